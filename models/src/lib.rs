@@ -1,0 +1,24 @@
+//! PVT³, the pruned video-vision transformer for tactile texture classification, in candle.
+//!
+//! A tactile recording `[batch, height, width, (channels,) frames]` is cut into spatial patches per
+//! frame (or per tubelet of frames), encoded by a spatial transformer per frame and a temporal
+//! transformer across frames (the ViViT factorised encoder), and classified from the temporal CLS
+//! token. Trainable *channel-selection* masks (attention q/k/v channels, feed-forward units) and a
+//! *frame-selection* mask let training find what can be pruned.
+
+pub mod attention;
+pub mod config;
+pub mod dropout;
+pub mod error;
+pub mod feed_forward;
+pub mod init;
+pub mod layer_norm;
+pub mod pvt3;
+pub mod rng;
+pub mod transformer;
+pub mod weights;
+
+pub use config::Config;
+pub use error::{Error, Result};
+pub use pvt3::Pvt3;
+pub use rng::Rng;

@@ -1,0 +1,105 @@
+//! The PVT³ model: patch embedding, frame-selection mask, spatial transformer per temporal token,
+//! temporal transformer over the spatial CLS outputs, and a classification head.
+//!
+//! Patch flattening follows the golden files: within a temporal token the patch index is
+//! row-major over the patch grid and the feature index is `((dt · ph + dy) · pw + dx) · c + ci`.
+//! The frame mask scales each temporal token's patch embeddings before the CLS token and the
+//! position embedding are added.
+
+use candle_core::{DType, Device, Tensor, D};
+use candle_nn::{linear, Init, Linear, Module, VarBuilder, VarMap};
+
+use crate::dropout::Dropout;
+use crate::layer_norm::LayerNorm;
+use crate::transformer::Transformer;
+use crate::{Config, Error, Result, Rng};
+
+#[cfg(test)]
+mod tests;
+
+#[derive(Clone, Debug)]
+pub struct Pvt3 {
+    patch_embed: Linear,
+    frame_mask: Tensor,
+    pos_embed: Tensor,
+    space_cls: Tensor,
+    temporal_cls: Tensor,
+    space: Transformer,
+    temporal: Transformer,
+    head_norm: LayerNorm,
+    head: Linear,
+    dropout: Dropout,
+    cfg: Config,
+}
+
+impl Pvt3 {
+    pub fn new(cfg: &Config, vb: VarBuilder) -> Result<Self> {
+        cfg.validate()?;
+        let (t, n, d) = (cfg.time_tokens(), cfg.num_patches(), cfg.dim);
+        let small = Init::Randn { mean: 0.0, stdev: 0.02 };
+        Ok(Self {
+            patch_embed: linear(cfg.patch_dim(), d, vb.pp("patch_embed"))?,
+            frame_mask: vb.get_with_hints(t, "frame_mask", Init::Const(1.0))?,
+            pos_embed: vb.get_with_hints((1, t, n + 1, d), "pos_embed", small)?,
+            space_cls: vb.get_with_hints((1, 1, d), "space_cls", small)?,
+            temporal_cls: vb.get_with_hints((1, 1, d), "temporal_cls", small)?,
+            space: Transformer::new(cfg, cfg.space_depth, vb.pp("space"))?,
+            temporal: Transformer::new(cfg, cfg.time_depth, vb.pp("temporal"))?,
+            head_norm: LayerNorm::new(d, cfg.layer_norm_eps, vb.pp("head_norm"))?,
+            head: linear(d, cfg.classes, vb.pp("head"))?,
+            dropout: Dropout::new(cfg.dropout),
+            cfg: cfg.clone(),
+        })
+    }
+
+    /// A fresh model on the CPU with its variables in a new [`VarMap`], seeded by `seed`.
+    pub fn init(cfg: &Config, seed: u64) -> Result<(Self, VarMap)> {
+        let varmap = VarMap::new();
+        let model = Self::new(cfg, VarBuilder::from_varmap(&varmap, DType::F32, &Device::Cpu))?;
+        crate::init::init_weights(&varmap, seed)?;
+        Ok((model, varmap))
+    }
+
+    pub fn config(&self) -> &Config {
+        &self.cfg
+    }
+
+    /// Cuts `[b, h, w, (c,) t]` into `[b, time_tokens, num_patches, patch_dim]`.
+    pub fn patchify(&self, x: &Tensor) -> Result<Tensor> {
+        let c = &self.cfg;
+        let dims = x.dims();
+        let expected = c.sample_shape();
+        if dims.len() != expected.len() + 1 || dims[1..] != expected[..] {
+            let expected = expected.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(", ");
+            return Err(Error::InputShape { got: dims.to_vec(), expected });
+        }
+        let b = dims[0];
+        let (gh, gw, tt) = (c.height / c.patch_height, c.width / c.patch_width, c.time_tokens());
+        let grid = x.reshape(vec![b, gh, c.patch_height, gw, c.patch_width, c.channels, tt, c.tubelet])?;
+        // → [b, tt, gh, gw, tubelet, ph, pw, c]
+        let tokens = grid.permute(vec![0, 6, 1, 3, 7, 2, 4, 5])?;
+        Ok(tokens.reshape((b, tt, gh * gw, c.patch_dim()))?)
+    }
+
+    /// Logits `[b, classes]`. Pass an `rng` to train (dropout on), `None` to evaluate.
+    pub fn forward(&self, x: &Tensor, mut rng: Option<&mut Rng>) -> Result<Tensor> {
+        let patches = self.patchify(x)?;
+        let (b, t, n, p) = patches.dims4()?;
+        let d = self.cfg.dim;
+        let embedded = self.patch_embed.forward(&patches.reshape((b * t * n, p))?)?.reshape((b, t, n, d))?;
+        let embedded = embedded.broadcast_mul(&self.frame_mask.reshape((1, t, 1, 1))?)?;
+        let cls = self.space_cls.reshape((1, 1, 1, d))?.broadcast_as((b, t, 1, d))?;
+        let tokens = Tensor::cat(&[&cls, &embedded], 2)?.broadcast_add(&self.pos_embed)?;
+        let tokens = self.dropout.forward(&tokens, rng.as_deref_mut())?;
+        let frames = self.space.forward_cls(&tokens.reshape((b * t, n + 1, d))?, rng.as_deref_mut())?;
+        let cls = self.temporal_cls.broadcast_as((b, 1, d))?;
+        let sequence = Tensor::cat(&[&cls, &frames.reshape((b, t, d))?], 1)?;
+        let pooled = self.temporal.forward_cls(&sequence, rng)?;
+        Ok(self.head.forward(&self.head_norm.forward(&pooled)?)?)
+    }
+
+    /// Class probabilities `[b, classes]` (evaluation mode).
+    pub fn probabilities(&self, x: &Tensor) -> Result<Tensor> {
+        Ok(candle_nn::ops::softmax(&self.forward(x, None)?, D::Minus1)?)
+    }
+}
