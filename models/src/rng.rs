@@ -3,7 +3,7 @@
 //! one, which makes a fixed seed give the same run.
 
 /// SplitMix64: tiny, fast and good enough for initialisation, dropout and shuffling.
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Rng {
     state: u64,
 }

@@ -1,1 +1,299 @@
-fn main(){}
+//! `pvt3`: train, cross-validate, evaluate and inspect PVT³ tactile texture classifiers.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use clap::{Parser, Subcommand};
+use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
+use pvt3_models::Config;
+use pvt3_trainer::checkpoint;
+use pvt3_trainer::cv::cross_validate;
+use pvt3_trainer::data::{Dataset, TEST_FOLD};
+use pvt3_trainer::evaluate::{evaluate, Samples};
+use pvt3_trainer::info::report;
+use pvt3_trainer::train::{train, RunSpec, TrainOptions};
+
+// candle's CPU training spends much of its time in malloc/free; mimalloc roughly doubles steps/s.
+#[global_allocator]
+static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
+#[derive(Parser)]
+#[command(name = "pvt3", version, about = "PVT³ tactile texture classification: train, cross-validate, evaluate, inspect")]
+struct Cli {
+    /// CPU threads for candle (default: all cores; one is about as fast as two for small models).
+    #[arg(long, global = true)]
+    threads: Option<usize>,
+    #[command(subcommand)]
+    command: Command,
+}
+
+/// Which data and which model.
+#[derive(clap::Args)]
+struct ModelArgs {
+    /// Data set: an .npz file (x, y, optional fold) or a directory of x.npy, y.npy, fold.npy.
+    #[arg(long, default_value = "data/icub20.npz")]
+    data: PathBuf,
+    /// Model preset (icub20, biotac20, gelsight); by default the one whose input fits the data.
+    #[arg(long, conflicts_with = "config")]
+    preset: Option<String>,
+    /// Model configuration as JSON (see `pvt3 info --json`).
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Override one configuration field, e.g. `--set tubelet=5 --set dim=32` (repeatable).
+    #[arg(long = "set", value_name = "FIELD=VALUE")]
+    overrides: Vec<String>,
+    /// Class names, one per line (default: class_0, class_1, …).
+    #[arg(long)]
+    class_names: Option<PathBuf>,
+    /// Stop after this many epochs (per run), leaving the work to be continued with --resume.
+    #[arg(long)]
+    pause_after: Option<usize>,
+    #[command(flatten)]
+    options: TrainOptions,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Train on one split: fold K validates (epoch selection), fold 4 tests, the rest trains.
+    Train {
+        #[command(flatten)]
+        model: ModelArgs,
+        /// Validation fold (0..3).
+        #[arg(long, default_value_t = 0)]
+        fold: usize,
+        /// Run directory (checkpoint in OUT/model, resume state in OUT/last, metrics.jsonl).
+        #[arg(long, short, default_value = "runs/train")]
+        out: PathBuf,
+        /// Continue the interrupted run in OUT.
+        #[arg(long)]
+        resume: bool,
+    },
+    /// The published protocol: 4-fold cross-validation, test on fold 4, mean ± std over seeds.
+    Cv {
+        #[command(flatten)]
+        model: ModelArgs,
+        /// Seeds to repeat the four folds with, comma-separated.
+        #[arg(long, value_delimiter = ',', default_value = "0")]
+        seeds: Vec<u64>,
+        #[arg(long, short, default_value = "runs/cv")]
+        out: PathBuf,
+        /// Continue: finished folds are kept, an interrupted one resumes.
+        #[arg(long)]
+        resume: bool,
+        /// Folds trained side by side (each on one thread).
+        #[arg(long, default_value_t = 1)]
+        jobs: usize,
+    },
+    /// Accuracy of a checkpoint on a data set (by default its test fold, or all samples).
+    Eval {
+        /// Checkpoint directory (or a run directory holding model/).
+        checkpoint: PathBuf,
+        #[arg(long, default_value = "data/icub20.npz")]
+        data: PathBuf,
+        /// Which samples: a fold number, or `all`.
+        #[arg(long, default_value = "4")]
+        fold: String,
+    },
+    /// Parameters, multiply-adds and tensor shapes of a preset, a JSON config or a checkpoint.
+    Info {
+        /// A preset name, a config .json, or a checkpoint directory.
+        #[arg(default_value = "icub20")]
+        model: String,
+        /// Print the configuration as JSON instead.
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+fn main() -> Result<()> {
+    let cli = Cli::parse();
+    let jobs = match &cli.command {
+        Command::Cv { jobs, .. } => *jobs,
+        _ => 1,
+    };
+    // candle reads the thread count from RAYON_NUM_THREADS; it must be set before its first use.
+    let threads = cli.threads.or((jobs > 1).then_some(1));
+    if let Some(t) = threads {
+        std::env::set_var("RAYON_NUM_THREADS", t.to_string());
+    }
+    match cli.command {
+        Command::Train { model, fold, out, resume } => {
+            let prepared = prepare(&model)?;
+            let bar = ProgressBar::new(0).with_style(bar_style());
+            bar.set_prefix(format!("fold {fold}"));
+            let started = Instant::now();
+            let r = train(&prepared.spec(&model, fold), &out, resume, &bar)?;
+            bar.finish();
+            let Some(r) = r else {
+                println!("paused; continue with the same command and --resume");
+                return Ok(());
+            };
+            println!(
+                "best epoch {} of {}: validation accuracy {:.4}, test accuracy {:.4} ({:.0} s); checkpoint {}",
+                r.best_epoch,
+                r.epochs,
+                r.val_accuracy,
+                r.test_accuracy,
+                started.elapsed().as_secs_f64(),
+                out.join("model").display()
+            );
+        }
+        Command::Cv { model, seeds, out, resume, jobs } => {
+            let prepared = prepare(&model)?;
+            let started = Instant::now();
+            let multi = MultiProgress::new();
+            let s = cross_validate(&prepared.spec(&model, 0), &seeds, &out, resume, jobs, &multi, &bar_style())?;
+            let Some(s) = s else {
+                println!("paused; continue with the same command and --resume");
+                return Ok(());
+            };
+            println!("{:>6} {:>5} {:>6} {:>8} {:>8} {:>8}", "seed", "fold", "epoch", "val", "test", "seconds");
+            for r in &s.runs {
+                println!(
+                    "{:>6} {:>5} {:>6} {:>8.4} {:>8.4} {:>8.0}",
+                    r.seed, r.val_fold, r.best_epoch, r.val_accuracy, r.test_accuracy, r.wall_seconds
+                );
+            }
+            println!(
+                "mean test accuracy {:.4} ± {:.4} over {} runs (wall {:.0} s); summary {}",
+                s.mean_test_accuracy,
+                s.std_test_accuracy,
+                s.runs.len(),
+                started.elapsed().as_secs_f64(),
+                out.join("cv.json").display()
+            );
+        }
+        Command::Eval { checkpoint, data, fold } => eval(&checkpoint, &data, &fold)?,
+        Command::Info { model, json } => {
+            let cfg = resolve_config(&model)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&cfg)?);
+            } else {
+                print!("{}", report(&cfg)?);
+            }
+        }
+    }
+    Ok(())
+}
+
+fn bar_style() -> ProgressStyle {
+    ProgressStyle::with_template("{prefix:>14} [{elapsed_precise}] {bar:30} {percent:>3}% eta {eta} {msg}")
+        .expect("a valid template")
+}
+
+/// A preset name, a JSON file, or a checkpoint directory.
+fn resolve_config(model: &str) -> Result<Config> {
+    let path = Path::new(model);
+    if path.is_dir() {
+        return Ok(checkpoint::load_meta(path)?.1.config);
+    }
+    if path.is_file() {
+        let text = std::fs::read_to_string(path).with_context(|| format!("reading {model}"))?;
+        return serde_json::from_str(&text).with_context(|| format!("{model} is not a model configuration"));
+    }
+    Ok(Config::preset(model)?)
+}
+
+/// A loaded data set with the model configuration and class names for it.
+struct Prepared {
+    data: Dataset,
+    config: Config,
+    classes: Vec<String>,
+}
+
+impl Prepared {
+    fn spec(&self, args: &ModelArgs, val_fold: usize) -> RunSpec<'_> {
+        RunSpec {
+            data: &self.data,
+            config: self.config.clone(),
+            val_fold,
+            options: args.options.clone(),
+            classes: self.classes.clone(),
+            pause_after: args.pause_after,
+        }
+    }
+}
+
+/// Loads the data set and builds the model configuration for it.
+fn prepare(args: &ModelArgs) -> Result<Prepared> {
+    let data = Dataset::load(&args.data, args.options.seed)?;
+    let mut cfg = match (&args.preset, &args.config) {
+        (Some(p), _) => Config::preset(p)?,
+        (None, Some(path)) => resolve_config(&path.display().to_string())?,
+        (None, None) => pvt3_models::config::PRESETS
+            .iter()
+            .map(|p| Config::preset(p).expect("known preset"))
+            .find(|c| c.sample_shape() == data.sample_shape)
+            .with_context(|| {
+                format!(
+                    "no preset takes samples of shape {:?}; pass --config FILE (start from `pvt3 info icub20 --json`)",
+                    data.sample_shape
+                )
+            })?,
+    };
+    cfg.classes = data.classes();
+    cfg = apply_overrides(cfg, &args.overrides)?;
+    cfg.validate()?;
+    let classes = match &args.class_names {
+        Some(path) => {
+            let text = std::fs::read_to_string(path).with_context(|| format!("reading class names from {}", path.display()))?;
+            let names: Vec<String> = text.lines().map(str::trim).filter(|l| !l.is_empty()).map(String::from).collect();
+            if names.len() != cfg.classes {
+                bail!("{} names {} classes, the data has {}", path.display(), names.len(), cfg.classes);
+            }
+            names
+        }
+        None => (0..cfg.classes).map(|k| format!("class_{k}")).collect(),
+    };
+    if !data.folds_from_file {
+        eprintln!("note: {} has no fold array; stratified folds were drawn with seed {}", data.path.display(), args.options.seed);
+    }
+    Ok(Prepared { data, config: cfg, classes })
+}
+
+fn apply_overrides(cfg: Config, overrides: &[String]) -> Result<Config> {
+    let mut value = serde_json::to_value(&cfg)?;
+    for o in overrides {
+        let (key, raw) = o.split_once('=').with_context(|| format!("--set {o}: expected FIELD=VALUE"))?;
+        let fields = value.as_object_mut().expect("a config is a JSON object");
+        if !fields.contains_key(key) {
+            let known: Vec<&String> = fields.keys().collect();
+            bail!("--set {o}: unknown field `{key}`; the fields are {known:?}");
+        }
+        let parsed = serde_json::from_str(raw).with_context(|| format!("--set {o}: `{raw}` is not a number"))?;
+        fields.insert(key.to_string(), parsed);
+    }
+    serde_json::from_value(value).context("the overridden configuration does not parse")
+}
+
+fn eval(checkpoint_path: &Path, data_path: &Path, fold: &str) -> Result<()> {
+    let (meta, model, _) = checkpoint::load(checkpoint_path)?;
+    let data = Dataset::load(data_path, meta.provenance.seed)?;
+    data.check_fits(&meta.config)?;
+    let indices: Vec<usize> = if fold == "all" {
+        (0..data.len()).collect()
+    } else {
+        let k: usize = fold.parse().with_context(|| format!("--fold {fold}: expected a fold number or `all`"))?;
+        (0..data.len()).filter(|&i| data.folds[i] == k).collect()
+    };
+    if indices.is_empty() {
+        bail!("fold {fold} of {} holds no samples", data_path.display());
+    }
+    let samples = Samples::new(&data, &indices, &meta.normalization);
+    let e = evaluate(&model, &samples)?;
+    println!("{} samples (fold {fold}): accuracy {:.4}, loss {:.4}", samples.len(), e.accuracy, e.loss);
+    if fold != "all" && fold.parse::<usize>().ok() == Some(TEST_FOLD) {
+        println!("(the checkpoint's own record: test accuracy {:?})", meta.provenance.test_accuracy);
+    }
+    println!("{:<24} {:>8} {:>8}", "class", "samples", "accuracy");
+    for (c, name) in meta.classes.iter().enumerate() {
+        let rows: Vec<usize> = (0..samples.len()).filter(|&r| samples.labels[r] as usize == c).collect();
+        if rows.is_empty() {
+            continue;
+        }
+        let ok = rows.iter().filter(|&&r| e.predictions[r] as usize == c).count();
+        println!("{:<24} {:>8} {:>8.3}", name, rows.len(), ok as f64 / rows.len() as f64);
+    }
+    Ok(())
+}

@@ -1,0 +1,143 @@
+//! Checkpoints are directories: `config.json`, `weights.safetensors`, `normalization.json`,
+//! `classes.json` and `provenance.json`. A directory is written under a temporary name and swapped
+//! in by renames, so a crash never leaves a half-written checkpoint; if it strikes between the two
+//! renames, the previous version is still found under `NAME.old`.
+
+use std::path::{Path, PathBuf};
+
+use candle_nn::VarMap;
+use pvt3_models::weights::{load_weights, save_weights};
+use pvt3_models::{Config, Pvt3};
+use serde::de::DeserializeOwned;
+use serde::{Deserialize, Serialize};
+
+use crate::normalization::Normalization;
+use crate::train::TrainOptions;
+use crate::{Error, Result};
+
+/// Where a trained model came from.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct Provenance {
+    pub pvt3_version: String,
+    pub data: String,
+    pub val_fold: usize,
+    pub seed: u64,
+    /// The selected (best-validation) epoch, 1-based.
+    pub epoch: usize,
+    pub val_accuracy: f64,
+    pub test_accuracy: Option<f64>,
+    pub options: TrainOptions,
+}
+
+/// Everything in a checkpoint except the weights.
+#[derive(Clone, Debug)]
+pub struct Meta {
+    pub config: Config,
+    pub normalization: Normalization,
+    pub classes: Vec<String>,
+    pub provenance: Provenance,
+}
+
+fn checkpoint_error(path: &Path, reason: impl Into<String>) -> Error {
+    Error::Checkpoint { path: path.to_path_buf(), reason: reason.into() }
+}
+
+pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
+    let text = serde_json::to_string_pretty(value).expect("plain data serialises");
+    std::fs::write(path, text + "\n").map_err(Error::io(path))
+}
+
+pub fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T> {
+    let text = std::fs::read_to_string(path).map_err(Error::io(path))?;
+    serde_json::from_str(&text).map_err(|e| checkpoint_error(path, format!("malformed JSON ({e})")))
+}
+
+fn sibling(target: &Path, suffix: &str) -> PathBuf {
+    let mut name = target.file_name().expect("a directory name").to_os_string();
+    name.push(suffix);
+    target.with_file_name(name)
+}
+
+/// Writes a directory through `fill` under a temporary name, then swaps it in for `target`.
+pub fn replace_dir(target: &Path, fill: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
+    let tmp = sibling(target, ".tmp");
+    let old = sibling(target, ".old");
+    if tmp.exists() {
+        std::fs::remove_dir_all(&tmp).map_err(Error::io(&tmp))?;
+    }
+    std::fs::create_dir_all(&tmp).map_err(Error::io(&tmp))?;
+    fill(&tmp)?;
+    if target.exists() {
+        if old.exists() {
+            std::fs::remove_dir_all(&old).map_err(Error::io(&old))?;
+        }
+        std::fs::rename(target, &old).map_err(Error::io(target))?;
+    }
+    std::fs::rename(&tmp, target).map_err(Error::io(&tmp))?;
+    if old.exists() {
+        std::fs::remove_dir_all(&old).map_err(Error::io(&old))?;
+    }
+    Ok(())
+}
+
+/// The directory to read for `target`: itself, or the `.old` copy a crash left behind.
+pub fn existing_dir(target: &Path) -> Option<PathBuf> {
+    let old = sibling(target, ".old");
+    if target.is_dir() {
+        Some(target.to_path_buf())
+    } else if old.is_dir() {
+        Some(old)
+    } else {
+        None
+    }
+}
+
+/// Writes the checkpoint files into an existing directory.
+pub fn write_files(dir: &Path, varmap: &VarMap, meta: &Meta) -> Result<()> {
+    write_json(&dir.join("config.json"), &meta.config)?;
+    write_json(&dir.join("normalization.json"), &meta.normalization)?;
+    write_json(&dir.join("classes.json"), &meta.classes)?;
+    write_json(&dir.join("provenance.json"), &meta.provenance)?;
+    save_weights(varmap, &dir.join("weights.safetensors"))?;
+    Ok(())
+}
+
+/// Writes a whole checkpoint directory atomically.
+pub fn save(dir: &Path, varmap: &VarMap, meta: &Meta) -> Result<()> {
+    replace_dir(dir, |tmp| write_files(tmp, varmap, meta))
+}
+
+/// Reads the metadata of a checkpoint directory (a run directory is read through its `model/`).
+pub fn load_meta(path: &Path) -> Result<(PathBuf, Meta)> {
+    let dir = resolve(path)?;
+    let config: Config = read_json(&dir.join("config.json"))?;
+    config.validate().map_err(|e| checkpoint_error(&dir, e.to_string()))?;
+    let normalization: Normalization = read_json(&dir.join("normalization.json"))?;
+    let classes: Vec<String> = read_json(&dir.join("classes.json"))?;
+    let provenance: Provenance = read_json(&dir.join("provenance.json"))?;
+    let channels = config.sample_shape().iter().product::<usize>() / config.frames;
+    if normalization.mean.len() != channels || normalization.std.len() != channels || normalization.frames != config.frames {
+        return Err(checkpoint_error(&dir, format!("normalization.json does not fit the configuration ({channels} channels × {} frames)", config.frames)));
+    }
+    if classes.len() != config.classes {
+        return Err(checkpoint_error(&dir, format!("classes.json names {} classes, the configuration has {}", classes.len(), config.classes)));
+    }
+    Ok((dir, Meta { config, normalization, classes, provenance }))
+}
+
+/// Loads a checkpoint: its metadata and the model with its weights.
+pub fn load(path: &Path) -> Result<(Meta, Pvt3, VarMap)> {
+    let (dir, meta) = load_meta(path)?;
+    let (model, varmap) = Pvt3::init(&meta.config, 0)?;
+    load_weights(&varmap, &dir.join("weights.safetensors"))?;
+    Ok((meta, model, varmap))
+}
+
+fn resolve(path: &Path) -> Result<PathBuf> {
+    let candidates = [path.to_path_buf(), path.join("model")];
+    candidates
+        .iter()
+        .filter_map(|c| existing_dir(c))
+        .find(|d| d.join("config.json").exists())
+        .ok_or_else(|| checkpoint_error(path, "not a checkpoint directory (no config.json in it or in its model/)"))
+}

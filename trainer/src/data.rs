@@ -1,0 +1,259 @@
+//! Tactile data sets: `.npz` files (keys `x`, `y` and optionally `fold`) or directories of
+//! `x.npy`, `y.npy` and `fold.npy`, holding frames `[N, H, W, T]`, `[N, C, T]` (read as a C × 1
+//! grid) or `[N, H, W, C, T]`, integer labels `[N]` and an optional fold per sample. Any integer
+//! or float dtype is accepted and converted to f32.
+//!
+//! The published protocol: fold k validates, fold 4 tests, the other folds train. A set without a
+//! fold array gets stratified folds 0..=4 drawn from a seed.
+
+use std::fs::File;
+use std::io::{Read, Seek};
+use std::path::{Path, PathBuf};
+
+use ndarray::{ArrayD, IxDyn};
+use ndarray_npy::{NpzReader, ReadNpyExt, ReadableElement};
+use pvt3_models::Rng;
+
+use crate::{Error, Result};
+
+/// The fold that holds the test set in the published protocol.
+pub const TEST_FOLD: usize = 4;
+/// Folds 0..FOLDS (the test fold included).
+pub const FOLDS: usize = 5;
+
+#[derive(Clone, Debug)]
+pub struct Dataset {
+    /// Samples back to back, each in the model layout `[H, W, (C,) T]`.
+    pub x: Vec<f32>,
+    /// The layout of one sample: `[H, W, T]` or `[H, W, C, T]`.
+    pub sample_shape: Vec<usize>,
+    pub labels: Vec<u32>,
+    pub folds: Vec<usize>,
+    /// False when the folds were drawn here because the file had none.
+    pub folds_from_file: bool,
+    pub path: PathBuf,
+}
+
+/// Which samples train, validate and test.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Split {
+    pub train: Vec<usize>,
+    pub val: Vec<usize>,
+    pub test: Vec<usize>,
+}
+
+fn data_error(path: &Path, reason: impl Into<String>) -> Error {
+    Error::Data { path: path.to_path_buf(), reason: reason.into() }
+}
+
+/// Reads an array of any of the common numeric dtypes as f64.
+trait ArraySource {
+    fn read<T: ReadableElement>(&mut self, key: &str) -> std::result::Result<ArrayD<T>, String>;
+    fn keys(&mut self) -> Vec<String>;
+}
+
+struct Npz<R: Read + Seek>(NpzReader<R>);
+
+impl<R: Read + Seek> ArraySource for Npz<R> {
+    fn read<T: ReadableElement>(&mut self, key: &str) -> std::result::Result<ArrayD<T>, String> {
+        let name = if self.keys().iter().any(|k| k == key) { key.to_string() } else { format!("{key}.npy") };
+        self.0.by_name::<ndarray::OwnedRepr<T>, IxDyn>(&name).map_err(|e| e.to_string())
+    }
+    fn keys(&mut self) -> Vec<String> {
+        self.0.names().unwrap_or_default().into_iter().map(|n| n.trim_end_matches(".npy").to_string()).collect()
+    }
+}
+
+struct NpyDir(PathBuf);
+
+impl ArraySource for NpyDir {
+    fn read<T: ReadableElement>(&mut self, key: &str) -> std::result::Result<ArrayD<T>, String> {
+        let file = File::open(self.0.join(format!("{key}.npy"))).map_err(|e| e.to_string())?;
+        ArrayD::<T>::read_npy(std::io::BufReader::new(file)).map_err(|e| e.to_string())
+    }
+    fn keys(&mut self) -> Vec<String> {
+        let entries = std::fs::read_dir(&self.0).into_iter().flatten().flatten();
+        entries.filter_map(|e| e.file_name().to_str()?.strip_suffix(".npy").map(str::to_string)).collect()
+    }
+}
+
+/// Reads `key` whatever its numeric dtype, as f64.
+fn read_numeric(src: &mut impl ArraySource, key: &str) -> std::result::Result<ArrayD<f64>, String> {
+    fn conv<T: Copy + Into<f64>>(a: ArrayD<T>) -> ArrayD<f64> {
+        a.mapv(Into::into)
+    }
+    let mut first_error = None;
+    macro_rules! attempt {
+        ($($t:ty),*) => {$(
+            match src.read::<$t>(key) {
+                Ok(a) => return Ok(conv(a)),
+                Err(e) => { first_error.get_or_insert(e); }
+            }
+        )*};
+    }
+    attempt!(f32, f64, i16, u8, i8, u16, i32, u32);
+    // 64-bit integers do not convert losslessly to f64 in general; labels and folds are small.
+    if let Ok(a) = src.read::<i64>(key) {
+        return Ok(a.mapv(|v| v as f64));
+    }
+    if let Ok(a) = src.read::<u64>(key) {
+        return Ok(a.mapv(|v| v as f64));
+    }
+    Err(first_error.unwrap_or_default())
+}
+
+impl Dataset {
+    /// Loads a data set; `seed` draws stratified folds when the file has none.
+    pub fn load(path: &Path, seed: u64) -> Result<Self> {
+        if !path.exists() {
+            return Err(data_error(path, "no such file or directory (expected an .npz file or a directory of .npy files)"));
+        }
+        if path.is_dir() {
+            Self::from_source(path, &mut NpyDir(path.to_path_buf()), seed)
+        } else {
+            let file = File::open(path).map_err(Error::io(path))?;
+            let npz = NpzReader::new(std::io::BufReader::new(file))
+                .map_err(|e| data_error(path, format!("not a readable .npz archive ({e})")))?;
+            Self::from_source(path, &mut Npz(npz), seed)
+        }
+    }
+
+    fn from_source(path: &Path, src: &mut impl ArraySource, seed: u64) -> Result<Self> {
+        let keys = src.keys();
+        let missing = |k: &str| data_error(path, format!("no array `{k}` (found: {})", keys.join(", ")));
+        if !keys.iter().any(|k| k == "x") {
+            return Err(missing("x"));
+        }
+        if !keys.iter().any(|k| k == "y") {
+            return Err(missing("y"));
+        }
+        let x = read_numeric(src, "x").map_err(|e| data_error(path, format!("array `x`: {e}")))?;
+        let y = read_numeric(src, "y").map_err(|e| data_error(path, format!("array `y`: {e}")))?;
+        let fold = if keys.iter().any(|k| k == "fold") {
+            Some(read_numeric(src, "fold").map_err(|e| data_error(path, format!("array `fold`: {e}")))?)
+        } else {
+            None
+        };
+        let n = x.shape()[0];
+        let sample_shape = match x.shape() {
+            [_, c, t] => vec![*c, 1, *t],
+            [_, h, w, t] => vec![*h, *w, *t],
+            [_, h, w, c, t] => vec![*h, *w, *c, *t],
+            s => {
+                return Err(data_error(
+                    path,
+                    format!("`x` has shape {s:?}; expected [N, H, W, T], [N, C, T] or [N, H, W, C, T]"),
+                ))
+            }
+        };
+        let labels = integers(path, "y", &y, n)?;
+        let x: Vec<f32> = x.iter().map(|v| *v as f32).collect();
+        let sample_len = x.len() / n.max(1);
+        if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+            return Err(data_error(path, format!("`x` holds a NaN or infinite value in sample {}", i / sample_len)));
+        }
+        let (folds, folds_from_file) = match fold {
+            Some(f) => {
+                let folds = integers(path, "fold", &f, n)?;
+                if let Some(bad) = folds.iter().find(|f| **f as usize >= FOLDS) {
+                    return Err(data_error(path, format!("fold {bad} is outside 0..={}", FOLDS - 1)));
+                }
+                (folds.into_iter().map(|f| f as usize).collect(), true)
+            }
+            None => (stratified_folds(&labels, seed), false),
+        };
+        Ok(Self { x, sample_shape, labels: labels.to_vec(), folds, folds_from_file, path: path.to_path_buf() })
+    }
+
+    pub fn len(&self) -> usize {
+        self.labels.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.labels.is_empty()
+    }
+
+    pub fn sample_len(&self) -> usize {
+        self.sample_shape.iter().product()
+    }
+
+    pub fn sample(&self, i: usize) -> &[f32] {
+        let l = self.sample_len();
+        &self.x[i * l..(i + 1) * l]
+    }
+
+    /// Number of classes: the largest label + 1.
+    pub fn classes(&self) -> usize {
+        self.labels.iter().max().map_or(0, |m| *m as usize + 1)
+    }
+
+    /// The published protocol for validation fold `val_fold`: test on fold 4, train on the rest.
+    pub fn split(&self, val_fold: usize) -> Result<Split> {
+        if val_fold >= TEST_FOLD {
+            return Err(Error::Usage(format!("validation fold {val_fold} must be in 0..{TEST_FOLD}")));
+        }
+        let pick = |keep: &dyn Fn(usize) -> bool| (0..self.len()).filter(|&i| keep(self.folds[i])).collect::<Vec<_>>();
+        let split = Split {
+            train: pick(&|f| f != val_fold && f != TEST_FOLD),
+            val: pick(&|f| f == val_fold),
+            test: pick(&|f| f == TEST_FOLD),
+        };
+        if split.train.is_empty() || split.val.is_empty() {
+            return Err(data_error(&self.path, format!("fold {val_fold} leaves no training or validation samples")));
+        }
+        Ok(split)
+    }
+
+    /// Checks that the samples fit a model configuration.
+    pub fn check_fits(&self, cfg: &pvt3_models::Config) -> Result<()> {
+        if self.sample_shape != cfg.sample_shape() {
+            return Err(data_error(
+                &self.path,
+                format!(
+                    "samples are {:?} but the model expects {:?} ([height, width, (channels,) frames])",
+                    self.sample_shape,
+                    cfg.sample_shape()
+                ),
+            ));
+        }
+        if let Some(bad) = self.labels.iter().find(|l| **l as usize >= cfg.classes) {
+            return Err(data_error(&self.path, format!("label {bad} is outside 0..{} of the model's classes", cfg.classes)));
+        }
+        Ok(())
+    }
+}
+
+/// Converts a numeric array of `n` whole, non-negative values to u32.
+fn integers(path: &Path, key: &str, a: &ArrayD<f64>, n: usize) -> Result<Vec<u32>> {
+    if a.shape() != [n] {
+        return Err(data_error(path, format!("`{key}` has shape {:?}; expected [{n}], one per sample", a.shape())));
+    }
+    a.iter()
+        .enumerate()
+        .map(|(i, v)| {
+            if v.fract() == 0.0 && *v >= 0.0 && *v <= u32::MAX as f64 {
+                Ok(*v as u32)
+            } else {
+                Err(data_error(path, format!("`{key}`[{i}] = {v} is not a whole number ≥ 0")))
+            }
+        })
+        .collect()
+}
+
+/// Deals each class's samples, shuffled by `seed`, round-robin into folds 0..FOLDS.
+fn stratified_folds(labels: &[u32], seed: u64) -> Vec<usize> {
+    let mut rng = Rng::new(seed);
+    let mut folds = vec![0; labels.len()];
+    let classes = labels.iter().max().map_or(0, |m| *m + 1);
+    for c in 0..classes {
+        let mut members: Vec<usize> = (0..labels.len()).filter(|&i| labels[i] == c).collect();
+        rng.shuffle(&mut members);
+        for (k, i) in members.into_iter().enumerate() {
+            folds[i] = k % FOLDS;
+        }
+    }
+    folds
+}
+
+#[cfg(test)]
+mod tests;

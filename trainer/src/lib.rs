@@ -1,0 +1,15 @@
+//! The pvt3 trainer: data sets, normalisation, training, cross-validation, checkpoints and
+//! evaluation for PVT³. The `pvt3` binary is a thin command line over this library.
+
+pub mod checkpoint;
+pub mod cv;
+pub mod data;
+pub mod error;
+pub mod evaluate;
+pub mod info;
+pub mod normalization;
+pub mod optim;
+pub mod schedule;
+pub mod train;
+
+pub use error::{Error, Result};

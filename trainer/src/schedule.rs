@@ -1,0 +1,37 @@
+//! The learning-rate schedule: linear warm-up, then cosine decay to a floor.
+
+#[derive(Clone, Debug)]
+pub struct Schedule {
+    pub peak: f64,
+    pub floor: f64,
+    pub warmup_steps: usize,
+    pub total_steps: usize,
+}
+
+impl Schedule {
+    /// The learning rate for optimiser step `step` (0-based).
+    pub fn at(&self, step: usize) -> f64 {
+        if step < self.warmup_steps {
+            return self.peak * (step + 1) as f64 / self.warmup_steps as f64;
+        }
+        let span = self.total_steps.saturating_sub(self.warmup_steps).max(1);
+        let progress = ((step - self.warmup_steps) as f64 / span as f64).min(1.0);
+        self.floor + 0.5 * (self.peak - self.floor) * (1.0 + (std::f64::consts::PI * progress).cos())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Schedule;
+
+    #[test]
+    fn warms_up_then_decays_to_the_floor() {
+        let s = Schedule { peak: 1e-3, floor: 1e-5, warmup_steps: 10, total_steps: 110 };
+        assert!((s.at(0) - 1e-4).abs() < 1e-12);
+        assert!((s.at(9) - 1e-3).abs() < 1e-12);
+        assert!((s.at(10) - 1e-3).abs() < 1e-12);
+        assert!((s.at(60) - (1e-3 + 1e-5) / 2.0).abs() < 1e-9);
+        assert!((s.at(110) - 1e-5).abs() < 1e-12);
+        assert!((1..110).all(|i| s.at(i) <= s.at(i - 1) || i < 10));
+    }
+}

@@ -1,0 +1,301 @@
+//! The training loop: AdamW with warm-up and cosine decay, label smoothing, gradient clipping,
+//! optional gain and noise augmentation, and epoch selection by validation accuracy. Every epoch
+//! appends a line to `metrics.jsonl` and saves the run state under `last/`, so `--resume`
+//! continues an interrupted run exactly; the best epoch's checkpoint is kept under `model/`.
+//!
+//! Run directory: `model/` (the checkpoint), `last/` (resume state), `metrics.jsonl`,
+//! `result.json` (written when the run is complete).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use candle_core::{Tensor, D};
+use indicatif::ProgressBar;
+use pvt3_models::{Config, Pvt3, Rng};
+use serde::{Deserialize, Serialize};
+
+use crate::checkpoint::{self, read_json, write_json, Meta, Provenance};
+use crate::data::{Dataset, Split};
+use crate::evaluate::{evaluate, Samples};
+use crate::normalization::Normalization;
+use crate::optim::AdamW;
+use crate::schedule::Schedule;
+use crate::{Error, Result};
+
+/// Training hyper-parameters.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, clap::Args)]
+pub struct TrainOptions {
+    /// Passes over the training split.
+    #[arg(long, default_value_t = 100)]
+    pub epochs: usize,
+    #[arg(long, default_value_t = 32)]
+    pub batch_size: usize,
+    /// Peak learning rate (reached after the warm-up, then cosine decay to 1 % of it).
+    #[arg(long, default_value_t = 2e-3)]
+    pub lr: f64,
+    #[arg(long, default_value_t = 5)]
+    pub warmup_epochs: usize,
+    /// Decoupled weight decay on weight matrices.
+    #[arg(long, default_value_t = 0.05)]
+    pub weight_decay: f64,
+    /// Dropout on embeddings, attention outputs and feed-forward layers.
+    #[arg(long, default_value_t = 0.1)]
+    pub dropout: f64,
+    #[arg(long, default_value_t = 0.1)]
+    pub label_smoothing: f64,
+    /// Clip the global gradient norm to this (0: no clipping).
+    #[arg(long, default_value_t = 1.0)]
+    pub clip_grad: f64,
+    /// Augmentation: each training sample is scaled by a random gain in [1 - g, 1 + g].
+    #[arg(long, default_value_t = 0.1)]
+    pub aug_gain: f64,
+    /// Augmentation: Gaussian noise of this standard deviation (in normalised units).
+    #[arg(long, default_value_t = 0.05)]
+    pub aug_noise: f64,
+    /// Seed of initialisation, shuffling, dropout and augmentation: a fixed seed gives the same run.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+}
+
+/// The outcome of a finished run.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RunResult {
+    pub val_fold: usize,
+    pub seed: u64,
+    pub best_epoch: usize,
+    pub val_accuracy: f64,
+    pub test_accuracy: f64,
+    pub epochs: usize,
+    pub wall_seconds: f64,
+}
+
+/// What `last/state.json` remembers between epochs.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct RunState {
+    epochs_done: usize,
+    step: usize,
+    rng: Rng,
+    best: Option<Best>,
+    wall_seconds: f64,
+}
+
+#[derive(Clone, Debug, Serialize, Deserialize)]
+struct Best {
+    epoch: usize,
+    val_accuracy: f64,
+    val_loss: f64,
+    test_accuracy: f64,
+}
+
+/// One line of `metrics.jsonl`.
+#[derive(Serialize, Deserialize)]
+struct EpochMetrics {
+    epoch: usize,
+    lr: f64,
+    train_loss: f64,
+    train_accuracy: f64,
+    val_loss: f64,
+    val_accuracy: f64,
+    test_accuracy: Option<f64>,
+    seconds: f64,
+}
+
+/// Everything a run needs besides its output directory.
+pub struct RunSpec<'a> {
+    pub data: &'a Dataset,
+    pub config: Config,
+    pub val_fold: usize,
+    pub options: TrainOptions,
+    pub classes: Vec<String>,
+    /// Stop after this many epochs in this call, leaving the run to be resumed.
+    pub pause_after: Option<usize>,
+}
+
+/// Cross-entropy against labels smoothed by `eps`.
+fn smoothed_cross_entropy(logits: &Tensor, labels: &Tensor, eps: f64) -> Result<Tensor> {
+    let nll = candle_nn::loss::cross_entropy(logits, labels)?;
+    if eps == 0.0 {
+        return Ok(nll);
+    }
+    let uniform = candle_nn::ops::log_softmax(logits, D::Minus1)?.mean_all()?.neg()?;
+    Ok(((nll * (1.0 - eps))? + (uniform * eps)?)?)
+}
+
+fn augment(sample: &mut [f32], opts: &TrainOptions, rng: &mut Rng) {
+    let gain = 1.0 + opts.aug_gain as f32 * (2.0 * rng.uniform() - 1.0);
+    let noise = opts.aug_noise as f32;
+    for v in sample.iter_mut() {
+        *v = *v * gain + if noise > 0.0 { noise * rng.normal() } else { 0.0 };
+    }
+}
+
+/// Trains one split into `out`; with `resume`, continues the run found there. `None` means the
+/// run paused (see [`RunSpec::pause_after`]) and can be resumed.
+pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Result<Option<RunResult>> {
+    let result_path = out.join("result.json");
+    let last = out.join("last");
+    let resumable = checkpoint::existing_dir(&last);
+    if resume && result_path.exists() {
+        return read_json(&result_path).map(Some);
+    }
+    if !resume && (resumable.is_some() || result_path.exists()) {
+        return Err(Error::Usage(format!(
+            "{} already holds a run; pass --resume to continue it, or choose another output directory",
+            out.display()
+        )));
+    }
+    std::fs::create_dir_all(out).map_err(Error::io(out))?;
+
+    let (mut spec_options, mut config) = (spec.options.clone(), spec.config.clone());
+    let mut state = None;
+    if let (true, Some(dir)) = (resume, &resumable) {
+        // A resumed run keeps the configuration and options it started with.
+        let (_, meta) = checkpoint::load_meta(dir)?;
+        config = meta.config;
+        spec_options = meta.provenance.options;
+        state = Some((dir.clone(), read_json::<RunState>(&dir.join("state.json"))?));
+    }
+    let opts = &spec_options;
+    config.dropout = opts.dropout;
+    spec.data.check_fits(&config)?;
+    let split: Split = spec.data.split(spec.val_fold)?;
+    let normalization = Normalization::fit(spec.data, &split.train);
+    let train_set = Samples::new(spec.data, &split.train, &normalization);
+    let val_set = Samples::new(spec.data, &split.val, &normalization);
+    let test_set = Samples::new(spec.data, &split.test, &normalization);
+
+    let (model, varmap) = Pvt3::init(&config, opts.seed)?;
+    let mut optimizer = AdamW::new(&varmap, opts.weight_decay)?;
+    let steps_per_epoch = train_set.len().div_ceil(opts.batch_size);
+    let schedule = Schedule {
+        peak: opts.lr,
+        floor: opts.lr * 0.01,
+        warmup_steps: opts.warmup_epochs * steps_per_epoch,
+        total_steps: opts.epochs * steps_per_epoch,
+    };
+    let mut run = match state {
+        Some((dir, st)) => {
+            pvt3_models::weights::load_weights(&varmap, &dir.join("weights.safetensors"))?;
+            optimizer.load(&dir.join("optimizer.safetensors"), st.step)?;
+            truncate_metrics(&out.join("metrics.jsonl"), st.epochs_done)?;
+            st
+        }
+        None => {
+            let _ = std::fs::remove_file(out.join("metrics.jsonl"));
+            RunState { epochs_done: 0, step: 0, rng: Rng::new(opts.seed.wrapping_add(1)), best: None, wall_seconds: 0.0 }
+        }
+    };
+
+    let meta_for = |epoch: usize, val_accuracy: f64, test_accuracy: Option<f64>| Meta {
+        config: config.clone(),
+        normalization: normalization.clone(),
+        classes: spec.classes.clone(),
+        provenance: Provenance {
+            pvt3_version: env!("CARGO_PKG_VERSION").to_string(),
+            data: spec.data.path.display().to_string(),
+            val_fold: spec.val_fold,
+            seed: opts.seed,
+            epoch,
+            val_accuracy,
+            test_accuracy,
+            options: opts.clone(),
+        },
+    };
+
+    bar.set_length((opts.epochs * steps_per_epoch) as u64);
+    bar.set_position((run.epochs_done * steps_per_epoch) as u64);
+    let mut log = std::fs::OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(out.join("metrics.jsonl"))
+        .map_err(Error::io(out))?;
+    let first_epoch = run.epochs_done + 1;
+    for epoch in first_epoch..=opts.epochs {
+        if spec.pause_after.is_some_and(|p| epoch - first_epoch >= p) {
+            return Ok(None);
+        }
+        let started = Instant::now();
+        let mut order: Vec<usize> = (0..train_set.len()).collect();
+        run.rng.shuffle(&mut order);
+        let (mut loss_sum, mut correct) = (0.0, 0usize);
+        let mut lr = schedule.at(run.step);
+        for rows in order.chunks(opts.batch_size) {
+            let rng = &mut run.rng;
+            let (x, y) = train_set.batch(rows, |s| augment(s, opts, rng))?;
+            let logits = model.forward(&x, Some(&mut run.rng))?;
+            let loss = smoothed_cross_entropy(&logits, &y, opts.label_smoothing)?;
+            let grads = loss.backward()?;
+            let scale = if opts.clip_grad > 0.0 {
+                (opts.clip_grad / optimizer.grad_norm(&grads)?.max(1e-12)).min(1.0)
+            } else {
+                1.0
+            };
+            lr = schedule.at(run.step);
+            optimizer.step(&grads, lr, scale)?;
+            run.step += 1;
+            loss_sum += loss.to_scalar::<f32>()? as f64 * rows.len() as f64;
+            let predicted = logits.argmax(D::Minus1)?.to_vec1::<u32>()?;
+            correct += predicted.iter().zip(y.to_vec1::<u32>()?).filter(|(p, l)| **p == *l).count();
+            bar.inc(1);
+        }
+        let val = evaluate(&model, &val_set)?;
+        let improved = run.best.as_ref().is_none_or(|b| {
+            val.accuracy > b.val_accuracy || (val.accuracy == b.val_accuracy && val.loss < b.val_loss)
+        });
+        let mut test_accuracy = None;
+        if improved {
+            let test = if test_set.is_empty() { None } else { Some(evaluate(&model, &test_set)?.accuracy) };
+            test_accuracy = test;
+            checkpoint::save(&out.join("model"), &varmap, &meta_for(epoch, val.accuracy, test))?;
+            run.best = Some(Best { epoch, val_accuracy: val.accuracy, val_loss: val.loss, test_accuracy: test.unwrap_or(f64::NAN) });
+        }
+        let seconds = started.elapsed().as_secs_f64();
+        run.wall_seconds += seconds;
+        run.epochs_done = epoch;
+        let n = train_set.len() as f64;
+        let line = EpochMetrics {
+            epoch,
+            lr,
+            train_loss: loss_sum / n,
+            train_accuracy: correct as f64 / n,
+            val_loss: val.loss,
+            val_accuracy: val.accuracy,
+            test_accuracy,
+            seconds,
+        };
+        checkpoint::replace_dir(&last, |dir| {
+            checkpoint::write_files(dir, &varmap, &meta_for(epoch, val.accuracy, None))?;
+            optimizer.save(&dir.join("optimizer.safetensors"))?;
+            write_json(&dir.join("state.json"), &run)
+        })?;
+        writeln!(log, "{}", serde_json::to_string(&line).expect("plain data")).map_err(Error::io(out))?;
+        let best = run.best.as_ref().expect("set after the first epoch");
+        bar.set_message(format!(
+            "epoch {epoch}/{} loss {:.3} train {:.3} val {:.3} (best {:.3} @ {})",
+            opts.epochs, line.train_loss, line.train_accuracy, val.accuracy, best.val_accuracy, best.epoch
+        ));
+    }
+    let best = run.best.clone().ok_or_else(|| Error::Usage("no epoch was trained (epochs = 0)".into()))?;
+    let result = RunResult {
+        val_fold: spec.val_fold,
+        seed: opts.seed,
+        best_epoch: best.epoch,
+        val_accuracy: best.val_accuracy,
+        test_accuracy: best.test_accuracy,
+        epochs: opts.epochs,
+        wall_seconds: run.wall_seconds,
+    };
+    write_json(&result_path, &result)?;
+    Ok(Some(result))
+}
+
+/// Keeps the first `epochs` lines of a metrics log (a crash may have left one more).
+fn truncate_metrics(path: &PathBuf, epochs: usize) -> Result<()> {
+    let Ok(text) = std::fs::read_to_string(path) else { return Ok(()) };
+    let kept: String = text.lines().take(epochs).map(|l| format!("{l}\n")).collect();
+    std::fs::write(path, kept).map_err(Error::io(path))
+}
+
+#[cfg(test)]
+mod tests;

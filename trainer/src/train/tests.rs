@@ -1,0 +1,137 @@
+//! Training on a tiny synthetic problem: it learns, a seed fixes the run, and a paused run
+//! resumed gives exactly the uninterrupted result.
+
+use std::path::PathBuf;
+
+use indicatif::ProgressBar;
+use pvt3_models::{Config, Rng};
+
+use super::*;
+use crate::data::Dataset;
+
+fn tiny_config() -> Config {
+    Config {
+        height: 2,
+        width: 2,
+        channels: 1,
+        frames: 8,
+        patch_height: 1,
+        patch_width: 2,
+        tubelet: 2,
+        dim: 8,
+        space_depth: 1,
+        time_depth: 1,
+        heads: 2,
+        dim_head: 4,
+        mlp_dim: 8,
+        classes: 2,
+        dropout: 0.0,
+        layer_norm_eps: 1e-5,
+    }
+}
+
+/// Two classes: a rising or a falling ramp on taxel 0, noise elsewhere, offset 50 everywhere.
+fn tiny_data() -> Dataset {
+    let mut rng = Rng::new(11);
+    let (n, len) = (80, 2 * 2 * 8);
+    let mut x = Vec::with_capacity(n * len);
+    let labels: Vec<u32> = (0..n as u32).map(|i| i % 2).collect();
+    for &label in &labels {
+        for taxel in 0..4 {
+            for t in 0..8 {
+                let ramp = if label == 0 { t as f32 } else { 7.0 - t as f32 };
+                let signal = if taxel == 0 { ramp } else { 0.0 };
+                x.push(50.0 + signal + rng.normal());
+            }
+        }
+    }
+    Dataset {
+        x,
+        sample_shape: vec![2, 2, 8],
+        labels,
+        folds: (0..n).map(|i| (i / 2) % 5).collect(),
+        folds_from_file: true,
+        path: PathBuf::from("tiny"),
+    }
+}
+
+fn options(epochs: usize) -> TrainOptions {
+    TrainOptions {
+        epochs,
+        batch_size: 8,
+        lr: 5e-3,
+        warmup_epochs: 1,
+        weight_decay: 0.01,
+        dropout: 0.1,
+        label_smoothing: 0.1,
+        clip_grad: 1.0,
+        aug_gain: 0.1,
+        aug_noise: 0.05,
+        seed: 5,
+    }
+}
+
+fn out_dir(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("pvt3-train-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    dir
+}
+
+fn spec(data: &Dataset, epochs: usize, pause_after: Option<usize>) -> RunSpec<'_> {
+    RunSpec {
+        data,
+        config: tiny_config(),
+        val_fold: 0,
+        options: options(epochs),
+        classes: vec!["up".into(), "down".into()],
+        pause_after,
+    }
+}
+
+/// The metrics log without the timings.
+fn metrics(dir: &std::path::Path) -> Vec<serde_json::Value> {
+    std::fs::read_to_string(dir.join("metrics.jsonl"))
+        .unwrap()
+        .lines()
+        .map(|l| {
+            let mut v: serde_json::Value = serde_json::from_str(l).unwrap();
+            v.as_object_mut().unwrap().remove("seconds");
+            v
+        })
+        .collect()
+}
+
+#[test]
+fn learns_a_separable_problem_and_writes_a_checkpoint() {
+    let data = tiny_data();
+    let dir = out_dir("learn");
+    let r = train(&spec(&data, 30, None), &dir, false, &ProgressBar::hidden()).unwrap().unwrap();
+    assert!(r.test_accuracy >= 0.9, "{r:?}");
+    assert_eq!(metrics(&dir).len(), 30);
+    let (meta, _, _) = crate::checkpoint::load(&dir).unwrap();
+    assert_eq!(meta.classes, vec!["up", "down"]);
+    assert_eq!(meta.provenance.epoch, r.best_epoch);
+    let split = data.split(0).unwrap();
+    assert_eq!(meta.normalization, Normalization::fit(&data, &split.train), "fitted on the training split only");
+    let again = train(&spec(&data, 30, None), &dir, false, &ProgressBar::hidden()).unwrap_err().to_string();
+    assert!(again.contains("already holds a run; pass --resume"), "{again}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn a_seed_fixes_the_run_and_a_paused_run_resumes_exactly() {
+    let data = tiny_data();
+    let (a, b) = (out_dir("a"), out_dir("b"));
+    let ra = train(&spec(&data, 6, None), &a, false, &ProgressBar::hidden()).unwrap().unwrap();
+    assert!(train(&spec(&data, 6, Some(2)), &b, false, &ProgressBar::hidden()).unwrap().is_none());
+    assert_eq!(metrics(&b).len(), 2);
+    let rb = train(&spec(&data, 6, None), &b, true, &ProgressBar::hidden()).unwrap().unwrap();
+    assert_eq!((ra.best_epoch, ra.val_accuracy, ra.test_accuracy), (rb.best_epoch, rb.val_accuracy, rb.test_accuracy));
+    assert_eq!(metrics(&a), metrics(&b));
+    let weights = |d: &PathBuf| std::fs::read(d.join("model/weights.safetensors")).unwrap();
+    assert_eq!(weights(&a), weights(&b), "identical weights, bit for bit");
+    let done = train(&spec(&data, 6, None), &b, true, &ProgressBar::hidden()).unwrap().unwrap();
+    assert_eq!(done, rb, "resuming a finished run returns its result");
+    std::fs::remove_dir_all(a).unwrap();
+    std::fs::remove_dir_all(b).unwrap();
+}
