@@ -1,5 +1,6 @@
 //! The feed-forward block, `Linear → GELU (erf form) → × channel mask → Linear`, whose mask has
-//! one trainable value per hidden unit.
+//! one trainable value per hidden unit. Scaling a hidden unit is scaling the matching input
+//! column of the second layer, so the mask is applied to that small weight matrix instead.
 
 use candle_core::{Result, Tensor};
 use candle_nn::{linear, Init, Linear, Module, VarBuilder};
@@ -10,16 +11,19 @@ use crate::{Config, Rng};
 #[derive(Clone, Debug)]
 pub struct FeedForward {
     fc1: Linear,
-    fc2: Linear,
+    fc2_weight: Tensor,
+    fc2_bias: Tensor,
     channel_mask: Tensor,
     dropout: Dropout,
 }
 
 impl FeedForward {
     pub fn new(cfg: &Config, vb: VarBuilder) -> Result<Self> {
+        let fc2 = linear(cfg.mlp_dim, cfg.dim, vb.pp("fc2"))?;
         Ok(Self {
             fc1: linear(cfg.dim, cfg.mlp_dim, vb.pp("fc1"))?,
-            fc2: linear(cfg.mlp_dim, cfg.dim, vb.pp("fc2"))?,
+            fc2_weight: fc2.weight().clone(),
+            fc2_bias: fc2.bias().expect("linear has a bias").clone(),
             channel_mask: vb.get_with_hints(cfg.mlp_dim, "channel_mask", Init::Const(1.0))?,
             dropout: Dropout::new(cfg.dropout),
         })
@@ -27,8 +31,9 @@ impl FeedForward {
 
     /// `x`: `[rows, dim]` → `[rows, dim]`.
     pub fn forward(&self, x: &Tensor, mut rng: Option<&mut Rng>) -> Result<Tensor> {
-        let hidden = self.fc1.forward(x)?.gelu_erf()?.broadcast_mul(&self.channel_mask)?;
-        let hidden = self.dropout.forward(&hidden, rng.as_deref_mut())?;
-        self.dropout.forward(&self.fc2.forward(&hidden)?, rng)
+        let hidden = self.dropout.forward(&self.fc1.forward(x)?.gelu_erf()?, rng.as_deref_mut())?;
+        let w2 = self.fc2_weight.broadcast_mul(&self.channel_mask.unsqueeze(0)?)?;
+        let out = hidden.matmul(&w2.t()?)?.broadcast_add(&self.fc2_bias)?;
+        self.dropout.forward(&out, rng)
     }
 }

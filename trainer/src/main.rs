@@ -14,9 +14,6 @@ use pvt3_trainer::evaluate::{evaluate, Samples};
 use pvt3_trainer::info::report;
 use pvt3_trainer::train::{train, RunSpec, TrainOptions};
 
-// candle's CPU training spends much of its time in malloc/free; mimalloc roughly doubles steps/s.
-#[global_allocator]
-static GLOBAL: mimalloc::MiMalloc = mimalloc::MiMalloc;
 
 #[derive(Parser)]
 #[command(name = "pvt3", version, about = "PVT³ tactile texture classification: train, cross-validate, evaluate, inspect")]
@@ -106,7 +103,20 @@ enum Command {
     },
 }
 
+/// candle allocates fresh buffers for every op, and glibc hands large ones back to the kernel
+/// on free, so training spent a quarter of its time in page faults zeroing new pages. Keeping
+/// freed memory in the heap makes the next step reuse it.
+fn keep_freed_memory() {
+    // SAFETY: mallopt only adjusts allocator parameters; called before any other thread starts.
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, 32 << 20);
+        libc::mallopt(libc::M_TRIM_THRESHOLD, 1 << 30);
+        libc::mallopt(libc::M_TOP_PAD, 64 << 20);
+    }
+}
+
 fn main() -> Result<()> {
+    keep_freed_memory();
     let cli = Cli::parse();
     let jobs = match &cli.command {
         Command::Cv { jobs, .. } => *jobs,

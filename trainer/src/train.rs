@@ -145,8 +145,6 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
             out.display()
         )));
     }
-    std::fs::create_dir_all(out).map_err(Error::io(out))?;
-
     let (mut spec_options, mut config) = (spec.options.clone(), spec.config.clone());
     let mut state = None;
     if let (true, Some(dir)) = (resume, &resumable) {
@@ -165,6 +163,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
     let val_set = Samples::new(spec.data, &split.val, &normalization);
     let test_set = Samples::new(spec.data, &split.test, &normalization);
 
+    std::fs::create_dir_all(out).map_err(Error::io(out))?;
     let (model, varmap) = Pvt3::init(&config, opts.seed)?;
     let mut optimizer = AdamW::new(&varmap, opts.weight_decay)?;
     let steps_per_epoch = train_set.len().div_ceil(opts.batch_size);

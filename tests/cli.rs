@@ -1,0 +1,133 @@
+//! End-to-end tests of the `pvt3` command on a small slice of the shipped iCub data: train,
+//! evaluate, cross-validate (side by side and resumed), inspect, and the errors a user meets.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use ndarray::{Array1, ArrayD, IxDyn};
+use ndarray_npy::NpzWriter;
+use pvt3_trainer::data::Dataset;
+
+fn pvt3(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_pvt3"))
+        .args(args)
+        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
+        .output()
+        .expect("pvt3 runs")
+}
+
+fn ok(args: &[&str]) -> String {
+    let out = pvt3(args);
+    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(out.status.success(), "pvt3 {args:?} failed:\n{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
+    stdout
+}
+
+fn fails(args: &[&str]) -> String {
+    let out = pvt3(args);
+    assert!(!out.status.success(), "pvt3 {args:?} should have failed");
+    String::from_utf8_lossy(&out.stderr).to_string()
+}
+
+fn scratch(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("pvt3-cli-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The first `per_fold` samples of every fold of the shipped iCub set, as an .npz.
+fn icub_slice(dir: &Path, per_fold: usize) -> PathBuf {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/icub20.npz");
+    let d = Dataset::load(&root, 0).unwrap();
+    let mut picked = Vec::new();
+    for f in 0..5 {
+        picked.extend((0..d.len()).filter(|&i| d.folds[i] == f).take(per_fold));
+    }
+    let x: Vec<f32> = picked.iter().flat_map(|&i| d.sample(i).to_vec()).collect();
+    let mut shape = vec![picked.len()];
+    shape.extend(&d.sample_shape);
+    let path = dir.join("slice.npz");
+    let mut w = NpzWriter::new_compressed(std::fs::File::create(&path).unwrap());
+    w.add_array("x", &ArrayD::from_shape_vec(IxDyn(&shape), x).unwrap()).unwrap();
+    w.add_array("y", &Array1::from_iter(picked.iter().map(|&i| d.labels[i] as i64))).unwrap();
+    w.add_array("fold", &Array1::from_iter(picked.iter().map(|&i| d.folds[i] as i64))).unwrap();
+    w.finish().unwrap();
+    path
+}
+
+const SMALL: [&str; 6] = ["--set", "space_depth=1", "--set", "time_depth=1", "--batch-size", "16"];
+
+#[test]
+fn info_reports_the_published_size() {
+    let out = ok(&["info"]);
+    assert!(out.contains("parameters    64272 trainable + 75 frame-mask entries"), "{out}");
+    let json = ok(&["info", "biotac20", "--json"]);
+    let cfg: pvt3_models::Config = serde_json::from_str(&json).unwrap();
+    assert_eq!(cfg, pvt3_models::Config::biotac20());
+}
+
+#[test]
+fn train_then_eval_agree_on_the_test_accuracy() {
+    let dir = scratch("train");
+    let data = icub_slice(&dir, 20);
+    let run = dir.join("run");
+    let (d, r) = (data.to_str().unwrap(), run.to_str().unwrap());
+    let mut args = vec!["train", "--data", d, "--out", r, "--epochs", "2", "--fold", "1"];
+    args.extend(SMALL);
+    let out = ok(&args);
+    assert!(out.contains("best epoch"), "{out}");
+    for f in ["config.json", "weights.safetensors", "normalization.json", "classes.json", "provenance.json"] {
+        assert!(run.join("model").join(f).exists(), "{f} is in the checkpoint");
+    }
+    let provenance: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("model/provenance.json")).unwrap()).unwrap();
+    let recorded = provenance["test_accuracy"].as_f64().unwrap();
+    let eval = ok(&["eval", r, "--data", d]);
+    assert!(eval.contains(&format!("accuracy {recorded:.4}")), "eval {eval} vs recorded {recorded}");
+    let info = ok(&["info", &format!("{r}/model")]);
+    assert!(!info.contains("64272 trainable") && info.contains("space.layers.0.attn"), "overrides are stored: {info}");
+
+    let again = fails(&args);
+    assert!(again.contains("already holds a run; pass --resume"), "{again}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn cv_runs_folds_side_by_side_and_resumes_without_retraining() {
+    let dir = scratch("cv");
+    let data = icub_slice(&dir, 12);
+    let out = dir.join("cv");
+    let (d, o) = (data.to_str().unwrap(), out.to_str().unwrap());
+    let mut args = vec!["cv", "--data", d, "--out", o, "--epochs", "1", "--jobs", "2"];
+    args.extend(SMALL);
+    let first = ok(&args);
+    assert!(first.contains("mean test accuracy"), "{first}");
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("cv.json")).unwrap()).unwrap();
+    assert_eq!(summary["runs"].as_array().unwrap().len(), 4);
+    let weights = std::fs::read(out.join("seed0/fold3/model/weights.safetensors")).unwrap();
+    args.push("--resume");
+    let second = ok(&args);
+    let tail = |s: &str| s.lines().last().unwrap().split(" (wall").next().unwrap().to_string();
+    assert_eq!(tail(&first), tail(&second));
+    assert_eq!(weights, std::fs::read(out.join("seed0/fold3/model/weights.safetensors")).unwrap(), "not retrained");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn bad_input_gets_a_clear_error() {
+    let dir = scratch("errors");
+    let missing = dir.join("absent.npz");
+    let err = fails(&["train", "--data", missing.to_str().unwrap(), "--out", dir.join("r").to_str().unwrap()]);
+    assert!(err.contains("absent.npz") && err.contains("no such file or directory"), "{err}");
+    let err = fails(&["train", "--preset", "biotac20", "--out", dir.join("r").to_str().unwrap()]);
+    assert!(err.contains("samples are [6, 10, 75] but the model expects [19, 1, 400]"), "{err}");
+    let err = fails(&["train", "--set", "depth=3", "--out", dir.join("r").to_str().unwrap()]);
+    assert!(err.contains("unknown field `depth`"), "{err}");
+    let err = fails(&["train", "--set", "patch_width=3", "--out", dir.join("r").to_str().unwrap()]);
+    assert!(err.contains("patch_width = 3 does not divide width = 10"), "{err}");
+    let err = fails(&["eval", dir.to_str().unwrap()]);
+    assert!(err.contains("not a checkpoint directory"), "{err}");
+    assert!(!dir.join("r").exists(), "nothing written on failure");
+    std::fs::remove_dir_all(dir).unwrap();
+}
