@@ -2,6 +2,7 @@
 //! evaluation for PVT³. The `pvt3` binary is a thin command line over this library.
 
 pub mod checkpoint;
+pub mod bench;
 pub mod cv;
 pub mod data;
 pub mod error;

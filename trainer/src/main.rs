@@ -7,6 +7,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use pvt3_models::Config;
+use pvt3_trainer::bench::train_speed;
 use pvt3_trainer::checkpoint;
 use pvt3_trainer::cv::cross_validate;
 use pvt3_trainer::data::{Dataset, TEST_FOLD};
@@ -92,6 +93,9 @@ enum Command {
         #[arg(long, default_value = "4")]
         fold: String,
     },
+    /// Benchmarks (see docs/training-speed.md).
+    #[command(subcommand)]
+    Bench(Bench),
     /// Parameters, multiply-adds and tensor shapes of a preset, a JSON config or a checkpoint.
     Info {
         /// A preset name, a config .json, or a checkpoint directory.
@@ -113,6 +117,20 @@ fn keep_freed_memory() {
         libc::mallopt(libc::M_TRIM_THRESHOLD, 1 << 30);
         libc::mallopt(libc::M_TOP_PAD, 64 << 20);
     }
+}
+
+#[derive(Subcommand)]
+enum Bench {
+    /// Training throughput of a preset in candle on random inputs, as one JSON line.
+    Train {
+        #[arg(long, default_value = "icub20")]
+        preset: String,
+        /// Timed optimiser steps (after two untimed warm-up steps).
+        #[arg(long, default_value_t = 20)]
+        steps: usize,
+        #[command(flatten)]
+        options: TrainOptions,
+    },
 }
 
 fn main() -> Result<()> {
@@ -175,6 +193,10 @@ fn main() -> Result<()> {
             );
         }
         Command::Eval { checkpoint, data, fold } => eval(&checkpoint, &data, &fold)?,
+        Command::Bench(Bench::Train { preset, steps, options }) => {
+            let speed = train_speed(&Config::preset(&preset)?, &options, 2, steps)?;
+            println!("{}", serde_json::to_string(&speed)?);
+        }
         Command::Info { model, json } => {
             let cfg = resolve_config(&model)?;
             if json {

@@ -58,6 +58,18 @@ pub struct TrainOptions {
     pub seed: u64,
 }
 
+impl Default for TrainOptions {
+    /// The command line's defaults.
+    fn default() -> Self {
+        #[derive(clap::Parser)]
+        struct Defaults {
+            #[command(flatten)]
+            options: TrainOptions,
+        }
+        <Defaults as clap::Parser>::parse_from(["pvt3"]).options
+    }
+}
+
 /// The outcome of a finished run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RunResult {
@@ -120,6 +132,29 @@ fn smoothed_cross_entropy(logits: &Tensor, labels: &Tensor, eps: f64) -> Result<
     }
     let uniform = candle_nn::ops::log_softmax(logits, D::Minus1)?.mean_all()?.neg()?;
     Ok(((nll * (1.0 - eps))? + (uniform * eps)?)?)
+}
+
+/// One optimiser step on a batch: forward with dropout, smoothed cross-entropy, backward,
+/// gradient clipping, AdamW. Returns the loss and the logits.
+pub fn step(
+    model: &Pvt3,
+    optimizer: &mut AdamW,
+    x: &Tensor,
+    y: &Tensor,
+    opts: &TrainOptions,
+    lr: f64,
+    rng: &mut Rng,
+) -> Result<(f64, Tensor)> {
+    let logits = model.forward(x, Some(rng))?;
+    let loss = smoothed_cross_entropy(&logits, y, opts.label_smoothing)?;
+    let grads = loss.backward()?;
+    let scale = if opts.clip_grad > 0.0 {
+        (opts.clip_grad / optimizer.grad_norm(&grads)?.max(1e-12)).min(1.0)
+    } else {
+        1.0
+    };
+    optimizer.step(&grads, lr, scale)?;
+    Ok((loss.to_scalar::<f32>()? as f64, logits))
 }
 
 fn augment(sample: &mut [f32], opts: &TrainOptions, rng: &mut Rng) {
@@ -222,18 +257,10 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
         for rows in order.chunks(opts.batch_size) {
             let rng = &mut run.rng;
             let (x, y) = train_set.batch(rows, |s| augment(s, opts, rng))?;
-            let logits = model.forward(&x, Some(&mut run.rng))?;
-            let loss = smoothed_cross_entropy(&logits, &y, opts.label_smoothing)?;
-            let grads = loss.backward()?;
-            let scale = if opts.clip_grad > 0.0 {
-                (opts.clip_grad / optimizer.grad_norm(&grads)?.max(1e-12)).min(1.0)
-            } else {
-                1.0
-            };
             lr = schedule.at(run.step);
-            optimizer.step(&grads, lr, scale)?;
+            let (loss, logits) = step(&model, &mut optimizer, &x, &y, opts, lr, &mut run.rng)?;
             run.step += 1;
-            loss_sum += loss.to_scalar::<f32>()? as f64 * rows.len() as f64;
+            loss_sum += loss * rows.len() as f64;
             let predicted = logits.argmax(D::Minus1)?.to_vec1::<u32>()?;
             correct += predicted.iter().zip(y.to_vec1::<u32>()?).filter(|(p, l)| **p == *l).count();
             bar.inc(1);
