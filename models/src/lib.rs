@@ -7,6 +7,7 @@
 //! *frame-selection* mask let training find what can be pruned.
 
 pub mod attention;
+pub mod bake;
 pub mod config;
 pub mod dropout;
 pub mod error;
@@ -14,6 +15,7 @@ pub mod feed_forward;
 pub mod init;
 pub mod layer_norm;
 pub mod pvt3;
+pub mod reference;
 pub mod rng;
 pub mod transformer;
 pub mod weights;

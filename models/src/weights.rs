@@ -55,3 +55,28 @@ pub fn save_weights(varmap: &VarMap, path: &Path) -> Result<()> {
     varmap.save(&tmp)?;
     std::fs::rename(&tmp, path).map_err(|e| weights_error(path, format!("cannot rename {}: {e}", tmp.display())))
 }
+
+/// Every variable of `varmap` as plain named tensors (for baking).
+pub fn varmap_tensors(varmap: &VarMap) -> Result<crate::bake::Tensors> {
+    let vars = varmap.data().lock().expect("varmap lock poisoned");
+    vars.iter()
+        .map(|(name, var)| Ok((name.clone(), (var.dims().to_vec(), var.flatten_all()?.to_vec1::<f32>()?))))
+        .collect()
+}
+
+/// Every f32 tensor of a safetensors file as plain named tensors.
+pub fn read_tensors(path: &Path) -> Result<crate::bake::Tensors> {
+    let bytes = std::fs::read(path).map_err(|e| weights_error(path, e.to_string()))?;
+    let file = SafeTensors::deserialize(&bytes)
+        .map_err(|e| weights_error(path, format!("not a valid safetensors file ({e})")))?;
+    file.tensors()
+        .into_iter()
+        .map(|(name, view)| {
+            if view.dtype() != safetensors::Dtype::F32 {
+                return Err(weights_error(path, format!("tensor `{name}` is {:?}, expected F32", view.dtype())));
+            }
+            let values = view.data().chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
+            Ok((name, (view.shape().to_vec(), values)))
+        })
+        .collect()
+}

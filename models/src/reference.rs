@@ -1,0 +1,129 @@
+//! A plain-Rust f64 forward of a [`BakedPvt3`]: the numerical yardstick every other form of the
+//! model (candle, ONNX in tract and in onnxruntime) is compared with. Written for clarity, not
+//! speed: loops over tokens and channels, no candle.
+
+use crate::bake::{BakedAttention, BakedFeedForward, BakedPvt3, BakedTransformer, Dense, Norm};
+use crate::{Error, Result};
+
+fn dense(l: &Dense, x: &[f64]) -> Vec<f64> {
+    (0..l.rows)
+        .map(|r| {
+            let w = &l.weight[r * l.cols..(r + 1) * l.cols];
+            let dot: f64 = w.iter().zip(x).map(|(w, x)| *w as f64 * x).sum();
+            dot + l.bias.as_ref().map_or(0.0, |b| b[r] as f64)
+        })
+        .collect()
+}
+
+fn layer_norm(n: &Norm, x: &[f64], eps: f64) -> Vec<f64> {
+    let len = x.len() as f64;
+    let mean = x.iter().sum::<f64>() / len;
+    let var = x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / len;
+    let inv = 1.0 / (var + eps).sqrt();
+    x.iter().enumerate().map(|(i, v)| (v - mean) * inv * n.weight[i] as f64 + n.bias[i] as f64).collect()
+}
+
+fn gelu(x: f64) -> f64 {
+    0.5 * x * (1.0 + libm::erf(x / std::f64::consts::SQRT_2))
+}
+
+/// Self-attention over `rows` (each already normalised).
+fn attention(a: &BakedAttention, rows: &[Vec<f64>]) -> Vec<Vec<f64>> {
+    let q: Vec<Vec<f64>> = rows.iter().map(|r| dense(&a.q, r)).collect();
+    let k: Vec<Vec<f64>> = rows.iter().map(|r| dense(&a.k, r)).collect();
+    let v: Vec<Vec<f64>> = rows.iter().map(|r| dense(&a.v, r)).collect();
+    let (hd, scale) = (a.head_dim, a.scale as f64);
+    let mut mixed = vec![vec![0.0; a.heads * hd]; rows.len()];
+    for h in 0..a.heads {
+        let ch = h * hd..(h + 1) * hd;
+        for (i, qi) in q.iter().enumerate() {
+            let scores: Vec<f64> = k
+                .iter()
+                .map(|kj| ch.clone().map(|c| qi[c] * kj[c]).sum::<f64>() * scale)
+                .collect();
+            let max = scores.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+            let exp: Vec<f64> = scores.iter().map(|s| (s - max).exp()).collect();
+            let total: f64 = exp.iter().sum();
+            for (j, e) in exp.iter().enumerate() {
+                for c in ch.clone() {
+                    mixed[i][c] += e / total * v[j][c];
+                }
+            }
+        }
+    }
+    mixed.iter().map(|m| dense(&a.out, m)).collect()
+}
+
+fn feed_forward(f: &BakedFeedForward, x: &[f64]) -> Vec<f64> {
+    let hidden: Vec<f64> = dense(&f.fc1, x).into_iter().map(gelu).collect();
+    dense(&f.fc2, &hidden)
+}
+
+/// Runs a transformer over `tokens` (`len` rows of `dim`) and returns its normalised first token.
+pub fn transformer_cls(t: &BakedTransformer, tokens: &[f64], len: usize, dim: usize, eps: f64) -> Vec<f64> {
+    let mut x: Vec<Vec<f64>> = (0..len).map(|i| tokens[i * dim..(i + 1) * dim].to_vec()).collect();
+    for b in &t.layers {
+        let normed: Vec<Vec<f64>> = x.iter().map(|r| layer_norm(&b.attn_norm, r, eps)).collect();
+        for (r, a) in x.iter_mut().zip(attention(&b.attn, &normed)) {
+            r.iter_mut().zip(a).for_each(|(v, a)| *v += a);
+        }
+        for r in x.iter_mut() {
+            let f = feed_forward(&b.ffn, &layer_norm(&b.ffn_norm, r, eps));
+            r.iter_mut().zip(f).for_each(|(v, f)| *v += f);
+        }
+    }
+    layer_norm(&t.norm, &x[0], eps)
+}
+
+/// Patch vectors of temporal token `k` of one raw sample (`[h, w, (c,) t]`).
+fn patches(m: &BakedPvt3, sample: &[f32], k: usize) -> Vec<Vec<f64>> {
+    let c = &m.config;
+    let (gw, frames) = (c.width / c.patch_width, c.frames);
+    (0..c.num_patches())
+        .map(|p| {
+            let (pr, pc) = (p / gw, p % gw);
+            let mut v = Vec::with_capacity(c.patch_dim());
+            for dt in 0..c.tubelet {
+                for dy in 0..c.patch_height {
+                    for dx in 0..c.patch_width {
+                        for ci in 0..c.channels {
+                            let (y, x) = (pr * c.patch_height + dy, pc * c.patch_width + dx);
+                            let t = k * c.tubelet + dt;
+                            v.push(sample[((y * c.width + x) * c.channels + ci) * frames + t] as f64);
+                        }
+                    }
+                }
+            }
+            v
+        })
+        .collect()
+}
+
+/// Logits `[batch][classes]` for `batch` raw samples laid out back to back.
+pub fn forward(m: &BakedPvt3, x: &[f32], batch: usize) -> Result<Vec<Vec<f64>>> {
+    let c = &m.config;
+    let sample_len: usize = c.sample_shape().iter().product();
+    if x.len() != batch * sample_len {
+        return Err(Error::InputShape { got: vec![x.len()], expected: format!("{batch} × {sample_len} values") });
+    }
+    let (n, d, eps) = (c.num_patches(), c.dim, c.layer_norm_eps);
+    x.chunks(sample_len)
+        .map(|sample| {
+            let mut sequence = m.temporal_cls.iter().map(|v| *v as f64).collect::<Vec<_>>();
+            let mut encodings: Vec<f64> = m.pruned_encodings.iter().map(|v| *v as f64).collect();
+            for (kk, &k) in m.kept_tokens.iter().enumerate() {
+                let pos = &m.pos_embed[kk * (n + 1) * d..(kk + 1) * (n + 1) * d];
+                let mut tokens: Vec<f64> = m.space_cls.iter().map(|v| *v as f64).collect();
+                for p in patches(m, sample, k) {
+                    tokens.extend(dense(&m.patch_embed, &p).into_iter().map(|e| e * m.token_scale[kk] as f64));
+                }
+                tokens.iter_mut().zip(pos).for_each(|(t, p)| *t += *p as f64);
+                let enc = transformer_cls(&m.space, &tokens, n + 1, d, eps);
+                encodings[k * d..(k + 1) * d].copy_from_slice(&enc);
+            }
+            sequence.extend(encodings);
+            let pooled = transformer_cls(&m.temporal, &sequence, c.time_tokens() + 1, d, eps);
+            Ok(dense(&m.head, &layer_norm(&m.head_norm, &pooled, eps)))
+        })
+        .collect()
+}
