@@ -131,3 +131,33 @@ fn bad_input_gets_a_clear_error() {
     assert!(!dir.join("r").exists(), "nothing written on failure");
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn train_prune_fine_tune_and_bake_make_a_smaller_model() {
+    let dir = scratch("prune");
+    let data = icub_slice(&dir, 12);
+    let run = dir.join("run");
+    let (d, r) = (data.to_str().unwrap(), run.to_str().unwrap());
+    let mut args = vec!["train", "--data", d, "--out", r, "--epochs", "1", "--l1", "0.01"];
+    args.extend(["--prune-channels", "50", "--prune-frames", "40", "--fine-tune-epochs", "1"]);
+    args.extend(SMALL);
+    let out = ok(&args);
+    assert!(out.contains("pruned and fine-tuned"), "{out}");
+    let provenance: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("pruned/model/provenance.json")).unwrap()).unwrap();
+    assert_eq!(provenance["pruning"]["channels"], 50.0);
+
+    let info = ok(&["info", &format!("{r}/pruned")]);
+    assert!(info.contains("after baking") && info.contains("45 of 75 temporal tokens kept"), "{info}");
+    let baked = dir.join("baked.json");
+    let out = ok(&["bake", &format!("{r}/pruned"), "-o", baked.to_str().unwrap()]);
+    assert!(out.contains("45 of 75 temporal tokens kept"), "{out}");
+    let file: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&baked).unwrap()).unwrap();
+    assert_eq!(file["baked"]["kept_tokens"].as_array().unwrap().len(), 45);
+    assert_eq!(file["baked"]["space"]["layers"][0]["attn"]["head_dim"], 32);
+    assert_eq!(file["baked"]["space"]["layers"][0]["ffn"]["fc1"]["rows"], 20);
+
+    let err = fails(&["prune", r, "--out", dir.join("p2").to_str().unwrap()]);
+    assert!(err.contains("give --prune-channels and/or --prune-frames"), "{err}");
+    std::fs::remove_dir_all(dir).unwrap();
+}

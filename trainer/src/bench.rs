@@ -5,11 +5,10 @@
 use std::time::Instant;
 
 use candle_core::{Device, Tensor};
-use pvt3_models::{Config, Pvt3, Rng};
+use pvt3_models::{Config, Rng};
 use serde::Serialize;
 
-use crate::optim::AdamW;
-use crate::train::{step, TrainOptions};
+use crate::train::{Learner, TrainOptions};
 use crate::Result;
 
 #[derive(Debug, Serialize)]
@@ -24,8 +23,7 @@ pub struct TrainSpeed {
 /// Times `steps` optimiser steps after `warmup` untimed ones.
 pub fn train_speed(cfg: &Config, opts: &TrainOptions, warmup: usize, steps: usize) -> Result<TrainSpeed> {
     let cfg = Config { dropout: opts.dropout, ..cfg.clone() };
-    let (model, varmap) = Pvt3::init(&cfg, opts.seed)?;
-    let mut optimizer = AdamW::new(&varmap, opts.weight_decay)?;
+    let mut learner = Learner::new(&cfg, opts, None)?;
     let mut rng = Rng::new(opts.seed);
     let mut shape = vec![opts.batch_size];
     shape.extend(cfg.sample_shape());
@@ -34,11 +32,11 @@ pub fn train_speed(cfg: &Config, opts: &TrainOptions, warmup: usize, steps: usiz
     let labels: Vec<u32> = (0..opts.batch_size).map(|i| (i % cfg.classes) as u32).collect();
     let y = Tensor::new(labels, &Device::Cpu)?;
     for _ in 0..warmup {
-        step(&model, &mut optimizer, &x, &y, opts, opts.lr, &mut rng)?;
+        learner.step(&x, &y, opts, opts.lr, &mut rng)?;
     }
     let started = Instant::now();
     for _ in 0..steps {
-        step(&model, &mut optimizer, &x, &y, opts, opts.lr, &mut rng)?;
+        learner.step(&x, &y, opts, opts.lr, &mut rng)?;
     }
     let seconds_per_step = started.elapsed().as_secs_f64() / steps.max(1) as f64;
     Ok(TrainSpeed {

@@ -27,6 +27,9 @@ pub struct Provenance {
     pub val_accuracy: f64,
     pub test_accuracy: Option<f64>,
     pub options: TrainOptions,
+    /// The pruning applied before fine-tuning, if any.
+    #[serde(default)]
+    pub pruning: Option<pvt3_models::prune::PruneSpec>,
 }
 
 /// Everything in a checkpoint except the weights.
@@ -45,6 +48,13 @@ fn checkpoint_error(path: &Path, reason: impl Into<String>) -> Error {
 pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
     let text = serde_json::to_string_pretty(value).expect("plain data serialises");
     std::fs::write(path, text + "\n").map_err(Error::io(path))
+}
+
+/// Writes JSON to a temporary file and renames it over `path`.
+pub fn write_json_atomically<T: Serialize>(path: &Path, value: &T) -> Result<()> {
+    let tmp = sibling(path, ".tmp");
+    write_json(&tmp, value)?;
+    std::fs::rename(&tmp, path).map_err(Error::io(path))
 }
 
 pub fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T> {

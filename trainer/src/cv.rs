@@ -12,6 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::checkpoint::write_json;
 use crate::data::TEST_FOLD;
+use crate::prune::{prune_and_fine_tune, PruneStage};
 use crate::train::{train, RunResult, RunSpec};
 use crate::Result;
 
@@ -23,8 +24,35 @@ pub struct CvSummary {
     pub mean_test_accuracy: f64,
     pub std_test_accuracy: f64,
     pub mean_val_accuracy: f64,
+    /// With pruning: the pruned and fine-tuned run of each entry of `runs`.
+    #[serde(default)]
+    pub pruned_runs: Vec<RunResult>,
+    #[serde(default)]
+    pub pruned_mean_test_accuracy: Option<f64>,
+    #[serde(default)]
+    pub pruned_std_test_accuracy: Option<f64>,
+    #[serde(default)]
+    pub pruning: Option<PruneStage>,
     /// Training time summed over runs (they may have run side by side).
     pub train_seconds: f64,
+}
+
+/// One fold's results: the trained run and, with pruning, its pruned and fine-tuned successor.
+struct FoldResult {
+    dense: RunResult,
+    pruned: Option<RunResult>,
+}
+
+fn run_fold(spec: &RunSpec, stage: Option<&PruneStage>, dir: &Path, resume: bool, bar: &ProgressBar) -> Result<Option<FoldResult>> {
+    let Some(dense) = train(spec, dir, resume, bar)? else { return Ok(None) };
+    let pruned = match stage {
+        Some(stage) => match prune_and_fine_tune(dir, spec.data, stage, &dir.join("pruned"), resume, bar)? {
+            Some(p) => Some(p),
+            None => return Ok(None),
+        },
+        None => None,
+    };
+    Ok(Some(FoldResult { dense, pruned }))
 }
 
 /// Mean and sample standard deviation.
@@ -37,8 +65,10 @@ pub fn mean_std(values: &[f64]) -> (f64, f64) {
 
 /// Runs every (seed, fold) of the protocol under `out`, `jobs` at a time. `None`: the runs
 /// paused (see [`RunSpec::pause_after`]); resume to finish them.
+#[allow(clippy::too_many_arguments)]
 pub fn cross_validate(
     spec: &RunSpec,
+    stage: Option<&PruneStage>,
     seeds: &[u64],
     out: &Path,
     resume: bool,
@@ -48,7 +78,7 @@ pub fn cross_validate(
 ) -> Result<Option<CvSummary>> {
     let work: Vec<(u64, usize)> = seeds.iter().flat_map(|&s| (0..TEST_FOLD).map(move |k| (s, k))).collect();
     let next = AtomicUsize::new(0);
-    let results: Mutex<Vec<Option<Result<Option<RunResult>>>>> = Mutex::new(work.iter().map(|_| None).collect());
+    let results: Mutex<Vec<Option<Result<Option<FoldResult>>>>> = Mutex::new(work.iter().map(|_| None).collect());
     std::thread::scope(|scope| {
         for _ in 0..jobs.clamp(1, work.len().max(1)) {
             scope.spawn(|| loop {
@@ -57,15 +87,12 @@ pub fn cross_validate(
                 let bar = progress.add(ProgressBar::new(0).with_style(style.clone()));
                 bar.set_prefix(format!("seed {seed} fold {fold}"));
                 let run_spec = RunSpec {
-                    data: spec.data,
-                    config: spec.config.clone(),
                     val_fold: fold,
                     options: crate::train::TrainOptions { seed, ..spec.options.clone() },
-                    classes: spec.classes.clone(),
-                    pause_after: spec.pause_after,
+                    ..spec.clone()
                 };
                 let dir = out.join(format!("seed{seed}")).join(format!("fold{fold}"));
-                let result = train(&run_spec, &dir, resume, &bar);
+                let result = run_fold(&run_spec, stage, &dir, resume, &bar);
                 bar.finish();
                 let failed = result.is_err();
                 results.lock().expect("no panics while holding the lock")[i] = Some(result);
@@ -75,13 +102,18 @@ pub fn cross_validate(
             });
         }
     });
-    let mut runs = Vec::new();
+    let (mut runs, mut pruned_runs) = (Vec::new(), Vec::new());
     for r in results.into_inner().expect("threads joined").into_iter().flatten() {
         match r? {
-            Some(run) => runs.push(run),
+            Some(fold) => {
+                runs.push(fold.dense);
+                pruned_runs.extend(fold.pruned);
+            }
             None => return Ok(None),
         }
     }
+    let pruned_tests: Vec<f64> = pruned_runs.iter().map(|r| r.test_accuracy).collect();
+    let pruned_stats = (!pruned_tests.is_empty()).then(|| mean_std(&pruned_tests));
     let tests: Vec<f64> = runs.iter().map(|r| r.test_accuracy).collect();
     let vals: Vec<f64> = runs.iter().map(|r| r.val_accuracy).collect();
     let (mean_test_accuracy, std_test_accuracy) = mean_std(&tests);
@@ -91,8 +123,12 @@ pub fn cross_validate(
         mean_test_accuracy,
         std_test_accuracy,
         mean_val_accuracy: mean_std(&vals).0,
-        train_seconds: runs.iter().map(|r| r.wall_seconds).sum(),
+        train_seconds: runs.iter().chain(&pruned_runs).map(|r| r.wall_seconds).sum(),
         runs,
+        pruned_mean_test_accuracy: pruned_stats.map(|s| s.0),
+        pruned_std_test_accuracy: pruned_stats.map(|s| s.1),
+        pruned_runs,
+        pruning: stage.cloned(),
     };
     write_json(&out.join("cv.json"), &summary)?;
     Ok(Some(summary))

@@ -7,7 +7,11 @@ use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use pvt3_models::Config;
+use pvt3_models::bake::bake;
+use pvt3_models::prune::{PruneSpec, Scope};
+use pvt3_models::weights::varmap_tensors;
 use pvt3_trainer::bench::train_speed;
+use pvt3_trainer::prune::{prune_and_fine_tune, PruneStage};
 use pvt3_trainer::checkpoint;
 use pvt3_trainer::cv::cross_validate;
 use pvt3_trainer::data::{Dataset, TEST_FOLD};
@@ -51,6 +55,44 @@ struct ModelArgs {
     options: TrainOptions,
 }
 
+/// Pruning after training (the paper's schedule: train, prune, fine-tune).
+#[derive(clap::Args)]
+struct PruneArgs {
+    /// Prune this percentage of channels (attention q/k/v channels and FFN units) by mask score.
+    #[arg(long)]
+    prune_channels: Option<f64>,
+    /// Prune this percentage of frames (temporal tokens) by mask score.
+    #[arg(long)]
+    prune_frames: Option<f64>,
+    /// `local`: the same share of every mask (every head); `global`: one threshold over all masks.
+    #[arg(long, default_value = "local", value_parser = ["local", "global"])]
+    prune_scope: String,
+    /// Epochs of fine-tuning after pruning, pruned entries held at zero.
+    #[arg(long, default_value_t = 30)]
+    fine_tune_epochs: usize,
+    /// Peak learning rate of the fine-tuning.
+    #[arg(long, default_value_t = 5e-4)]
+    fine_tune_lr: f64,
+}
+
+impl PruneArgs {
+    fn stage(&self) -> Option<PruneStage> {
+        if self.prune_channels.is_none() && self.prune_frames.is_none() {
+            return None;
+        }
+        let scope = if self.prune_scope == "global" { Scope::Global } else { Scope::Local };
+        Some(PruneStage {
+            spec: PruneSpec {
+                channels: self.prune_channels.unwrap_or(0.0),
+                frames: self.prune_frames.unwrap_or(0.0),
+                scope,
+            },
+            epochs: self.fine_tune_epochs,
+            lr: self.fine_tune_lr,
+        })
+    }
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Train on one split: fold K validates (epoch selection), fold 4 tests, the rest trains.
@@ -66,6 +108,9 @@ enum Command {
         /// Continue the interrupted run in OUT.
         #[arg(long)]
         resume: bool,
+        /// With --prune-channels/--prune-frames: prune the trained model and fine-tune it into OUT/pruned.
+        #[command(flatten)]
+        prune: PruneArgs,
     },
     /// The published protocol: 4-fold cross-validation, test on fold 4, mean ± std over seeds.
     Cv {
@@ -82,6 +127,32 @@ enum Command {
         /// Folds trained side by side (each on one thread).
         #[arg(long, default_value_t = 1)]
         jobs: usize,
+        /// With --prune-channels/--prune-frames: every fold is also pruned and fine-tuned
+        /// (OUT/seed*/fold*/pruned), and both results are reported.
+        #[command(flatten)]
+        prune: PruneArgs,
+    },
+    /// Prune a trained run by its mask scores, then fine-tune it with the pruned entries held at zero.
+    Prune {
+        /// The trained run (or checkpoint) directory.
+        run: PathBuf,
+        /// Data set (default: the one the run was trained on).
+        #[arg(long)]
+        data: Option<PathBuf>,
+        #[arg(long, short, default_value = "runs/pruned")]
+        out: PathBuf,
+        #[arg(long)]
+        resume: bool,
+        #[command(flatten)]
+        prune: PruneArgs,
+    },
+    /// Bake a (pruned) checkpoint into a smaller dense model: pruned channels and frames removed.
+    Bake {
+        /// The run (or checkpoint) directory.
+        run: PathBuf,
+        /// Output file (JSON: the baked weights, normalisation, class names, provenance).
+        #[arg(long, short, default_value = "baked.json")]
+        out: PathBuf,
     },
     /// Accuracy of a checkpoint on a data set (by default its test fold, or all samples).
     Eval {
@@ -146,7 +217,7 @@ fn main() -> Result<()> {
         std::env::set_var("RAYON_NUM_THREADS", t.to_string());
     }
     match cli.command {
-        Command::Train { model, fold, out, resume } => {
+        Command::Train { model, fold, out, resume, prune } => {
             let prepared = prepare(&model)?;
             let bar = ProgressBar::new(0).with_style(bar_style());
             bar.set_prefix(format!("fold {fold}"));
@@ -166,22 +237,63 @@ fn main() -> Result<()> {
                 started.elapsed().as_secs_f64(),
                 out.join("model").display()
             );
+            if let Some(stage) = prune.stage() {
+                let bar = ProgressBar::new(0).with_style(bar_style());
+                bar.set_prefix("fine-tune");
+                let pruned = out.join("pruned");
+                if let Some(p) = prune_and_fine_tune(&out, &prepared.data, &stage, &pruned, resume, &bar)? {
+                    bar.finish();
+                    report_pruned(&p, &pruned)?;
+                }
+            }
         }
-        Command::Cv { model, seeds, out, resume, jobs } => {
+        Command::Prune { run, data, out, resume, prune } => {
+            let stage = prune.stage().context("give --prune-channels and/or --prune-frames")?;
+            let (_, meta) = checkpoint::load_meta(&run)?;
+            let data_path = data.unwrap_or_else(|| PathBuf::from(&meta.provenance.data));
+            let dataset = Dataset::load(&data_path, meta.provenance.seed)?;
+            let bar = ProgressBar::new(0).with_style(bar_style());
+            bar.set_prefix("fine-tune");
+            if let Some(p) = prune_and_fine_tune(&run, &dataset, &stage, &out, resume, &bar)? {
+                bar.finish();
+                report_pruned(&p, &out)?;
+            }
+        }
+        Command::Bake { run, out } => {
+            let (meta, _, varmap) = checkpoint::load(&run)?;
+            let baked = bake(&meta.config, &varmap_tensors(&varmap)?)?;
+            let file = BakedFile { baked, normalization: meta.normalization, classes: meta.classes, provenance: meta.provenance };
+            checkpoint::write_json_atomically(&out, &file)?;
+            println!(
+                "baked {}: {} → {} parameters, {} → {} multiply-adds per sample, {} of {} temporal tokens kept",
+                out.display(),
+                file.baked.config.parameter_count() + file.baked.config.time_tokens(),
+                file.baked.parameter_count(),
+                file.baked.config.mult_adds(),
+                file.baked.mult_adds(),
+                file.baked.kept_tokens.len(),
+                file.baked.config.time_tokens()
+            );
+        }
+        Command::Cv { model, seeds, out, resume, jobs, prune } => {
             let prepared = prepare(&model)?;
             let started = Instant::now();
             let multi = MultiProgress::new();
-            let s = cross_validate(&prepared.spec(&model, 0), &seeds, &out, resume, jobs, &multi, &bar_style())?;
+            let s = cross_validate(&prepared.spec(&model, 0), prune.stage().as_ref(), &seeds, &out, resume, jobs, &multi, &bar_style())?;
             let Some(s) = s else {
                 println!("paused; continue with the same command and --resume");
                 return Ok(());
             };
-            println!("{:>6} {:>5} {:>6} {:>8} {:>8} {:>8}", "seed", "fold", "epoch", "val", "test", "seconds");
-            for r in &s.runs {
+            println!("{:>6} {:>5} {:>6} {:>8} {:>8} {:>8} {:>12}", "seed", "fold", "epoch", "val", "test", "seconds", "pruned test");
+            for (i, r) in s.runs.iter().enumerate() {
+                let pruned = s.pruned_runs.get(i).map_or(String::new(), |p| format!("{:.4}", p.test_accuracy));
                 println!(
-                    "{:>6} {:>5} {:>6} {:>8.4} {:>8.4} {:>8.0}",
-                    r.seed, r.val_fold, r.best_epoch, r.val_accuracy, r.test_accuracy, r.wall_seconds
+                    "{:>6} {:>5} {:>6} {:>8.4} {:>8.4} {:>8.0} {:>12}",
+                    r.seed, r.val_fold, r.best_epoch, r.val_accuracy, r.test_accuracy, r.wall_seconds, pruned
                 );
+            }
+            if let (Some(m), Some(sd)) = (s.pruned_mean_test_accuracy, s.pruned_std_test_accuracy) {
+                println!("pruned and fine-tuned: mean test accuracy {m:.4} ± {sd:.4}");
             }
             println!(
                 "mean test accuracy {:.4} ± {:.4} over {} runs (wall {:.0} s); summary {}",
@@ -203,9 +315,45 @@ fn main() -> Result<()> {
                 println!("{}", serde_json::to_string_pretty(&cfg)?);
             } else {
                 print!("{}", report(&cfg)?);
+                if Path::new(&model).is_dir() {
+                    let (meta, _, varmap) = checkpoint::load(Path::new(&model))?;
+                    let baked = bake(&meta.config, &varmap_tensors(&varmap)?)?;
+                    println!(
+                        "\nafter baking  {} parameters, {} multiply-adds per sample, {} of {} temporal tokens kept",
+                        baked.parameter_count(),
+                        baked.mult_adds(),
+                        baked.kept_tokens.len(),
+                        cfg.time_tokens()
+                    );
+                }
             }
         }
     }
+    Ok(())
+}
+
+/// What `pvt3 bake` writes: everything the exporter needs.
+#[derive(serde::Serialize)]
+struct BakedFile {
+    baked: pvt3_models::bake::BakedPvt3,
+    normalization: pvt3_trainer::normalization::Normalization,
+    classes: Vec<String>,
+    provenance: checkpoint::Provenance,
+}
+
+fn report_pruned(r: &pvt3_trainer::train::RunResult, out: &Path) -> Result<()> {
+    let (meta, _, varmap) = checkpoint::load(out)?;
+    let baked = bake(&meta.config, &varmap_tensors(&varmap)?)?;
+    println!(
+        "pruned and fine-tuned: best epoch {} of {}, validation {:.4}, test {:.4}; baked: {} parameters, {} multiply-adds per sample; checkpoint {}",
+        r.best_epoch,
+        r.epochs,
+        r.val_accuracy,
+        r.test_accuracy,
+        baked.parameter_count(),
+        baked.mult_adds(),
+        out.join("model").display()
+    );
     Ok(())
 }
 
@@ -243,6 +391,8 @@ impl Prepared {
             options: args.options.clone(),
             classes: self.classes.clone(),
             pause_after: args.pause_after,
+            start: None,
+            pruning: None,
         }
     }
 }

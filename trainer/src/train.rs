@@ -10,7 +10,10 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use candle_core::{Tensor, D};
+use candle_core::{DType, Device, Tensor, Var, D};
+use candle_nn::VarMap;
+use pvt3_models::bake::Tensors;
+use pvt3_models::prune::PruneSpec;
 use indicatif::ProgressBar;
 use pvt3_models::{Config, Pvt3, Rng};
 use serde::{Deserialize, Serialize};
@@ -56,6 +59,15 @@ pub struct TrainOptions {
     /// Seed of initialisation, shuffling, dropout and augmentation: a fixed seed gives the same run.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// L1 penalty on the selection masks (this times the mean |mask| over all entries): drives
+    /// unimportant channels and frames towards zero, so that pruning by score is meaningful.
+    #[arg(long, default_value_t = 0.0)]
+    #[serde(default)]
+    pub l1: f64,
+    /// Hold mask entries that are zero at the start at zero (fine-tuning after pruning).
+    #[arg(skip)]
+    #[serde(default)]
+    pub hold_pruned: bool,
 }
 
 impl Default for TrainOptions {
@@ -114,6 +126,7 @@ struct EpochMetrics {
 }
 
 /// Everything a run needs besides its output directory.
+#[derive(Clone)]
 pub struct RunSpec<'a> {
     pub data: &'a Dataset,
     pub config: Config,
@@ -122,6 +135,10 @@ pub struct RunSpec<'a> {
     pub classes: Vec<String>,
     /// Stop after this many epochs in this call, leaving the run to be resumed.
     pub pause_after: Option<usize>,
+    /// Weights to start from instead of a seeded initialisation (fine-tuning).
+    pub start: Option<Tensors>,
+    /// The pruning that produced `start`, recorded in the provenance.
+    pub pruning: Option<PruneSpec>,
 }
 
 /// Cross-entropy against labels smoothed by `eps`.
@@ -134,27 +151,70 @@ fn smoothed_cross_entropy(logits: &Tensor, labels: &Tensor, eps: f64) -> Result<
     Ok(((nll * (1.0 - eps))? + (uniform * eps)?)?)
 }
 
-/// One optimiser step on a batch: forward with dropout, smoothed cross-entropy, backward,
-/// gradient clipping, AdamW. Returns the loss and the logits.
-pub fn step(
-    model: &Pvt3,
-    optimizer: &mut AdamW,
-    x: &Tensor,
-    y: &Tensor,
-    opts: &TrainOptions,
-    lr: f64,
-    rng: &mut Rng,
-) -> Result<(f64, Tensor)> {
-    let logits = model.forward(x, Some(rng))?;
-    let loss = smoothed_cross_entropy(&logits, y, opts.label_smoothing)?;
-    let grads = loss.backward()?;
-    let scale = if opts.clip_grad > 0.0 {
-        (opts.clip_grad / optimizer.grad_norm(&grads)?.max(1e-12)).min(1.0)
-    } else {
-        1.0
-    };
-    optimizer.step(&grads, lr, scale)?;
-    Ok((loss.to_scalar::<f32>()? as f64, logits))
+/// A model with its optimiser: what one training step needs.
+pub struct Learner {
+    pub model: Pvt3,
+    pub varmap: VarMap,
+    pub optimizer: AdamW,
+    /// The selection masks, for the L1 penalty.
+    masks: Vec<Tensor>,
+    /// Mask variables and their 0/1 keep flags, re-applied after every step.
+    held: Vec<(Var, Tensor)>,
+}
+
+impl Learner {
+    /// A seeded model, or one starting from `start` weights.
+    pub fn new(config: &Config, opts: &TrainOptions, start: Option<&Tensors>) -> Result<Self> {
+        let (model, varmap) = Pvt3::init(config, opts.seed)?;
+        if let Some(start) = start {
+            for (name, var) in varmap.data().lock().expect("varmap lock poisoned").iter() {
+                let (shape, values) = start.get(name).ok_or_else(|| Error::Usage(format!("start weights lack `{name}`")))?;
+                var.set(&Tensor::from_vec(values.clone(), shape.as_slice(), &Device::Cpu)?)?;
+            }
+        }
+        let masks = mask_vars(&varmap).into_iter().map(|v| v.as_tensor().clone()).collect();
+        let optimizer = AdamW::new(&varmap, opts.weight_decay)?;
+        Ok(Self { model, varmap, optimizer, masks, held: Vec::new() })
+    }
+
+    /// From now on, mask entries that are zero stay zero.
+    pub fn hold_zero_masks(&mut self) -> Result<()> {
+        self.held = mask_vars(&self.varmap)
+            .into_iter()
+            .map(|v| Ok((v.clone(), v.as_tensor().ne(0.0)?.to_dtype(DType::F32)?)))
+            .collect::<Result<_>>()?;
+        Ok(())
+    }
+
+    /// One optimiser step on a batch: forward with dropout, smoothed cross-entropy (plus the L1
+    /// penalty on the masks), backward, gradient clipping, AdamW. Returns the loss and logits.
+    pub fn step(&mut self, x: &Tensor, y: &Tensor, opts: &TrainOptions, lr: f64, rng: &mut Rng) -> Result<(f64, Tensor)> {
+        let logits = self.model.forward(x, Some(rng))?;
+        let mut loss = smoothed_cross_entropy(&logits, y, opts.label_smoothing)?;
+        if opts.l1 > 0.0 {
+            let flat: Vec<Tensor> = self.masks.iter().map(|m| m.abs()).collect::<candle_core::Result<_>>()?;
+            loss = (loss + (Tensor::cat(&flat, 0)?.mean_all()? * opts.l1)?)?;
+        }
+        let grads = loss.backward()?;
+        let scale = if opts.clip_grad > 0.0 {
+            (opts.clip_grad / self.optimizer.grad_norm(&grads)?.max(1e-12)).min(1.0)
+        } else {
+            1.0
+        };
+        self.optimizer.step(&grads, lr, scale)?;
+        for (var, keep) in &self.held {
+            var.set(&(var.as_tensor() * keep)?)?;
+        }
+        Ok((loss.to_scalar::<f32>()? as f64, logits))
+    }
+}
+
+/// The selection-mask variables, in name order.
+fn mask_vars(varmap: &VarMap) -> Vec<Var> {
+    let vars = varmap.data().lock().expect("varmap lock poisoned");
+    let mut names: Vec<&String> = vars.keys().filter(|n| n.ends_with("mask")).collect();
+    names.sort();
+    names.into_iter().map(|n| vars[n].clone()).collect()
 }
 
 fn augment(sample: &mut [f32], opts: &TrainOptions, rng: &mut Rng) {
@@ -199,8 +259,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
     let test_set = Samples::new(spec.data, &split.test, &normalization);
 
     std::fs::create_dir_all(out).map_err(Error::io(out))?;
-    let (model, varmap) = Pvt3::init(&config, opts.seed)?;
-    let mut optimizer = AdamW::new(&varmap, opts.weight_decay)?;
+    let mut learner = Learner::new(&config, opts, spec.start.as_ref())?;
     let steps_per_epoch = train_set.len().div_ceil(opts.batch_size);
     let schedule = Schedule {
         peak: opts.lr,
@@ -210,8 +269,8 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
     };
     let mut run = match state {
         Some((dir, st)) => {
-            pvt3_models::weights::load_weights(&varmap, &dir.join("weights.safetensors"))?;
-            optimizer.load(&dir.join("optimizer.safetensors"), st.step)?;
+            pvt3_models::weights::load_weights(&learner.varmap, &dir.join("weights.safetensors"))?;
+            learner.optimizer.load(&dir.join("optimizer.safetensors"), st.step)?;
             truncate_metrics(&out.join("metrics.jsonl"), st.epochs_done)?;
             st
         }
@@ -234,9 +293,13 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
             val_accuracy,
             test_accuracy,
             options: opts.clone(),
+            pruning: spec.pruning.clone(),
         },
     };
 
+    if opts.hold_pruned {
+        learner.hold_zero_masks()?;
+    }
     bar.set_length((opts.epochs * steps_per_epoch) as u64);
     bar.set_position((run.epochs_done * steps_per_epoch) as u64);
     let mut log = std::fs::OpenOptions::new()
@@ -258,22 +321,22 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
             let rng = &mut run.rng;
             let (x, y) = train_set.batch(rows, |s| augment(s, opts, rng))?;
             lr = schedule.at(run.step);
-            let (loss, logits) = step(&model, &mut optimizer, &x, &y, opts, lr, &mut run.rng)?;
+            let (loss, logits) = learner.step(&x, &y, opts, lr, &mut run.rng)?;
             run.step += 1;
             loss_sum += loss * rows.len() as f64;
             let predicted = logits.argmax(D::Minus1)?.to_vec1::<u32>()?;
             correct += predicted.iter().zip(y.to_vec1::<u32>()?).filter(|(p, l)| **p == *l).count();
             bar.inc(1);
         }
-        let val = evaluate(&model, &val_set)?;
+        let val = evaluate(&learner.model, &val_set)?;
         let improved = run.best.as_ref().is_none_or(|b| {
             val.accuracy > b.val_accuracy || (val.accuracy == b.val_accuracy && val.loss < b.val_loss)
         });
         let mut test_accuracy = None;
         if improved {
-            let test = if test_set.is_empty() { None } else { Some(evaluate(&model, &test_set)?.accuracy) };
+            let test = if test_set.is_empty() { None } else { Some(evaluate(&learner.model, &test_set)?.accuracy) };
             test_accuracy = test;
-            checkpoint::save(&out.join("model"), &varmap, &meta_for(epoch, val.accuracy, test))?;
+            checkpoint::save(&out.join("model"), &learner.varmap, &meta_for(epoch, val.accuracy, test))?;
             run.best = Some(Best { epoch, val_accuracy: val.accuracy, val_loss: val.loss, test_accuracy: test.unwrap_or(f64::NAN) });
         }
         let seconds = started.elapsed().as_secs_f64();
@@ -291,8 +354,8 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
             seconds,
         };
         checkpoint::replace_dir(&last, |dir| {
-            checkpoint::write_files(dir, &varmap, &meta_for(epoch, val.accuracy, None))?;
-            optimizer.save(&dir.join("optimizer.safetensors"))?;
+            checkpoint::write_files(dir, &learner.varmap, &meta_for(epoch, val.accuracy, None))?;
+            learner.optimizer.save(&dir.join("optimizer.safetensors"))?;
             write_json(&dir.join("state.json"), &run)
         })?;
         writeln!(log, "{}", serde_json::to_string(&line).expect("plain data")).map_err(Error::io(out))?;
@@ -324,4 +387,4 @@ fn truncate_metrics(path: &PathBuf, epochs: usize) -> Result<()> {
 }
 
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;

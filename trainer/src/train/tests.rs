@@ -31,7 +31,7 @@ fn tiny_config() -> Config {
 }
 
 /// Two classes: a rising or a falling ramp on taxel 0, noise elsewhere, offset 50 everywhere.
-fn tiny_data() -> Dataset {
+pub(crate) fn tiny_data() -> Dataset {
     let mut rng = Rng::new(11);
     let (n, len) = (80, 2 * 2 * 8);
     let mut x = Vec::with_capacity(n * len);
@@ -68,16 +68,18 @@ fn options(epochs: usize) -> TrainOptions {
         aug_gain: 0.1,
         aug_noise: 0.05,
         seed: 5,
+        l1: 0.0,
+        hold_pruned: false,
     }
 }
 
-fn out_dir(tag: &str) -> PathBuf {
+pub(crate) fn out_dir(tag: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("pvt3-train-{tag}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     dir
 }
 
-fn spec(data: &Dataset, epochs: usize, pause_after: Option<usize>) -> RunSpec<'_> {
+pub(crate) fn spec(data: &Dataset, epochs: usize, pause_after: Option<usize>) -> RunSpec<'_> {
     RunSpec {
         data,
         config: tiny_config(),
@@ -85,6 +87,8 @@ fn spec(data: &Dataset, epochs: usize, pause_after: Option<usize>) -> RunSpec<'_
         options: options(epochs),
         classes: vec!["up".into(), "down".into()],
         pause_after,
+        start: None,
+        pruning: None,
     }
 }
 

@@ -1,0 +1,59 @@
+//! The paper's schedule after training: prune a run by its selection-mask scores, then fine-tune
+//! with the pruned entries held at zero. The fine-tuned run is an ordinary run directory whose
+//! provenance records the pruning.
+
+use std::path::Path;
+
+use indicatif::ProgressBar;
+use pvt3_models::prune::{self, PruneSpec};
+use pvt3_models::weights::varmap_tensors;
+
+use crate::checkpoint;
+use crate::data::Dataset;
+use crate::train::{train, RunResult, RunSpec, TrainOptions};
+use crate::Result;
+
+/// What to prune and how long to fine-tune.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct PruneStage {
+    pub spec: PruneSpec,
+    pub epochs: usize,
+    pub lr: f64,
+}
+
+/// Prunes the checkpoint of `parent` and fine-tunes it into `out` on the parent's split of `data`.
+pub fn prune_and_fine_tune(
+    parent: &Path,
+    data: &Dataset,
+    stage: &PruneStage,
+    out: &Path,
+    resume: bool,
+    bar: &ProgressBar,
+) -> Result<Option<RunResult>> {
+    let (meta, _, varmap) = checkpoint::load(parent)?;
+    let mut tensors = varmap_tensors(&varmap)?;
+    let plan = prune::plan(&meta.config, &tensors, &stage.spec)?;
+    prune::apply(&plan, &mut tensors);
+    let parent_options = meta.provenance.options;
+    let options = TrainOptions {
+        epochs: stage.epochs,
+        lr: stage.lr,
+        warmup_epochs: parent_options.warmup_epochs.min(1),
+        hold_pruned: true,
+        ..parent_options
+    };
+    let spec = RunSpec {
+        data,
+        config: meta.config,
+        val_fold: meta.provenance.val_fold,
+        options,
+        classes: meta.classes,
+        pause_after: None,
+        start: Some(tensors),
+        pruning: Some(stage.spec.clone()),
+    };
+    train(&spec, out, resume, bar)
+}
+
+#[cfg(test)]
+mod tests;
