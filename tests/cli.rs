@@ -8,6 +8,9 @@ use ndarray::{Array1, ArrayD, IxDyn};
 use ndarray_npy::NpzWriter;
 use pvt3_trainer::data::Dataset;
 
+#[path = "support/onnx_check.rs"]
+mod onnx_check;
+
 fn pvt3(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_pvt3"))
         .args(args)
@@ -159,5 +162,25 @@ fn train_prune_fine_tune_and_bake_make_a_smaller_model() {
 
     let err = fails(&["prune", r, "--out", dir.join("p2").to_str().unwrap()]);
     assert!(err.contains("give --prune-channels and/or --prune-frames"), "{err}");
+
+    // Exported from the checkpoint and from the baked file: onnxruntime on raw frames equals
+    // candle on normalised ones.
+    let from_run = dir.join("run.onnx");
+    let from_baked = dir.join("baked.onnx");
+    ok(&["export", &format!("{r}/pruned"), "-o", from_run.to_str().unwrap()]);
+    ok(&["export", baked.to_str().unwrap(), "-o", from_baked.to_str().unwrap()]);
+    let (meta, model, _) = pvt3_trainer::checkpoint::load(&run.join("pruned")).unwrap();
+    let d = Dataset::load(&data, 0).unwrap();
+    let test: Vec<usize> = (0..d.len()).filter(|&i| d.folds[i] == 4).take(8).collect();
+    let samples = pvt3_trainer::evaluate::Samples::new(&d, &test, &meta.normalization);
+    let (x, _) = samples.batch(&(0..8).collect::<Vec<_>>(), |_| {}).unwrap();
+    let expected = model.forward(&x, None).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap();
+    let raw: Vec<f32> = test.iter().flat_map(|&i| d.sample(i).to_vec()).collect();
+    for onnx in [&from_run, &from_baked] {
+        onnx_check::assert_onnxruntime_matches(onnx, (&[8, 6, 10, 75], &raw), &expected, 1e-5);
+    }
+    onnx_check::assert_onnxruntime_matches(&from_run, (&[1, 6, 10, 75], &raw[..4500]), &expected[..20], 1e-5);
+    let err = fails(&["export", data.to_str().unwrap(), "-o", dir.join("x.onnx").to_str().unwrap()]);
+    assert!(err.contains("neither a checkpoint directory nor a baked model"), "{err}");
     std::fs::remove_dir_all(dir).unwrap();
 }

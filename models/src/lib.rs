@@ -14,6 +14,7 @@ pub mod error;
 pub mod feed_forward;
 pub mod init;
 pub mod layer_norm;
+pub mod normalization;
 pub mod prune;
 pub mod pvt3;
 pub mod reference;

@@ -32,6 +32,43 @@ pub struct Provenance {
     pub pruning: Option<pvt3_models::prune::PruneSpec>,
 }
 
+/// A baked model with everything the exporter needs: what `pvt3 bake` writes.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub struct BakedFile {
+    pub baked: pvt3_models::bake::BakedPvt3,
+    pub normalization: Normalization,
+    pub classes: Vec<String>,
+    pub provenance: Provenance,
+}
+
+impl BakedFile {
+    /// Bakes the checkpoint at `path` (a run or checkpoint directory).
+    pub fn from_checkpoint(path: &Path) -> Result<Self> {
+        let (meta, _, varmap) = load(path)?;
+        let baked = pvt3_models::bake::bake(&meta.config, &pvt3_models::weights::varmap_tensors(&varmap)?)?;
+        Ok(Self { baked, normalization: meta.normalization, classes: meta.classes, provenance: meta.provenance })
+    }
+
+    /// A checkpoint directory (baked on the way) or a file written by `pvt3 bake`.
+    pub fn load(path: &Path) -> Result<Self> {
+        if path.is_dir() {
+            return Self::from_checkpoint(path);
+        }
+        let bytes = std::fs::read(path).map_err(Error::io(path))?;
+        serde_json::from_slice(&bytes).map_err(|e| {
+            checkpoint_error(path, format!("neither a checkpoint directory nor a baked model from `pvt3 bake` ({e})"))
+        })
+    }
+
+    /// The ONNX metadata: class names and where the model came from.
+    pub fn metadata(&self) -> pvt3_export::Metadata {
+        pvt3_export::Metadata {
+            classes: self.classes.clone(),
+            provenance: serde_json::to_value(&self.provenance).expect("plain data serialises"),
+        }
+    }
+}
+
 /// Everything in a checkpoint except the weights.
 #[derive(Clone, Debug)]
 pub struct Meta {

@@ -12,7 +12,7 @@ use pvt3_models::prune::{PruneSpec, Scope};
 use pvt3_models::weights::varmap_tensors;
 use pvt3_trainer::bench::train_speed;
 use pvt3_trainer::prune::{prune_and_fine_tune, PruneStage};
-use pvt3_trainer::checkpoint;
+use pvt3_trainer::checkpoint::{self, BakedFile};
 use pvt3_trainer::cv::cross_validate;
 use pvt3_trainer::data::{Dataset, TEST_FOLD};
 use pvt3_trainer::evaluate::{evaluate, Samples};
@@ -146,6 +146,14 @@ enum Command {
         #[command(flatten)]
         prune: PruneArgs,
     },
+    /// Write a model as one ONNX file (opset 17): raw frames in, normalisation and kept-frame
+    /// selection inside, logits and probabilities out.
+    Export {
+        /// A run or checkpoint directory (baked on the way), or a file written by `pvt3 bake`.
+        model: PathBuf,
+        #[arg(long, short, default_value = "model.onnx")]
+        out: PathBuf,
+    },
     /// Bake a (pruned) checkpoint into a smaller dense model: pruned channels and frames removed.
     Bake {
         /// The run (or checkpoint) directory.
@@ -260,9 +268,7 @@ fn main() -> Result<()> {
             }
         }
         Command::Bake { run, out } => {
-            let (meta, _, varmap) = checkpoint::load(&run)?;
-            let baked = bake(&meta.config, &varmap_tensors(&varmap)?)?;
-            let file = BakedFile { baked, normalization: meta.normalization, classes: meta.classes, provenance: meta.provenance };
+            let file = BakedFile::from_checkpoint(&run)?;
             checkpoint::write_json_atomically(&out, &file)?;
             println!(
                 "baked {}: {} → {} parameters, {} → {} multiply-adds per sample, {} of {} temporal tokens kept",
@@ -305,6 +311,20 @@ fn main() -> Result<()> {
             );
         }
         Command::Eval { checkpoint, data, fold } => eval(&checkpoint, &data, &fold)?,
+        Command::Export { model, out } => {
+            let file = BakedFile::load(&model)?;
+            let onnx = pvt3_export::export(&file.baked, &file.normalization, &file.metadata())
+                .with_context(|| format!("exporting {}", model.display()))?;
+            pvt3_export::write(&onnx, &out)?;
+            println!(
+                "wrote {}: {} parameters, {} multiply-adds per sample, {} of {} temporal tokens kept",
+                out.display(),
+                file.baked.parameter_count(),
+                file.baked.mult_adds(),
+                file.baked.kept_tokens.len(),
+                file.baked.config.time_tokens()
+            );
+        }
         Command::Bench(Bench::Train { preset, steps, options }) => {
             let speed = train_speed(&Config::preset(&preset)?, &options, 2, steps)?;
             println!("{}", serde_json::to_string(&speed)?);
@@ -330,15 +350,6 @@ fn main() -> Result<()> {
         }
     }
     Ok(())
-}
-
-/// What `pvt3 bake` writes: everything the exporter needs.
-#[derive(serde::Serialize)]
-struct BakedFile {
-    baked: pvt3_models::bake::BakedPvt3,
-    normalization: pvt3_trainer::normalization::Normalization,
-    classes: Vec<String>,
-    provenance: checkpoint::Provenance,
 }
 
 fn report_pruned(r: &pvt3_trainer::train::RunResult, out: &Path) -> Result<()> {

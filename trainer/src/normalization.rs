@@ -1,55 +1,36 @@
-//! Per-channel normalisation (a channel is one taxel or electrode, and one colour of it), fitted on
-//! the training split only and stored with the checkpoint so that evaluation and export apply the
-//! very same numbers to raw sensor values.
+//! Fitting the per-channel normalisation on the training split only (the plain
+//! [`Normalization`] data lives in the models crate, beside the model it feeds).
 
-use serde::{Deserialize, Serialize};
+pub use pvt3_models::normalization::Normalization;
 
 use crate::data::Dataset;
-
-/// `(x - mean[c]) / std[c]` for every channel `c`; samples are laid out `[channels…, frames]`.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Normalization {
-    pub mean: Vec<f32>,
-    pub std: Vec<f32>,
-    pub frames: usize,
-}
 
 /// A channel whose training values barely vary (an idle taxel) keeps unit scale.
 const MIN_STD: f64 = 1e-6;
 
-impl Normalization {
-    /// Mean and standard deviation per channel over the `indices` samples and all their frames.
-    pub fn fit(data: &Dataset, indices: &[usize]) -> Self {
-        let frames = *data.sample_shape.last().expect("a sample has at least one dimension");
-        let channels = data.sample_len() / frames;
-        let mut sum = vec![0f64; channels];
-        let mut sq = vec![0f64; channels];
-        for &i in indices {
-            for (c, row) in data.sample(i).chunks(frames).enumerate() {
-                sum[c] += row.iter().map(|v| *v as f64).sum::<f64>();
-                sq[c] += row.iter().map(|v| (*v as f64).powi(2)).sum::<f64>();
-            }
-        }
-        let count = (indices.len() * frames).max(1) as f64;
-        let mean: Vec<f64> = sum.iter().map(|s| s / count).collect();
-        let std = sq
-            .iter()
-            .zip(&mean)
-            .map(|(s, m)| {
-                let sd = (s / count - m * m).max(0.0).sqrt();
-                if sd < MIN_STD { 1.0 } else { sd as f32 }
-            })
-            .collect();
-        Self { mean: mean.into_iter().map(|m| m as f32).collect(), std, frames }
-    }
-
-    /// Appends the normalised `sample` to `out`.
-    pub fn apply_into(&self, sample: &[f32], out: &mut Vec<f32>) {
-        for (c, row) in sample.chunks(self.frames).enumerate() {
-            let (m, s) = (self.mean[c], self.std[c]);
-            out.extend(row.iter().map(|v| (v - m) / s));
+/// Mean and standard deviation per channel over the `indices` samples and all their frames.
+pub fn fit(data: &Dataset, indices: &[usize]) -> Normalization {
+    let frames = *data.sample_shape.last().expect("a sample has at least one dimension");
+    let channels = data.sample_len() / frames;
+    let mut sum = vec![0f64; channels];
+    let mut sq = vec![0f64; channels];
+    for &i in indices {
+        for (c, row) in data.sample(i).chunks(frames).enumerate() {
+            sum[c] += row.iter().map(|v| *v as f64).sum::<f64>();
+            sq[c] += row.iter().map(|v| (*v as f64).powi(2)).sum::<f64>();
         }
     }
+    let count = (indices.len() * frames).max(1) as f64;
+    let mean: Vec<f64> = sum.iter().map(|s| s / count).collect();
+    let std = sq
+        .iter()
+        .zip(&mean)
+        .map(|(s, m)| {
+            let sd = (s / count - m * m).max(0.0).sqrt();
+            if sd < MIN_STD { 1.0 } else { sd as f32 }
+        })
+        .collect();
+    Normalization { mean: mean.into_iter().map(|m| m as f32).collect(), std, frames }
 }
 
 #[cfg(test)]
@@ -68,7 +49,7 @@ mod tests {
             folds_from_file: true,
             path: PathBuf::from("mem"),
         };
-        let norm = Normalization::fit(&data, &[0, 1]);
+        let norm = fit(&data, &[0, 1]);
         assert_eq!(norm.mean, vec![3.0, 0.0]);
         assert!((norm.std[0] - (10.0f32 / 6.0).sqrt()).abs() < 1e-6);
         assert_eq!(norm.std[1], 1.0, "a constant channel keeps unit scale");

@@ -21,7 +21,6 @@ use serde::{Deserialize, Serialize};
 use crate::checkpoint::{self, read_json, write_json, Meta, Provenance};
 use crate::data::{Dataset, Split};
 use crate::evaluate::{evaluate, Samples};
-use crate::normalization::Normalization;
 use crate::optim::AdamW;
 use crate::schedule::Schedule;
 use crate::{Error, Result};
@@ -253,7 +252,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
     config.dropout = opts.dropout;
     spec.data.check_fits(&config)?;
     let split: Split = spec.data.split(spec.val_fold)?;
-    let normalization = Normalization::fit(spec.data, &split.train);
+    let normalization = crate::normalization::fit(spec.data, &split.train);
     let train_set = Samples::new(spec.data, &split.train, &normalization);
     let val_set = Samples::new(spec.data, &split.val, &normalization);
     let test_set = Samples::new(spec.data, &split.test, &normalization);

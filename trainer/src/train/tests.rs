@@ -116,7 +116,7 @@ fn learns_a_separable_problem_and_writes_a_checkpoint() {
     assert_eq!(meta.classes, vec!["up", "down"]);
     assert_eq!(meta.provenance.epoch, r.best_epoch);
     let split = data.split(0).unwrap();
-    assert_eq!(meta.normalization, Normalization::fit(&data, &split.train), "fitted on the training split only");
+    assert_eq!(meta.normalization, crate::normalization::fit(&data, &split.train), "fitted on the training split only");
     let again = train(&spec(&data, 30, None), &dir, false, &ProgressBar::hidden()).unwrap_err().to_string();
     assert!(again.contains("already holds a run; pass --resume"), "{again}");
     std::fs::remove_dir_all(dir).unwrap();

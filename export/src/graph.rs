@@ -1,0 +1,73 @@
+//! A small builder for ONNX graphs: constants become initializers, every node gets a fresh
+//! output name, attributes are built by helpers.
+
+use tract_onnx::pb::{attribute_proto::AttributeType, tensor_proto::DataType, AttributeProto, NodeProto, TensorProto};
+
+#[derive(Default)]
+pub struct Graph {
+    pub nodes: Vec<NodeProto>,
+    pub initializers: Vec<TensorProto>,
+    count: usize,
+}
+
+pub fn int(name: &str, v: i64) -> AttributeProto {
+    AttributeProto { name: name.into(), r#type: AttributeType::Int as i32, i: v, ..Default::default() }
+}
+
+pub fn ints(name: &str, v: &[i64]) -> AttributeProto {
+    AttributeProto { name: name.into(), r#type: AttributeType::Ints as i32, ints: v.to_vec(), ..Default::default() }
+}
+
+pub fn float(name: &str, v: f32) -> AttributeProto {
+    AttributeProto { name: name.into(), r#type: AttributeType::Float as i32, f: v, ..Default::default() }
+}
+
+impl Graph {
+    fn fresh(&mut self, hint: &str) -> String {
+        self.count += 1;
+        format!("{hint}_{}", self.count)
+    }
+
+    pub fn f32s(&mut self, hint: &str, dims: &[usize], data: Vec<f32>) -> String {
+        debug_assert_eq!(dims.iter().product::<usize>(), data.len(), "{hint}");
+        let name = self.fresh(hint);
+        self.initializers.push(TensorProto {
+            name: name.clone(),
+            dims: dims.iter().map(|d| *d as i64).collect(),
+            data_type: DataType::Float as i32,
+            raw_data: data.iter().flat_map(|v| v.to_le_bytes()).collect(),
+            ..Default::default()
+        });
+        name
+    }
+
+    pub fn i64s(&mut self, hint: &str, dims: &[usize], data: Vec<i64>) -> String {
+        let name = self.fresh(hint);
+        self.initializers.push(TensorProto {
+            name: name.clone(),
+            dims: dims.iter().map(|d| *d as i64).collect(),
+            data_type: DataType::Int64 as i32,
+            raw_data: data.iter().flat_map(|v| v.to_le_bytes()).collect(),
+            ..Default::default()
+        });
+        name
+    }
+
+    /// A node with one output, named after `hint` unless `output` is given.
+    pub fn node(&mut self, op: &str, inputs: &[&str], attribute: Vec<AttributeProto>, output: Option<&str>) -> String {
+        let out = output.map_or_else(|| self.fresh(&op.to_lowercase()), str::to_string);
+        self.nodes.push(NodeProto {
+            op_type: op.into(),
+            name: format!("{op}_{}", self.nodes.len()),
+            input: inputs.iter().map(|s| s.to_string()).collect(),
+            output: vec![out.clone()],
+            attribute,
+            ..Default::default()
+        });
+        out
+    }
+
+    pub fn op(&mut self, op: &str, inputs: &[&str]) -> String {
+        self.node(op, inputs, vec![], None)
+    }
+}

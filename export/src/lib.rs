@@ -1,0 +1,14 @@
+//! Export a baked PVT³ to ONNX (opset 17): one file that takes raw sensor frames in the data
+//! set's own layout (batch dimension symbolic), normalises them and gathers the kept frames
+//! inside the graph, and outputs logits and class probabilities. Metadata properties name the
+//! classes, the input layout, the kept frames, the configuration and where the model came from.
+//!
+//! Depends on the baked form only: pruned channels and frames are already gone, so the graph
+//! computes the spatial transformer for the kept frames alone.
+
+mod error;
+mod graph;
+mod model;
+
+pub use error::{Error, Result};
+pub use model::{export, write, Metadata, INPUT, LOGITS, PROBABILITIES};

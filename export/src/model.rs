@@ -1,0 +1,279 @@
+//! The PVT³ graph, from raw frames to logits and probabilities.
+
+use std::path::Path;
+
+use prost::Message;
+use pvt3_models::bake::{BakedAttention, BakedBlock, BakedPvt3, BakedTransformer, Dense, Norm};
+use pvt3_models::normalization::Normalization;
+use tract_onnx::pb::{
+    tensor_proto::DataType, tensor_shape_proto::dimension::Value as Dim, tensor_shape_proto::Dimension, type_proto,
+    GraphProto, ModelProto, OperatorSetIdProto, StringStringEntryProto, TensorShapeProto, TypeProto, ValueInfoProto,
+};
+
+use crate::graph::{float, int, ints, Graph};
+use crate::{Error, Result};
+
+/// The input: raw sensor frames `[batch, height, width, (channels,) frames]`.
+pub const INPUT: &str = "frames";
+pub const LOGITS: &str = "logits";
+pub const PROBABILITIES: &str = "probabilities";
+
+/// What the file says about itself, besides the graph.
+#[derive(Clone, Debug)]
+pub struct Metadata {
+    pub classes: Vec<String>,
+    /// Where the model came from (data set, fold, accuracy, pruning), as JSON.
+    pub provenance: serde_json::Value,
+}
+
+fn linear(g: &mut Graph, x: &str, l: &Dense, hint: &str) -> String {
+    let wt: Vec<f32> = (0..l.cols).flat_map(|c| (0..l.rows).map(move |r| (r, c))).map(|(r, c)| l.weight[r * l.cols + c]).collect();
+    let w = g.f32s(&format!("{hint}_w"), &[l.cols, l.rows], wt);
+    let y = g.op("MatMul", &[x, &w]);
+    match &l.bias {
+        Some(b) => {
+            let b = g.f32s(&format!("{hint}_b"), &[l.rows], b.clone());
+            g.op("Add", &[&y, &b])
+        }
+        None => y,
+    }
+}
+
+fn layer_norm(g: &mut Graph, x: &str, n: &Norm, eps: f64, hint: &str) -> String {
+    let d = n.weight.len();
+    let w = g.f32s(&format!("{hint}_scale"), &[d], n.weight.clone());
+    let b = g.f32s(&format!("{hint}_bias"), &[d], n.bias.clone());
+    g.node("LayerNormalization", &[x, &w, &b], vec![int("axis", -1), float("epsilon", eps as f32)], None)
+}
+
+fn gelu(g: &mut Graph, x: &str) -> String {
+    let root2 = g.f32s("sqrt2", &[], vec![std::f32::consts::SQRT_2]);
+    let one = g.f32s("one", &[], vec![1.0]);
+    let half = g.f32s("half", &[], vec![0.5]);
+    let scaled = g.op("Div", &[x, &root2]);
+    let erf = g.op("Erf", &[&scaled]);
+    let plus = g.op("Add", &[&erf, &one]);
+    let prod = g.op("Mul", &[x, &plus]);
+    g.op("Mul", &[&prod, &half])
+}
+
+/// Attention over `x` `[sequences, tokens, dim]`; the scale is folded into the q weights.
+fn attention(g: &mut Graph, x: &str, a: &BakedAttention, hint: &str) -> String {
+    let q_scaled = Dense { weight: a.q.weight.iter().map(|w| w * a.scale).collect(), ..a.q.clone() };
+    let q = linear(g, x, &q_scaled, &format!("{hint}_q"));
+    let k = linear(g, x, &a.k, &format!("{hint}_k"));
+    let v = linear(g, x, &a.v, &format!("{hint}_v"));
+    let mixed = if a.heads == 1 {
+        let kt = g.node("Transpose", &[&k], vec![ints("perm", &[0, 2, 1])], None);
+        let scores = g.op("MatMul", &[&q, &kt]);
+        let probs = g.node("Softmax", &[&scores], vec![int("axis", -1)], None);
+        g.op("MatMul", &[&probs, &v])
+    } else {
+        let split = g.i64s("split_heads", &[4], vec![0, 0, a.heads as i64, a.head_dim as i64]);
+        let heads = |g: &mut Graph, t: &str, perm: &[i64]| {
+            let r = g.op("Reshape", &[t, &split]);
+            g.node("Transpose", &[&r], vec![ints("perm", perm)], None)
+        };
+        let (qh, kt, vh) = (heads(g, &q, &[0, 2, 1, 3]), heads(g, &k, &[0, 2, 3, 1]), heads(g, &v, &[0, 2, 1, 3]));
+        let scores = g.op("MatMul", &[&qh, &kt]);
+        let probs = g.node("Softmax", &[&scores], vec![int("axis", -1)], None);
+        let mixed = g.op("MatMul", &[&probs, &vh]);
+        let back = g.node("Transpose", &[&mixed], vec![ints("perm", &[0, 2, 1, 3])], None);
+        let merge = g.i64s("merge_heads", &[3], vec![0, 0, (a.heads * a.head_dim) as i64]);
+        g.op("Reshape", &[&back, &merge])
+    };
+    linear(g, &mixed, &a.out, &format!("{hint}_out"))
+}
+
+fn block(g: &mut Graph, x: &str, b: &BakedBlock, eps: f64, hint: &str) -> String {
+    let n1 = layer_norm(g, x, &b.attn_norm, eps, &format!("{hint}_attn_norm"));
+    let a = attention(g, &n1, &b.attn, &format!("{hint}_attn"));
+    let x1 = g.op("Add", &[x, &a]);
+    let n2 = layer_norm(g, &x1, &b.ffn_norm, eps, &format!("{hint}_ffn_norm"));
+    let h = linear(g, &n2, &b.ffn.fc1, &format!("{hint}_fc1"));
+    let h = gelu(g, &h);
+    let f = linear(g, &h, &b.ffn.fc2, &format!("{hint}_fc2"));
+    g.op("Add", &[&x1, &f])
+}
+
+/// A transformer over `x` `[sequences, tokens, dim]` → its normalised first token `[sequences, dim]`.
+fn transformer_cls(g: &mut Graph, x: &str, t: &BakedTransformer, eps: f64, hint: &str) -> String {
+    let mut x = x.to_string();
+    for (i, b) in t.layers.iter().enumerate() {
+        x = block(g, &x, b, eps, &format!("{hint}{i}"));
+    }
+    let zero = g.i64s("first", &[], vec![0]);
+    let cls = g.node("Gather", &[&x, &zero], vec![int("axis", 1)], None);
+    layer_norm(g, &cls, &t.norm, eps, &format!("{hint}_norm"))
+}
+
+/// `token` `[1, 1, (1,) dim]` repeated to `[batch, rest…]`.
+fn expand_over_batch(g: &mut Graph, token: &str, batch: &str, rest: &[usize]) -> String {
+    let rest = g.i64s("shape_rest", &[rest.len()], rest.iter().map(|v| *v as i64).collect());
+    let shape = g.node("Concat", &[batch, &rest], vec![int("axis", 0)], None);
+    g.op("Expand", &[token, &shape])
+}
+
+/// Checks the parts of a baked model the graph relies on.
+fn check(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<()> {
+    let c = &m.config;
+    c.validate().map_err(|e| Error::Inconsistent(e.to_string()))?;
+    let channels = c.sample_shape().iter().product::<usize>() / c.frames;
+    if norm.mean.len() != channels || norm.std.len() != channels || norm.frames != c.frames {
+        return Err(Error::Inconsistent(format!("normalisation does not fit {channels} channels × {} frames", c.frames)));
+    }
+    if meta.classes.len() != c.classes {
+        return Err(Error::Inconsistent(format!("{} class names for {} classes", meta.classes.len(), c.classes)));
+    }
+    if m.kept_tokens.is_empty() {
+        return Err(Error::Unsupported("every frame is pruned; the model would ignore its input".into()));
+    }
+    for (name, t) in [("space", &m.space), ("temporal", &m.temporal)] {
+        for (i, b) in t.layers.iter().enumerate() {
+            if b.attn.head_dim == 0 || b.ffn.fc1.rows == 0 {
+                return Err(Error::Unsupported(format!(
+                    "{name} layer {i} has no attention channel or no feed-forward unit left; prune less"
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+fn value_info(name: &str, dims: &[Option<usize>]) -> ValueInfoProto {
+    let dim = dims
+        .iter()
+        .map(|d| Dimension {
+            value: Some(match d {
+                Some(v) => Dim::DimValue(*v as i64),
+                None => Dim::DimParam("batch".into()),
+            }),
+            ..Default::default()
+        })
+        .collect();
+    ValueInfoProto {
+        name: name.into(),
+        r#type: Some(TypeProto {
+            value: Some(type_proto::Value::TensorType(type_proto::Tensor {
+                elem_type: DataType::Float as i32,
+                shape: Some(TensorShapeProto { dim }),
+            })),
+            ..Default::default()
+        }),
+        ..Default::default()
+    }
+}
+
+/// The ONNX model of a baked PVT³ with its normalisation.
+pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<ModelProto> {
+    check(m, norm, meta)?;
+    let c = &m.config;
+    let (n, d, eps) = (c.num_patches(), c.dim, c.layer_norm_eps);
+    let (t, tk, tt) = (c.time_tokens(), m.kept_tokens.len(), c.tubelet);
+    let mut g = Graph::default();
+    let sample = c.sample_shape();
+    let rank = sample.len() + 1;
+
+    // Normalise: (x - mean) / std per channel, broadcast over frames.
+    let mut stat_dims: Vec<usize> = sample[..sample.len() - 1].to_vec();
+    stat_dims.push(1);
+    let mean = g.f32s("norm_mean", &stat_dims, norm.mean.clone());
+    let std = g.f32s("norm_std", &stat_dims, norm.std.clone());
+    let centred = g.op("Sub", &[INPUT, &mean]);
+    let mut x = g.op("Div", &[&centred, &std]);
+
+    // Keep only the frames of kept temporal tokens.
+    let kept_frames: Vec<i64> = m.kept_tokens.iter().flat_map(|k| (k * tt..(k + 1) * tt).map(|f| f as i64)).collect();
+    if tk < t {
+        let idx = g.i64s("kept_frames", &[kept_frames.len()], kept_frames.clone());
+        x = g.node("Gather", &[&x, &idx], vec![int("axis", rank as i64 - 1)], None);
+    }
+
+    // Patches: [b, gh, ph, gw, pw, c, tk, tt] → [b, tk, gh, gw, tt, ph, pw, c] → [b, tk, n, patch_dim].
+    let (gh, gw) = (c.height / c.patch_height, c.width / c.patch_width);
+    let grid = [0, gh, c.patch_height, gw, c.patch_width, c.channels, tk, tt].map(|v| v as i64);
+    let grid = g.i64s("grid", &[8], grid.to_vec());
+    let x = g.op("Reshape", &[&x, &grid]);
+    let x = g.node("Transpose", &[&x], vec![ints("perm", &[0, 6, 1, 3, 7, 2, 4, 5])], None);
+    let tokens_shape = g.i64s("tokens", &[4], vec![0, tk as i64, n as i64, c.patch_dim() as i64]);
+    let x = g.op("Reshape", &[&x, &tokens_shape]);
+    let x = linear(&mut g, &x, &m.patch_embed, "patch_embed");
+    let scale = g.f32s("frame_scale", &[1, tk, 1, 1], m.token_scale.clone());
+    let embedded = g.op("Mul", &[&x, &scale]);
+
+    // The batch size, as a 1-element shape.
+    let input_shape = g.op("Shape", &[INPUT]);
+    let (s0, s1) = (g.i64s("start", &[1], vec![0]), g.i64s("end", &[1], vec![1]));
+    let batch = g.op("Slice", &[&input_shape, &s0, &s1]);
+
+    let space_cls = g.f32s("space_cls", &[1, 1, 1, d], m.space_cls.clone());
+    let cls = expand_over_batch(&mut g, &space_cls, &batch, &[tk, 1, d]);
+    let tokens = g.node("Concat", &[&cls, &embedded], vec![int("axis", 2)], None);
+    let pos = g.f32s("pos_embed", &[1, tk, n + 1, d], m.pos_embed.clone());
+    let tokens = g.op("Add", &[&tokens, &pos]);
+    let seqs = g.i64s("space_seqs", &[3], vec![-1, (n + 1) as i64, d as i64]);
+    let tokens = g.op("Reshape", &[&tokens, &seqs]);
+    let encoded = transformer_cls(&mut g, &tokens, &m.space, eps, "space");
+    let per_sample = g.i64s("per_sample", &[3], vec![-1, tk as i64, d as i64]);
+    let mut frames = g.op("Reshape", &[&encoded, &per_sample]);
+
+    // Pruned tokens: their constant encodings, placed around the kept ones.
+    if tk < t {
+        let mut place = vec![0f32; t * tk];
+        for (kk, &k) in m.kept_tokens.iter().enumerate() {
+            place[k * tk + kk] = 1.0;
+        }
+        let place = g.f32s("place_kept", &[t, tk], place);
+        let constants = g.f32s("pruned_encodings", &[t, d], m.pruned_encodings.clone());
+        let placed = g.op("MatMul", &[&place, &frames]);
+        frames = g.op("Add", &[&placed, &constants]);
+    }
+    let temporal_cls = g.f32s("temporal_cls", &[1, 1, d], m.temporal_cls.clone());
+    let tcls = expand_over_batch(&mut g, &temporal_cls, &batch, &[1, d]);
+    let sequence = g.node("Concat", &[&tcls, &frames], vec![int("axis", 1)], None);
+    let pooled = transformer_cls(&mut g, &sequence, &m.temporal, eps, "temporal");
+    let normed = layer_norm(&mut g, &pooled, &m.head_norm, eps, "head_norm");
+    let logits = linear(&mut g, &normed, &m.head, "head");
+    g.node("Identity", &[&logits], vec![], Some(LOGITS));
+    g.node("Softmax", &[&logits], vec![int("axis", -1)], Some(PROBABILITIES));
+
+    let mut input_dims = vec![None];
+    input_dims.extend(sample.iter().map(|v| Some(*v)));
+    let graph = GraphProto {
+        name: "pvt3".into(),
+        node: g.nodes,
+        initializer: g.initializers,
+        input: vec![value_info(INPUT, &input_dims)],
+        output: vec![value_info(LOGITS, &[None, Some(c.classes)]), value_info(PROBABILITIES, &[None, Some(c.classes)])],
+        ..Default::default()
+    };
+    let layout = if c.channels == 1 { "[batch, height, width, frames]" } else { "[batch, height, width, channels, frames]" };
+    let props = [
+        ("pvt3.classes", serde_json::to_string(&meta.classes).expect("strings serialise")),
+        ("pvt3.input_layout", format!("{layout} = [batch, {}], raw sensor values as float32", sample.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(", "))),
+        ("pvt3.input_units", "the data set's raw units (normalisation is inside the graph)".into()),
+        ("pvt3.kept_frames", serde_json::to_string(&kept_frames).expect("integers serialise")),
+        ("pvt3.config", serde_json::to_string(c).expect("the configuration serialises")),
+        ("pvt3.provenance", meta.provenance.to_string()),
+    ];
+    Ok(ModelProto {
+        ir_version: 8,
+        opset_import: vec![OperatorSetIdProto { domain: String::new(), version: 17 }],
+        producer_name: "pvt3".into(),
+        producer_version: env!("CARGO_PKG_VERSION").into(),
+        graph: Some(graph),
+        metadata_props: props.into_iter().map(|(k, v)| StringStringEntryProto { key: k.into(), value: v }).collect(),
+        ..Default::default()
+    })
+}
+
+/// Writes the model to `path` through a temporary file and a rename.
+pub fn write(model: &ModelProto, path: &Path) -> Result<()> {
+    let tmp = path.with_extension("onnx.tmp");
+    let io = |e: std::io::Error| Error::Io { path: path.display().to_string(), source: e };
+    std::fs::write(&tmp, model.encode_to_vec()).map_err(io)?;
+    std::fs::rename(&tmp, path).map_err(io)
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,89 @@
+//! The exported golden model in onnxruntime, batch 1 and 8; the pruned-frame graph; errors.
+
+use std::path::PathBuf;
+
+use ndarray::{Array2, Array4};
+use ndarray_npy::read_npy;
+use pvt3_models::bake::bake;
+use pvt3_models::weights::read_tensors;
+use pvt3_models::Config;
+
+use super::*;
+
+#[path = "../../../tests/support/onnx_check.rs"]
+mod onnx_check;
+
+fn golden(file: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/golden/icub20").join(file)
+}
+
+fn identity_normalization(cfg: &Config) -> Normalization {
+    let channels = cfg.sample_shape().iter().product::<usize>() / cfg.frames;
+    Normalization { mean: vec![0.0; channels], std: vec![1.0; channels], frames: cfg.frames }
+}
+
+fn meta(classes: usize) -> Metadata {
+    Metadata { classes: (0..classes).map(|k| format!("class_{k}")).collect(), provenance: serde_json::json!({"data": "golden"}) }
+}
+
+fn scratch(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("pvt3-export-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+#[test]
+fn golden_model_in_onnxruntime_matches_the_golden_logits_at_batch_1_and_8() {
+    let cfg = Config::icub20();
+    let baked = bake(&cfg, &read_tensors(&golden("weights.safetensors")).unwrap()).unwrap();
+    let model = export(&baked, &identity_normalization(&cfg), &meta(20)).unwrap();
+    let dir = scratch("golden");
+    let path = dir.join("golden.onnx");
+    write(&model, &path).unwrap();
+    let input: Array4<f32> = read_npy(golden("input.npy")).unwrap();
+    let logits: Array2<f64> = read_npy(golden("logits.npy")).unwrap();
+    let x: Vec<f32> = input.iter().copied().collect();
+    let y: Vec<f32> = logits.iter().map(|v| *v as f32).collect();
+    let msg = onnx_check::assert_onnxruntime_matches(&path, (&[8, 6, 10, 75], &x), &y, 1e-5);
+    assert!(msg.starts_with("ok"), "{msg}");
+    let one = dir.join("golden1.onnx");
+    write(&model, &one).unwrap();
+    onnx_check::assert_onnxruntime_matches(&one, (&[1, 6, 10, 75], &x[..4500]), &y[..20], 1e-5);
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn pruned_frames_are_gathered_away_before_the_spatial_transformer() {
+    let cfg = Config::icub20();
+    let mut tensors = read_tensors(&golden("weights.safetensors")).unwrap();
+    let pruned = export(&bake(&cfg, &tensors).unwrap(), &identity_normalization(&cfg), &meta(20)).unwrap();
+    tensors.get_mut("frame_mask").unwrap().1.iter_mut().for_each(|v| *v = 1.0);
+    let full = export(&bake(&cfg, &tensors).unwrap(), &identity_normalization(&cfg), &meta(20)).unwrap();
+    let graph = |m: &ModelProto| m.graph.clone().unwrap();
+    let spatial_batch = |m: &ModelProto| {
+        let g = graph(m);
+        let reshape_to_tokens = g.initializer.iter().find(|t| t.name.starts_with("tokens_")).unwrap();
+        i64::from_le_bytes(reshape_to_tokens.raw_data[8..16].try_into().unwrap())
+    };
+    assert_eq!(spatial_batch(&pruned), 55, "the golden frame mask prunes 20 of 75 frames");
+    assert_eq!(spatial_batch(&full), 75);
+    let gathers = |m: &ModelProto| graph(m).node.iter().filter(|n| n.op_type == "Gather").count();
+    assert_eq!(gathers(&pruned), gathers(&full) + 1, "one Gather of the kept frames at the input");
+    assert_eq!(graph(&pruned).node.len(), graph(&full).node.len() + 3, "gather, place, add constants");
+    let kept = pruned.metadata_props.iter().find(|p| p.key == "pvt3.kept_frames").unwrap();
+    assert_eq!(serde_json::from_str::<Vec<usize>>(&kept.value).unwrap().len(), 55);
+}
+
+#[test]
+fn what_cannot_be_exported_is_named() {
+    let cfg = Config::icub20();
+    let mut tensors = read_tensors(&golden("weights.safetensors")).unwrap();
+    let baked = bake(&cfg, &tensors).unwrap();
+    let msg = export(&baked, &identity_normalization(&Config { height: 3, ..cfg.clone() }), &meta(20)).unwrap_err().to_string();
+    assert!(msg.contains("normalisation does not fit 60 channels"), "{msg}");
+    let msg = export(&baked, &identity_normalization(&cfg), &meta(3)).unwrap_err().to_string();
+    assert!(msg.contains("3 class names for 20 classes"), "{msg}");
+    tensors.get_mut("frame_mask").unwrap().1.iter_mut().for_each(|v| *v = 0.0);
+    let msg = export(&bake(&cfg, &tensors).unwrap(), &identity_normalization(&cfg), &meta(20)).unwrap_err().to_string();
+    assert!(msg.contains("every frame is pruned"), "{msg}");
+}
