@@ -63,6 +63,11 @@ pub struct TrainOptions {
     #[arg(long, default_value_t = 0.0)]
     #[serde(default)]
     pub l1: f64,
+    /// Random unstructured pruning as a regulariser: every step, this share of the entries of
+    /// each weight matrix is zeroed for the forward and backward pass; the update applies to all.
+    #[arg(long, default_value_t = 0.0)]
+    #[serde(default)]
+    pub random_prune: f64,
     /// Hold mask entries that are zero at the start at zero (fine-tuning after pruning).
     #[arg(skip)]
     #[serde(default)]
@@ -159,6 +164,8 @@ pub struct Learner {
     masks: Vec<Tensor>,
     /// Mask variables and their 0/1 keep flags, re-applied after every step.
     held: Vec<(Var, Tensor)>,
+    /// The weight matrices, for random pruning.
+    matrices: Vec<Var>,
 }
 
 impl Learner {
@@ -173,7 +180,13 @@ impl Learner {
         }
         let masks = mask_vars(&varmap).into_iter().map(|v| v.as_tensor().clone()).collect();
         let optimizer = AdamW::new(&varmap, opts.weight_decay)?;
-        Ok(Self { model, varmap, optimizer, masks, held: Vec::new() })
+        let matrices = {
+            let vars = varmap.data().lock().expect("varmap lock poisoned");
+            let mut names: Vec<&String> = vars.keys().filter(|n| n.ends_with(".weight") && vars[*n].rank() == 2).collect();
+            names.sort();
+            names.into_iter().map(|n| vars[n].clone()).collect()
+        };
+        Ok(Self { model, varmap, optimizer, masks, held: Vec::new(), matrices })
     }
 
     /// From now on, mask entries that are zero stay zero.
@@ -188,6 +201,16 @@ impl Learner {
     /// One optimiser step on a batch: forward with dropout, smoothed cross-entropy (plus the L1
     /// penalty on the masks), backward, gradient clipping, AdamW. Returns the loss and logits.
     pub fn step(&mut self, x: &Tensor, y: &Tensor, opts: &TrainOptions, lr: f64, rng: &mut Rng) -> Result<(f64, Tensor)> {
+        let mut saved = Vec::new();
+        if opts.random_prune > 0.0 {
+            let p = opts.random_prune as f32;
+            for var in &self.matrices {
+                let full = var.as_tensor().copy()?;
+                let keep: Vec<f32> = (0..full.elem_count()).map(|_| if rng.uniform() < p { 0.0 } else { 1.0 }).collect();
+                var.set(&(&full * Tensor::from_vec(keep, full.shape(), &Device::Cpu)?)?)?;
+                saved.push(full);
+            }
+        }
         let logits = self.model.forward(x, Some(rng))?;
         let mut loss = smoothed_cross_entropy(&logits, y, opts.label_smoothing)?;
         if opts.l1 > 0.0 {
@@ -195,6 +218,9 @@ impl Learner {
             loss = (loss + (Tensor::cat(&flat, 0)?.mean_all()? * opts.l1)?)?;
         }
         let grads = loss.backward()?;
+        for (var, full) in self.matrices.iter().zip(&saved) {
+            var.set(full)?;
+        }
         let scale = if opts.clip_grad > 0.0 {
             (opts.clip_grad / self.optimizer.grad_norm(&grads)?.max(1e-12)).min(1.0)
         } else {

@@ -69,6 +69,7 @@ fn options(epochs: usize) -> TrainOptions {
         aug_noise: 0.05,
         seed: 5,
         l1: 0.0,
+        random_prune: 0.0,
         hold_pruned: false,
     }
 }
@@ -138,4 +139,20 @@ fn a_seed_fixes_the_run_and_a_paused_run_resumes_exactly() {
     assert_eq!(done, rb, "resuming a finished run returns its result");
     std::fs::remove_dir_all(a).unwrap();
     std::fs::remove_dir_all(b).unwrap();
+}
+
+#[test]
+fn random_pruning_regularises_without_leaving_zeros_behind() {
+    let data = tiny_data();
+    let dir = out_dir("random-prune");
+    let mut s = spec(&data, 30, None);
+    s.options.random_prune = 0.05;
+    let r = train(&s, &dir, false, &ProgressBar::hidden()).unwrap().unwrap();
+    // A width-8 model is fragile: 5 % of its weights gone each step costs accuracy, but it learns.
+    assert!(r.test_accuracy >= 0.75, "{r:?}");
+    let (_, _, varmap) = crate::checkpoint::load(&dir).unwrap();
+    let vars = varmap.data().lock().unwrap();
+    let w = vars["space.layers.0.ffn.fc1.weight"].flatten_all().unwrap().to_vec1::<f32>().unwrap();
+    assert!(w.iter().all(|v| *v != 0.0), "the pruned entries are restored after every step");
+    std::fs::remove_dir_all(dir).unwrap();
 }
