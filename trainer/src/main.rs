@@ -111,6 +111,9 @@ enum Command {
         /// With --prune-channels/--prune-frames: prune the trained model and fine-tune it into OUT/pruned.
         #[command(flatten)]
         prune: PruneArgs,
+        /// Finally bake the model (the pruned one, if pruning was asked for) and export it as ONNX.
+        #[arg(long, value_name = "FILE.onnx")]
+        export: Option<PathBuf>,
     },
     /// The published protocol: 4-fold cross-validation, test on fold 4, mean ± std over seeds.
     Cv {
@@ -225,7 +228,7 @@ fn main() -> Result<()> {
         std::env::set_var("RAYON_NUM_THREADS", t.to_string());
     }
     match cli.command {
-        Command::Train { model, fold, out, resume, prune } => {
+        Command::Train { model, fold, out, resume, prune, export } => {
             let prepared = prepare(&model)?;
             let bar = ProgressBar::new(0).with_style(bar_style());
             bar.set_prefix(format!("fold {fold}"));
@@ -249,10 +252,16 @@ fn main() -> Result<()> {
                 let bar = ProgressBar::new(0).with_style(bar_style());
                 bar.set_prefix("fine-tune");
                 let pruned = out.join("pruned");
-                if let Some(p) = prune_and_fine_tune(&out, &prepared.data, &stage, &pruned, resume, &bar)? {
-                    bar.finish();
-                    report_pruned(&p, &pruned)?;
-                }
+                let Some(p) = prune_and_fine_tune(&out, &prepared.data, &stage, &pruned, resume, &bar)? else {
+                    println!("paused; continue with the same command and --resume");
+                    return Ok(());
+                };
+                bar.finish();
+                report_pruned(&p, &pruned)?;
+            }
+            if let Some(path) = export {
+                let final_run = if prune.stage().is_some() { out.join("pruned") } else { out.clone() };
+                export_onnx(&final_run, &path)?;
             }
         }
         Command::Prune { run, data, out, resume, prune } => {
@@ -311,20 +320,7 @@ fn main() -> Result<()> {
             );
         }
         Command::Eval { checkpoint, data, fold } => eval(&checkpoint, &data, &fold)?,
-        Command::Export { model, out } => {
-            let file = BakedFile::load(&model)?;
-            let onnx = pvt3_export::export(&file.baked, &file.normalization, &file.metadata())
-                .with_context(|| format!("exporting {}", model.display()))?;
-            pvt3_export::write(&onnx, &out)?;
-            println!(
-                "wrote {}: {} parameters, {} multiply-adds per sample, {} of {} temporal tokens kept",
-                out.display(),
-                file.baked.parameter_count(),
-                file.baked.mult_adds(),
-                file.baked.kept_tokens.len(),
-                file.baked.config.time_tokens()
-            );
-        }
+        Command::Export { model, out } => export_onnx(&model, &out)?,
         Command::Bench(Bench::Train { preset, steps, options }) => {
             let speed = train_speed(&Config::preset(&preset)?, &options, 2, steps)?;
             println!("{}", serde_json::to_string(&speed)?);
@@ -349,6 +345,23 @@ fn main() -> Result<()> {
             }
         }
     }
+    Ok(())
+}
+
+/// Bakes (if needed) and exports `model` to `out`.
+fn export_onnx(model: &Path, out: &Path) -> Result<()> {
+    let file = BakedFile::load(model)?;
+    let onnx = pvt3_export::export(&file.baked, &file.normalization, &file.metadata())
+        .with_context(|| format!("exporting {}", model.display()))?;
+    pvt3_export::write(&onnx, out)?;
+    println!(
+        "wrote {}: {} parameters, {} multiply-adds per sample, {} of {} temporal tokens kept",
+        out.display(),
+        file.baked.parameter_count(),
+        file.baked.mult_adds(),
+        file.baked.kept_tokens.len(),
+        file.baked.config.time_tokens()
+    );
     Ok(())
 }
 
