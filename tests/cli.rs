@@ -180,6 +180,10 @@ fn train_prune_fine_tune_and_bake_make_a_smaller_model() {
         onnx_check::assert_onnxruntime_matches(onnx, (&[8, 6, 10, 75], &raw), &expected, 1e-5);
     }
     onnx_check::assert_onnxruntime_matches(&from_run, (&[1, 6, 10, 75], &raw[..4500]), &expected[..20], 1e-5);
+    // The robot runtime (tract) agrees too.
+    let (logits, _) = pvt3_runtime::Classifier::load(&from_run).unwrap().run(&raw, 8).unwrap();
+    let worst = logits.iter().zip(&expected).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+    assert!(worst <= 1e-5, "tract against candle: {worst:e}");
     let err = fails(&["export", data.to_str().unwrap(), "-o", dir.join("x.onnx").to_str().unwrap()]);
     assert!(err.contains("neither a checkpoint directory nor a baked model"), "{err}");
     std::fs::remove_dir_all(dir).unwrap();

@@ -1,0 +1,144 @@
+//! [`Classifier`]: an exported model, its metadata, and a plan per batch size.
+
+use std::collections::HashMap;
+use std::path::Path;
+use std::sync::{Arc, Mutex};
+
+use tract_onnx::pb::ModelProto;
+use tract_onnx::prelude::*;
+
+use crate::{Error, Result};
+
+/// The answer for one window.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Prediction {
+    /// Index of the most probable class.
+    pub class: usize,
+    /// Its name, from the model's metadata.
+    pub label: String,
+    pub probabilities: Vec<f32>,
+}
+
+pub struct Classifier {
+    proto: ModelProto,
+    classes: Vec<String>,
+    sample_shape: Vec<usize>,
+    kept_frames: Vec<usize>,
+    plans: Mutex<HashMap<usize, Arc<TypedRunnableModel>>>,
+    path: String,
+}
+
+fn tract_error(e: impl std::fmt::Display) -> Error {
+    Error::Tract(e.to_string())
+}
+
+impl Classifier {
+    /// Loads an `.onnx` written by `pvt3 export`.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self> {
+        let path = path.as_ref();
+        let name = path.display().to_string();
+        let bytes = std::fs::read(path).map_err(|source| Error::Io { path: name.clone(), source })?;
+        let proto = tract_onnx::onnx()
+            .proto_model_for_read(&mut bytes.as_slice())
+            .map_err(|e| Error::NotOnnx { path: name.clone(), reason: e.to_string() })?;
+        let meta = |key: &'static str| -> Result<serde_json::Value> {
+            let entry = proto.metadata_props.iter().find(|p| p.key == key);
+            let entry = entry.ok_or_else(|| Error::NotPvt3 { path: name.clone(), key, problem: "is missing".into() })?;
+            serde_json::from_str(&entry.value)
+                .map_err(|e| Error::NotPvt3 { path: name.clone(), key, problem: format!("is not JSON ({e})") })
+        };
+        let bad = |key: &'static str| Error::NotPvt3 { path: name.clone(), key, problem: "has an unexpected form".into() };
+        let classes: Vec<String> = serde_json::from_value(meta("pvt3.classes")?).map_err(|_| bad("pvt3.classes"))?;
+        let kept_frames: Vec<usize> = serde_json::from_value(meta("pvt3.kept_frames")?).map_err(|_| bad("pvt3.kept_frames"))?;
+        let config = meta("pvt3.config")?;
+        let dim = |k: &str| config.get(k).and_then(|v| v.as_u64()).map(|v| v as usize).ok_or_else(|| bad("pvt3.config"));
+        let channels = dim("channels")?;
+        let mut sample_shape = vec![dim("height")?, dim("width")?];
+        if channels > 1 {
+            sample_shape.push(channels);
+        }
+        sample_shape.push(dim("frames")?);
+        Ok(Self { proto, classes, sample_shape, kept_frames, plans: Mutex::new(HashMap::new()), path: name })
+    }
+
+    pub fn classes(&self) -> &[String] {
+        &self.classes
+    }
+
+    /// One window: `[height, width, (channels,) frames]`.
+    pub fn sample_shape(&self) -> &[usize] {
+        &self.sample_shape
+    }
+
+    /// The frames of a window the model reads; the others were pruned.
+    pub fn kept_frames(&self) -> &[usize] {
+        &self.kept_frames
+    }
+
+    fn sample_len(&self) -> usize {
+        self.sample_shape.iter().product()
+    }
+
+    /// The optimised plan for `batch` windows, built on first use.
+    fn plan(&self, batch: usize) -> Result<Arc<TypedRunnableModel>> {
+        let mut plans = self.plans.lock().unwrap_or_else(|p| p.into_inner());
+        if let Some(p) = plans.get(&batch) {
+            return Ok(p.clone());
+        }
+        let mut shape = vec![batch];
+        shape.extend(&self.sample_shape);
+        let plan = tract_onnx::onnx()
+            .model_for_proto_model(&self.proto)
+            .and_then(|m| m.with_input_fact(0, f32::fact(&shape).into()))
+            .and_then(|m| m.into_optimized())
+            .and_then(|m| m.into_runnable())
+            .map_err(|e| Error::NotOnnx { path: self.path.clone(), reason: format!("{e:#}") })?;
+        plans.insert(batch, plan.clone());
+        Ok(plan)
+    }
+
+    fn validate(&self, frames: &[f32], batch: usize) -> Result<()> {
+        if batch == 0 {
+            return Err(Error::EmptyBatch);
+        }
+        let expected = batch * self.sample_len();
+        if frames.len() != expected {
+            let sample = self.sample_shape.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(" × ");
+            return Err(Error::InputLength { got: frames.len(), expected, batch, sample });
+        }
+        if let Some((index, value)) = frames.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(Error::NonFinite { index, value: *value });
+        }
+        Ok(())
+    }
+
+    /// Logits and probabilities `[batch × classes]` each, for `batch` windows back to back.
+    pub fn run(&self, frames: &[f32], batch: usize) -> Result<(Vec<f32>, Vec<f32>)> {
+        self.validate(frames, batch)?;
+        let mut shape = vec![batch];
+        shape.extend(&self.sample_shape);
+        let input = Tensor::from_shape(&shape, frames).map_err(tract_error)?;
+        let outputs = self.plan(batch)?.run(tvec!(input.into())).map_err(tract_error)?;
+        let values = |i: usize| -> Result<Vec<f32>> {
+            Ok(outputs[i].to_plain_array_view::<f32>().map_err(tract_error)?.iter().copied().collect())
+        };
+        Ok((values(0)?, values(1)?))
+    }
+
+    /// Classifies `batch` windows laid out back to back.
+    pub fn classify_batch(&self, frames: &[f32], batch: usize) -> Result<Vec<Prediction>> {
+        let (_, probabilities) = self.run(frames, batch)?;
+        Ok(probabilities
+            .chunks(self.classes.len())
+            .map(|p| {
+                let class = p.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map_or(0, |(i, _)| i);
+                Prediction { class, label: self.classes[class].clone(), probabilities: p.to_vec() }
+            })
+            .collect())
+    }
+
+    /// Classifies one window.
+    pub fn classify(&self, frames: &[f32]) -> Result<Prediction> {
+        Ok(self.classify_batch(frames, 1)?.remove(0))
+    }
+}
