@@ -5,9 +5,7 @@ use std::path::{Path, PathBuf};
 
 use ndarray::{Array2, Array4};
 use ndarray_npy::read_npy;
-use pvt3_export::{export, write, Metadata};
 use pvt3_models::bake::bake;
-use pvt3_models::normalization::Normalization;
 use pvt3_models::weights::read_tensors;
 use pvt3_models::{reference, Config};
 use pvt3_runtime::{Classifier, Error};
@@ -22,23 +20,16 @@ fn scratch(tag: &str) -> PathBuf {
     dir
 }
 
-/// The golden weights exported with an identity normalisation, and the golden input.
-fn golden_onnx(dir: &Path) -> (PathBuf, Vec<f32>, pvt3_models::bake::BakedPvt3) {
-    let cfg = Config::icub20();
-    let baked = bake(&cfg, &read_tensors(&golden("weights.safetensors")).unwrap()).unwrap();
-    let norm = Normalization { mean: vec![0.0; 60], std: vec![1.0; 60], frames: 75 };
-    let classes = (0..20).map(|k| format!("material_{}", k + 1)).collect();
-    let model = export(&baked, &norm, &Metadata { classes, provenance: serde_json::json!({}) }).unwrap();
-    let path = dir.join("golden.onnx");
-    write(&model, &path).unwrap();
+/// The committed golden model (kept current by an export test), its input, and its baked form.
+fn golden_onnx() -> (PathBuf, Vec<f32>, pvt3_models::bake::BakedPvt3) {
+    let baked = bake(&Config::icub20(), &read_tensors(&golden("weights.safetensors")).unwrap()).unwrap();
     let input: Array4<f32> = read_npy(golden("input.npy")).unwrap();
-    (path, input.iter().copied().collect(), baked)
+    (golden("model.onnx"), input.iter().copied().collect(), baked)
 }
 
 #[test]
 fn golden_logits_from_tract_match_the_golden_and_the_f64_reference() {
-    let dir = scratch("golden");
-    let (path, x, baked) = golden_onnx(&dir);
+    let (path, x, baked) = golden_onnx();
     let expected: Array2<f64> = read_npy(golden("logits.npy")).unwrap();
     let reference = reference::forward(&baked, &x, 8).unwrap();
     let c = Classifier::load(&path).unwrap();
@@ -60,13 +51,12 @@ fn golden_logits_from_tract_match_the_golden_and_the_f64_reference() {
     let first = &c.classify_batch(&x, 8).unwrap()[0];
     assert_eq!(first.class, p.class);
     assert!(first.probabilities.iter().zip(&p.probabilities).all(|(a, b)| (a - b).abs() < 1e-6), "plans per batch size agree");
-    std::fs::remove_dir_all(dir).unwrap();
 }
 
 #[test]
 fn bad_input_and_bad_files_are_typed_errors() {
     let dir = scratch("errors");
-    let (path, x, _) = golden_onnx(&dir);
+    let (path, x, _) = golden_onnx();
     let c = Classifier::load(&path).unwrap();
     assert!(matches!(c.classify(&x[..4499]), Err(Error::InputLength { got: 4499, expected: 4500, .. })));
     assert!(matches!(c.classify_batch(&x, 7), Err(Error::InputLength { expected: 31500, .. })));

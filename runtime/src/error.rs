@@ -12,6 +12,8 @@ pub enum Error {
     InputLength { got: usize, expected: usize, batch: usize, sample: String },
     #[error("input value {index} is {value}: only finite values can be classified")]
     NonFinite { index: usize, value: f32 },
+    #[error("{path}: {reason}")]
+    Npy { path: String, reason: String },
     #[error("batch size must be at least 1")]
     EmptyBatch,
     #[error("tract: {0}")]

@@ -8,6 +8,8 @@
 
 mod classifier;
 mod error;
+mod npy;
 
 pub use classifier::{Classifier, Prediction};
 pub use error::{Error, Result};
+pub use npy::read_npy;

@@ -87,3 +87,20 @@ fn what_cannot_be_exported_is_named() {
     let msg = export(&bake(&cfg, &tensors).unwrap(), &identity_normalization(&cfg), &meta(20)).unwrap_err().to_string();
     assert!(msg.contains("every frame is pruned"), "{msg}");
 }
+
+/// `tests/golden/icub20/model.onnx`, the golden weights exported (identity normalisation, classes
+/// material_1 …), is test data for the runtime, which must not depend on the exporter. This keeps
+/// it current: run with PVT3_BLESS=1 to rewrite it after a deliberate change of the exporter.
+#[test]
+fn committed_golden_onnx_is_what_the_exporter_writes() {
+    let cfg = Config::icub20();
+    let baked = bake(&cfg, &read_tensors(&golden("weights.safetensors")).unwrap()).unwrap();
+    let classes = (0..20).map(|k| format!("material_{}", k + 1)).collect();
+    let meta = Metadata { classes, provenance: serde_json::json!({"data": "tests/golden/icub20 (independent implementation)"}) };
+    let bytes = export(&baked, &identity_normalization(&cfg), &meta).unwrap().encode_to_vec();
+    let path = golden("model.onnx");
+    if std::env::var_os("PVT3_BLESS").is_some() {
+        std::fs::write(&path, &bytes).unwrap();
+    }
+    assert!(std::fs::read(&path).ok() == Some(bytes), "{} is stale: rerun this test with PVT3_BLESS=1", path.display());
+}
