@@ -55,6 +55,11 @@ pub struct TrainOptions {
     /// Augmentation: Gaussian noise of this standard deviation (in normalised units).
     #[arg(long, default_value_t = 0.05)]
     pub aug_noise: f64,
+    /// Augmentation: shift each training sample in time by a random offset in [-N, N] frames
+    /// (edge frames repeated).
+    #[arg(long, default_value_t = 0)]
+    #[serde(default)]
+    pub aug_shift: usize,
     /// Seed of initialisation, shuffling, dropout and augmentation: a fixed seed gives the same run.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -242,7 +247,18 @@ fn mask_vars(varmap: &VarMap) -> Vec<Var> {
     names.into_iter().map(|n| vars[n].clone()).collect()
 }
 
-fn augment(sample: &mut [f32], opts: &TrainOptions, rng: &mut Rng) {
+fn augment(sample: &mut [f32], frames: usize, opts: &TrainOptions, rng: &mut Rng) {
+    if opts.aug_shift > 0 {
+        let span = 2 * opts.aug_shift + 1;
+        let shift = rng.below(span) as isize - opts.aug_shift as isize;
+        let last = frames as isize - 1;
+        for row in sample.chunks_mut(frames) {
+            let original = row.to_vec();
+            for (t, v) in row.iter_mut().enumerate() {
+                *v = original[(t as isize - shift).clamp(0, last) as usize];
+            }
+        }
+    }
     let gain = 1.0 + opts.aug_gain as f32 * (2.0 * rng.uniform() - 1.0);
     let noise = opts.aug_noise as f32;
     for v in sample.iter_mut() {
@@ -344,7 +360,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
         let mut lr = schedule.at(run.step);
         for rows in order.chunks(opts.batch_size) {
             let rng = &mut run.rng;
-            let (x, y) = train_set.batch(rows, |s| augment(s, opts, rng))?;
+            let (x, y) = train_set.batch(rows, |s| augment(s, config.frames, opts, rng))?;
             lr = schedule.at(run.step);
             let (loss, logits) = learner.step(&x, &y, opts, lr, &mut run.rng)?;
             run.step += 1;

@@ -67,6 +67,7 @@ fn options(epochs: usize) -> TrainOptions {
         clip_grad: 1.0,
         aug_gain: 0.1,
         aug_noise: 0.05,
+        aug_shift: 0,
         seed: 5,
         l1: 0.0,
         random_prune: 0.0,
@@ -155,4 +156,20 @@ fn random_pruning_regularises_without_leaving_zeros_behind() {
     let w = vars["space.layers.0.ffn.fc1.weight"].flatten_all().unwrap().to_vec1::<f32>().unwrap();
     assert!(w.iter().all(|v| *v != 0.0), "the pruned entries are restored after every step");
     std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn time_shift_moves_frames_and_repeats_the_edge() {
+    let opts = TrainOptions { aug_shift: 2, aug_gain: 0.0, aug_noise: 0.0, ..TrainOptions::default() };
+    let mut rng = Rng::new(1);
+    let mut seen = std::collections::BTreeSet::new();
+    for _ in 0..50 {
+        let mut sample: Vec<f32> = (0..10).map(|t| t as f32).collect(); // two channels of 5 frames
+        augment(&mut sample, 5, &opts, &mut rng);
+        let shift = 2 - sample[2] as isize;
+        let expected: Vec<f32> = (0..10).map(|i| ((i % 5) as isize - shift).clamp(0, 4) as f32 + (i / 5 * 5) as f32).collect();
+        assert_eq!(sample, expected);
+        seen.insert(shift);
+    }
+    assert_eq!(seen.into_iter().collect::<Vec<_>>(), vec![-2, -1, 0, 1, 2]);
 }
