@@ -8,6 +8,7 @@
 
 mod classifier;
 mod error;
+pub mod ffi;
 mod npy;
 
 pub use classifier::{Classifier, Prediction};

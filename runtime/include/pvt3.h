@@ -1,0 +1,46 @@
+/* pvt3: tactile texture classification on the robot (C ABI of the pvt3-runtime crate).
+ *
+ * Link libpvt3_runtime.a (with -lm -lpthread -ldl) or libpvt3_runtime.so. Every function that
+ * returns int returns PVT3_OK or an error code; pvt3_last_error() then says what went wrong.
+ * No call panics or aborts on bad input: null pointers, wrong lengths, non-finite values,
+ * truncated or foreign files are all reported. */
+#ifndef PVT3_H
+#define PVT3_H
+
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define PVT3_OK 0
+#define PVT3_ERR_NULL 1
+#define PVT3_ERR_IO 2
+#define PVT3_ERR_MODEL 3
+#define PVT3_ERR_INPUT 4
+#define PVT3_ERR_INTERNAL 5
+
+typedef struct Pvt3Classifier pvt3_classifier;
+
+/* Loads an .onnx written by `pvt3 export`; *out owns a handle to free with pvt3_classifier_free. */
+int pvt3_classifier_load(const char *path, pvt3_classifier **out);
+/* Frees a handle (NULL is ignored). */
+void pvt3_classifier_free(pvt3_classifier *c);
+/* Values in one window: height x width x (channels x) frames, raw sensor values. */
+int pvt3_classifier_sample_len(const pvt3_classifier *c, size_t *out);
+/* Number of classes. */
+int pvt3_classifier_num_classes(const pvt3_classifier *c, size_t *out);
+/* Name of class `index`, valid as long as the handle. */
+int pvt3_classifier_class_name(const pvt3_classifier *c, size_t index, const char **out);
+/* Classifies `batch` windows (frames_len = batch x sample_len values): batch x classes
+ * probabilities, and the most probable class of each window unless classes_out is NULL. */
+int pvt3_classify(const pvt3_classifier *c, const float *frames, size_t frames_len, size_t batch,
+                  float *probabilities, size_t probabilities_len, size_t *classes_out);
+/* Message of the last failed call on this thread ("" if none), valid until the next call. */
+const char *pvt3_last_error(void);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

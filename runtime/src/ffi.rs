@@ -1,0 +1,190 @@
+//! The C ABI (`include/pvt3.h`): an opaque classifier handle, status codes, and a last-error
+//! message per thread. Every entry point catches panics, so none crosses into C: a panic is
+//! reported as `PVT3_ERR_INTERNAL` with its message.
+
+use std::cell::RefCell;
+use std::ffi::{c_char, c_int, CStr, CString};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+
+use crate::{Classifier, Error};
+
+pub const PVT3_OK: c_int = 0;
+pub const PVT3_ERR_NULL: c_int = 1;
+pub const PVT3_ERR_IO: c_int = 2;
+pub const PVT3_ERR_MODEL: c_int = 3;
+pub const PVT3_ERR_INPUT: c_int = 4;
+pub const PVT3_ERR_INTERNAL: c_int = 5;
+
+/// What C holds: the classifier and its class names as C strings.
+pub struct Pvt3Classifier {
+    classifier: Classifier,
+    names: Vec<CString>,
+}
+
+thread_local! {
+    static LAST_ERROR: RefCell<CString> = RefCell::new(CString::default());
+}
+
+fn set_last_error(msg: String) {
+    let c = CString::new(msg.replace('\0', " ")).expect("NULs replaced");
+    LAST_ERROR.with(|e| *e.borrow_mut() = c);
+}
+
+fn status(e: &Error) -> c_int {
+    match e {
+        Error::Io { .. } => PVT3_ERR_IO,
+        Error::NotOnnx { .. } | Error::NotPvt3 { .. } => PVT3_ERR_MODEL,
+        Error::InputLength { .. } | Error::NonFinite { .. } | Error::EmptyBatch | Error::Npy { .. } => PVT3_ERR_INPUT,
+        Error::Tract(_) => PVT3_ERR_INTERNAL,
+    }
+}
+
+/// Runs `f`, turning errors and panics into a status code and a last-error message.
+fn guard(f: impl FnOnce() -> std::result::Result<(), (c_int, String)>) -> c_int {
+    match catch_unwind(AssertUnwindSafe(f)) {
+        Ok(Ok(())) => PVT3_OK,
+        Ok(Err((code, msg))) => {
+            set_last_error(msg);
+            code
+        }
+        Err(panic) => {
+            let what = panic
+                .downcast_ref::<&str>()
+                .map(|s| s.to_string())
+                .or_else(|| panic.downcast_ref::<String>().cloned())
+                .unwrap_or_else(|| "unknown".into());
+            set_last_error(format!("internal error (panic): {what}"));
+            PVT3_ERR_INTERNAL
+        }
+    }
+}
+
+fn null(what: &str) -> (c_int, String) {
+    (PVT3_ERR_NULL, format!("{what} is a null pointer"))
+}
+
+fn fail(e: Error) -> (c_int, String) {
+    (status(&e), e.to_string())
+}
+
+/// Loads a model; on success `*out` owns a handle to free with `pvt3_classifier_free`.
+///
+/// # Safety
+/// `path` is a NUL-terminated string or null; `out` is writable or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_classifier_load(path: *const c_char, out: *mut *mut Pvt3Classifier) -> c_int {
+    guard(|| {
+        if path.is_null() {
+            return Err(null("path"));
+        }
+        if out.is_null() {
+            return Err(null("out"));
+        }
+        let path = CStr::from_ptr(path).to_str().map_err(|_| (PVT3_ERR_IO, "path is not UTF-8".to_string()))?;
+        let classifier = Classifier::load(path).map_err(fail)?;
+        let names = classifier.classes().iter().map(|n| CString::new(n.replace('\0', " ")).expect("NULs replaced")).collect();
+        *out = Box::into_raw(Box::new(Pvt3Classifier { classifier, names }));
+        Ok(())
+    })
+}
+
+/// Frees a handle from `pvt3_classifier_load` (null is ignored).
+///
+/// # Safety
+/// `c` came from `pvt3_classifier_load` and is not used afterwards.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_classifier_free(c: *mut Pvt3Classifier) {
+    if !c.is_null() {
+        let _ = catch_unwind(AssertUnwindSafe(|| drop(Box::from_raw(c))));
+    }
+}
+
+/// Values in one window (`height × width × (channels ×) frames`).
+///
+/// # Safety
+/// `c` is a live handle or null; `out` is writable or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_classifier_sample_len(c: *const Pvt3Classifier, out: *mut usize) -> c_int {
+    guard(|| {
+        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
+        let out = out.as_mut().ok_or_else(|| null("out"))?;
+        *out = c.classifier.sample_shape().iter().product();
+        Ok(())
+    })
+}
+
+/// Number of classes.
+///
+/// # Safety
+/// `c` is a live handle or null; `out` is writable or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_classifier_num_classes(c: *const Pvt3Classifier, out: *mut usize) -> c_int {
+    guard(|| {
+        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
+        let out = out.as_mut().ok_or_else(|| null("out"))?;
+        *out = c.names.len();
+        Ok(())
+    })
+}
+
+/// The name of class `index`; the string lives as long as the handle.
+///
+/// # Safety
+/// `c` is a live handle or null; `out` is writable or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_classifier_class_name(c: *const Pvt3Classifier, index: usize, out: *mut *const c_char) -> c_int {
+    guard(|| {
+        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
+        let out = out.as_mut().ok_or_else(|| null("out"))?;
+        let name = c.names.get(index).ok_or_else(|| (PVT3_ERR_INPUT, format!("class {index} of {}", c.names.len())))?;
+        *out = name.as_ptr();
+        Ok(())
+    })
+}
+
+/// Classifies `batch` windows of raw frames (`frames_len` = batch × sample length values).
+/// Writes `batch × classes` probabilities to `probabilities` (room for `probabilities_len`
+/// values) and, unless `classes_out` is null, the most probable class of each window.
+///
+/// # Safety
+/// Pointers are null or valid for the lengths given.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_classify(
+    c: *const Pvt3Classifier,
+    frames: *const f32,
+    frames_len: usize,
+    batch: usize,
+    probabilities: *mut f32,
+    probabilities_len: usize,
+    classes_out: *mut usize,
+) -> c_int {
+    guard(|| {
+        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
+        if frames.is_null() {
+            return Err(null("frames"));
+        }
+        if probabilities.is_null() {
+            return Err(null("probabilities"));
+        }
+        let needed = batch * c.names.len();
+        if probabilities_len < needed {
+            return Err((PVT3_ERR_INPUT, format!("probabilities has room for {probabilities_len} values; {needed} needed")));
+        }
+        let input = std::slice::from_raw_parts(frames, frames_len);
+        let predictions = c.classifier.classify_batch(input, batch).map_err(fail)?;
+        let probs = std::slice::from_raw_parts_mut(probabilities, needed);
+        for (i, p) in predictions.iter().enumerate() {
+            probs[i * c.names.len()..(i + 1) * c.names.len()].copy_from_slice(&p.probabilities);
+            if !classes_out.is_null() {
+                *classes_out.add(i) = p.class;
+            }
+        }
+        Ok(())
+    })
+}
+
+/// The message of the last failed call on this thread ("" if none); valid until the next call.
+#[no_mangle]
+pub extern "C" fn pvt3_last_error() -> *const c_char {
+    LAST_ERROR.with(|e| e.borrow().as_ptr())
+}
