@@ -51,6 +51,10 @@ fn golden_logits_from_tract_match_the_golden_and_the_f64_reference() {
     let first = &c.classify_batch(&x, 8).unwrap()[0];
     assert_eq!(first.class, p.class);
     assert!(first.probabilities.iter().zip(&p.probabilities).all(|(a, b)| (a - b).abs() < 1e-6), "plans per batch size agree");
+    let (two_threads, _) = Classifier::load(&path).unwrap().with_threads(2).run(&x, 8).unwrap();
+    let (one_thread, _) = c.run(&x, 8).unwrap();
+    let diff = two_threads.iter().zip(&one_thread).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+    assert!(diff < 1e-5, "two threads: {diff:e}");
 }
 
 #[test]

@@ -5,7 +5,9 @@ use std::path::Path;
 use std::sync::{Arc, Mutex};
 
 use tract_onnx::pb::ModelProto;
+use tract_linalg::multithread::Executor;
 use tract_onnx::prelude::*;
+use tract_onnx::tract_core::runtime::RunOptions;
 
 use crate::{Error, Result};
 
@@ -25,6 +27,7 @@ pub struct Classifier {
     sample_shape: Vec<usize>,
     kept_frames: Vec<usize>,
     plans: Mutex<HashMap<usize, Arc<TypedRunnableModel>>>,
+    threads: usize,
     path: String,
 }
 
@@ -58,7 +61,14 @@ impl Classifier {
             sample_shape.push(channels);
         }
         sample_shape.push(dim("frames")?);
-        Ok(Self { proto, classes, sample_shape, kept_frames, plans: Mutex::new(HashMap::new()), path: name })
+        Ok(Self { proto, classes, sample_shape, kept_frames, plans: Mutex::new(HashMap::new()), threads: 1, path: name })
+    }
+
+    /// Runs on `threads` threads from now on (default 1; small models rarely gain from more).
+    pub fn with_threads(mut self, threads: usize) -> Self {
+        self.threads = threads.max(1);
+        self.plans.get_mut().unwrap_or_else(|p| p.into_inner()).clear();
+        self
     }
 
     pub fn classes(&self) -> &[String] {
@@ -91,7 +101,13 @@ impl Classifier {
             .model_for_proto_model(&self.proto)
             .and_then(|m| m.with_input_fact(0, f32::fact(&shape).into()))
             .and_then(|m| m.into_optimized())
-            .and_then(|m| m.into_runnable())
+            .and_then(|m| {
+                let executor = match self.threads {
+                    1 => Executor::SingleThread,
+                    n => Executor::multithread(n),
+                };
+                m.into_runnable_with_options(&RunOptions { executor: Some(executor), ..Default::default() })
+            })
             .map_err(|e| Error::NotOnnx { path: self.path.clone(), reason: format!("{e:#}") })?;
         plans.insert(batch, plan.clone());
         Ok(plan)
