@@ -28,29 +28,25 @@ impl Graph {
         format!("{hint}_{}", self.count)
     }
 
-    pub fn f32s(&mut self, hint: &str, dims: &[usize], data: Vec<f32>) -> String {
-        debug_assert_eq!(dims.iter().product::<usize>(), data.len(), "{hint}");
+    fn initializer(&mut self, hint: &str, dims: &[usize], data_type: DataType, raw_data: Vec<u8>) -> String {
         let name = self.fresh(hint);
         self.initializers.push(TensorProto {
             name: name.clone(),
             dims: dims.iter().map(|d| *d as i64).collect(),
-            data_type: DataType::Float as i32,
-            raw_data: data.iter().flat_map(|v| v.to_le_bytes()).collect(),
+            data_type: data_type as i32,
+            raw_data,
             ..Default::default()
         });
         name
     }
 
+    pub fn f32s(&mut self, hint: &str, dims: &[usize], data: Vec<f32>) -> String {
+        debug_assert_eq!(dims.iter().product::<usize>(), data.len(), "{hint}");
+        self.initializer(hint, dims, DataType::Float, data.iter().flat_map(|v| v.to_le_bytes()).collect())
+    }
+
     pub fn i64s(&mut self, hint: &str, dims: &[usize], data: Vec<i64>) -> String {
-        let name = self.fresh(hint);
-        self.initializers.push(TensorProto {
-            name: name.clone(),
-            dims: dims.iter().map(|d| *d as i64).collect(),
-            data_type: DataType::Int64 as i32,
-            raw_data: data.iter().flat_map(|v| v.to_le_bytes()).collect(),
-            ..Default::default()
-        });
-        name
+        self.initializer(hint, dims, DataType::Int64, data.iter().flat_map(|v| v.to_le_bytes()).collect())
     }
 
     /// A node with one output, named after `hint` unless `output` is given.
