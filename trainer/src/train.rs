@@ -7,7 +7,7 @@
 //! `result.json` (written when the run is complete).
 
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 use candle_core::{DType, Device, Tensor, Var, D};
@@ -421,7 +421,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
 }
 
 /// Keeps the first `epochs` lines of a metrics log (a crash may have left one more).
-fn truncate_metrics(path: &PathBuf, epochs: usize) -> Result<()> {
+fn truncate_metrics(path: &Path, epochs: usize) -> Result<()> {
     let Ok(text) = std::fs::read_to_string(path) else { return Ok(()) };
     let kept: String = text.lines().take(epochs).map(|l| format!("{l}\n")).collect();
     std::fs::write(path, kept).map_err(Error::io(path))

@@ -71,7 +71,8 @@ fn a_set_without_folds_gets_balanced_stratified_folds() {
 #[test]
 fn bad_files_get_errors_that_say_what_was_expected() {
     let dir = temp_dir("bad");
-    let cases: Vec<(&str, Box<dyn Fn(&mut NpzWriter<std::fs::File>)>, &str)> = vec![
+    type Fill = Box<dyn Fn(&mut NpzWriter<std::fs::File>)>;
+    let cases: Vec<(&str, Fill, &str)> = vec![
         (
             "nan",
             Box::new(|w| {
