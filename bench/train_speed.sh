@@ -50,7 +50,7 @@ out = [
     f"**candle / PyTorch = {candle / torch:.2f}**",
     "",
 ]
-open("docs/training-speed.md.table", "w").write("\n".join(out))
+open("docs/training-speed.md.table", "w").write("\n".join(out) + "\n")
 print("\n".join(out))
 PY
 # Keep the hand-written analysis below the generated table.
