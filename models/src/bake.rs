@@ -272,6 +272,17 @@ impl BakedPvt3 {
             + dense(&self.head)
     }
 
+    /// "N parameters, M multiply-adds per sample, k of T temporal tokens kept".
+    pub fn size_summary(&self) -> String {
+        format!(
+            "{} parameters, {} multiply-adds per sample, {} of {} temporal tokens kept",
+            self.parameter_count(),
+            self.mult_adds(),
+            self.kept_tokens.len(),
+            self.config.time_tokens()
+        )
+    }
+
     /// Multiply-adds per sample (matrix products only), as [`Config::mult_adds`] counts them.
     pub fn mult_adds(&self) -> u64 {
         let c = &self.config;

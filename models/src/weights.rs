@@ -4,7 +4,7 @@
 
 use std::path::Path;
 
-use candle_core::{DType, Device, Tensor};
+use candle_core::{Device, Tensor};
 use candle_nn::VarMap;
 use safetensors::SafeTensors;
 
@@ -16,35 +16,35 @@ fn weights_error(path: &Path, reason: impl Into<String>) -> Error {
 
 /// Sets every variable of `varmap` from the safetensors file at `path`.
 pub fn load_weights(varmap: &VarMap, path: &Path) -> Result<()> {
-    let bytes = std::fs::read(path).map_err(|e| weights_error(path, e.to_string()))?;
-    let file = SafeTensors::deserialize(&bytes)
-        .map_err(|e| weights_error(path, format!("not a valid safetensors file ({e})")))?;
+    set_vars(varmap, &read_tensors(path)?, path)
+}
+
+/// Sets every variable of `varmap` from `tensors` (read from `source`), after checking that every
+/// name is there with the expected shape and finite values, and that nothing is left over.
+pub fn set_vars(varmap: &VarMap, tensors: &crate::bake::Tensors, source: &Path) -> Result<()> {
     let vars = varmap.data().lock().expect("varmap lock poisoned");
     let mut names: Vec<&String> = vars.keys().collect();
     names.sort();
     for name in names {
         let var = &vars[name];
-        let view = file
-            .tensor(name)
-            .map_err(|_| weights_error(path, format!("tensor `{name}` is missing (a checkpoint of another model?)")))?;
-        if view.shape() != var.dims() {
+        let (shape, values) = tensors
+            .get(name)
+            .ok_or_else(|| weights_error(source, format!("tensor `{name}` is missing (a checkpoint of another model?)")))?;
+        if shape.as_slice() != var.dims() {
             return Err(weights_error(
-                path,
-                format!("tensor `{name}` has shape {:?}, the configuration expects {:?}", view.shape(), var.dims()),
+                source,
+                format!("tensor `{name}` has shape {shape:?}, the configuration expects {:?}", var.dims()),
             ));
         }
-        if view.dtype() != safetensors::Dtype::F32 {
-            return Err(weights_error(path, format!("tensor `{name}` is {:?}, expected F32", view.dtype())));
+        if values.iter().any(|v| !v.is_finite()) {
+            return Err(weights_error(source, format!("tensor `{name}` holds NaN or infinite values")));
         }
-        let tensor = Tensor::from_raw_buffer(view.data(), DType::F32, view.shape(), &Device::Cpu)?;
-        if tensor.flatten_all()?.to_vec1::<f32>()?.iter().any(|v| !v.is_finite()) {
-            return Err(weights_error(path, format!("tensor `{name}` holds NaN or infinite values")));
-        }
-        var.set(&tensor)?;
+        var.set(&Tensor::from_vec(values.clone(), shape.as_slice(), &Device::Cpu)?)?;
     }
-    let unknown: Vec<&str> = file.names().into_iter().filter(|n| !vars.contains_key(*n)).collect();
+    let mut unknown: Vec<&str> = tensors.keys().map(String::as_str).filter(|n| !vars.contains_key(*n)).collect();
     if !unknown.is_empty() {
-        return Err(weights_error(path, format!("tensors the configuration does not have: {}", unknown.join(", "))));
+        unknown.sort_unstable();
+        return Err(weights_error(source, format!("tensors the configuration does not have: {}", unknown.join(", "))));
     }
     Ok(())
 }

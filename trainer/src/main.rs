@@ -7,9 +7,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use pvt3_models::Config;
-use pvt3_models::bake::bake;
 use pvt3_models::prune::{PruneSpec, Scope};
-use pvt3_models::weights::varmap_tensors;
 use pvt3_trainer::bench::train_speed;
 use pvt3_trainer::prune::{prune_and_fine_tune, PruneStage};
 use pvt3_trainer::checkpoint::{self, BakedFile};
@@ -326,21 +324,18 @@ fn main() -> Result<()> {
             println!("{}", serde_json::to_string(&speed)?);
         }
         Command::Info { model, json } => {
-            let cfg = resolve_config(&model)?;
+            // A checkpoint is read once: its configuration, and its size after baking.
+            let baked = if Path::new(&model).is_dir() { Some(BakedFile::from_checkpoint(Path::new(&model))?.baked) } else { None };
+            let cfg = match &baked {
+                Some(b) => b.config.clone(),
+                None => resolve_config(&model)?,
+            };
             if json {
                 println!("{}", serde_json::to_string_pretty(&cfg)?);
             } else {
                 print!("{}", report(&cfg)?);
-                if Path::new(&model).is_dir() {
-                    let (meta, _, varmap) = checkpoint::load(Path::new(&model))?;
-                    let baked = bake(&meta.config, &varmap_tensors(&varmap)?)?;
-                    println!(
-                        "\nafter baking  {} parameters, {} multiply-adds per sample, {} of {} temporal tokens kept",
-                        baked.parameter_count(),
-                        baked.mult_adds(),
-                        baked.kept_tokens.len(),
-                        cfg.time_tokens()
-                    );
+                if let Some(b) = baked {
+                    println!("\nafter baking  {}", b.size_summary());
                 }
             }
         }
@@ -354,28 +349,19 @@ fn export_onnx(model: &Path, out: &Path) -> Result<()> {
     let onnx = pvt3_export::export(&file.baked, &file.normalization, &file.metadata())
         .with_context(|| format!("exporting {}", model.display()))?;
     pvt3_export::write(&onnx, out)?;
-    println!(
-        "wrote {}: {} parameters, {} multiply-adds per sample, {} of {} temporal tokens kept",
-        out.display(),
-        file.baked.parameter_count(),
-        file.baked.mult_adds(),
-        file.baked.kept_tokens.len(),
-        file.baked.config.time_tokens()
-    );
+    println!("wrote {}: {}", out.display(), file.baked.size_summary());
     Ok(())
 }
 
 fn report_pruned(r: &pvt3_trainer::train::RunResult, out: &Path) -> Result<()> {
-    let (meta, _, varmap) = checkpoint::load(out)?;
-    let baked = bake(&meta.config, &varmap_tensors(&varmap)?)?;
+    let baked = BakedFile::from_checkpoint(out)?.baked;
     println!(
-        "pruned and fine-tuned: best epoch {} of {}, validation {:.4}, test {:.4}; baked: {} parameters, {} multiply-adds per sample; checkpoint {}",
+        "pruned and fine-tuned: best epoch {} of {}, validation {:.4}, test {:.4}; baked: {}; checkpoint {}",
         r.best_epoch,
         r.epochs,
         r.val_accuracy,
         r.test_accuracy,
-        baked.parameter_count(),
-        baked.mult_adds(),
+        baked.size_summary(),
         out.join("model").display()
     );
     Ok(())

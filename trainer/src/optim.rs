@@ -11,6 +11,11 @@ use candle_nn::VarMap;
 
 use crate::Result;
 
+/// A linear layer's weight matrix: what weight decay (and random pruning) applies to.
+pub fn is_weight_matrix(name: &str, var: &Var) -> bool {
+    name.ends_with(".weight") && var.rank() == 2
+}
+
 pub struct AdamW {
     params: Vec<Param>,
     pub step: usize,
@@ -34,7 +39,7 @@ impl AdamW {
         let mut params = vars
             .iter()
             .map(|(name, var)| {
-                let decay = name.ends_with(".weight") && var.rank() == 2;
+                let decay = is_weight_matrix(name, var);
                 let zeros = var.zeros_like()?;
                 Ok(Param { name: name.clone(), var: var.clone(), decay, m: zeros.clone(), v: zeros })
             })

@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 use crate::checkpoint::{self, read_json, write_json, Meta, Provenance};
 use crate::data::{Dataset, Split};
 use crate::evaluate::{evaluate, Samples};
-use crate::optim::AdamW;
+use crate::optim::{is_weight_matrix, AdamW};
 use crate::schedule::Schedule;
 use crate::{Error, Result};
 
@@ -178,25 +178,17 @@ impl Learner {
     pub fn new(config: &Config, opts: &TrainOptions, start: Option<&Tensors>) -> Result<Self> {
         let (model, varmap) = Pvt3::init(config, opts.seed)?;
         if let Some(start) = start {
-            for (name, var) in varmap.data().lock().expect("varmap lock poisoned").iter() {
-                let (shape, values) = start.get(name).ok_or_else(|| Error::Usage(format!("start weights lack `{name}`")))?;
-                var.set(&Tensor::from_vec(values.clone(), shape.as_slice(), &Device::Cpu)?)?;
-            }
+            pvt3_models::weights::set_vars(&varmap, start, Path::new("(start weights)"))?;
         }
-        let masks = mask_vars(&varmap).into_iter().map(|v| v.as_tensor().clone()).collect();
+        let masks = vars_where(&varmap, is_mask).into_iter().map(|v| v.as_tensor().clone()).collect();
         let optimizer = AdamW::new(&varmap, opts.weight_decay)?;
-        let matrices = {
-            let vars = varmap.data().lock().expect("varmap lock poisoned");
-            let mut names: Vec<&String> = vars.keys().filter(|n| n.ends_with(".weight") && vars[*n].rank() == 2).collect();
-            names.sort();
-            names.into_iter().map(|n| vars[n].clone()).collect()
-        };
+        let matrices = vars_where(&varmap, is_weight_matrix);
         Ok(Self { model, varmap, optimizer, masks, held: Vec::new(), matrices })
     }
 
     /// From now on, mask entries that are zero stay zero.
     pub fn hold_zero_masks(&mut self) -> Result<()> {
-        self.held = mask_vars(&self.varmap)
+        self.held = vars_where(&self.varmap, is_mask)
             .into_iter()
             .map(|v| Ok((v.clone(), v.as_tensor().ne(0.0)?.to_dtype(DType::F32)?)))
             .collect::<Result<_>>()?;
@@ -239,10 +231,15 @@ impl Learner {
     }
 }
 
-/// The selection-mask variables, in name order.
-fn mask_vars(varmap: &VarMap) -> Vec<Var> {
+/// A selection mask (channel or frame).
+fn is_mask(name: &str, _: &Var) -> bool {
+    name.ends_with("mask")
+}
+
+/// The variables `keep` selects, in name order.
+fn vars_where(varmap: &VarMap, keep: fn(&str, &Var) -> bool) -> Vec<Var> {
     let vars = varmap.data().lock().expect("varmap lock poisoned");
-    let mut names: Vec<&String> = vars.keys().filter(|n| n.ends_with("mask")).collect();
+    let mut names: Vec<&String> = vars.iter().filter(|(n, v)| keep(n, v)).map(|(n, _)| n).collect();
     names.sort();
     names.into_iter().map(|n| vars[n].clone()).collect()
 }
