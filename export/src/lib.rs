@@ -4,11 +4,15 @@
 //! classes, the input layout, the kept frames, the configuration and where the model came from.
 //!
 //! Depends on the baked form only: pruned channels and frames are already gone, so the graph
-//! computes the spatial transformer for the kept frames alone.
+//! computes the spatial transformer for the kept frames alone. Named seams between the spatial
+//! and the temporal stage let the runtime stream a touch frame by frame from the same file.
 
 mod error;
 mod graph;
 mod model;
 
 pub use error::{Error, Result};
-pub use model::{export, write, Metadata, INPUT, LOGITS, PROBABILITIES};
+pub use model::{
+    export, write, Metadata, INPUT, LOGITS, PROBABILITIES, TOKEN_ENCODINGS, TOKEN_FRAMES,
+    TOKEN_INDEX,
+};

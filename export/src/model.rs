@@ -6,8 +6,9 @@ use prost::Message;
 use pvt3_models::bake::{BakedAttention, BakedBlock, BakedPvt3, BakedTransformer, Dense, Norm};
 use pvt3_models::normalization::Normalization;
 use tract_onnx::pb::{
-    tensor_proto::DataType, tensor_shape_proto::dimension::Value as Dim, tensor_shape_proto::Dimension, type_proto,
-    GraphProto, ModelProto, OperatorSetIdProto, StringStringEntryProto, TensorShapeProto, TypeProto, ValueInfoProto,
+    tensor_proto::DataType, tensor_shape_proto::dimension::Value as Dim,
+    tensor_shape_proto::Dimension, type_proto, GraphProto, ModelProto, OperatorSetIdProto,
+    StringStringEntryProto, TensorShapeProto, TypeProto, ValueInfoProto,
 };
 
 use crate::graph::{float, int, ints, Graph};
@@ -16,6 +17,12 @@ use crate::{Error, Result};
 /// The input: raw sensor frames `[batch, height, width, (channels,) frames]`.
 pub const INPUT: &str = "frames";
 pub const LOGITS: &str = "logits";
+/// Seam of the spatial stage: the raw frames of each kept temporal token, `[tokens, tubelet, height, width, channels]`.
+pub const TOKEN_FRAMES: &str = "token_frames";
+/// Seam of the spatial stage: each token's place among the kept tokens, int64 `[tokens]`.
+pub const TOKEN_INDEX: &str = "token_index";
+/// Seam between the stages: the spatial encoding of each kept token, `[tokens, dim]`.
+pub const TOKEN_ENCODINGS: &str = "token_encodings";
 pub const PROBABILITIES: &str = "probabilities";
 
 /// What the file says about itself, besides the graph.
@@ -27,7 +34,10 @@ pub struct Metadata {
 }
 
 fn linear(g: &mut Graph, x: &str, l: &Dense, hint: &str) -> String {
-    let wt: Vec<f32> = (0..l.cols).flat_map(|c| (0..l.rows).map(move |r| (r, c))).map(|(r, c)| l.weight[r * l.cols + c]).collect();
+    let wt: Vec<f32> = (0..l.cols)
+        .flat_map(|c| (0..l.rows).map(move |r| (r, c)))
+        .map(|(r, c)| l.weight[r * l.cols + c])
+        .collect();
     let w = g.f32s(&format!("{hint}_w"), &[l.cols, l.rows], wt);
     let y = g.op("MatMul", &[x, &w]);
     match &l.bias {
@@ -43,7 +53,12 @@ fn layer_norm(g: &mut Graph, x: &str, n: &Norm, eps: f64, hint: &str) -> String 
     let d = n.weight.len();
     let w = g.f32s(&format!("{hint}_scale"), &[d], n.weight.clone());
     let b = g.f32s(&format!("{hint}_bias"), &[d], n.bias.clone());
-    g.node("LayerNormalization", &[x, &w, &b], vec![int("axis", -1), float("epsilon", eps as f32)], None)
+    g.node(
+        "LayerNormalization",
+        &[x, &w, &b],
+        vec![int("axis", -1), float("epsilon", eps as f32)],
+        None,
+    )
 }
 
 fn gelu(g: &mut Graph, x: &str) -> String {
@@ -59,7 +74,10 @@ fn gelu(g: &mut Graph, x: &str) -> String {
 
 /// Attention over `x` `[sequences, tokens, dim]`; the scale is folded into the q weights.
 fn attention(g: &mut Graph, x: &str, a: &BakedAttention, hint: &str) -> String {
-    let q_scaled = Dense { weight: a.q.weight.iter().map(|w| w * a.scale).collect(), ..a.q.clone() };
+    let q_scaled = Dense {
+        weight: a.q.weight.iter().map(|w| w * a.scale).collect(),
+        ..a.q.clone()
+    };
     let q = linear(g, x, &q_scaled, &format!("{hint}_q"));
     let k = linear(g, x, &a.k, &format!("{hint}_k"));
     let v = linear(g, x, &a.v, &format!("{hint}_v"));
@@ -69,17 +87,34 @@ fn attention(g: &mut Graph, x: &str, a: &BakedAttention, hint: &str) -> String {
         let probs = g.node("Softmax", &[&scores], vec![int("axis", -1)], None);
         g.op("MatMul", &[&probs, &v])
     } else {
-        let split = g.i64s("split_heads", &[4], vec![0, 0, a.heads as i64, a.head_dim as i64]);
+        let split = g.i64s(
+            "split_heads",
+            &[4],
+            vec![0, 0, a.heads as i64, a.head_dim as i64],
+        );
         let heads = |g: &mut Graph, t: &str, perm: &[i64]| {
             let r = g.op("Reshape", &[t, &split]);
             g.node("Transpose", &[&r], vec![ints("perm", perm)], None)
         };
-        let (qh, kt, vh) = (heads(g, &q, &[0, 2, 1, 3]), heads(g, &k, &[0, 2, 3, 1]), heads(g, &v, &[0, 2, 1, 3]));
+        let (qh, kt, vh) = (
+            heads(g, &q, &[0, 2, 1, 3]),
+            heads(g, &k, &[0, 2, 3, 1]),
+            heads(g, &v, &[0, 2, 1, 3]),
+        );
         let scores = g.op("MatMul", &[&qh, &kt]);
         let probs = g.node("Softmax", &[&scores], vec![int("axis", -1)], None);
         let mixed = g.op("MatMul", &[&probs, &vh]);
-        let back = g.node("Transpose", &[&mixed], vec![ints("perm", &[0, 2, 1, 3])], None);
-        let merge = g.i64s("merge_heads", &[3], vec![0, 0, (a.heads * a.head_dim) as i64]);
+        let back = g.node(
+            "Transpose",
+            &[&mixed],
+            vec![ints("perm", &[0, 2, 1, 3])],
+            None,
+        );
+        let merge = g.i64s(
+            "merge_heads",
+            &[3],
+            vec![0, 0, (a.heads * a.head_dim) as i64],
+        );
         g.op("Reshape", &[&back, &merge])
     };
     linear(g, &mixed, &a.out, &format!("{hint}_out"))
@@ -107,9 +142,19 @@ fn transformer_cls(g: &mut Graph, x: &str, t: &BakedTransformer, eps: f64, hint:
     layer_norm(g, &cls, &t.norm, eps, &format!("{hint}_norm"))
 }
 
+/// The first entry of a shape, as a 1-element shape.
+fn first_dim(g: &mut Graph, shape: &str) -> String {
+    let (s0, s1) = (g.i64s("start", &[1], vec![0]), g.i64s("end", &[1], vec![1]));
+    g.op("Slice", &[shape, &s0, &s1])
+}
+
 /// `token` `[1, 1, (1,) dim]` repeated to `[batch, rest…]`.
 fn expand_over_batch(g: &mut Graph, token: &str, batch: &str, rest: &[usize]) -> String {
-    let rest = g.i64s("shape_rest", &[rest.len()], rest.iter().map(|v| *v as i64).collect());
+    let rest = g.i64s(
+        "shape_rest",
+        &[rest.len()],
+        rest.iter().map(|v| *v as i64).collect(),
+    );
     let shape = g.node("Concat", &[batch, &rest], vec![int("axis", 0)], None);
     g.op("Expand", &[token, &shape])
 }
@@ -117,16 +162,26 @@ fn expand_over_batch(g: &mut Graph, token: &str, batch: &str, rest: &[usize]) ->
 /// Checks the parts of a baked model the graph relies on.
 fn check(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<()> {
     let c = &m.config;
-    c.validate().map_err(|e| Error::Inconsistent(e.to_string()))?;
+    c.validate()
+        .map_err(|e| Error::Inconsistent(e.to_string()))?;
     let channels = c.sample_shape().iter().product::<usize>() / c.frames;
     if norm.mean.len() != channels || norm.std.len() != channels || norm.frames != c.frames {
-        return Err(Error::Inconsistent(format!("normalisation does not fit {channels} channels × {} frames", c.frames)));
+        return Err(Error::Inconsistent(format!(
+            "normalisation does not fit {channels} channels × {} frames",
+            c.frames
+        )));
     }
     if meta.classes.len() != c.classes {
-        return Err(Error::Inconsistent(format!("{} class names for {} classes", meta.classes.len(), c.classes)));
+        return Err(Error::Inconsistent(format!(
+            "{} class names for {} classes",
+            meta.classes.len(),
+            c.classes
+        )));
     }
     if m.kept_tokens.is_empty() {
-        return Err(Error::Unsupported("every frame is pruned; the model would ignore its input".into()));
+        return Err(Error::Unsupported(
+            "every frame is pruned; the model would ignore its input".into(),
+        ));
     }
     for (name, t) in [("space", &m.space), ("temporal", &m.temporal)] {
         for (i, b) in t.layers.iter().enumerate() {
@@ -165,58 +220,109 @@ fn value_info(name: &str, dims: &[Option<usize>]) -> ValueInfoProto {
 }
 
 /// The ONNX model of a baked PVT³ with its normalisation.
+///
+/// The graph has two named seams so that a streaming runtime can cut it: the spatial stage maps
+/// [`TOKEN_FRAMES`] (the raw frames of each kept temporal token) and [`TOKEN_INDEX`] (its place
+/// among the kept tokens) to [`TOKEN_ENCODINGS`]; the temporal stage maps those to the outputs.
+/// Both stages are written for any number of tokens, so the same nodes serve a whole batch and a
+/// single token as it arrives.
 pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<ModelProto> {
     check(m, norm, meta)?;
     let c = &m.config;
     let (n, d, eps) = (c.num_patches(), c.dim, c.layer_norm_eps);
     let (t, tk, tt) = (c.time_tokens(), m.kept_tokens.len(), c.tubelet);
+    let (h, w, ch) = (c.height, c.width, c.channels);
     let mut g = Graph::default();
     let sample = c.sample_shape();
-    let rank = sample.len() + 1;
 
-    // Normalise: (x - mean) / std per channel, broadcast over frames.
-    let mut stat_dims: Vec<usize> = sample[..sample.len() - 1].to_vec();
-    stat_dims.push(1);
-    let mean = g.f32s("norm_mean", &stat_dims, norm.mean.clone());
-    let std = g.f32s("norm_std", &stat_dims, norm.std.clone());
-    let centred = g.op("Sub", &[INPUT, &mean]);
-    let mut x = g.op("Div", &[&centred, &std]);
-
-    // Keep only the frames of kept temporal tokens.
-    let kept_frames: Vec<i64> = m.kept_tokens.iter().flat_map(|k| (k * tt..(k + 1) * tt).map(|f| f as i64)).collect();
+    // The kept tokens' raw frames: [b, h, w, (c,) f] → [b, h, w, c, t, tt] → gather → [b·tk, tt, h, w, c].
+    let split = g.i64s(
+        "split_tokens",
+        &[6],
+        [0, h, w, ch, t, tt].map(|v| v as i64).to_vec(),
+    );
+    let mut x = g.op("Reshape", &[INPUT, &split]);
     if tk < t {
-        let idx = g.i64s("kept_frames", &[kept_frames.len()], kept_frames.clone());
-        x = g.node("Gather", &[&x, &idx], vec![int("axis", rank as i64 - 1)], None);
+        let idx = g.i64s(
+            "kept_tokens",
+            &[tk],
+            m.kept_tokens.iter().map(|k| *k as i64).collect(),
+        );
+        x = g.node("Gather", &[&x, &idx], vec![int("axis", 4)], None);
     }
+    let x = g.node(
+        "Transpose",
+        &[&x],
+        vec![ints("perm", &[0, 4, 5, 1, 2, 3])],
+        None,
+    );
+    let per_token = g.i64s(
+        "per_token",
+        &[5],
+        [-1, tt as i64, h as i64, w as i64, ch as i64].to_vec(),
+    );
+    let x = g.op("Reshape", &[&x, &per_token]);
+    g.node("Identity", &[&x], vec![], Some(TOKEN_FRAMES));
+    let input_shape = g.op("Shape", &[INPUT]);
+    let batch = first_dim(&mut g, &input_shape);
+    let kept_row = g.i64s("kept_row", &[1, tk], (0..tk as i64).collect());
+    let rows = g.i64s("rows", &[1], vec![tk as i64]);
+    let b_tk = g.node("Concat", &[&batch, &rows], vec![int("axis", 0)], None);
+    let index = g.op("Expand", &[&kept_row, &b_tk]);
+    let flat = g.i64s("flat", &[1], vec![-1]);
+    let index = g.op("Reshape", &[&index, &flat]);
+    g.node("Identity", &[&index], vec![], Some(TOKEN_INDEX));
 
-    // Patches: [b, gh, ph, gw, pw, c, tk, tt] → [b, tk, gh, gw, tt, ph, pw, c] → [b, tk, n, patch_dim].
-    let (gh, gw) = (c.height / c.patch_height, c.width / c.patch_width);
-    let grid = [0, gh, c.patch_height, gw, c.patch_width, c.channels, tk, tt].map(|v| v as i64);
-    let grid = g.i64s("grid", &[8], grid.to_vec());
+    // Spatial stage. Normalise per channel: (x - mean) / std.
+    let mean = g.f32s("norm_mean", &[h, w, ch], norm.mean.clone());
+    let std = g.f32s("norm_std", &[h, w, ch], norm.std.clone());
+    let centred = g.op("Sub", &[TOKEN_FRAMES, &mean]);
+    let x = g.op("Div", &[&centred, &std]);
+    // Patches: [N, tt, gh, ph, gw, pw, c] → [N, gh, gw, tt, ph, pw, c] → [N, n, patch_dim].
+    let (gh, gw) = (h / c.patch_height, w / c.patch_width);
+    let grid = [0, tt, gh, c.patch_height, gw, c.patch_width, ch].map(|v| v as i64);
+    let grid = g.i64s("grid", &[7], grid.to_vec());
     let x = g.op("Reshape", &[&x, &grid]);
-    let x = g.node("Transpose", &[&x], vec![ints("perm", &[0, 6, 1, 3, 7, 2, 4, 5])], None);
-    let tokens_shape = g.i64s("tokens", &[4], vec![0, tk as i64, n as i64, c.patch_dim() as i64]);
+    let x = g.node(
+        "Transpose",
+        &[&x],
+        vec![ints("perm", &[0, 2, 4, 1, 3, 5, 6])],
+        None,
+    );
+    let tokens_shape = g.i64s("tokens", &[3], vec![0, n as i64, c.patch_dim() as i64]);
     let x = g.op("Reshape", &[&x, &tokens_shape]);
     let x = linear(&mut g, &x, &m.patch_embed, "patch_embed");
-    let scale = g.f32s("frame_scale", &[1, tk, 1, 1], m.token_scale.clone());
+    let scales = g.f32s("frame_scale", &[tk], m.token_scale.clone());
+    let scale = g.node(
+        "Gather",
+        &[&scales, TOKEN_INDEX],
+        vec![int("axis", 0)],
+        None,
+    );
+    let column = g.i64s("column", &[3], vec![-1, 1, 1]);
+    let scale = g.op("Reshape", &[&scale, &column]);
     let embedded = g.op("Mul", &[&x, &scale]);
-
-    // The batch size, as a 1-element shape.
-    let input_shape = g.op("Shape", &[INPUT]);
-    let (s0, s1) = (g.i64s("start", &[1], vec![0]), g.i64s("end", &[1], vec![1]));
-    let batch = g.op("Slice", &[&input_shape, &s0, &s1]);
-
-    let space_cls = g.f32s("space_cls", &[1, 1, 1, d], m.space_cls.clone());
-    let cls = expand_over_batch(&mut g, &space_cls, &batch, &[tk, 1, d]);
-    let tokens = g.node("Concat", &[&cls, &embedded], vec![int("axis", 2)], None);
-    let pos = g.f32s("pos_embed", &[1, tk, n + 1, d], m.pos_embed.clone());
+    let token_shape = g.op("Shape", &[TOKEN_FRAMES]);
+    let count = first_dim(&mut g, &token_shape);
+    let space_cls = g.f32s("space_cls", &[1, 1, d], m.space_cls.clone());
+    let cls = expand_over_batch(&mut g, &space_cls, &count, &[1, d]);
+    let tokens = g.node("Concat", &[&cls, &embedded], vec![int("axis", 1)], None);
+    let positions = g.f32s("pos_embed", &[tk, n + 1, d], m.pos_embed.clone());
+    let pos = g.node(
+        "Gather",
+        &[&positions, TOKEN_INDEX],
+        vec![int("axis", 0)],
+        None,
+    );
     let tokens = g.op("Add", &[&tokens, &pos]);
-    let seqs = g.i64s("space_seqs", &[3], vec![-1, (n + 1) as i64, d as i64]);
-    let tokens = g.op("Reshape", &[&tokens, &seqs]);
     let encoded = transformer_cls(&mut g, &tokens, &m.space, eps, "space");
-    let per_sample = g.i64s("per_sample", &[3], vec![-1, tk as i64, d as i64]);
-    let mut frames = g.op("Reshape", &[&encoded, &per_sample]);
+    g.node("Identity", &[&encoded], vec![], Some(TOKEN_ENCODINGS));
 
+    // Temporal stage.
+    let per_sample = g.i64s("per_sample", &[3], vec![-1, tk as i64, d as i64]);
+    let mut frames = g.op("Reshape", &[TOKEN_ENCODINGS, &per_sample]);
+    let frames_shape = g.op("Shape", &[&frames]);
+    let batch = first_dim(&mut g, &frames_shape);
     // Pruned tokens: their constant encodings, placed around the kept ones.
     if tk < t {
         let mut place = vec![0f32; t * tk];
@@ -235,7 +341,17 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
     let normed = layer_norm(&mut g, &pooled, &m.head_norm, eps, "head_norm");
     let logits = linear(&mut g, &normed, &m.head, "head");
     g.node("Identity", &[&logits], vec![], Some(LOGITS));
-    g.node("Softmax", &[&logits], vec![int("axis", -1)], Some(PROBABILITIES));
+    g.node(
+        "Softmax",
+        &[&logits],
+        vec![int("axis", -1)],
+        Some(PROBABILITIES),
+    );
+    let kept_frames: Vec<i64> = m
+        .kept_tokens
+        .iter()
+        .flat_map(|k| (k * tt..(k + 1) * tt).map(|f| f as i64))
+        .collect();
 
     let mut input_dims = vec![None];
     input_dims.extend(sample.iter().map(|v| Some(*v)));
@@ -244,25 +360,63 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
         node: g.nodes,
         initializer: g.initializers,
         input: vec![value_info(INPUT, &input_dims)],
-        output: vec![value_info(LOGITS, &[None, Some(c.classes)]), value_info(PROBABILITIES, &[None, Some(c.classes)])],
+        output: vec![
+            value_info(LOGITS, &[None, Some(c.classes)]),
+            value_info(PROBABILITIES, &[None, Some(c.classes)]),
+        ],
         ..Default::default()
     };
-    let layout = if c.channels == 1 { "[batch, height, width, frames]" } else { "[batch, height, width, channels, frames]" };
+    let layout = if c.channels == 1 {
+        "[batch, height, width, frames]"
+    } else {
+        "[batch, height, width, channels, frames]"
+    };
     let props = [
-        ("pvt3.classes", serde_json::to_string(&meta.classes).expect("strings serialise")),
-        ("pvt3.input_layout", format!("{layout} = [batch, {}], raw sensor values as float32", sample.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(", "))),
-        ("pvt3.input_units", "the data set's raw units (normalisation is inside the graph)".into()),
-        ("pvt3.kept_frames", serde_json::to_string(&kept_frames).expect("integers serialise")),
-        ("pvt3.config", serde_json::to_string(c).expect("the configuration serialises")),
+        (
+            "pvt3.classes",
+            serde_json::to_string(&meta.classes).expect("strings serialise"),
+        ),
+        (
+            "pvt3.input_layout",
+            format!(
+                "{layout} = [batch, {}], raw sensor values as float32",
+                sample
+                    .iter()
+                    .map(|v| v.to_string())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        ),
+        (
+            "pvt3.input_units",
+            "the data set's raw units (normalisation is inside the graph)".into(),
+        ),
+        (
+            "pvt3.kept_frames",
+            serde_json::to_string(&kept_frames).expect("integers serialise"),
+        ),
+        (
+            "pvt3.config",
+            serde_json::to_string(c).expect("the configuration serialises"),
+        ),
         ("pvt3.provenance", meta.provenance.to_string()),
     ];
     Ok(ModelProto {
         ir_version: 8,
-        opset_import: vec![OperatorSetIdProto { domain: String::new(), version: 17 }],
+        opset_import: vec![OperatorSetIdProto {
+            domain: String::new(),
+            version: 17,
+        }],
         producer_name: "pvt3".into(),
         producer_version: env!("CARGO_PKG_VERSION").into(),
         graph: Some(graph),
-        metadata_props: props.into_iter().map(|(k, v)| StringStringEntryProto { key: k.into(), value: v }).collect(),
+        metadata_props: props
+            .into_iter()
+            .map(|(k, v)| StringStringEntryProto {
+                key: k.into(),
+                value: v,
+            })
+            .collect(),
         ..Default::default()
     })
 }
@@ -270,7 +424,10 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
 /// Writes the model to `path` through a temporary file and a rename.
 pub fn write(model: &ModelProto, path: &Path) -> Result<()> {
     let tmp = path.with_extension("onnx.tmp");
-    let io = |e: std::io::Error| Error::Io { path: path.display().to_string(), source: e };
+    let io = |e: std::io::Error| Error::Io {
+        path: path.display().to_string(),
+        source: e,
+    };
     std::fs::write(&tmp, model.encode_to_vec()).map_err(io)?;
     std::fs::rename(&tmp, path).map_err(io)
 }

@@ -28,7 +28,9 @@ pub fn init_weights(varmap: &VarMap, seed: u64) -> Result<()> {
             let layer = name.rsplit_once('.').map_or(name.as_str(), |(l, _)| l);
             let fan_in = vars[&format!("{layer}.weight")].dims()[1];
             let bound = 1.0 / (fan_in as f32).sqrt();
-            (0..n).map(|_| bound * (2.0 * rng.uniform() - 1.0)).collect()
+            (0..n)
+                .map(|_| bound * (2.0 * rng.uniform() - 1.0))
+                .collect()
         };
         var.set(&Tensor::from_vec(values, shape, var.device())?)?;
     }

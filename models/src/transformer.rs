@@ -30,7 +30,9 @@ impl Block {
 
     /// `x`: `[sequences, tokens, dim]` → the same shape.
     pub fn forward(&self, x: &Tensor, mut rng: Option<&mut Rng>) -> Result<Tensor> {
-        let x = (x + self.attn.forward(&self.attn_norm.forward(x)?, rng.as_deref_mut())?)?;
+        let x = (x + self
+            .attn
+            .forward(&self.attn_norm.forward(x)?, rng.as_deref_mut())?)?;
         let (b, l, d) = x.dims3()?;
         let rows = self.ffn_norm.forward(&x.reshape((b * l, d))?)?;
         x + self.ffn.forward(&rows, rng)?.reshape((b, l, d))?

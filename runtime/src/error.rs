@@ -3,17 +3,35 @@
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     #[error("{path}: {source}")]
-    Io { path: String, source: std::io::Error },
+    Io {
+        path: String,
+        source: std::io::Error,
+    },
     #[error("{path} is not a readable ONNX model: {reason}")]
     NotOnnx { path: String, reason: String },
     #[error("{path} is not a pvt3 model: metadata `{key}` {problem}")]
-    NotPvt3 { path: String, key: &'static str, problem: String },
+    NotPvt3 {
+        path: String,
+        key: &'static str,
+        problem: String,
+    },
     #[error("input has {got} values; expected {expected} ({batch} × {sample})")]
-    InputLength { got: usize, expected: usize, batch: usize, sample: String },
+    InputLength {
+        got: usize,
+        expected: usize,
+        batch: usize,
+        sample: String,
+    },
     #[error("input value {index} is {value}: only finite values can be classified")]
     NonFinite { index: usize, value: f32 },
     #[error("{path}: {reason}")]
     Npy { path: String, reason: String },
+    #[error("a frame has {got} values; expected {expected} (height × width × channels)")]
+    FrameLength { got: usize, expected: usize },
+    #[error("the touch already has all its {frames} frames: finish it first")]
+    TooManyFrames { frames: usize },
+    #[error("the touch has {got} of its {frames} frames: push the rest before finishing")]
+    Incomplete { got: usize, frames: usize },
     #[error("batch size must be at least 1")]
     EmptyBatch,
     #[error("tract: {0}")]

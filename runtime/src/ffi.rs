@@ -34,7 +34,13 @@ fn status(e: &Error) -> c_int {
     match e {
         Error::Io { .. } => PVT3_ERR_IO,
         Error::NotOnnx { .. } | Error::NotPvt3 { .. } => PVT3_ERR_MODEL,
-        Error::InputLength { .. } | Error::NonFinite { .. } | Error::EmptyBatch | Error::Npy { .. } => PVT3_ERR_INPUT,
+        Error::InputLength { .. }
+        | Error::NonFinite { .. }
+        | Error::EmptyBatch
+        | Error::Npy { .. }
+        | Error::FrameLength { .. }
+        | Error::TooManyFrames { .. }
+        | Error::Incomplete { .. } => PVT3_ERR_INPUT,
         Error::Tract(_) => PVT3_ERR_INTERNAL,
     }
 }
@@ -72,7 +78,10 @@ fn fail(e: Error) -> (c_int, String) {
 /// # Safety
 /// `path` is a NUL-terminated string or null; `out` is writable or null.
 #[no_mangle]
-pub unsafe extern "C" fn pvt3_classifier_load(path: *const c_char, out: *mut *mut Pvt3Classifier) -> c_int {
+pub unsafe extern "C" fn pvt3_classifier_load(
+    path: *const c_char,
+    out: *mut *mut Pvt3Classifier,
+) -> c_int {
     guard(|| {
         if path.is_null() {
             return Err(null("path"));
@@ -80,9 +89,15 @@ pub unsafe extern "C" fn pvt3_classifier_load(path: *const c_char, out: *mut *mu
         if out.is_null() {
             return Err(null("out"));
         }
-        let path = CStr::from_ptr(path).to_str().map_err(|_| (PVT3_ERR_IO, "path is not UTF-8".to_string()))?;
+        let path = CStr::from_ptr(path)
+            .to_str()
+            .map_err(|_| (PVT3_ERR_IO, "path is not UTF-8".to_string()))?;
         let classifier = Classifier::load(path).map_err(fail)?;
-        let names = classifier.classes().iter().map(|n| CString::new(n.replace('\0', " ")).expect("NULs replaced")).collect();
+        let names = classifier
+            .classes()
+            .iter()
+            .map(|n| CString::new(n.replace('\0', " ")).expect("NULs replaced"))
+            .collect();
         *out = Box::into_raw(Box::new(Pvt3Classifier { classifier, names }));
         Ok(())
     })
@@ -104,7 +119,10 @@ pub unsafe extern "C" fn pvt3_classifier_free(c: *mut Pvt3Classifier) {
 /// # Safety
 /// `c` is a live handle or null; `out` is writable or null.
 #[no_mangle]
-pub unsafe extern "C" fn pvt3_classifier_sample_len(c: *const Pvt3Classifier, out: *mut usize) -> c_int {
+pub unsafe extern "C" fn pvt3_classifier_sample_len(
+    c: *const Pvt3Classifier,
+    out: *mut usize,
+) -> c_int {
     guard(|| {
         let c = c.as_ref().ok_or_else(|| null("classifier"))?;
         let out = out.as_mut().ok_or_else(|| null("out"))?;
@@ -118,7 +136,10 @@ pub unsafe extern "C" fn pvt3_classifier_sample_len(c: *const Pvt3Classifier, ou
 /// # Safety
 /// `c` is a live handle or null; `out` is writable or null.
 #[no_mangle]
-pub unsafe extern "C" fn pvt3_classifier_num_classes(c: *const Pvt3Classifier, out: *mut usize) -> c_int {
+pub unsafe extern "C" fn pvt3_classifier_num_classes(
+    c: *const Pvt3Classifier,
+    out: *mut usize,
+) -> c_int {
     guard(|| {
         let c = c.as_ref().ok_or_else(|| null("classifier"))?;
         let out = out.as_mut().ok_or_else(|| null("out"))?;
@@ -132,11 +153,20 @@ pub unsafe extern "C" fn pvt3_classifier_num_classes(c: *const Pvt3Classifier, o
 /// # Safety
 /// `c` is a live handle or null; `out` is writable or null.
 #[no_mangle]
-pub unsafe extern "C" fn pvt3_classifier_class_name(c: *const Pvt3Classifier, index: usize, out: *mut *const c_char) -> c_int {
+pub unsafe extern "C" fn pvt3_classifier_class_name(
+    c: *const Pvt3Classifier,
+    index: usize,
+    out: *mut *const c_char,
+) -> c_int {
     guard(|| {
         let c = c.as_ref().ok_or_else(|| null("classifier"))?;
         let out = out.as_mut().ok_or_else(|| null("out"))?;
-        let name = c.names.get(index).ok_or_else(|| (PVT3_ERR_INPUT, format!("class {index} of {}", c.names.len())))?;
+        let name = c.names.get(index).ok_or_else(|| {
+            (
+                PVT3_ERR_INPUT,
+                format!("class {index} of {}", c.names.len()),
+            )
+        })?;
         *out = name.as_ptr();
         Ok(())
     })
@@ -168,7 +198,10 @@ pub unsafe extern "C" fn pvt3_classify(
         }
         let needed = batch * c.names.len();
         if probabilities_len < needed {
-            return Err((PVT3_ERR_INPUT, format!("probabilities has room for {probabilities_len} values; {needed} needed")));
+            return Err((
+                PVT3_ERR_INPUT,
+                format!("probabilities has room for {probabilities_len} values; {needed} needed"),
+            ));
         }
         let input = std::slice::from_raw_parts(frames, frames_len);
         let predictions = c.classifier.classify_batch(input, batch).map_err(fail)?;

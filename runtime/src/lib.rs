@@ -7,10 +7,13 @@
 //! with a fixed input shape (a fixed shape ran markedly faster than a symbolic batch in tract).
 
 mod classifier;
+mod cut;
 mod error;
 pub mod ffi;
 mod npy;
+mod stream;
 
 pub use classifier::{Classifier, Prediction};
 pub use error::{Error, Result};
 pub use npy::read_npy;
+pub use stream::Session;

@@ -1,8 +1,8 @@
 //! The pvt3 trainer: data sets, normalisation, training, cross-validation, checkpoints and
 //! evaluation for PVT³. The `pvt3` binary is a thin command line over this library.
 
-pub mod checkpoint;
 pub mod bench;
+pub mod checkpoint;
 pub mod cv;
 pub mod data;
 pub mod error;

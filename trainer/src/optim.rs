@@ -29,23 +29,45 @@ struct Param {
     name: String,
     var: Var,
     decay: bool,
+    /// This parameter's learning rate as a multiple of the schedule's.
+    lr_scale: f64,
     m: Tensor,
     v: Tensor,
 }
 
 impl AdamW {
-    pub fn new(varmap: &VarMap, weight_decay: f64) -> Result<Self> {
+    /// Every variable of `varmap`, each with its learning-rate multiple `lr_scale(name, var)`.
+    pub fn new(
+        varmap: &VarMap,
+        weight_decay: f64,
+        lr_scale: impl Fn(&str, &Var) -> f64,
+    ) -> Result<Self> {
         let vars = varmap.data().lock().expect("varmap lock poisoned");
         let mut params = vars
             .iter()
             .map(|(name, var)| {
                 let decay = is_weight_matrix(name, var);
                 let zeros = var.zeros_like()?;
-                Ok(Param { name: name.clone(), var: var.clone(), decay, m: zeros.clone(), v: zeros })
+                let lr_scale = lr_scale(name, var);
+                Ok(Param {
+                    name: name.clone(),
+                    var: var.clone(),
+                    decay,
+                    lr_scale,
+                    m: zeros.clone(),
+                    v: zeros,
+                })
             })
             .collect::<Result<Vec<_>>>()?;
         params.sort_by(|a, b| a.name.cmp(&b.name));
-        Ok(Self { params, step: 0, weight_decay, beta1: 0.9, beta2: 0.999, eps: 1e-8 })
+        Ok(Self {
+            params,
+            step: 0,
+            weight_decay,
+            beta1: 0.9,
+            beta2: 0.999,
+            eps: 1e-8,
+        })
     }
 
     /// The global L2 norm of the gradients.
@@ -71,6 +93,7 @@ impl AdamW {
             p.m = ((&p.m * b1)? + (&g * (1.0 - b1))?)?;
             p.v = ((&p.v * b2)? + (g.sqr()? * (1.0 - b2))?)?;
             let update = ((&p.m / bc1)? / ((&p.v / bc2)?.sqrt()? + self.eps)?)?;
+            let lr = lr * p.lr_scale;
             let mut theta = p.var.as_tensor().clone();
             if p.decay {
                 theta = (theta * (1.0 - lr * self.weight_decay))?;
@@ -117,9 +140,11 @@ mod tests {
     fn minimises_a_quadratic_and_decays_only_matrices() {
         let varmap = VarMap::new();
         let vb = VarBuilder::from_varmap(&varmap, DType::F32, &Device::Cpu);
-        let w = vb.get_with_hints((2, 2), "fc.weight", Init::Const(1.0)).unwrap();
+        let w = vb
+            .get_with_hints((2, 2), "fc.weight", Init::Const(1.0))
+            .unwrap();
         let b = vb.get_with_hints(2, "fc.bias", Init::Const(1.0)).unwrap();
-        let mut opt = AdamW::new(&varmap, 0.1).unwrap();
+        let mut opt = AdamW::new(&varmap, 0.1, |_, _| 1.0).unwrap();
         // Adam's first step moves every value by lr against the gradient's sign; the matrix
         // alone is also decayed by lr × weight_decay.
         let loss = (w.sum_all().unwrap() + b.sum_all().unwrap()).unwrap();

@@ -1,0 +1,224 @@
+//! [`Session`]: classify a touch frame by frame, as the sensor produces it.
+//!
+//! The exported graph has two stages joined at a named seam (`token_encodings`): the spatial
+//! transformer encodes each temporal token from its own frames alone, and the temporal transformer
+//! reads all the encodings. So a session drops a pruned frame on arrival, encodes a kept token as
+//! soon as its last frame arrives, and at the end of the touch runs only the temporal stage. Both
+//! stages are cut from the one file, so streaming and whole-window classification are the same
+//! function.
+
+use std::sync::Arc;
+
+use tract_onnx::pb::tensor_proto::DataType;
+use tract_onnx::prelude::*;
+
+use crate::classifier::tract_error;
+use crate::cut::{cut, Seam};
+use crate::{Classifier, Error, Prediction, Result};
+
+/// The seams the exporter names (see `pvt3_export::model`).
+const TOKEN_FRAMES: &str = "token_frames";
+const TOKEN_INDEX: &str = "token_index";
+const TOKEN_ENCODINGS: &str = "token_encodings";
+const PROBABILITIES: &str = "probabilities";
+
+/// The two stages of a classifier, each optimised for its streaming shape.
+pub(crate) struct Stages {
+    /// One kept token's frames `[1, tubelet, height, width, channels]` and its index → `[1, dim]`.
+    spatial: Arc<TypedRunnableModel>,
+    /// All kept tokens' encodings `[kept, dim]` → probabilities `[1, classes]`.
+    temporal: Arc<TypedRunnableModel>,
+    /// For each temporal token, its index among the kept tokens.
+    kept_index: Vec<Option<usize>>,
+    /// `[1, tubelet, height, width, channels]`
+    token_shape: Vec<usize>,
+}
+
+impl Stages {
+    pub(crate) fn new(c: &Classifier) -> Result<Self> {
+        let frames = *c.sample_shape().last().expect("a sample has a frame axis");
+        let tokens = frames / c.tubelet;
+        let mut kept_index = vec![None; tokens];
+        for (kk, f) in c.kept_frames().iter().step_by(c.tubelet).enumerate() {
+            kept_index[f / c.tubelet] = Some(kk);
+        }
+        let kept = c.kept_frames().len() / c.tubelet;
+        let frame = &c.sample_shape()[..c.sample_shape().len() - 1];
+        let token_shape = vec![
+            1,
+            c.tubelet,
+            frame[0],
+            frame[1],
+            frame.get(2).copied().unwrap_or(1),
+        ];
+        let no_seam = |reason: String| Error::NotOnnx {
+            path: c.path.clone(),
+            reason: format!("cannot stream: {reason}"),
+        };
+        let spatial = cut(
+            &c.proto,
+            &[
+                Seam {
+                    name: TOKEN_FRAMES,
+                    data_type: DataType::Float,
+                    shape: token_shape.clone(),
+                },
+                Seam {
+                    name: TOKEN_INDEX,
+                    data_type: DataType::Int64,
+                    shape: vec![1],
+                },
+            ],
+            &[TOKEN_ENCODINGS],
+        )
+        .map_err(no_seam)?;
+        let temporal = cut(
+            &c.proto,
+            &[Seam {
+                name: TOKEN_ENCODINGS,
+                data_type: DataType::Float,
+                shape: vec![kept, c.dim],
+            }],
+            &[PROBABILITIES],
+        )
+        .map_err(no_seam)?;
+        Ok(Self {
+            spatial: c.optimise(
+                &spatial,
+                vec![f32::fact(&token_shape).into(), i64::fact([1]).into()],
+            )?,
+            temporal: c.optimise(&temporal, vec![f32::fact([kept, c.dim]).into()])?,
+            kept_index,
+            token_shape,
+        })
+    }
+}
+
+/// One touch in progress. Push its frames in order with [`Session::push_frame`], then
+/// [`Session::finish`]; the session is then ready for the next touch.
+pub struct Session<'a> {
+    classifier: &'a Classifier,
+    stages: Arc<Stages>,
+    /// Frames received so far in this touch.
+    received: usize,
+    /// The frames of the kept token being filled, `[tubelet, frame]`.
+    token: Vec<f32>,
+    /// The encodings of the kept tokens completed so far, `[kept, dim]`.
+    encodings: Vec<f32>,
+}
+
+impl Classifier {
+    /// A streaming session (builds the two stages on first use).
+    pub fn session(&self) -> Result<Session<'_>> {
+        Ok(Session {
+            classifier: self,
+            stages: self.stages()?,
+            received: 0,
+            token: Vec::new(),
+            encodings: Vec::new(),
+        })
+    }
+
+    /// Values in one frame: `height × width × channels`.
+    pub fn frame_len(&self) -> usize {
+        self.sample_shape()[..self.sample_shape().len() - 1]
+            .iter()
+            .product()
+    }
+}
+
+impl Session<'_> {
+    /// Frames the model reads per touch, pruned ones included.
+    fn frames(&self) -> usize {
+        self.stages.kept_index.len() * self.classifier.tubelet
+    }
+
+    /// Takes the next frame, `[height, width, (channels)]` in row-major order. A frame the model
+    /// pruned is dropped at once; the last frame of a kept token runs the spatial stage.
+    pub fn push_frame(&mut self, frame: &[f32]) -> Result<()> {
+        let (expected, frames) = (self.classifier.frame_len(), self.frames());
+        if frame.len() != expected {
+            return Err(Error::FrameLength {
+                got: frame.len(),
+                expected,
+            });
+        }
+        if self.received == frames {
+            return Err(Error::TooManyFrames { frames });
+        }
+        let tubelet = self.classifier.tubelet;
+        let Some(kk) = self.stages.kept_index[self.received / tubelet] else {
+            self.received += 1;
+            return Ok(());
+        };
+        if let Some((index, value)) = frame.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(Error::NonFinite {
+                index,
+                value: *value,
+            });
+        }
+        self.token.extend_from_slice(frame);
+        self.received += 1;
+        if self.received % tubelet == 0 {
+            let frames =
+                Tensor::from_shape(&self.stages.token_shape, &self.token).map_err(tract_error)?;
+            let index = Tensor::from_shape(&[1], &[kk as i64]).map_err(tract_error)?;
+            let out = self
+                .stages
+                .spatial
+                .run(tvec!(frames.into(), index.into()))
+                .map_err(tract_error)?;
+            self.encodings.extend(
+                out[0]
+                    .to_plain_array_view::<f32>()
+                    .map_err(tract_error)?
+                    .iter(),
+            );
+            self.token.clear();
+        }
+        Ok(())
+    }
+
+    /// Frames received so far in this touch.
+    pub fn received(&self) -> usize {
+        self.received
+    }
+
+    /// The answer for the touch, once all its frames have arrived: runs the temporal stage only.
+    /// The session is then empty, ready for the next touch.
+    pub fn finish(&mut self) -> Result<Prediction> {
+        let frames = self.frames();
+        if self.received < frames {
+            return Err(Error::Incomplete {
+                got: self.received,
+                frames,
+            });
+        }
+        let kept = self.encodings.len() / self.classifier.dim;
+        let encodings = Tensor::from_shape(&[kept, self.classifier.dim], &self.encodings)
+            .map_err(tract_error)?;
+        let out = self
+            .stages
+            .temporal
+            .run(tvec!(encodings.into()))
+            .map_err(tract_error)?;
+        let probabilities: Vec<f32> = out[0]
+            .to_plain_array_view::<f32>()
+            .map_err(tract_error)?
+            .iter()
+            .copied()
+            .collect();
+        self.reset();
+        Ok(self.classifier.prediction(&probabilities))
+    }
+
+    /// Forgets the touch in progress.
+    pub fn reset(&mut self) {
+        self.received = 0;
+        self.token.clear();
+        self.encodings.clear();
+    }
+}
+
+#[cfg(test)]
+mod tests;

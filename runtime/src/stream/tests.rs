@@ -1,0 +1,85 @@
+//! Streaming on the committed golden model (20 of its 75 frames pruned): frame by frame equals
+//! the whole window; pruned frames are never read; misuse is a typed error.
+
+use std::path::PathBuf;
+
+use super::*;
+use crate::read_npy;
+
+fn golden(file: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../tests/golden/icub20")
+        .join(file)
+}
+
+/// Frame `t` of window `w` of a `[batch, 6, 10, 75]` array.
+fn frame(x: &[f32], w: usize, t: usize) -> Vec<f32> {
+    (0..60).map(|i| x[w * 4500 + i * 75 + t]).collect()
+}
+
+#[test]
+fn streaming_frame_by_frame_equals_the_whole_window() {
+    let c = Classifier::load(golden("model.onnx")).unwrap();
+    let (_, x) = read_npy(&golden("input.npy")).unwrap();
+    let whole = c.classify_batch(&x, 8).unwrap();
+    let mut session = c.session().unwrap();
+    for (w, expected) in whole.iter().enumerate() {
+        for t in 0..75 {
+            session.push_frame(&frame(&x, w, t)).unwrap();
+        }
+        assert_eq!(session.received(), 75);
+        let got = session.finish().unwrap();
+        assert_eq!(session.received(), 0, "finishing starts the next touch");
+        let worst = got
+            .probabilities
+            .iter()
+            .zip(&expected.probabilities)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f32::max);
+        assert!(worst <= 1e-5, "window {w}: {worst:e}");
+        assert_eq!((got.class, &got.label), (expected.class, &expected.label));
+    }
+}
+
+#[test]
+fn pruned_frames_are_dropped_unread_and_misuse_is_an_error() {
+    let c = Classifier::load(golden("model.onnx")).unwrap();
+    let (_, x) = read_npy(&golden("input.npy")).unwrap();
+    let kept = c.kept_frames().to_vec();
+    let pruned = (0..75).find(|t| !kept.contains(t)).unwrap();
+    let expected = c.classify(&x[..4500]).unwrap();
+    let mut s = c.session().unwrap();
+    assert!(matches!(
+        s.finish(),
+        Err(Error::Incomplete { got: 0, frames: 75 })
+    ));
+    assert!(matches!(
+        s.push_frame(&[0.0; 59]),
+        Err(Error::FrameLength {
+            got: 59,
+            expected: 60
+        })
+    ));
+    for t in 0..75 {
+        let mut f = frame(&x, 0, t);
+        if t == pruned {
+            f[3] = f32::NAN; // never read: the model pruned this frame
+        } else if t == kept[0] {
+            let mut bad = f.clone();
+            bad[5] = f32::INFINITY;
+            assert!(matches!(
+                s.push_frame(&bad),
+                Err(Error::NonFinite { index: 5, .. })
+            ));
+        }
+        s.push_frame(&f).unwrap();
+    }
+    assert!(matches!(
+        s.push_frame(&frame(&x, 0, 0)),
+        Err(Error::TooManyFrames { frames: 75 })
+    ));
+    assert_eq!(s.finish().unwrap().class, expected.class);
+    s.push_frame(&frame(&x, 1, 0)).unwrap();
+    s.reset();
+    assert_eq!(s.received(), 0);
+}
