@@ -22,11 +22,7 @@ fn pvt3(args: &[&str]) -> Output {
 fn ok(args: &[&str]) -> String {
     let out = pvt3(args);
     let stdout = String::from_utf8_lossy(&out.stdout).to_string();
-    assert!(
-        out.status.success(),
-        "pvt3 {args:?} failed:\n{stdout}\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert!(out.status.success(), "pvt3 {args:?} failed:\n{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
     stdout
 }
 
@@ -56,38 +52,19 @@ fn icub_slice(dir: &Path, per_fold: usize) -> PathBuf {
     shape.extend(&d.sample_shape);
     let path = dir.join("slice.npz");
     let mut w = NpzWriter::new_compressed(std::fs::File::create(&path).unwrap());
-    w.add_array("x", &ArrayD::from_shape_vec(IxDyn(&shape), x).unwrap())
-        .unwrap();
-    w.add_array(
-        "y",
-        &Array1::from_iter(picked.iter().map(|&i| d.labels[i] as i64)),
-    )
-    .unwrap();
-    w.add_array(
-        "fold",
-        &Array1::from_iter(picked.iter().map(|&i| d.folds[i] as i64)),
-    )
-    .unwrap();
+    w.add_array("x", &ArrayD::from_shape_vec(IxDyn(&shape), x).unwrap()).unwrap();
+    w.add_array("y", &Array1::from_iter(picked.iter().map(|&i| d.labels[i] as i64))).unwrap();
+    w.add_array("fold", &Array1::from_iter(picked.iter().map(|&i| d.folds[i] as i64))).unwrap();
     w.finish().unwrap();
     path
 }
 
-const SMALL: [&str; 6] = [
-    "--set",
-    "space_depth=1",
-    "--set",
-    "time_depth=1",
-    "--batch-size",
-    "16",
-];
+const SMALL: [&str; 6] = ["--set", "space_depth=1", "--set", "time_depth=1", "--batch-size", "16"];
 
 #[test]
 fn info_reports_the_published_size() {
     let out = ok(&["info"]);
-    assert!(
-        out.contains("parameters    64272 trainable + 75 frame-mask entries"),
-        "{out}"
-    );
+    assert!(out.contains("parameters    64272 trainable + 75 frame-mask entries"), "{out}");
     let json = ok(&["info", "biotac20", "--json"]);
     let cfg: pvt3_models::Config = serde_json::from_str(&json).unwrap();
     assert_eq!(cfg, pvt3_models::Config::biotac20());
@@ -99,44 +76,22 @@ fn train_then_eval_agree_on_the_test_accuracy() {
     let data = icub_slice(&dir, 20);
     let run = dir.join("run");
     let (d, r) = (data.to_str().unwrap(), run.to_str().unwrap());
-    let mut args = vec![
-        "train", "--data", d, "--out", r, "--epochs", "2", "--fold", "1",
-    ];
+    let mut args = vec!["train", "--data", d, "--out", r, "--epochs", "2", "--fold", "1"];
     args.extend(SMALL);
     let out = ok(&args);
     assert!(out.contains("best epoch"), "{out}");
-    for f in [
-        "config.json",
-        "weights.safetensors",
-        "normalization.json",
-        "classes.json",
-        "provenance.json",
-    ] {
-        assert!(
-            run.join("model").join(f).exists(),
-            "{f} is in the checkpoint"
-        );
+    for f in ["config.json", "weights.safetensors", "normalization.json", "classes.json", "provenance.json"] {
+        assert!(run.join("model").join(f).exists(), "{f} is in the checkpoint");
     }
-    let provenance: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(run.join("model/provenance.json")).unwrap())
-            .unwrap();
+    let provenance: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(run.join("model/provenance.json")).unwrap()).unwrap();
     let recorded = provenance["test_accuracy"].as_f64().unwrap();
     let eval = ok(&["eval", r, "--data", d]);
-    assert!(
-        eval.contains(&format!("accuracy {recorded:.4}")),
-        "eval {eval} vs recorded {recorded}"
-    );
+    assert!(eval.contains(&format!("accuracy {recorded:.4}")), "eval {eval} vs recorded {recorded}");
     let info = ok(&["info", &format!("{r}/model")]);
-    assert!(
-        !info.contains("64272 trainable") && info.contains("space.layers.0.attn"),
-        "overrides are stored: {info}"
-    );
+    assert!(!info.contains("64272 trainable") && info.contains("space.layers.0.attn"), "overrides are stored: {info}");
 
     let again = fails(&args);
-    assert!(
-        again.contains("already holds a run; pass --resume"),
-        "{again}"
-    );
+    assert!(again.contains("already holds a run; pass --resume"), "{again}");
     std::fs::remove_dir_all(dir).unwrap();
 }
 
@@ -146,33 +101,18 @@ fn cv_runs_folds_side_by_side_and_resumes_without_retraining() {
     let data = icub_slice(&dir, 12);
     let out = dir.join("cv");
     let (d, o) = (data.to_str().unwrap(), out.to_str().unwrap());
-    let mut args = vec![
-        "cv", "--data", d, "--out", o, "--epochs", "1", "--jobs", "2",
-    ];
+    let mut args = vec!["cv", "--data", d, "--out", o, "--epochs", "1", "--jobs", "2"];
     args.extend(SMALL);
     let first = ok(&args);
     assert!(first.contains("mean test accuracy"), "{first}");
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("cv.json")).unwrap()).unwrap();
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("cv.json")).unwrap()).unwrap();
     assert_eq!(summary["runs"].as_array().unwrap().len(), 4);
     let weights = std::fs::read(out.join("seed0/fold3/model/weights.safetensors")).unwrap();
     args.push("--resume");
     let second = ok(&args);
-    let tail = |s: &str| {
-        s.lines()
-            .last()
-            .unwrap()
-            .split(" (wall")
-            .next()
-            .unwrap()
-            .to_string()
-    };
+    let tail = |s: &str| s.lines().last().unwrap().split(" (wall").next().unwrap().to_string();
     assert_eq!(tail(&first), tail(&second));
-    assert_eq!(
-        weights,
-        std::fs::read(out.join("seed0/fold3/model/weights.safetensors")).unwrap(),
-        "not retrained"
-    );
+    assert_eq!(weights, std::fs::read(out.join("seed0/fold3/model/weights.safetensors")).unwrap(), "not retrained");
     std::fs::remove_dir_all(dir).unwrap();
 }
 
@@ -180,47 +120,14 @@ fn cv_runs_folds_side_by_side_and_resumes_without_retraining() {
 fn bad_input_gets_a_clear_error() {
     let dir = scratch("errors");
     let missing = dir.join("absent.npz");
-    let err = fails(&[
-        "train",
-        "--data",
-        missing.to_str().unwrap(),
-        "--out",
-        dir.join("r").to_str().unwrap(),
-    ]);
-    assert!(
-        err.contains("absent.npz") && err.contains("no such file or directory"),
-        "{err}"
-    );
-    let err = fails(&[
-        "train",
-        "--preset",
-        "biotac20",
-        "--out",
-        dir.join("r").to_str().unwrap(),
-    ]);
-    assert!(
-        err.contains("samples are [6, 10, 75] but the model expects [19, 1, 400]"),
-        "{err}"
-    );
-    let err = fails(&[
-        "train",
-        "--set",
-        "depth=3",
-        "--out",
-        dir.join("r").to_str().unwrap(),
-    ]);
+    let err = fails(&["train", "--data", missing.to_str().unwrap(), "--out", dir.join("r").to_str().unwrap()]);
+    assert!(err.contains("absent.npz") && err.contains("no such file or directory"), "{err}");
+    let err = fails(&["train", "--preset", "biotac20", "--out", dir.join("r").to_str().unwrap()]);
+    assert!(err.contains("samples are [6, 10, 75] but the model expects [19, 1, 400]"), "{err}");
+    let err = fails(&["train", "--set", "depth=3", "--out", dir.join("r").to_str().unwrap()]);
     assert!(err.contains("unknown field `depth`"), "{err}");
-    let err = fails(&[
-        "train",
-        "--set",
-        "patch_width=3",
-        "--out",
-        dir.join("r").to_str().unwrap(),
-    ]);
-    assert!(
-        err.contains("patch_width = 3 does not divide width = 10"),
-        "{err}"
-    );
+    let err = fails(&["train", "--set", "patch_width=3", "--out", dir.join("r").to_str().unwrap()]);
+    assert!(err.contains("patch_width = 3 does not divide width = 10"), "{err}");
     let err = fails(&["eval", dir.to_str().unwrap()]);
     assert!(err.contains("not a checkpoint directory"), "{err}");
     assert!(!dir.join("r").exists(), "nothing written on failure");
@@ -234,116 +141,49 @@ fn train_prune_fine_tune_and_bake_make_a_smaller_model() {
     let run = dir.join("run");
     let (d, r) = (data.to_str().unwrap(), run.to_str().unwrap());
     let from_run = dir.join("run.onnx");
-    let mut args = vec![
-        "train",
-        "--data",
-        d,
-        "--out",
-        r,
-        "--epochs",
-        "1",
-        "--l1",
-        "0.01",
-        "--random-prune",
-        "0.1",
-    ];
-    args.extend([
-        "--prune-channels",
-        "50",
-        "--prune-frames",
-        "40",
-        "--fine-tune-epochs",
-        "1",
-    ]);
+    let mut args = vec!["train", "--data", d, "--out", r, "--epochs", "1", "--l1", "0.01", "--random-prune", "0.1"];
+    args.extend(["--prune-channels", "50", "--prune-frames", "40", "--fine-tune-epochs", "1"]);
     args.extend(["--export", from_run.to_str().unwrap()]);
     args.extend(SMALL);
     let out = ok(&args);
     assert!(out.contains("pruned and fine-tuned"), "{out}");
-    let provenance: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(run.join("pruned/model/provenance.json")).unwrap(),
-    )
-    .unwrap();
+    let provenance: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("pruned/model/provenance.json")).unwrap()).unwrap();
     assert_eq!(provenance["pruning"]["channels"], 50.0);
 
     let info = ok(&["info", &format!("{r}/pruned")]);
-    assert!(
-        info.contains("after baking") && info.contains("45 of 75 temporal tokens kept"),
-        "{info}"
-    );
+    assert!(info.contains("after baking") && info.contains("45 of 75 temporal tokens kept"), "{info}");
     let baked = dir.join("baked.json");
-    let out = ok(&[
-        "bake",
-        &format!("{r}/pruned"),
-        "-o",
-        baked.to_str().unwrap(),
-    ]);
+    let out = ok(&["bake", &format!("{r}/pruned"), "-o", baked.to_str().unwrap()]);
     assert!(out.contains("45 of 75 temporal tokens kept"), "{out}");
-    let file: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(&baked).unwrap()).unwrap();
+    let file: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&baked).unwrap()).unwrap();
     assert_eq!(file["baked"]["kept_tokens"].as_array().unwrap().len(), 45);
     assert_eq!(file["baked"]["space"]["layers"][0]["attn"]["head_dim"], 32);
-    assert_eq!(
-        file["baked"]["space"]["layers"][0]["ffn"]["fc1"]["rows"],
-        20
-    );
+    assert_eq!(file["baked"]["space"]["layers"][0]["ffn"]["fc1"]["rows"], 20);
 
     let err = fails(&["prune", r, "--out", dir.join("p2").to_str().unwrap()]);
-    assert!(
-        err.contains("give --prune-channels and/or --prune-frames"),
-        "{err}"
-    );
+    assert!(err.contains("give --prune-channels and/or --prune-frames"), "{err}");
 
     // Exported by `train --export` and from the baked file: onnxruntime on raw frames equals
     // candle on normalised ones.
     let from_baked = dir.join("baked.onnx");
-    ok(&[
-        "export",
-        baked.to_str().unwrap(),
-        "-o",
-        from_baked.to_str().unwrap(),
-    ]);
+    ok(&["export", baked.to_str().unwrap(), "-o", from_baked.to_str().unwrap()]);
     let (meta, model, _) = pvt3_trainer::checkpoint::load(&run.join("pruned")).unwrap();
     let d = Dataset::load(&data, 0).unwrap();
     let test: Vec<usize> = (0..d.len()).filter(|&i| d.folds[i] == 4).take(8).collect();
     let samples = pvt3_trainer::evaluate::Samples::new(&d, &test, &meta.normalization);
     let (x, _) = samples.batch(&(0..8).collect::<Vec<_>>(), |_| {}).unwrap();
-    let expected = model
-        .forward(&x, None)
-        .unwrap()
-        .flatten_all()
-        .unwrap()
-        .to_vec1::<f32>()
-        .unwrap();
+    let expected = model.forward(&x, None).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap();
     let raw: Vec<f32> = test.iter().flat_map(|&i| d.sample(i).to_vec()).collect();
     for onnx in [&from_run, &from_baked] {
         onnx_check::assert_onnxruntime_matches(onnx, (&[8, 6, 10, 75], &raw), &expected, 1e-5);
     }
-    onnx_check::assert_onnxruntime_matches(
-        &from_run,
-        (&[1, 6, 10, 75], &raw[..4500]),
-        &expected[..20],
-        1e-5,
-    );
+    onnx_check::assert_onnxruntime_matches(&from_run, (&[1, 6, 10, 75], &raw[..4500]), &expected[..20], 1e-5);
     // The robot runtime (tract) agrees too.
-    let (logits, _) = pvt3_runtime::Classifier::load(&from_run)
-        .unwrap()
-        .run(&raw, 8)
-        .unwrap();
-    let worst = logits
-        .iter()
-        .zip(&expected)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f32::max);
+    let (logits, _) = pvt3_runtime::Classifier::load(&from_run).unwrap().run(&raw, 8).unwrap();
+    let worst = logits.iter().zip(&expected).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
     assert!(worst <= 1e-5, "tract against candle: {worst:e}");
-    let err = fails(&[
-        "export",
-        data.to_str().unwrap(),
-        "-o",
-        dir.join("x.onnx").to_str().unwrap(),
-    ]);
-    assert!(
-        err.contains("neither a checkpoint directory nor a baked model"),
-        "{err}"
-    );
+    let err = fails(&["export", data.to_str().unwrap(), "-o", dir.join("x.onnx").to_str().unwrap()]);
+    assert!(err.contains("neither a checkpoint directory nor a baked model"), "{err}");
     std::fs::remove_dir_all(dir).unwrap();
 }

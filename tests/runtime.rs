@@ -12,9 +12,7 @@ use pvt3_models::{reference, Config, Pvt3};
 use pvt3_runtime::{Classifier, Error};
 
 fn golden(file: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/golden/icub20")
-        .join(file)
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/golden/icub20").join(file)
 }
 
 fn scratch(tag: &str) -> PathBuf {
@@ -25,11 +23,7 @@ fn scratch(tag: &str) -> PathBuf {
 
 /// The committed golden model (kept current by an export test), its input, and its baked form.
 fn golden_onnx() -> (PathBuf, Vec<f32>, pvt3_models::bake::BakedPvt3) {
-    let baked = bake(
-        &Config::icub20(),
-        &read_tensors(&golden("weights.safetensors")).unwrap(),
-    )
-    .unwrap();
+    let baked = bake(&Config::icub20(), &read_tensors(&golden("weights.safetensors")).unwrap()).unwrap();
     let input: Array4<f32> = read_npy(golden("input.npy")).unwrap();
     (golden("model.onnx"), input.iter().copied().collect(), baked)
 }
@@ -44,57 +38,22 @@ fn golden_logits_from_tract_match_the_golden_and_the_f64_reference() {
     assert_eq!(c.kept_frames().len(), 55);
     for batch in [8, 1] {
         let (logits, probabilities) = c.run(&x[..batch * 4500], batch).unwrap();
-        let golden_err = logits
-            .iter()
-            .zip(expected.iter())
-            .map(|(a, b)| (*a as f64 - b).abs())
-            .fold(0.0, f64::max);
-        let reference_err = logits
-            .iter()
-            .zip(reference.iter().flatten())
-            .map(|(a, b)| (*a as f64 - b).abs())
-            .fold(0.0, f64::max);
-        assert!(
-            golden_err <= 1e-5 && reference_err <= 1e-5,
-            "batch {batch}: {golden_err:e}, {reference_err:e}"
-        );
+        let golden_err = logits.iter().zip(expected.iter()).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
+        let reference_err = logits.iter().zip(reference.iter().flatten()).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
+        assert!(golden_err <= 1e-5 && reference_err <= 1e-5, "batch {batch}: {golden_err:e}, {reference_err:e}");
         for p in probabilities.chunks(20) {
             assert!((p.iter().sum::<f32>() - 1.0).abs() < 1e-5);
         }
     }
     let p = c.classify(&x[..4500]).unwrap();
-    let best = expected
-        .row(0)
-        .iter()
-        .enumerate()
-        .max_by(|a, b| a.1.total_cmp(b.1))
-        .unwrap()
-        .0;
-    assert_eq!(
-        (p.class, p.label.as_str()),
-        (best, format!("material_{}", best + 1).as_str())
-    );
+    let best = expected.row(0).iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).unwrap().0;
+    assert_eq!((p.class, p.label.as_str()), (best, format!("material_{}", best + 1).as_str()));
     let first = &c.classify_batch(&x, 8).unwrap()[0];
     assert_eq!(first.class, p.class);
-    assert!(
-        first
-            .probabilities
-            .iter()
-            .zip(&p.probabilities)
-            .all(|(a, b)| (a - b).abs() < 1e-6),
-        "plans per batch size agree"
-    );
-    let (two_threads, _) = Classifier::load(&path)
-        .unwrap()
-        .with_threads(2)
-        .run(&x, 8)
-        .unwrap();
+    assert!(first.probabilities.iter().zip(&p.probabilities).all(|(a, b)| (a - b).abs() < 1e-6), "plans per batch size agree");
+    let (two_threads, _) = Classifier::load(&path).unwrap().with_threads(2).run(&x, 8).unwrap();
     let (one_thread, _) = c.run(&x, 8).unwrap();
-    let diff = two_threads
-        .iter()
-        .zip(&one_thread)
-        .map(|(a, b)| (a - b).abs())
-        .fold(0.0, f32::max);
+    let diff = two_threads.iter().zip(&one_thread).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
     assert!(diff < 1e-5, "two threads: {diff:e}");
 }
 
@@ -102,21 +61,12 @@ fn golden_logits_from_tract_match_the_golden_and_the_f64_reference() {
 /// normalisation: frame by frame equals the whole window, and both equal the f64 reference.
 #[test]
 fn streaming_equals_the_whole_window_with_heads_tubelets_and_pruned_tokens() {
-    let cfg = Config {
-        heads: 2,
-        dim_head: 16,
-        tubelet: 3,
-        ..Config::icub20()
-    };
+    let cfg = Config { heads: 2, dim_head: 16, tubelet: 3, ..Config::icub20() };
     let (_, varmap) = Pvt3::init(&cfg, 5).unwrap();
     let mut tensors = varmap_tensors(&varmap).unwrap();
     let mask = &mut tensors.get_mut("frame_mask").unwrap().1;
     for (t, m) in mask.iter_mut().enumerate() {
-        *m = if t % 3 == 1 {
-            0.0
-        } else {
-            0.5 + t as f32 / 25.0
-        };
+        *m = if t % 3 == 1 { 0.0 } else { 0.5 + t as f32 / 25.0 };
     }
     let baked = bake(&cfg, &tensors).unwrap();
     assert_eq!(baked.kept_tokens.len(), 17);
@@ -125,10 +75,7 @@ fn streaming_equals_the_whole_window_with_heads_tubelets_and_pruned_tokens() {
         std: (0..60).map(|i| 0.5 + i as f32 / 30.0).collect(),
         frames: 75,
     };
-    let meta = pvt3_export::Metadata {
-        classes: (0..20).map(|k| format!("c{k}")).collect(),
-        provenance: serde_json::json!({}),
-    };
+    let meta = pvt3_export::Metadata { classes: (0..20).map(|k| format!("c{k}")).collect(), provenance: serde_json::json!({}) };
     let dir = scratch("stream");
     let path = dir.join("tubelets.onnx");
     pvt3_export::write(&pvt3_export::export(&baked, &norm, &meta).unwrap(), &path).unwrap();
@@ -145,30 +92,16 @@ fn streaming_equals_the_whole_window_with_heads_tubelets_and_pruned_tokens() {
         })
         .collect();
     let reference = reference::forward(&baked, &normalised, 8).unwrap();
-    let worst = logits
-        .iter()
-        .zip(reference.iter().flatten())
-        .map(|(a, b)| (*a as f64 - b).abs())
-        .fold(0.0, f64::max);
+    let worst = logits.iter().zip(reference.iter().flatten()).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
     assert!(worst <= 1e-5, "tract against the f64 reference: {worst:e}");
     let mut session = c.session().unwrap();
     for (sample, expected) in x.chunks(4500).zip(&whole) {
         for t in 0..75 {
-            session
-                .push_frame(&(0..60).map(|i| sample[i * 75 + t]).collect::<Vec<_>>())
-                .unwrap();
+            session.push_frame(&(0..60).map(|i| sample[i * 75 + t]).collect::<Vec<_>>()).unwrap();
         }
         let streamed = session.finish().unwrap();
-        let worst = streamed
-            .probabilities
-            .iter()
-            .zip(&expected.probabilities)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f32::max);
-        assert!(
-            worst <= 1e-5 && streamed.class == expected.class,
-            "streamed against whole window: {worst:e}"
-        );
+        let worst = streamed.probabilities.iter().zip(&expected.probabilities).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+        assert!(worst <= 1e-5 && streamed.class == expected.class, "streamed against whole window: {worst:e}");
     }
     std::fs::remove_dir_all(dir).unwrap();
 }
@@ -178,50 +111,23 @@ fn bad_input_and_bad_files_are_typed_errors() {
     let dir = scratch("errors");
     let (path, x, _) = golden_onnx();
     let c = Classifier::load(&path).unwrap();
-    assert!(matches!(
-        c.classify(&x[..4499]),
-        Err(Error::InputLength {
-            got: 4499,
-            expected: 4500,
-            ..
-        })
-    ));
-    assert!(matches!(
-        c.classify_batch(&x, 7),
-        Err(Error::InputLength {
-            expected: 31500,
-            ..
-        })
-    ));
+    assert!(matches!(c.classify(&x[..4499]), Err(Error::InputLength { got: 4499, expected: 4500, .. })));
+    assert!(matches!(c.classify_batch(&x, 7), Err(Error::InputLength { expected: 31500, .. })));
     assert!(matches!(c.classify_batch(&[], 0), Err(Error::EmptyBatch)));
     let mut nan = x[..4500].to_vec();
     nan[17] = f32::NAN;
-    assert!(matches!(
-        c.classify(&nan),
-        Err(Error::NonFinite { index: 17, .. })
-    ));
+    assert!(matches!(c.classify(&nan), Err(Error::NonFinite { index: 17, .. })));
     nan[17] = f32::INFINITY;
-    assert!(matches!(
-        c.classify(&nan),
-        Err(Error::NonFinite { index: 17, .. })
-    ));
+    assert!(matches!(c.classify(&nan), Err(Error::NonFinite { index: 17, .. })));
 
     let bytes = std::fs::read(&path).unwrap();
     let truncated = dir.join("truncated.onnx");
     std::fs::write(&truncated, &bytes[..bytes.len() / 2]).unwrap();
-    let err = Classifier::load(&truncated)
-        .err()
-        .expect("a truncated file fails");
+    let err = Classifier::load(&truncated).err().expect("a truncated file fails");
     assert!(matches!(err, Error::NotOnnx { .. }), "{err}");
     let text = dir.join("text.onnx");
     std::fs::write(&text, "not a model").unwrap();
-    assert!(matches!(
-        Classifier::load(&text),
-        Err(Error::NotOnnx { .. } | Error::NotPvt3 { .. })
-    ));
-    assert!(matches!(
-        Classifier::load(dir.join("absent.onnx")),
-        Err(Error::Io { .. })
-    ));
+    assert!(matches!(Classifier::load(&text), Err(Error::NotOnnx { .. } | Error::NotPvt3 { .. })));
+    assert!(matches!(Classifier::load(dir.join("absent.onnx")), Err(Error::Io { .. })));
     std::fs::remove_dir_all(dir).unwrap();
 }

@@ -7,10 +7,7 @@ pub enum Error {
     #[error("not a consistent baked model: {0}")]
     Inconsistent(String),
     #[error("{path}: {source}")]
-    Io {
-        path: String,
-        source: std::io::Error,
-    },
+    Io { path: String, source: std::io::Error },
 }
 
 pub type Result<T> = std::result::Result<T, Error>;

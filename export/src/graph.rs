@@ -1,9 +1,7 @@
 //! A small builder for ONNX graphs: constants become initializers, every node gets a fresh
 //! output name, attributes are built by helpers.
 
-use tract_onnx::pb::{
-    attribute_proto::AttributeType, tensor_proto::DataType, AttributeProto, NodeProto, TensorProto,
-};
+use tract_onnx::pb::{attribute_proto::AttributeType, tensor_proto::DataType, AttributeProto, NodeProto, TensorProto};
 
 #[derive(Default)]
 pub struct Graph {
@@ -13,30 +11,15 @@ pub struct Graph {
 }
 
 pub fn int(name: &str, v: i64) -> AttributeProto {
-    AttributeProto {
-        name: name.into(),
-        r#type: AttributeType::Int as i32,
-        i: v,
-        ..Default::default()
-    }
+    AttributeProto { name: name.into(), r#type: AttributeType::Int as i32, i: v, ..Default::default() }
 }
 
 pub fn ints(name: &str, v: &[i64]) -> AttributeProto {
-    AttributeProto {
-        name: name.into(),
-        r#type: AttributeType::Ints as i32,
-        ints: v.to_vec(),
-        ..Default::default()
-    }
+    AttributeProto { name: name.into(), r#type: AttributeType::Ints as i32, ints: v.to_vec(), ..Default::default() }
 }
 
 pub fn float(name: &str, v: f32) -> AttributeProto {
-    AttributeProto {
-        name: name.into(),
-        r#type: AttributeType::Float as i32,
-        f: v,
-        ..Default::default()
-    }
+    AttributeProto { name: name.into(), r#type: AttributeType::Float as i32, f: v, ..Default::default() }
 }
 
 impl Graph {
@@ -45,13 +28,7 @@ impl Graph {
         format!("{hint}_{}", self.count)
     }
 
-    fn initializer(
-        &mut self,
-        hint: &str,
-        dims: &[usize],
-        data_type: DataType,
-        raw_data: Vec<u8>,
-    ) -> String {
+    fn initializer(&mut self, hint: &str, dims: &[usize], data_type: DataType, raw_data: Vec<u8>) -> String {
         let name = self.fresh(hint);
         self.initializers.push(TensorProto {
             name: name.clone(),
@@ -65,31 +42,15 @@ impl Graph {
 
     pub fn f32s(&mut self, hint: &str, dims: &[usize], data: Vec<f32>) -> String {
         debug_assert_eq!(dims.iter().product::<usize>(), data.len(), "{hint}");
-        self.initializer(
-            hint,
-            dims,
-            DataType::Float,
-            data.iter().flat_map(|v| v.to_le_bytes()).collect(),
-        )
+        self.initializer(hint, dims, DataType::Float, data.iter().flat_map(|v| v.to_le_bytes()).collect())
     }
 
     pub fn i64s(&mut self, hint: &str, dims: &[usize], data: Vec<i64>) -> String {
-        self.initializer(
-            hint,
-            dims,
-            DataType::Int64,
-            data.iter().flat_map(|v| v.to_le_bytes()).collect(),
-        )
+        self.initializer(hint, dims, DataType::Int64, data.iter().flat_map(|v| v.to_le_bytes()).collect())
     }
 
     /// A node with one output, named after `hint` unless `output` is given.
-    pub fn node(
-        &mut self,
-        op: &str,
-        inputs: &[&str],
-        attribute: Vec<AttributeProto>,
-        output: Option<&str>,
-    ) -> String {
+    pub fn node(&mut self, op: &str, inputs: &[&str], attribute: Vec<AttributeProto>, output: Option<&str>) -> String {
         let out = output.map_or_else(|| self.fresh(&op.to_lowercase()), str::to_string);
         self.nodes.push(NodeProto {
             op_type: op.into(),

@@ -12,7 +12,4 @@ mod graph;
 mod model;
 
 pub use error::{Error, Result};
-pub use model::{
-    export, write, Metadata, INPUT, LOGITS, PROBABILITIES, TOKEN_ENCODINGS, TOKEN_FRAMES,
-    TOKEN_INDEX,
-};
+pub use model::{export, write, Metadata, INPUT, LOGITS, PROBABILITIES, TOKEN_ENCODINGS, TOKEN_FRAMES, TOKEN_INDEX};

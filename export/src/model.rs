@@ -6,9 +6,8 @@ use prost::Message;
 use pvt3_models::bake::{BakedAttention, BakedBlock, BakedPvt3, BakedTransformer, Dense, Norm};
 use pvt3_models::normalization::Normalization;
 use tract_onnx::pb::{
-    tensor_proto::DataType, tensor_shape_proto::dimension::Value as Dim,
-    tensor_shape_proto::Dimension, type_proto, GraphProto, ModelProto, OperatorSetIdProto,
-    StringStringEntryProto, TensorShapeProto, TypeProto, ValueInfoProto,
+    tensor_proto::DataType, tensor_shape_proto::dimension::Value as Dim, tensor_shape_proto::Dimension, type_proto, GraphProto, ModelProto,
+    OperatorSetIdProto, StringStringEntryProto, TensorShapeProto, TypeProto, ValueInfoProto,
 };
 
 use crate::graph::{float, int, ints, Graph};
@@ -34,10 +33,7 @@ pub struct Metadata {
 }
 
 fn linear(g: &mut Graph, x: &str, l: &Dense, hint: &str) -> String {
-    let wt: Vec<f32> = (0..l.cols)
-        .flat_map(|c| (0..l.rows).map(move |r| (r, c)))
-        .map(|(r, c)| l.weight[r * l.cols + c])
-        .collect();
+    let wt: Vec<f32> = (0..l.cols).flat_map(|c| (0..l.rows).map(move |r| (r, c))).map(|(r, c)| l.weight[r * l.cols + c]).collect();
     let w = g.f32s(&format!("{hint}_w"), &[l.cols, l.rows], wt);
     let y = g.op("MatMul", &[x, &w]);
     match &l.bias {
@@ -53,12 +49,7 @@ fn layer_norm(g: &mut Graph, x: &str, n: &Norm, eps: f64, hint: &str) -> String 
     let d = n.weight.len();
     let w = g.f32s(&format!("{hint}_scale"), &[d], n.weight.clone());
     let b = g.f32s(&format!("{hint}_bias"), &[d], n.bias.clone());
-    g.node(
-        "LayerNormalization",
-        &[x, &w, &b],
-        vec![int("axis", -1), float("epsilon", eps as f32)],
-        None,
-    )
+    g.node("LayerNormalization", &[x, &w, &b], vec![int("axis", -1), float("epsilon", eps as f32)], None)
 }
 
 fn gelu(g: &mut Graph, x: &str) -> String {
@@ -74,10 +65,7 @@ fn gelu(g: &mut Graph, x: &str) -> String {
 
 /// Attention over `x` `[sequences, tokens, dim]`; the scale is folded into the q weights.
 fn attention(g: &mut Graph, x: &str, a: &BakedAttention, hint: &str) -> String {
-    let q_scaled = Dense {
-        weight: a.q.weight.iter().map(|w| w * a.scale).collect(),
-        ..a.q.clone()
-    };
+    let q_scaled = Dense { weight: a.q.weight.iter().map(|w| w * a.scale).collect(), ..a.q.clone() };
     let q = linear(g, x, &q_scaled, &format!("{hint}_q"));
     let k = linear(g, x, &a.k, &format!("{hint}_k"));
     let v = linear(g, x, &a.v, &format!("{hint}_v"));
@@ -87,34 +75,17 @@ fn attention(g: &mut Graph, x: &str, a: &BakedAttention, hint: &str) -> String {
         let probs = g.node("Softmax", &[&scores], vec![int("axis", -1)], None);
         g.op("MatMul", &[&probs, &v])
     } else {
-        let split = g.i64s(
-            "split_heads",
-            &[4],
-            vec![0, 0, a.heads as i64, a.head_dim as i64],
-        );
+        let split = g.i64s("split_heads", &[4], vec![0, 0, a.heads as i64, a.head_dim as i64]);
         let heads = |g: &mut Graph, t: &str, perm: &[i64]| {
             let r = g.op("Reshape", &[t, &split]);
             g.node("Transpose", &[&r], vec![ints("perm", perm)], None)
         };
-        let (qh, kt, vh) = (
-            heads(g, &q, &[0, 2, 1, 3]),
-            heads(g, &k, &[0, 2, 3, 1]),
-            heads(g, &v, &[0, 2, 1, 3]),
-        );
+        let (qh, kt, vh) = (heads(g, &q, &[0, 2, 1, 3]), heads(g, &k, &[0, 2, 3, 1]), heads(g, &v, &[0, 2, 1, 3]));
         let scores = g.op("MatMul", &[&qh, &kt]);
         let probs = g.node("Softmax", &[&scores], vec![int("axis", -1)], None);
         let mixed = g.op("MatMul", &[&probs, &vh]);
-        let back = g.node(
-            "Transpose",
-            &[&mixed],
-            vec![ints("perm", &[0, 2, 1, 3])],
-            None,
-        );
-        let merge = g.i64s(
-            "merge_heads",
-            &[3],
-            vec![0, 0, (a.heads * a.head_dim) as i64],
-        );
+        let back = g.node("Transpose", &[&mixed], vec![ints("perm", &[0, 2, 1, 3])], None);
+        let merge = g.i64s("merge_heads", &[3], vec![0, 0, (a.heads * a.head_dim) as i64]);
         g.op("Reshape", &[&back, &merge])
     };
     linear(g, &mixed, &a.out, &format!("{hint}_out"))
@@ -150,11 +121,7 @@ fn first_dim(g: &mut Graph, shape: &str) -> String {
 
 /// `token` `[1, 1, (1,) dim]` repeated to `[batch, rest…]`.
 fn expand_over_batch(g: &mut Graph, token: &str, batch: &str, rest: &[usize]) -> String {
-    let rest = g.i64s(
-        "shape_rest",
-        &[rest.len()],
-        rest.iter().map(|v| *v as i64).collect(),
-    );
+    let rest = g.i64s("shape_rest", &[rest.len()], rest.iter().map(|v| *v as i64).collect());
     let shape = g.node("Concat", &[batch, &rest], vec![int("axis", 0)], None);
     g.op("Expand", &[token, &shape])
 }
@@ -162,26 +129,16 @@ fn expand_over_batch(g: &mut Graph, token: &str, batch: &str, rest: &[usize]) ->
 /// Checks the parts of a baked model the graph relies on.
 fn check(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<()> {
     let c = &m.config;
-    c.validate()
-        .map_err(|e| Error::Inconsistent(e.to_string()))?;
+    c.validate().map_err(|e| Error::Inconsistent(e.to_string()))?;
     let channels = c.sample_shape().iter().product::<usize>() / c.frames;
     if norm.mean.len() != channels || norm.std.len() != channels || norm.frames != c.frames {
-        return Err(Error::Inconsistent(format!(
-            "normalisation does not fit {channels} channels × {} frames",
-            c.frames
-        )));
+        return Err(Error::Inconsistent(format!("normalisation does not fit {channels} channels × {} frames", c.frames)));
     }
     if meta.classes.len() != c.classes {
-        return Err(Error::Inconsistent(format!(
-            "{} class names for {} classes",
-            meta.classes.len(),
-            c.classes
-        )));
+        return Err(Error::Inconsistent(format!("{} class names for {} classes", meta.classes.len(), c.classes)));
     }
     if m.kept_tokens.is_empty() {
-        return Err(Error::Unsupported(
-            "every frame is pruned; the model would ignore its input".into(),
-        ));
+        return Err(Error::Unsupported("every frame is pruned; the model would ignore its input".into()));
     }
     for (name, t) in [("space", &m.space), ("temporal", &m.temporal)] {
         for (i, b) in t.layers.iter().enumerate() {
@@ -236,31 +193,14 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
     let sample = c.sample_shape();
 
     // The kept tokens' raw frames: [b, h, w, (c,) f] → [b, h, w, c, t, tt] → gather → [b·tk, tt, h, w, c].
-    let split = g.i64s(
-        "split_tokens",
-        &[6],
-        [0, h, w, ch, t, tt].map(|v| v as i64).to_vec(),
-    );
+    let split = g.i64s("split_tokens", &[6], [0, h, w, ch, t, tt].map(|v| v as i64).to_vec());
     let mut x = g.op("Reshape", &[INPUT, &split]);
     if tk < t {
-        let idx = g.i64s(
-            "kept_tokens",
-            &[tk],
-            m.kept_tokens.iter().map(|k| *k as i64).collect(),
-        );
+        let idx = g.i64s("kept_tokens", &[tk], m.kept_tokens.iter().map(|k| *k as i64).collect());
         x = g.node("Gather", &[&x, &idx], vec![int("axis", 4)], None);
     }
-    let x = g.node(
-        "Transpose",
-        &[&x],
-        vec![ints("perm", &[0, 4, 5, 1, 2, 3])],
-        None,
-    );
-    let per_token = g.i64s(
-        "per_token",
-        &[5],
-        [-1, tt as i64, h as i64, w as i64, ch as i64].to_vec(),
-    );
+    let x = g.node("Transpose", &[&x], vec![ints("perm", &[0, 4, 5, 1, 2, 3])], None);
+    let per_token = g.i64s("per_token", &[5], [-1, tt as i64, h as i64, w as i64, ch as i64].to_vec());
     let x = g.op("Reshape", &[&x, &per_token]);
     g.node("Identity", &[&x], vec![], Some(TOKEN_FRAMES));
     let input_shape = g.op("Shape", &[INPUT]);
@@ -283,22 +223,12 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
     let grid = [0, tt, gh, c.patch_height, gw, c.patch_width, ch].map(|v| v as i64);
     let grid = g.i64s("grid", &[7], grid.to_vec());
     let x = g.op("Reshape", &[&x, &grid]);
-    let x = g.node(
-        "Transpose",
-        &[&x],
-        vec![ints("perm", &[0, 2, 4, 1, 3, 5, 6])],
-        None,
-    );
+    let x = g.node("Transpose", &[&x], vec![ints("perm", &[0, 2, 4, 1, 3, 5, 6])], None);
     let tokens_shape = g.i64s("tokens", &[3], vec![0, n as i64, c.patch_dim() as i64]);
     let x = g.op("Reshape", &[&x, &tokens_shape]);
     let x = linear(&mut g, &x, &m.patch_embed, "patch_embed");
     let scales = g.f32s("frame_scale", &[tk], m.token_scale.clone());
-    let scale = g.node(
-        "Gather",
-        &[&scales, TOKEN_INDEX],
-        vec![int("axis", 0)],
-        None,
-    );
+    let scale = g.node("Gather", &[&scales, TOKEN_INDEX], vec![int("axis", 0)], None);
     let column = g.i64s("column", &[3], vec![-1, 1, 1]);
     let scale = g.op("Reshape", &[&scale, &column]);
     let embedded = g.op("Mul", &[&x, &scale]);
@@ -308,12 +238,7 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
     let cls = expand_over_batch(&mut g, &space_cls, &count, &[1, d]);
     let tokens = g.node("Concat", &[&cls, &embedded], vec![int("axis", 1)], None);
     let positions = g.f32s("pos_embed", &[tk, n + 1, d], m.pos_embed.clone());
-    let pos = g.node(
-        "Gather",
-        &[&positions, TOKEN_INDEX],
-        vec![int("axis", 0)],
-        None,
-    );
+    let pos = g.node("Gather", &[&positions, TOKEN_INDEX], vec![int("axis", 0)], None);
     let tokens = g.op("Add", &[&tokens, &pos]);
     let encoded = transformer_cls(&mut g, &tokens, &m.space, eps, "space");
     g.node("Identity", &[&encoded], vec![], Some(TOKEN_ENCODINGS));
@@ -341,17 +266,8 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
     let normed = layer_norm(&mut g, &pooled, &m.head_norm, eps, "head_norm");
     let logits = linear(&mut g, &normed, &m.head, "head");
     g.node("Identity", &[&logits], vec![], Some(LOGITS));
-    g.node(
-        "Softmax",
-        &[&logits],
-        vec![int("axis", -1)],
-        Some(PROBABILITIES),
-    );
-    let kept_frames: Vec<i64> = m
-        .kept_tokens
-        .iter()
-        .flat_map(|k| (k * tt..(k + 1) * tt).map(|f| f as i64))
-        .collect();
+    g.node("Softmax", &[&logits], vec![int("axis", -1)], Some(PROBABILITIES));
+    let kept_frames: Vec<i64> = m.kept_tokens.iter().flat_map(|k| (k * tt..(k + 1) * tt).map(|f| f as i64)).collect();
 
     let mut input_dims = vec![None];
     input_dims.extend(sample.iter().map(|v| Some(*v)));
@@ -360,63 +276,31 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
         node: g.nodes,
         initializer: g.initializers,
         input: vec![value_info(INPUT, &input_dims)],
-        output: vec![
-            value_info(LOGITS, &[None, Some(c.classes)]),
-            value_info(PROBABILITIES, &[None, Some(c.classes)]),
-        ],
+        output: vec![value_info(LOGITS, &[None, Some(c.classes)]), value_info(PROBABILITIES, &[None, Some(c.classes)])],
         ..Default::default()
     };
-    let layout = if c.channels == 1 {
-        "[batch, height, width, frames]"
-    } else {
-        "[batch, height, width, channels, frames]"
-    };
+    let layout = if c.channels == 1 { "[batch, height, width, frames]" } else { "[batch, height, width, channels, frames]" };
     let props = [
-        (
-            "pvt3.classes",
-            serde_json::to_string(&meta.classes).expect("strings serialise"),
-        ),
+        ("pvt3.classes", serde_json::to_string(&meta.classes).expect("strings serialise")),
         (
             "pvt3.input_layout",
             format!(
                 "{layout} = [batch, {}], raw sensor values as float32",
-                sample
-                    .iter()
-                    .map(|v| v.to_string())
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                sample.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(", ")
             ),
         ),
-        (
-            "pvt3.input_units",
-            "the data set's raw units (normalisation is inside the graph)".into(),
-        ),
-        (
-            "pvt3.kept_frames",
-            serde_json::to_string(&kept_frames).expect("integers serialise"),
-        ),
-        (
-            "pvt3.config",
-            serde_json::to_string(c).expect("the configuration serialises"),
-        ),
+        ("pvt3.input_units", "the data set's raw units (normalisation is inside the graph)".into()),
+        ("pvt3.kept_frames", serde_json::to_string(&kept_frames).expect("integers serialise")),
+        ("pvt3.config", serde_json::to_string(c).expect("the configuration serialises")),
         ("pvt3.provenance", meta.provenance.to_string()),
     ];
     Ok(ModelProto {
         ir_version: 8,
-        opset_import: vec![OperatorSetIdProto {
-            domain: String::new(),
-            version: 17,
-        }],
+        opset_import: vec![OperatorSetIdProto { domain: String::new(), version: 17 }],
         producer_name: "pvt3".into(),
         producer_version: env!("CARGO_PKG_VERSION").into(),
         graph: Some(graph),
-        metadata_props: props
-            .into_iter()
-            .map(|(k, v)| StringStringEntryProto {
-                key: k.into(),
-                value: v,
-            })
-            .collect(),
+        metadata_props: props.into_iter().map(|(k, v)| StringStringEntryProto { key: k.into(), value: v }).collect(),
         ..Default::default()
     })
 }
@@ -424,10 +308,7 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
 /// Writes the model to `path` through a temporary file and a rename.
 pub fn write(model: &ModelProto, path: &Path) -> Result<()> {
     let tmp = path.with_extension("onnx.tmp");
-    let io = |e: std::io::Error| Error::Io {
-        path: path.display().to_string(),
-        source: e,
-    };
+    let io = |e: std::io::Error| Error::Io { path: path.display().to_string(), source: e };
     std::fs::write(&tmp, model.encode_to_vec()).map_err(io)?;
     std::fs::rename(&tmp, path).map_err(io)
 }

@@ -27,11 +27,7 @@ impl Attention {
     pub fn new(cfg: &Config, vb: VarBuilder) -> Result<Self> {
         let inner = cfg.inner_dim();
         Ok(Self {
-            qkv: vb.pp("qkv").get_with_hints(
-                (3 * inner, cfg.dim),
-                "weight",
-                candle_nn::init::DEFAULT_KAIMING_NORMAL,
-            )?,
+            qkv: vb.pp("qkv").get_with_hints((3 * inner, cfg.dim), "weight", candle_nn::init::DEFAULT_KAIMING_NORMAL)?,
             out: linear(inner, cfg.dim, vb.pp("out"))?,
             channel_mask: vb.get_with_hints(inner, "channel_mask", Init::Const(1.0))?,
             heads: cfg.heads,
@@ -53,19 +49,13 @@ impl Attention {
             if self.heads == 1 {
                 y.reshape((b, l, inner))
             } else {
-                y.reshape((b, l, self.heads, self.dim_head))?
-                    .transpose(1, 2)?
-                    .contiguous()
+                y.reshape((b, l, self.heads, self.dim_head))?.transpose(1, 2)?.contiguous()
             }
         };
         let (q, k, v) = (project(0, self.scale)?, project(1, 1.0)?, project(2, 1.0)?);
         let probs = candle_nn::ops::softmax(&q.matmul(&k.t()?)?, D::Minus1)?;
         let mixed = probs.matmul(&v)?;
-        let heads = if self.heads == 1 {
-            mixed
-        } else {
-            mixed.transpose(1, 2)?
-        };
+        let heads = if self.heads == 1 { mixed } else { mixed.transpose(1, 2)? };
         let heads = heads.reshape((b * l, inner))?;
         let out = self.out.forward(&heads)?.reshape((b, l, d))?;
         self.dropout.forward(&out, rng)

@@ -104,14 +104,9 @@ struct Source<'a> {
 
 impl Source<'_> {
     fn get(&self, name: &str, shape: &[usize]) -> Result<&[f32]> {
-        let (s, v) = self
-            .tensors
-            .get(name)
-            .ok_or_else(|| Error::Config(format!("cannot bake: tensor `{name}` is missing")))?;
+        let (s, v) = self.tensors.get(name).ok_or_else(|| Error::Config(format!("cannot bake: tensor `{name}` is missing")))?;
         if s.iter().product::<usize>() != shape.iter().product::<usize>() {
-            return Err(Error::Config(format!(
-                "cannot bake: `{name}` has shape {s:?}, expected {shape:?}"
-            )));
+            return Err(Error::Config(format!("cannot bake: `{name}` has shape {s:?}, expected {shape:?}")));
         }
         Ok(v)
     }
@@ -127,14 +122,8 @@ impl Source<'_> {
         Ok(Dense {
             rows,
             cols,
-            weight: self
-                .get(&format!("{prefix}.weight"), &[rows, cols])?
-                .to_vec(),
-            bias: if bias {
-                Some(self.get(&format!("{prefix}.bias"), &[rows])?.to_vec())
-            } else {
-                None
-            },
+            weight: self.get(&format!("{prefix}.weight"), &[rows, cols])?.to_vec(),
+            bias: if bias { Some(self.get(&format!("{prefix}.bias"), &[rows])?.to_vec()) } else { None },
         })
     }
 }
@@ -142,27 +131,12 @@ impl Source<'_> {
 /// Rows `keep` of a `[rows, cols]` matrix, row i scaled by `scale[i]`.
 fn take_rows(w: &[f32], cols: usize, keep: &[usize], scale: impl Fn(usize) -> f32) -> Vec<f32> {
     let scale = &scale;
-    keep.iter()
-        .flat_map(|&r| {
-            w[r * cols..(r + 1) * cols]
-                .iter()
-                .map(move |v| v * scale(r))
-        })
-        .collect()
+    keep.iter().flat_map(|&r| w[r * cols..(r + 1) * cols].iter().map(move |v| v * scale(r))).collect()
 }
 
 /// Columns `keep` of a `[rows, cols]` matrix, column j scaled by `scale[j]`.
-fn take_cols(
-    w: &[f32],
-    rows: usize,
-    cols: usize,
-    keep: &[usize],
-    scale: impl Fn(usize) -> f32,
-) -> Vec<f32> {
-    (0..rows)
-        .flat_map(|r| keep.iter().map(move |&c| (r, c)))
-        .map(|(r, c)| w[r * cols + c] * scale(c))
-        .collect()
+fn take_cols(w: &[f32], rows: usize, cols: usize, keep: &[usize], scale: impl Fn(usize) -> f32) -> Vec<f32> {
+    (0..rows).flat_map(|r| keep.iter().map(move |&c| (r, c))).map(|(r, c)| w[r * cols + c] * scale(c)).collect()
 }
 
 fn bake_attention(src: &Source, p: &str, cfg: &Config) -> Result<BakedAttention> {
@@ -171,22 +145,12 @@ fn bake_attention(src: &Source, p: &str, cfg: &Config) -> Result<BakedAttention>
     let mask = src.get(&format!("{p}.channel_mask"), &[inner])?;
     let qkv = src.get(&format!("{p}.qkv.weight"), &[3 * inner, d])?;
     // The same number of channels per head: the non-zero ones, topped up with zero ones.
-    let per_head: Vec<Vec<usize>> = (0..h)
-        .map(|head| {
-            (head * dh..(head + 1) * dh)
-                .filter(|&c| mask[c] != 0.0)
-                .collect()
-        })
-        .collect();
+    let per_head: Vec<Vec<usize>> = (0..h).map(|head| (head * dh..(head + 1) * dh).filter(|&c| mask[c] != 0.0).collect()).collect();
     let head_dim = per_head.iter().map(Vec::len).max().unwrap_or(0);
     let keep: Vec<usize> = (0..h)
         .flat_map(|head| {
             let mut chosen = per_head[head].clone();
-            chosen.extend(
-                (head * dh..(head + 1) * dh)
-                    .filter(|c| mask[*c] == 0.0)
-                    .take(head_dim - chosen.len()),
-            );
+            chosen.extend((head * dh..(head + 1) * dh).filter(|c| mask[*c] == 0.0).take(head_dim - chosen.len()));
             chosen.sort_unstable();
             chosen
         })
@@ -194,9 +158,7 @@ fn bake_attention(src: &Source, p: &str, cfg: &Config) -> Result<BakedAttention>
     let block = |i: usize| Dense {
         rows: keep.len(),
         cols: d,
-        weight: take_rows(&qkv[i * inner * d..(i + 1) * inner * d], d, &keep, |c| {
-            mask[c]
-        }),
+        weight: take_rows(&qkv[i * inner * d..(i + 1) * inner * d], d, &keep, |c| mask[c]),
         bias: None,
     };
     let out_w = src.get(&format!("{p}.out.weight"), &[d, inner])?;
@@ -230,12 +192,7 @@ fn bake_feed_forward(src: &Source, p: &str, cfg: &Config) -> Result<BakedFeedFor
             weight: take_rows(&fc1.weight, d, &keep, |_| 1.0),
             bias: Some(keep.iter().map(|&u| fc1_bias[u]).collect()),
         },
-        fc2: Dense {
-            rows: d,
-            cols: keep.len(),
-            weight: take_cols(&fc2.weight, d, m, &keep, |u| mask[u]),
-            bias: fc2.bias,
-        },
+        fc2: Dense { rows: d, cols: keep.len(), weight: take_cols(&fc2.weight, d, m, &keep, |u| mask[u]), bias: fc2.bias },
     })
 }
 
@@ -251,10 +208,7 @@ fn bake_transformer(src: &Source, p: &str, depth: usize, cfg: &Config) -> Result
             })
         })
         .collect::<Result<_>>()?;
-    Ok(BakedTransformer {
-        layers,
-        norm: src.norm(&format!("{p}.norm"), cfg.dim)?,
-    })
+    Ok(BakedTransformer { layers, norm: src.norm(&format!("{p}.norm"), cfg.dim)? })
 }
 
 /// Bakes the masked model `cfg` with weights `tensors` (the checkpoint names).
@@ -271,28 +225,16 @@ pub fn bake(cfg: &Config, tensors: &Tensors) -> Result<BakedPvt3> {
     // A pruned token's spatial input is the CLS token and the position embedding alone.
     let mut pruned_encodings = vec![0f32; t * d];
     for k in (0..t).filter(|k| frame_mask[*k] == 0.0) {
-        let mut tokens: Vec<f64> = pos[k * row..(k + 1) * row]
-            .iter()
-            .map(|v| *v as f64)
-            .collect();
-        tokens
-            .iter_mut()
-            .zip(&space_cls)
-            .for_each(|(v, c)| *v += *c as f64);
+        let mut tokens: Vec<f64> = pos[k * row..(k + 1) * row].iter().map(|v| *v as f64).collect();
+        tokens.iter_mut().zip(&space_cls).for_each(|(v, c)| *v += *c as f64);
         let encoded = reference::transformer_cls(&space, &tokens, n + 1, d, cfg.layer_norm_eps);
-        pruned_encodings[k * d..(k + 1) * d]
-            .iter_mut()
-            .zip(encoded)
-            .for_each(|(o, v)| *o = v as f32);
+        pruned_encodings[k * d..(k + 1) * d].iter_mut().zip(encoded).for_each(|(o, v)| *o = v as f32);
     }
     Ok(BakedPvt3 {
         config: cfg.clone(),
         patch_embed: src.dense("patch_embed", d, cfg.patch_dim(), true)?,
         token_scale: kept_tokens.iter().map(|&k| frame_mask[k]).collect(),
-        pos_embed: kept_tokens
-            .iter()
-            .flat_map(|&k| pos[k * row..(k + 1) * row].iter().copied())
-            .collect(),
+        pos_embed: kept_tokens.iter().flat_map(|&k| pos[k * row..(k + 1) * row].iter().copied()).collect(),
         kept_tokens,
         space_cls,
         temporal_cls: src.get("temporal_cls", &[1, 1, d])?.to_vec(),
@@ -365,18 +307,8 @@ impl BakedPvt3 {
         };
         let kept = self.kept_tokens.len();
         let embed = (kept * n * self.patch_embed.weight.len()) as u64;
-        let space: u64 = self
-            .space
-            .layers
-            .iter()
-            .map(|b| layer(b, kept, n + 1))
-            .sum();
-        let time: u64 = self
-            .temporal
-            .layers
-            .iter()
-            .map(|b| layer(b, 1, t + 1))
-            .sum();
+        let space: u64 = self.space.layers.iter().map(|b| layer(b, kept, n + 1)).sum();
+        let time: u64 = self.temporal.layers.iter().map(|b| layer(b, 1, t + 1)).sum();
         embed + space + time + self.head.weight.len() as u64
     }
 }

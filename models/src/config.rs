@@ -74,15 +74,7 @@ impl Config {
     /// spatial token (a 19 × 1 grid, patch 1 × 1) and 10 consecutive frames form one temporal
     /// token, so the spatial transformer attends across electrodes over 40 time steps.
     pub fn biotac20() -> Self {
-        Self {
-            height: 19,
-            width: 1,
-            frames: 400,
-            patch_height: 1,
-            patch_width: 1,
-            tubelet: 10,
-            ..Self::icub20()
-        }
+        Self { height: 19, width: 1, frames: 400, patch_height: 1, patch_width: 1, tubelet: 10, ..Self::icub20() }
     }
 
     /// GelSight-style optical tactile video: 25 RGB frames of 240 × 320, patches 40 × 40.
@@ -135,16 +127,11 @@ impl Config {
         ];
         for (pn, p, n, v) in divides {
             if v % p != 0 {
-                return Err(Error::Config(format!(
-                    "{pn} = {p} does not divide {n} = {v}"
-                )));
+                return Err(Error::Config(format!("{pn} = {p} does not divide {n} = {v}")));
             }
         }
         if !(0.0..1.0).contains(&self.dropout) {
-            return Err(Error::Config(format!(
-                "dropout = {} is not in [0, 1)",
-                self.dropout
-            )));
+            return Err(Error::Config(format!("dropout = {} is not in [0, 1)", self.dropout)));
         }
         Ok(())
     }
@@ -193,8 +180,7 @@ impl Config {
         let embed = self.patch_dim() * d + d;
         let pos = self.time_tokens() * (self.num_patches() + 1) * d;
         let cls = 2 * d;
-        let transformers =
-            (self.space_depth + self.time_depth) * self.layer_parameters() + 2 * 2 * d;
+        let transformers = (self.space_depth + self.time_depth) * self.layer_parameters() + 2 * 2 * d;
         let head = 2 * d + d * self.classes + self.classes;
         embed + pos + cls + transformers + head
     }
@@ -239,22 +225,13 @@ mod tests {
             let back: Config = serde_json::from_str(&serde_json::to_string(&cfg).unwrap()).unwrap();
             assert_eq!(back, cfg);
         }
-        assert!(matches!(
-            Config::preset("nope"),
-            Err(Error::UnknownPreset(_))
-        ));
+        assert!(matches!(Config::preset("nope"), Err(Error::UnknownPreset(_))));
     }
 
     #[test]
     fn validate_names_the_misfit() {
-        let cfg = Config {
-            patch_width: 3,
-            ..Config::icub20()
-        };
+        let cfg = Config { patch_width: 3, ..Config::icub20() };
         let msg = cfg.validate().unwrap_err().to_string();
-        assert!(
-            msg.contains("patch_width = 3 does not divide width = 10"),
-            "{msg}"
-        );
+        assert!(msg.contains("patch_width = 3 does not divide width = 10"), "{msg}");
     }
 }

@@ -22,9 +22,7 @@ impl Dropout {
         };
         let scale = 1.0 / (1.0 - self.p);
         let p = self.p;
-        let mask: Vec<f32> = (0..x.elem_count())
-            .map(|_| if rng.uniform() < p { 0.0 } else { scale })
-            .collect();
+        let mask: Vec<f32> = (0..x.elem_count()).map(|_| if rng.uniform() < p { 0.0 } else { scale }).collect();
         x * Tensor::from_vec(mask, x.shape(), x.device())?
     }
 }

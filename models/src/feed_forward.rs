@@ -31,12 +31,8 @@ impl FeedForward {
 
     /// `x`: `[rows, dim]` → `[rows, dim]`.
     pub fn forward(&self, x: &Tensor, mut rng: Option<&mut Rng>) -> Result<Tensor> {
-        let hidden = self
-            .dropout
-            .forward(&self.fc1.forward(x)?.gelu_erf()?, rng.as_deref_mut())?;
-        let w2 = self
-            .fc2_weight
-            .broadcast_mul(&self.channel_mask.unsqueeze(0)?)?;
+        let hidden = self.dropout.forward(&self.fc1.forward(x)?.gelu_erf()?, rng.as_deref_mut())?;
+        let w2 = self.fc2_weight.broadcast_mul(&self.channel_mask.unsqueeze(0)?)?;
         let out = hidden.matmul(&w2.t()?)?.broadcast_add(&self.fc2_bias)?;
         self.dropout.forward(&out, rng)
     }

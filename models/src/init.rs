@@ -28,9 +28,7 @@ pub fn init_weights(varmap: &VarMap, seed: u64) -> Result<()> {
             let layer = name.rsplit_once('.').map_or(name.as_str(), |(l, _)| l);
             let fan_in = vars[&format!("{layer}.weight")].dims()[1];
             let bound = 1.0 / (fan_in as f32).sqrt();
-            (0..n)
-                .map(|_| bound * (2.0 * rng.uniform() - 1.0))
-                .collect()
+            (0..n).map(|_| bound * (2.0 * rng.uniform() - 1.0)).collect()
         };
         var.set(&Tensor::from_vec(values, shape, var.device())?)?;
     }
@@ -38,6 +36,5 @@ pub fn init_weights(varmap: &VarMap, seed: u64) -> Result<()> {
 }
 
 fn is_norm(name: &str, leaf: &str) -> bool {
-    name.strip_suffix(leaf)
-        .is_some_and(|layer| layer.ends_with("norm."))
+    name.strip_suffix(leaf).is_some_and(|layer| layer.ends_with("norm."))
 }

@@ -63,16 +63,11 @@ fn share(n: usize, percent: f64) -> usize {
 pub fn plan(cfg: &Config, tensors: &Tensors, spec: &PruneSpec) -> Result<Plan> {
     for (what, p) in [("channels", spec.channels), ("frames", spec.frames)] {
         if !(0.0..=100.0).contains(&p) {
-            return Err(Error::Config(format!(
-                "cannot prune {p} % of the {what}: give a percentage from 0 to 100"
-            )));
+            return Err(Error::Config(format!("cannot prune {p} % of the {what}: give a percentage from 0 to 100")));
         }
     }
     let get = |name: &str| -> Result<&Vec<f32>> {
-        tensors
-            .get(name)
-            .map(|(_, v)| v)
-            .ok_or_else(|| Error::Config(format!("cannot prune: no mask `{name}`")))
+        tensors.get(name).map(|(_, v)| v).ok_or_else(|| Error::Config(format!("cannot prune: no mask `{name}`")))
     };
     let mut plan = Plan::new();
     let masks = channel_masks(cfg);
@@ -81,10 +76,7 @@ pub fn plan(cfg: &Config, tensors: &Tensors, spec: &PruneSpec) -> Result<Plan> {
             for (name, groups) in &masks {
                 let scores = get(name)?;
                 let width = scores.len() / groups;
-                let keep = scores
-                    .chunks(width)
-                    .flat_map(|g| keep_largest(g, share(width, spec.channels)))
-                    .collect();
+                let keep = scores.chunks(width).flat_map(|g| keep_largest(g, share(width, spec.channels))).collect();
                 plan.insert(name.clone(), keep);
             }
         }
@@ -92,33 +84,20 @@ pub fn plan(cfg: &Config, tensors: &Tensors, spec: &PruneSpec) -> Result<Plan> {
             let all: Vec<(usize, usize, f32)> = masks
                 .iter()
                 .enumerate()
-                .map(|(m, (name, _))| {
-                    get(name).map(|s| s.iter().enumerate().map(move |(i, v)| (m, i, *v)))
-                })
+                .map(|(m, (name, _))| get(name).map(|s| s.iter().enumerate().map(move |(i, v)| (m, i, *v))))
                 .collect::<Result<Vec<_>>>()?
                 .into_iter()
                 .flatten()
                 .collect();
-            let keep = keep_largest(
-                &all.iter().map(|e| e.2).collect::<Vec<_>>(),
-                share(all.len(), spec.channels),
-            );
+            let keep = keep_largest(&all.iter().map(|e| e.2).collect::<Vec<_>>(), share(all.len(), spec.channels));
             for (m, (name, _)) in masks.iter().enumerate() {
-                let flags = all
-                    .iter()
-                    .zip(&keep)
-                    .filter(|(e, _)| e.0 == m)
-                    .map(|(_, k)| *k)
-                    .collect();
+                let flags = all.iter().zip(&keep).filter(|(e, _)| e.0 == m).map(|(_, k)| *k).collect();
                 plan.insert(name.clone(), flags);
             }
         }
     }
     let frames = get("frame_mask")?;
-    plan.insert(
-        "frame_mask".into(),
-        keep_largest(frames, share(frames.len(), spec.frames)),
-    );
+    plan.insert("frame_mask".into(), keep_largest(frames, share(frames.len(), spec.frames)));
     Ok(plan)
 }
 
@@ -126,11 +105,7 @@ pub fn plan(cfg: &Config, tensors: &Tensors, spec: &PruneSpec) -> Result<Plan> {
 pub fn apply(plan: &Plan, tensors: &mut Tensors) {
     for (name, keep) in plan {
         if let Some((_, values)) = tensors.get_mut(name) {
-            values
-                .iter_mut()
-                .zip(keep)
-                .filter(|(_, k)| !**k)
-                .for_each(|(v, _)| *v = 0.0);
+            values.iter_mut().zip(keep).filter(|(_, k)| !**k).for_each(|(v, _)| *v = 0.0);
         }
     }
 }
@@ -142,61 +117,22 @@ mod tests {
     fn tensors(cfg: &Config, score: impl Fn(&str, usize) -> f32) -> Tensors {
         let mut t = Tensors::new();
         for (name, _) in channel_masks(cfg) {
-            let n = if name.contains("attn") {
-                cfg.inner_dim()
-            } else {
-                cfg.mlp_dim
-            };
-            t.insert(
-                name.clone(),
-                (vec![n], (0..n).map(|i| score(&name, i)).collect()),
-            );
+            let n = if name.contains("attn") { cfg.inner_dim() } else { cfg.mlp_dim };
+            t.insert(name.clone(), (vec![n], (0..n).map(|i| score(&name, i)).collect()));
         }
         let n = cfg.time_tokens();
-        t.insert(
-            "frame_mask".into(),
-            (vec![n], (0..n).map(|i| score("frame_mask", i)).collect()),
-        );
+        t.insert("frame_mask".into(), (vec![n], (0..n).map(|i| score("frame_mask", i)).collect()));
         t
     }
 
     #[test]
     fn local_pruning_takes_the_same_share_of_every_head_by_magnitude() {
-        let cfg = Config {
-            heads: 2,
-            dim_head: 4,
-            mlp_dim: 8,
-            ..Config::icub20()
-        };
+        let cfg = Config { heads: 2, dim_head: 4, mlp_dim: 8, ..Config::icub20() };
         // Scores alternate in sign; magnitudes rise with the index inside each head.
-        let t = tensors(&cfg, |_, i| {
-            if i % 2 == 0 {
-                (i % 4) as f32
-            } else {
-                -((i % 4) as f32)
-            }
-        });
-        let p = plan(
-            &cfg,
-            &t,
-            &PruneSpec {
-                channels: 50.0,
-                frames: 40.0,
-                scope: Scope::Local,
-            },
-        )
-        .unwrap();
-        assert_eq!(
-            p["space.layers.0.attn.channel_mask"],
-            vec![false, false, true, true, false, false, true, true]
-        );
-        assert_eq!(
-            p["space.layers.0.ffn.channel_mask"]
-                .iter()
-                .filter(|k| !**k)
-                .count(),
-            4
-        );
+        let t = tensors(&cfg, |_, i| if i % 2 == 0 { (i % 4) as f32 } else { -((i % 4) as f32) });
+        let p = plan(&cfg, &t, &PruneSpec { channels: 50.0, frames: 40.0, scope: Scope::Local }).unwrap();
+        assert_eq!(p["space.layers.0.attn.channel_mask"], vec![false, false, true, true, false, false, true, true]);
+        assert_eq!(p["space.layers.0.ffn.channel_mask"].iter().filter(|k| !**k).count(), 4);
         assert_eq!(p["frame_mask"].iter().filter(|k| !**k).count(), 30);
     }
 
@@ -204,42 +140,15 @@ mod tests {
     fn global_pruning_uses_one_threshold() {
         let cfg = Config::icub20();
         // Temporal masks score high, spatial ones low: global pruning takes the spatial ones first.
-        let t = tensors(&cfg, |name, i| {
-            if name.starts_with("space") {
-                0.1 + i as f32 * 1e-3
-            } else {
-                1.0
-            }
-        });
-        let p = plan(
-            &cfg,
-            &t,
-            &PruneSpec {
-                channels: 50.0,
-                frames: 0.0,
-                scope: Scope::Global,
-            },
-        )
-        .unwrap();
+        let t = tensors(&cfg, |name, i| if name.starts_with("space") { 0.1 + i as f32 * 1e-3 } else { 1.0 });
+        let p = plan(&cfg, &t, &PruneSpec { channels: 50.0, frames: 0.0, scope: Scope::Global }).unwrap();
         assert!(p["space.layers.2.attn.channel_mask"].iter().all(|k| !k));
         assert!(p["temporal.layers.2.ffn.channel_mask"].iter().all(|k| *k));
         assert!(p["frame_mask"].iter().all(|k| *k));
         let mut pruned = t.clone();
         apply(&p, &mut pruned);
-        assert!(pruned["space.layers.0.ffn.channel_mask"]
-            .1
-            .iter()
-            .all(|v| *v == 0.0));
-        let err = plan(
-            &cfg,
-            &t,
-            &PruneSpec {
-                channels: 120.0,
-                frames: 0.0,
-                scope: Scope::Local,
-            },
-        )
-        .unwrap_err();
+        assert!(pruned["space.layers.0.ffn.channel_mask"].1.iter().all(|v| *v == 0.0));
+        let err = plan(&cfg, &t, &PruneSpec { channels: 120.0, frames: 0.0, scope: Scope::Local }).unwrap_err();
         assert!(err.to_string().contains("give a percentage from 0 to 100"));
     }
 }

@@ -36,10 +36,7 @@ impl Pvt3 {
     pub fn new(cfg: &Config, vb: VarBuilder) -> Result<Self> {
         cfg.validate()?;
         let (t, n, d) = (cfg.time_tokens(), cfg.num_patches(), cfg.dim);
-        let small = Init::Randn {
-            mean: 0.0,
-            stdev: 0.02,
-        };
+        let small = Init::Randn { mean: 0.0, stdev: 0.02 };
         Ok(Self {
             patch_embed: linear(cfg.patch_dim(), d, vb.pp("patch_embed"))?,
             frame_mask: vb.get_with_hints(t, "frame_mask", Init::Const(1.0))?,
@@ -58,10 +55,7 @@ impl Pvt3 {
     /// A fresh model on the CPU with its variables in a new [`VarMap`], seeded by `seed`.
     pub fn init(cfg: &Config, seed: u64) -> Result<(Self, VarMap)> {
         let varmap = VarMap::new();
-        let model = Self::new(
-            cfg,
-            VarBuilder::from_varmap(&varmap, DType::F32, &Device::Cpu),
-        )?;
+        let model = Self::new(cfg, VarBuilder::from_varmap(&varmap, DType::F32, &Device::Cpu))?;
         crate::init::init_weights(&varmap, seed)?;
         Ok((model, varmap))
     }
@@ -76,32 +70,12 @@ impl Pvt3 {
         let dims = x.dims();
         let expected = c.sample_shape();
         if dims.len() != expected.len() + 1 || dims[1..] != expected[..] {
-            let expected = expected
-                .iter()
-                .map(|v| v.to_string())
-                .collect::<Vec<_>>()
-                .join(", ");
-            return Err(Error::InputShape {
-                got: dims.to_vec(),
-                expected,
-            });
+            let expected = expected.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(", ");
+            return Err(Error::InputShape { got: dims.to_vec(), expected });
         }
         let b = dims[0];
-        let (gh, gw, tt) = (
-            c.height / c.patch_height,
-            c.width / c.patch_width,
-            c.time_tokens(),
-        );
-        let grid = x.reshape(vec![
-            b,
-            gh,
-            c.patch_height,
-            gw,
-            c.patch_width,
-            c.channels,
-            tt,
-            c.tubelet,
-        ])?;
+        let (gh, gw, tt) = (c.height / c.patch_height, c.width / c.patch_width, c.time_tokens());
+        let grid = x.reshape(vec![b, gh, c.patch_height, gw, c.patch_width, c.channels, tt, c.tubelet])?;
         // → [b, tt, gh, gw, tubelet, ph, pw, c]
         let tokens = grid.permute(vec![0, 6, 1, 3, 7, 2, 4, 5])?;
         Ok(tokens.reshape((b, tt, gh * gw, c.patch_dim()))?)
@@ -112,20 +86,12 @@ impl Pvt3 {
         let patches = self.patchify(x)?;
         let (b, t, n, p) = patches.dims4()?;
         let d = self.cfg.dim;
-        let embedded = self
-            .patch_embed
-            .forward(&patches.reshape((b * t * n, p))?)?
-            .reshape((b, t, n, d))?;
+        let embedded = self.patch_embed.forward(&patches.reshape((b * t * n, p))?)?.reshape((b, t, n, d))?;
         let embedded = embedded.broadcast_mul(&self.frame_mask.reshape((1, t, 1, 1))?)?;
-        let cls = self
-            .space_cls
-            .reshape((1, 1, 1, d))?
-            .broadcast_as((b, t, 1, d))?;
+        let cls = self.space_cls.reshape((1, 1, 1, d))?.broadcast_as((b, t, 1, d))?;
         let tokens = Tensor::cat(&[&cls, &embedded], 2)?.broadcast_add(&self.pos_embed)?;
         let tokens = self.dropout.forward(&tokens, rng.as_deref_mut())?;
-        let frames = self
-            .space
-            .forward_cls(&tokens.reshape((b * t, n + 1, d))?, rng.as_deref_mut())?;
+        let frames = self.space.forward_cls(&tokens.reshape((b * t, n + 1, d))?, rng.as_deref_mut())?;
         let cls = self.temporal_cls.broadcast_as((b, 1, d))?;
         let sequence = Tensor::cat(&[&cls, &frames.reshape((b, t, d))?], 1)?;
         let pooled = self.temporal.forward_cls(&sequence, rng)?;

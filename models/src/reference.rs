@@ -20,10 +20,7 @@ fn layer_norm(n: &Norm, x: &[f64], eps: f64) -> Vec<f64> {
     let mean = x.iter().sum::<f64>() / len;
     let var = x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / len;
     let inv = 1.0 / (var + eps).sqrt();
-    x.iter()
-        .enumerate()
-        .map(|(i, v)| (v - mean) * inv * n.weight[i] as f64 + n.bias[i] as f64)
-        .collect()
+    x.iter().enumerate().map(|(i, v)| (v - mean) * inv * n.weight[i] as f64 + n.bias[i] as f64).collect()
 }
 
 fn gelu(x: f64) -> f64 {
@@ -40,10 +37,7 @@ fn attention(a: &BakedAttention, rows: &[Vec<f64>]) -> Vec<Vec<f64>> {
     for h in 0..a.heads {
         let ch = h * hd..(h + 1) * hd;
         for (i, qi) in q.iter().enumerate() {
-            let scores: Vec<f64> = k
-                .iter()
-                .map(|kj| ch.clone().map(|c| qi[c] * kj[c]).sum::<f64>() * scale)
-                .collect();
+            let scores: Vec<f64> = k.iter().map(|kj| ch.clone().map(|c| qi[c] * kj[c]).sum::<f64>() * scale).collect();
             let max = scores.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
             let exp: Vec<f64> = scores.iter().map(|s| (s - max).exp()).collect();
             let total: f64 = exp.iter().sum();
@@ -63,16 +57,8 @@ fn feed_forward(f: &BakedFeedForward, x: &[f64]) -> Vec<f64> {
 }
 
 /// Runs a transformer over `tokens` (`len` rows of `dim`) and returns its normalised first token.
-pub fn transformer_cls(
-    t: &BakedTransformer,
-    tokens: &[f64],
-    len: usize,
-    dim: usize,
-    eps: f64,
-) -> Vec<f64> {
-    let mut x: Vec<Vec<f64>> = (0..len)
-        .map(|i| tokens[i * dim..(i + 1) * dim].to_vec())
-        .collect();
+pub fn transformer_cls(t: &BakedTransformer, tokens: &[f64], len: usize, dim: usize, eps: f64) -> Vec<f64> {
+    let mut x: Vec<Vec<f64>> = (0..len).map(|i| tokens[i * dim..(i + 1) * dim].to_vec()).collect();
     for b in &t.layers {
         let normed: Vec<Vec<f64>> = x.iter().map(|r| layer_norm(&b.attn_norm, r, eps)).collect();
         for (r, a) in x.iter_mut().zip(attention(&b.attn, &normed)) {
@@ -100,9 +86,7 @@ fn patches(m: &BakedPvt3, sample: &[f32], k: usize) -> Vec<Vec<f64>> {
                         for ci in 0..c.channels {
                             let (y, x) = (pr * c.patch_height + dy, pc * c.patch_width + dx);
                             let t = k * c.tubelet + dt;
-                            v.push(
-                                sample[((y * c.width + x) * c.channels + ci) * frames + t] as f64,
-                            );
+                            v.push(sample[((y * c.width + x) * c.channels + ci) * frames + t] as f64);
                         }
                     }
                 }
@@ -117,10 +101,7 @@ pub fn forward(m: &BakedPvt3, x: &[f32], batch: usize) -> Result<Vec<Vec<f64>>> 
     let c = &m.config;
     let sample_len: usize = c.sample_shape().iter().product();
     if x.len() != batch * sample_len {
-        return Err(Error::InputShape {
-            got: vec![x.len()],
-            expected: format!("{batch} × {sample_len} values"),
-        });
+        return Err(Error::InputShape { got: vec![x.len()], expected: format!("{batch} × {sample_len} values") });
     }
     let (n, d, eps) = (c.num_patches(), c.dim, c.layer_norm_eps);
     x.chunks(sample_len)
@@ -131,16 +112,9 @@ pub fn forward(m: &BakedPvt3, x: &[f32], batch: usize) -> Result<Vec<Vec<f64>>> 
                 let pos = &m.pos_embed[kk * (n + 1) * d..(kk + 1) * (n + 1) * d];
                 let mut tokens: Vec<f64> = m.space_cls.iter().map(|v| *v as f64).collect();
                 for p in patches(m, sample, k) {
-                    tokens.extend(
-                        dense(&m.patch_embed, &p)
-                            .into_iter()
-                            .map(|e| e * m.token_scale[kk] as f64),
-                    );
+                    tokens.extend(dense(&m.patch_embed, &p).into_iter().map(|e| e * m.token_scale[kk] as f64));
                 }
-                tokens
-                    .iter_mut()
-                    .zip(pos)
-                    .for_each(|(t, p)| *t += *p as f64);
+                tokens.iter_mut().zip(pos).for_each(|(t, p)| *t += *p as f64);
                 let enc = transformer_cls(&m.space, &tokens, n + 1, d, eps);
                 encodings[k * d..(k + 1) * d].copy_from_slice(&enc);
             }

@@ -10,9 +10,7 @@ pub struct Rng {
 
 impl Rng {
     pub fn new(seed: u64) -> Self {
-        Self {
-            state: seed ^ 0x5DEE_CE66_D1CE_4E5B,
-        }
+        Self { state: seed ^ 0x5DEE_CE66_D1CE_4E5B }
     }
 
     pub fn next_u64(&mut self) -> u64 {
@@ -60,10 +58,7 @@ mod tests {
         let xs: Vec<f32> = (0..n).map(|_| a.normal()).collect();
         let mean = xs.iter().sum::<f32>() / n as f32;
         let var = xs.iter().map(|x| (x - mean).powi(2)).sum::<f32>() / n as f32;
-        assert!(
-            mean.abs() < 0.03 && (var - 1.0).abs() < 0.05,
-            "mean {mean} var {var}"
-        );
+        assert!(mean.abs() < 0.03 && (var - 1.0).abs() < 0.05, "mean {mean} var {var}");
         let mut v: Vec<usize> = (0..50).collect();
         a.shuffle(&mut v);
         assert_ne!(v, (0..50).collect::<Vec<_>>());

@@ -30,9 +30,7 @@ impl Block {
 
     /// `x`: `[sequences, tokens, dim]` → the same shape.
     pub fn forward(&self, x: &Tensor, mut rng: Option<&mut Rng>) -> Result<Tensor> {
-        let x = (x + self
-            .attn
-            .forward(&self.attn_norm.forward(x)?, rng.as_deref_mut())?)?;
+        let x = (x + self.attn.forward(&self.attn_norm.forward(x)?, rng.as_deref_mut())?)?;
         let (b, l, d) = x.dims3()?;
         let rows = self.ffn_norm.forward(&x.reshape((b * l, d))?)?;
         x + self.ffn.forward(&rows, rng)?.reshape((b, l, d))?
@@ -47,9 +45,7 @@ pub struct Transformer {
 
 impl Transformer {
     pub fn new(cfg: &Config, depth: usize, vb: VarBuilder) -> Result<Self> {
-        let layers = (0..depth)
-            .map(|i| Block::new(cfg, vb.pp(format!("layers.{i}"))))
-            .collect::<Result<_>>()?;
+        let layers = (0..depth).map(|i| Block::new(cfg, vb.pp(format!("layers.{i}")))).collect::<Result<_>>()?;
         let norm = LayerNorm::new(cfg.dim, cfg.layer_norm_eps, vb.pp("norm"))?;
         Ok(Self { layers, norm })
     }

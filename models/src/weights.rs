@@ -11,10 +11,7 @@ use safetensors::SafeTensors;
 use crate::{Error, Result};
 
 fn weights_error(path: &Path, reason: impl Into<String>) -> Error {
-    Error::Weights {
-        path: path.display().to_string(),
-        reason: reason.into(),
-    }
+    Error::Weights { path: path.display().to_string(), reason: reason.into() }
 }
 
 /// Sets every variable of `varmap` from the safetensors file at `path`.
@@ -30,47 +27,21 @@ pub fn set_vars(varmap: &VarMap, tensors: &crate::bake::Tensors, source: &Path) 
     names.sort();
     for name in names {
         let var = &vars[name];
-        let (shape, values) = tensors.get(name).ok_or_else(|| {
-            weights_error(
-                source,
-                format!("tensor `{name}` is missing (a checkpoint of another model?)"),
-            )
-        })?;
+        let (shape, values) = tensors
+            .get(name)
+            .ok_or_else(|| weights_error(source, format!("tensor `{name}` is missing (a checkpoint of another model?)")))?;
         if shape.as_slice() != var.dims() {
-            return Err(weights_error(
-                source,
-                format!(
-                    "tensor `{name}` has shape {shape:?}, the configuration expects {:?}",
-                    var.dims()
-                ),
-            ));
+            return Err(weights_error(source, format!("tensor `{name}` has shape {shape:?}, the configuration expects {:?}", var.dims())));
         }
         if values.iter().any(|v| !v.is_finite()) {
-            return Err(weights_error(
-                source,
-                format!("tensor `{name}` holds NaN or infinite values"),
-            ));
+            return Err(weights_error(source, format!("tensor `{name}` holds NaN or infinite values")));
         }
-        var.set(&Tensor::from_vec(
-            values.clone(),
-            shape.as_slice(),
-            &Device::Cpu,
-        )?)?;
+        var.set(&Tensor::from_vec(values.clone(), shape.as_slice(), &Device::Cpu)?)?;
     }
-    let mut unknown: Vec<&str> = tensors
-        .keys()
-        .map(String::as_str)
-        .filter(|n| !vars.contains_key(*n))
-        .collect();
+    let mut unknown: Vec<&str> = tensors.keys().map(String::as_str).filter(|n| !vars.contains_key(*n)).collect();
     if !unknown.is_empty() {
         unknown.sort_unstable();
-        return Err(weights_error(
-            source,
-            format!(
-                "tensors the configuration does not have: {}",
-                unknown.join(", ")
-            ),
-        ));
+        return Err(weights_error(source, format!("tensors the configuration does not have: {}", unknown.join(", "))));
     }
     Ok(())
 }
@@ -79,42 +50,26 @@ pub fn set_vars(varmap: &VarMap, tensors: &crate::bake::Tensors, source: &Path) 
 pub fn save_weights(varmap: &VarMap, path: &Path) -> Result<()> {
     let tmp = path.with_extension("safetensors.tmp");
     varmap.save(&tmp)?;
-    std::fs::rename(&tmp, path)
-        .map_err(|e| weights_error(path, format!("cannot rename {}: {e}", tmp.display())))
+    std::fs::rename(&tmp, path).map_err(|e| weights_error(path, format!("cannot rename {}: {e}", tmp.display())))
 }
 
 /// Every variable of `varmap` as plain named tensors (for baking).
 pub fn varmap_tensors(varmap: &VarMap) -> Result<crate::bake::Tensors> {
     let vars = varmap.data().lock().expect("varmap lock poisoned");
-    vars.iter()
-        .map(|(name, var)| {
-            Ok((
-                name.clone(),
-                (var.dims().to_vec(), var.flatten_all()?.to_vec1::<f32>()?),
-            ))
-        })
-        .collect()
+    vars.iter().map(|(name, var)| Ok((name.clone(), (var.dims().to_vec(), var.flatten_all()?.to_vec1::<f32>()?)))).collect()
 }
 
 /// Every f32 tensor of a safetensors file as plain named tensors.
 pub fn read_tensors(path: &Path) -> Result<crate::bake::Tensors> {
     let bytes = std::fs::read(path).map_err(|e| weights_error(path, e.to_string()))?;
-    let file = SafeTensors::deserialize(&bytes)
-        .map_err(|e| weights_error(path, format!("not a valid safetensors file ({e})")))?;
+    let file = SafeTensors::deserialize(&bytes).map_err(|e| weights_error(path, format!("not a valid safetensors file ({e})")))?;
     file.tensors()
         .into_iter()
         .map(|(name, view)| {
             if view.dtype() != safetensors::Dtype::F32 {
-                return Err(weights_error(
-                    path,
-                    format!("tensor `{name}` is {:?}, expected F32", view.dtype()),
-                ));
+                return Err(weights_error(path, format!("tensor `{name}` is {:?}, expected F32", view.dtype())));
             }
-            let values = view
-                .data()
-                .chunks_exact(4)
-                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
-                .collect();
+            let values = view.data().chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect();
             Ok((name, (view.shape().to_vec(), values)))
         })
         .collect()

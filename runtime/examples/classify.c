@@ -3,7 +3,9 @@
  *   classify MODEL.onnx FRAMES.f32 BATCH
  *
  * FRAMES.f32 holds BATCH windows of raw float32 values (little-endian, the model's input layout).
- * Prints, per window, the class index, its name and probability, then all probabilities. */
+ * Classifies them as one batch, then streams each window frame by frame through a session, as a
+ * robot would during a touch. Prints, per window and way ("batch" or "stream"), the window, the
+ * class index, its name and probability, then all probabilities. */
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -12,6 +14,14 @@
 static int fail(const char *what) {
     fprintf(stderr, "classify: %s: %s\n", what, pvt3_last_error());
     return 1;
+}
+
+static void print(const char *way, const pvt3_classifier *model, size_t i, size_t class, const float *probs, size_t classes) {
+    const char *name = "?";
+    pvt3_classifier_class_name(model, class, &name);
+    printf("%s\t%zu\t%zu\t%s\t%.6f", way, i, class, name, probs[class]);
+    for (size_t k = 0; k < classes; k++) printf("\t%.9g", probs[k]);
+    printf("\n");
 }
 
 int main(int argc, char **argv) {
@@ -25,6 +35,9 @@ int main(int argc, char **argv) {
     size_t sample_len = 0, classes = 0;
     if (pvt3_classifier_sample_len(model, &sample_len) != PVT3_OK) return fail("sample_len");
     if (pvt3_classifier_num_classes(model, &classes) != PVT3_OK) return fail("num_classes");
+    size_t frames_per_window = 0;
+    if (pvt3_classifier_frames(model, &frames_per_window) != PVT3_OK) return fail("frames");
+    size_t frame_len = sample_len / frames_per_window;
 
     FILE *f = fopen(argv[2], "rb");
     if (!f) {
@@ -38,13 +51,24 @@ int main(int argc, char **argv) {
     float *probs = malloc(batch * classes * sizeof(float));
     size_t *best = malloc(batch * sizeof(size_t));
     if (pvt3_classify(model, frames, got, batch, probs, batch * classes, best) != PVT3_OK) return fail("classify");
+    for (size_t i = 0; i < batch; i++) print("batch", model, i, best[i], probs + i * classes, classes);
+
+    /* The window is [height, width, (channels,) frames]: frame t is every frames_per_window-th value. */
+    pvt3_session *session = NULL;
+    if (pvt3_session_new(model, &session) != PVT3_OK) return fail("session_new");
+    float *frame = malloc(frame_len * sizeof(float));
     for (size_t i = 0; i < batch; i++) {
-        const char *name = NULL;
-        if (pvt3_classifier_class_name(model, best[i], &name) != PVT3_OK) return fail("class_name");
-        printf("%zu\t%zu\t%s\t%.6f", i, best[i], name, probs[i * classes + best[i]]);
-        for (size_t k = 0; k < classes; k++) printf("\t%.9g", probs[i * classes + k]);
-        printf("\n");
+        const float *window = frames + i * sample_len;
+        for (size_t t = 0; t < frames_per_window; t++) {
+            for (size_t j = 0; j < frame_len; j++) frame[j] = window[j * frames_per_window + t];
+            if (pvt3_session_push_frame(session, frame, frame_len) != PVT3_OK) return fail("push_frame");
+        }
+        size_t class = 0;
+        if (pvt3_session_finish(session, probs, classes, &class) != PVT3_OK) return fail("finish");
+        print("stream", model, i, class, probs, classes);
     }
+    free(frame);
+    pvt3_session_free(session);
     free(frames);
     free(probs);
     free(best);

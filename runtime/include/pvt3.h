@@ -21,6 +21,7 @@ extern "C" {
 #define PVT3_ERR_INTERNAL 5
 
 typedef struct Pvt3Classifier pvt3_classifier;
+typedef struct Pvt3Session pvt3_session;
 
 /* Loads an .onnx written by `pvt3 export`; *out owns a handle to free with pvt3_classifier_free. */
 int pvt3_classifier_load(const char *path, pvt3_classifier **out);
@@ -28,6 +29,8 @@ int pvt3_classifier_load(const char *path, pvt3_classifier **out);
 void pvt3_classifier_free(pvt3_classifier *c);
 /* Values in one window: height x width x (channels x) frames, raw sensor values. */
 int pvt3_classifier_sample_len(const pvt3_classifier *c, size_t *out);
+/* Frames in one window (its last axis); a frame has sample_len / frames values. */
+int pvt3_classifier_frames(const pvt3_classifier *c, size_t *out);
 /* Number of classes. */
 int pvt3_classifier_num_classes(const pvt3_classifier *c, size_t *out);
 /* Name of class `index`, valid as long as the handle. */
@@ -36,6 +39,16 @@ int pvt3_classifier_class_name(const pvt3_classifier *c, size_t index, const cha
  * probabilities, and the most probable class of each window unless classes_out is NULL. */
 int pvt3_classify(const pvt3_classifier *c, const float *frames, size_t frames_len, size_t batch,
                   float *probabilities, size_t probabilities_len, size_t *classes_out);
+/* Streaming: a session takes a touch frame by frame (frame_len = height x width x channels raw
+ * values, in time order). Pruned frames are dropped on arrival, each kept frame is encoded when it
+ * arrives, and finishing runs only the temporal stage; the result equals pvt3_classify on the
+ * whole window. After finish the session is ready for the next touch. */
+int pvt3_session_new(const pvt3_classifier *c, pvt3_session **out);
+/* Frees a session (NULL is ignored); it may outlive its classifier. */
+void pvt3_session_free(pvt3_session *s);
+int pvt3_session_push_frame(pvt3_session *s, const float *frame, size_t frame_len);
+/* Writes the class probabilities, and the most probable class unless class_out is NULL. */
+int pvt3_session_finish(pvt3_session *s, float *probabilities, size_t probabilities_len, size_t *class_out);
 /* Message of the last failed call on this thread ("" if none), valid until the next call. */
 const char *pvt3_last_error(void);
 

@@ -37,6 +37,12 @@ pub struct Classifier {
     pub(crate) path: String,
 }
 
+/// The prediction for one row of probabilities.
+pub(crate) fn prediction(classes: &[String], probabilities: &[f32]) -> Prediction {
+    let class = probabilities.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map_or(0, |(i, _)| i);
+    Prediction { class, label: classes[class].clone(), probabilities: probabilities.to_vec() }
+}
+
 pub(crate) fn tract_error(e: impl std::fmt::Display) -> Error {
     Error::Tract(e.to_string())
 }
@@ -46,46 +52,24 @@ impl Classifier {
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
         let name = path.display().to_string();
-        let bytes = std::fs::read(path).map_err(|source| Error::Io {
-            path: name.clone(),
-            source,
-        })?;
+        let bytes = std::fs::read(path).map_err(|source| Error::Io { path: name.clone(), source })?;
         let proto = tract_onnx::onnx()
             .proto_model_for_read(&mut bytes.as_slice())
-            .map_err(|e| Error::NotOnnx {
-                path: name.clone(),
-                reason: e.to_string(),
-            })?;
+            .map_err(|e| Error::NotOnnx { path: name.clone(), reason: e.to_string() })?;
         let meta = |key: &'static str| -> Result<serde_json::Value> {
             let entry = proto.metadata_props.iter().find(|p| p.key == key);
-            let entry = entry.ok_or_else(|| Error::NotPvt3 {
-                path: name.clone(),
-                key,
-                problem: "is missing".into(),
-            })?;
+            let entry = entry.ok_or_else(|| Error::NotPvt3 { path: name.clone(), key, problem: "is missing".into() })?;
             serde_json::from_str(&entry.value).map_err(|e| Error::NotPvt3 {
                 path: name.clone(),
                 key,
                 problem: format!("is not JSON ({e})"),
             })
         };
-        let bad = |key: &'static str| Error::NotPvt3 {
-            path: name.clone(),
-            key,
-            problem: "has an unexpected form".into(),
-        };
-        let classes: Vec<String> =
-            serde_json::from_value(meta("pvt3.classes")?).map_err(|_| bad("pvt3.classes"))?;
-        let kept_frames: Vec<usize> = serde_json::from_value(meta("pvt3.kept_frames")?)
-            .map_err(|_| bad("pvt3.kept_frames"))?;
+        let bad = |key: &'static str| Error::NotPvt3 { path: name.clone(), key, problem: "has an unexpected form".into() };
+        let classes: Vec<String> = serde_json::from_value(meta("pvt3.classes")?).map_err(|_| bad("pvt3.classes"))?;
+        let kept_frames: Vec<usize> = serde_json::from_value(meta("pvt3.kept_frames")?).map_err(|_| bad("pvt3.kept_frames"))?;
         let config = meta("pvt3.config")?;
-        let dim = |k: &str| {
-            config
-                .get(k)
-                .and_then(|v| v.as_u64())
-                .map(|v| v as usize)
-                .ok_or_else(|| bad("pvt3.config"))
-        };
+        let dim = |k: &str| config.get(k).and_then(|v| v.as_u64()).map(|v| v as usize).ok_or_else(|| bad("pvt3.config"));
         let channels = dim("channels")?;
         let mut sample_shape = vec![dim("height")?, dim("width")?];
         if channels > 1 {
@@ -95,27 +79,13 @@ impl Classifier {
         let (tubelet, dim) = (dim("tubelet")?, dim("dim")?);
         let plans = Mutex::new(HashMap::new());
         let stages = Mutex::new(None);
-        Ok(Self {
-            proto,
-            classes,
-            sample_shape,
-            kept_frames,
-            tubelet,
-            dim,
-            plans,
-            stages,
-            threads: 1,
-            path: name,
-        })
+        Ok(Self { proto, classes, sample_shape, kept_frames, tubelet, dim, plans, stages, threads: 1, path: name })
     }
 
     /// Runs on `threads` threads from now on (default 1; small models rarely gain from more).
     pub fn with_threads(mut self, threads: usize) -> Self {
         self.threads = threads.max(1);
-        self.plans
-            .get_mut()
-            .unwrap_or_else(|p| p.into_inner())
-            .clear();
+        self.plans.get_mut().unwrap_or_else(|p| p.into_inner()).clear();
         *self.stages.get_mut().unwrap_or_else(|p| p.into_inner()) = None;
         self
     }
@@ -139,17 +109,10 @@ impl Classifier {
     }
 
     /// `model` with fixed input facts, optimised and made runnable on the caller's threads.
-    pub(crate) fn optimise(
-        &self,
-        model: &ModelProto,
-        inputs: Vec<InferenceFact>,
-    ) -> Result<Arc<TypedRunnableModel>> {
+    pub(crate) fn optimise(&self, model: &ModelProto, inputs: Vec<InferenceFact>) -> Result<Arc<TypedRunnableModel>> {
         let mut model = tract_onnx::onnx()
             .model_for_proto_model(model)
-            .map_err(|e| Error::NotOnnx {
-                path: self.path.clone(),
-                reason: format!("{e:#}"),
-            })?;
+            .map_err(|e| Error::NotOnnx { path: self.path.clone(), reason: format!("{e:#}") })?;
         for (i, fact) in inputs.into_iter().enumerate() {
             model = model.with_input_fact(i, fact).map_err(tract_error)?;
         }
@@ -159,16 +122,8 @@ impl Classifier {
         };
         model
             .into_optimized()
-            .and_then(|m| {
-                m.into_runnable_with_options(&RunOptions {
-                    executor: Some(executor),
-                    ..Default::default()
-                })
-            })
-            .map_err(|e| Error::NotOnnx {
-                path: self.path.clone(),
-                reason: format!("{e:#}"),
-            })
+            .and_then(|m| m.into_runnable_with_options(&RunOptions { executor: Some(executor), ..Default::default() }))
+            .map_err(|e| Error::NotOnnx { path: self.path.clone(), reason: format!("{e:#}") })
     }
 
     /// The optimised plan for `batch` windows, built on first use.
@@ -201,24 +156,11 @@ impl Classifier {
         }
         let expected = batch * self.sample_len();
         if frames.len() != expected {
-            let sample = self
-                .sample_shape
-                .iter()
-                .map(|v| v.to_string())
-                .collect::<Vec<_>>()
-                .join(" × ");
-            return Err(Error::InputLength {
-                got: frames.len(),
-                expected,
-                batch,
-                sample,
-            });
+            let sample = self.sample_shape.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(" × ");
+            return Err(Error::InputLength { got: frames.len(), expected, batch, sample });
         }
         if let Some((index, value)) = frames.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(Error::NonFinite {
-                index,
-                value: *value,
-            });
+            return Err(Error::NonFinite { index, value: *value });
         }
         Ok(())
     }
@@ -229,42 +171,16 @@ impl Classifier {
         let mut shape = vec![batch];
         shape.extend(&self.sample_shape);
         let input = Tensor::from_shape(&shape, frames).map_err(tract_error)?;
-        let outputs = self
-            .plan(batch)?
-            .run(tvec!(input.into()))
-            .map_err(tract_error)?;
-        let values = |i: usize| -> Result<Vec<f32>> {
-            Ok(outputs[i]
-                .to_plain_array_view::<f32>()
-                .map_err(tract_error)?
-                .iter()
-                .copied()
-                .collect())
-        };
+        let outputs = self.plan(batch)?.run(tvec!(input.into())).map_err(tract_error)?;
+        let values =
+            |i: usize| -> Result<Vec<f32>> { Ok(outputs[i].to_plain_array_view::<f32>().map_err(tract_error)?.iter().copied().collect()) };
         Ok((values(0)?, values(1)?))
-    }
-
-    /// The prediction for one row of probabilities.
-    pub(crate) fn prediction(&self, probabilities: &[f32]) -> Prediction {
-        let class = probabilities
-            .iter()
-            .enumerate()
-            .max_by(|a, b| a.1.total_cmp(b.1))
-            .map_or(0, |(i, _)| i);
-        Prediction {
-            class,
-            label: self.classes[class].clone(),
-            probabilities: probabilities.to_vec(),
-        }
     }
 
     /// Classifies `batch` windows laid out back to back.
     pub fn classify_batch(&self, frames: &[f32], batch: usize) -> Result<Vec<Prediction>> {
         let (_, probabilities) = self.run(frames, batch)?;
-        Ok(probabilities
-            .chunks(self.classes.len())
-            .map(|p| self.prediction(p))
-            .collect())
+        Ok(probabilities.chunks(self.classes.len()).map(|p| prediction(&self.classes, p)).collect())
     }
 
     /// Classifies one window.

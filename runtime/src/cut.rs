@@ -5,9 +5,8 @@
 use std::collections::HashSet;
 
 use tract_onnx::pb::{
-    tensor_proto::DataType, tensor_shape_proto::dimension::Value as Dim,
-    tensor_shape_proto::Dimension, type_proto, GraphProto, ModelProto, TensorShapeProto, TypeProto,
-    ValueInfoProto,
+    tensor_proto::DataType, tensor_shape_proto::dimension::Value as Dim, tensor_shape_proto::Dimension, type_proto, GraphProto, ModelProto,
+    TensorShapeProto, TypeProto, ValueInfoProto,
 };
 
 /// A tensor that becomes an input of the cut graph.
@@ -18,10 +17,7 @@ pub(crate) struct Seam<'a> {
 }
 
 fn value_info(seam: &Seam) -> ValueInfoProto {
-    let dim = seam.shape.iter().map(|v| Dimension {
-        value: Some(Dim::DimValue(*v as i64)),
-        ..Default::default()
-    });
+    let dim = seam.shape.iter().map(|v| Dimension { value: Some(Dim::DimValue(*v as i64)), ..Default::default() });
     ValueInfoProto {
         name: seam.name.into(),
         r#type: Some(TypeProto {
@@ -37,21 +33,11 @@ fn value_info(seam: &Seam) -> ValueInfoProto {
 
 /// The part of `model` that maps `inputs` to `outputs`; an error names a tensor the cut would
 /// still need from outside (a seam the file does not have, or one in the wrong place).
-pub(crate) fn cut(
-    model: &ModelProto,
-    inputs: &[Seam],
-    outputs: &[&str],
-) -> Result<ModelProto, String> {
+pub(crate) fn cut(model: &ModelProto, inputs: &[Seam], outputs: &[&str]) -> Result<ModelProto, String> {
     let graph = model.graph.as_ref().ok_or("the file has no graph")?;
     for name in inputs.iter().map(|s| s.name).chain(outputs.iter().copied()) {
-        if !graph
-            .node
-            .iter()
-            .any(|n| n.output.iter().any(|o| o == name))
-        {
-            return Err(format!(
-                "no tensor named `{name}` (exported by an older pvt3?)"
-            ));
+        if !graph.node.iter().any(|n| n.output.iter().any(|o| o == name)) {
+            return Err(format!("no tensor named `{name}` (exported by an older pvt3?)"));
         }
     }
     let seams: HashSet<&str> = inputs.iter().map(|s| s.name).collect();
@@ -59,36 +45,16 @@ pub(crate) fn cut(
     let mut keep = vec![false; graph.node.len()];
     // ONNX lists nodes in topological order, so one backward pass finds every producer.
     for (i, node) in graph.node.iter().enumerate().rev() {
-        if node.output.iter().any(|o| needed.contains(o.as_str()))
-            && !node.output.iter().any(|o| seams.contains(o.as_str()))
-        {
+        if node.output.iter().any(|o| needed.contains(o.as_str())) && !node.output.iter().any(|o| seams.contains(o.as_str())) {
             keep[i] = true;
-            needed.extend(
-                node.input
-                    .iter()
-                    .map(String::as_str)
-                    .filter(|n| !n.is_empty() && !seams.contains(n)),
-            );
+            needed.extend(node.input.iter().map(String::as_str).filter(|n| !n.is_empty() && !seams.contains(n)));
         }
     }
-    let produced: HashSet<&str> = graph
-        .node
-        .iter()
-        .zip(&keep)
-        .filter(|(_, k)| **k)
-        .flat_map(|(n, _)| n.output.iter().map(String::as_str))
-        .collect();
-    let initializer: Vec<_> = graph
-        .initializer
-        .iter()
-        .filter(|t| needed.contains(t.name.as_str()))
-        .cloned()
-        .collect();
-    let mut missing: Vec<&str> = needed
-        .iter()
-        .filter(|n| !produced.contains(*n) && !initializer.iter().any(|t| t.name == **n))
-        .copied()
-        .collect();
+    let produced: HashSet<&str> =
+        graph.node.iter().zip(&keep).filter(|(_, k)| **k).flat_map(|(n, _)| n.output.iter().map(String::as_str)).collect();
+    let initializer: Vec<_> = graph.initializer.iter().filter(|t| needed.contains(t.name.as_str())).cloned().collect();
+    let mut missing: Vec<&str> =
+        needed.iter().filter(|n| !produced.contains(*n) && !initializer.iter().any(|t| t.name == **n)).copied().collect();
     if !missing.is_empty() {
         missing.sort();
         return Err(format!("the cut still needs {}", missing.join(", ")));
@@ -101,28 +67,16 @@ pub(crate) fn cut(
                 .iter()
                 .find(|v| v.name == *o)
                 .cloned()
-                .unwrap_or_else(|| ValueInfoProto {
-                    name: o.to_string(),
-                    ..Default::default()
-                })
+                .unwrap_or_else(|| ValueInfoProto { name: o.to_string(), ..Default::default() })
         })
         .collect();
     let graph = GraphProto {
         name: format!("{}:{}", graph.name, outputs.join("+")),
-        node: graph
-            .node
-            .iter()
-            .zip(&keep)
-            .filter(|(_, k)| **k)
-            .map(|(n, _)| n.clone())
-            .collect(),
+        node: graph.node.iter().zip(&keep).filter(|(_, k)| **k).map(|(n, _)| n.clone()).collect(),
         initializer,
         input: inputs.iter().map(value_info).collect(),
         output,
         ..Default::default()
     };
-    Ok(ModelProto {
-        graph: Some(graph),
-        ..model.clone()
-    })
+    Ok(ModelProto { graph: Some(graph), ..model.clone() })
 }

@@ -3,25 +3,13 @@
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     #[error("{path}: {source}")]
-    Io {
-        path: String,
-        source: std::io::Error,
-    },
+    Io { path: String, source: std::io::Error },
     #[error("{path} is not a readable ONNX model: {reason}")]
     NotOnnx { path: String, reason: String },
     #[error("{path} is not a pvt3 model: metadata `{key}` {problem}")]
-    NotPvt3 {
-        path: String,
-        key: &'static str,
-        problem: String,
-    },
+    NotPvt3 { path: String, key: &'static str, problem: String },
     #[error("input has {got} values; expected {expected} ({batch} × {sample})")]
-    InputLength {
-        got: usize,
-        expected: usize,
-        batch: usize,
-        sample: String,
-    },
+    InputLength { got: usize, expected: usize, batch: usize, sample: String },
     #[error("input value {index} is {value}: only finite values can be classified")]
     NonFinite { index: usize, value: f32 },
     #[error("{path}: {reason}")]

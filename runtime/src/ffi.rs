@@ -1,4 +1,4 @@
-//! The C ABI (`include/pvt3.h`): an opaque classifier handle, status codes, and a last-error
+//! The C ABI (`include/pvt3.h`): opaque classifier and streaming-session handles, status codes, and a last-error
 //! message per thread. Every entry point catches panics, so none crosses into C: a panic is
 //! reported as `PVT3_ERR_INTERNAL` with its message.
 
@@ -6,7 +6,7 @@ use std::cell::RefCell;
 use std::ffi::{c_char, c_int, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
-use crate::{Classifier, Error};
+use crate::{Classifier, Error, Session};
 
 pub const PVT3_OK: c_int = 0;
 pub const PVT3_ERR_NULL: c_int = 1;
@@ -19,6 +19,12 @@ pub const PVT3_ERR_INTERNAL: c_int = 5;
 pub struct Pvt3Classifier {
     classifier: Classifier,
     names: Vec<CString>,
+}
+
+/// What C holds for a touch in progress.
+pub struct Pvt3Session {
+    session: Session,
+    names: usize,
 }
 
 thread_local! {
@@ -78,10 +84,7 @@ fn fail(e: Error) -> (c_int, String) {
 /// # Safety
 /// `path` is a NUL-terminated string or null; `out` is writable or null.
 #[no_mangle]
-pub unsafe extern "C" fn pvt3_classifier_load(
-    path: *const c_char,
-    out: *mut *mut Pvt3Classifier,
-) -> c_int {
+pub unsafe extern "C" fn pvt3_classifier_load(path: *const c_char, out: *mut *mut Pvt3Classifier) -> c_int {
     guard(|| {
         if path.is_null() {
             return Err(null("path"));
@@ -89,15 +92,9 @@ pub unsafe extern "C" fn pvt3_classifier_load(
         if out.is_null() {
             return Err(null("out"));
         }
-        let path = CStr::from_ptr(path)
-            .to_str()
-            .map_err(|_| (PVT3_ERR_IO, "path is not UTF-8".to_string()))?;
+        let path = CStr::from_ptr(path).to_str().map_err(|_| (PVT3_ERR_IO, "path is not UTF-8".to_string()))?;
         let classifier = Classifier::load(path).map_err(fail)?;
-        let names = classifier
-            .classes()
-            .iter()
-            .map(|n| CString::new(n.replace('\0', " ")).expect("NULs replaced"))
-            .collect();
+        let names = classifier.classes().iter().map(|n| CString::new(n.replace('\0', " ")).expect("NULs replaced")).collect();
         *out = Box::into_raw(Box::new(Pvt3Classifier { classifier, names }));
         Ok(())
     })
@@ -119,14 +116,25 @@ pub unsafe extern "C" fn pvt3_classifier_free(c: *mut Pvt3Classifier) {
 /// # Safety
 /// `c` is a live handle or null; `out` is writable or null.
 #[no_mangle]
-pub unsafe extern "C" fn pvt3_classifier_sample_len(
-    c: *const Pvt3Classifier,
-    out: *mut usize,
-) -> c_int {
+pub unsafe extern "C" fn pvt3_classifier_sample_len(c: *const Pvt3Classifier, out: *mut usize) -> c_int {
     guard(|| {
         let c = c.as_ref().ok_or_else(|| null("classifier"))?;
         let out = out.as_mut().ok_or_else(|| null("out"))?;
         *out = c.classifier.sample_shape().iter().product();
+        Ok(())
+    })
+}
+
+/// Frames in one window (its last axis), pruned ones included.
+///
+/// # Safety
+/// `c` is a live handle or null; `out` is writable or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_classifier_frames(c: *const Pvt3Classifier, out: *mut usize) -> c_int {
+    guard(|| {
+        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
+        let out = out.as_mut().ok_or_else(|| null("out"))?;
+        *out = *c.classifier.sample_shape().last().expect("a window has a frame axis");
         Ok(())
     })
 }
@@ -136,10 +144,7 @@ pub unsafe extern "C" fn pvt3_classifier_sample_len(
 /// # Safety
 /// `c` is a live handle or null; `out` is writable or null.
 #[no_mangle]
-pub unsafe extern "C" fn pvt3_classifier_num_classes(
-    c: *const Pvt3Classifier,
-    out: *mut usize,
-) -> c_int {
+pub unsafe extern "C" fn pvt3_classifier_num_classes(c: *const Pvt3Classifier, out: *mut usize) -> c_int {
     guard(|| {
         let c = c.as_ref().ok_or_else(|| null("classifier"))?;
         let out = out.as_mut().ok_or_else(|| null("out"))?;
@@ -153,20 +158,11 @@ pub unsafe extern "C" fn pvt3_classifier_num_classes(
 /// # Safety
 /// `c` is a live handle or null; `out` is writable or null.
 #[no_mangle]
-pub unsafe extern "C" fn pvt3_classifier_class_name(
-    c: *const Pvt3Classifier,
-    index: usize,
-    out: *mut *const c_char,
-) -> c_int {
+pub unsafe extern "C" fn pvt3_classifier_class_name(c: *const Pvt3Classifier, index: usize, out: *mut *const c_char) -> c_int {
     guard(|| {
         let c = c.as_ref().ok_or_else(|| null("classifier"))?;
         let out = out.as_mut().ok_or_else(|| null("out"))?;
-        let name = c.names.get(index).ok_or_else(|| {
-            (
-                PVT3_ERR_INPUT,
-                format!("class {index} of {}", c.names.len()),
-            )
-        })?;
+        let name = c.names.get(index).ok_or_else(|| (PVT3_ERR_INPUT, format!("class {index} of {}", c.names.len())))?;
         *out = name.as_ptr();
         Ok(())
     })
@@ -198,10 +194,7 @@ pub unsafe extern "C" fn pvt3_classify(
         }
         let needed = batch * c.names.len();
         if probabilities_len < needed {
-            return Err((
-                PVT3_ERR_INPUT,
-                format!("probabilities has room for {probabilities_len} values; {needed} needed"),
-            ));
+            return Err((PVT3_ERR_INPUT, format!("probabilities has room for {probabilities_len} values; {needed} needed")));
         }
         let input = std::slice::from_raw_parts(frames, frames_len);
         let predictions = c.classifier.classify_batch(input, batch).map_err(fail)?;
@@ -211,6 +204,78 @@ pub unsafe extern "C" fn pvt3_classify(
             if !classes_out.is_null() {
                 *classes_out.add(i) = p.class;
             }
+        }
+        Ok(())
+    })
+}
+
+/// Starts a streaming session on a classifier; `*out` owns a handle to free with
+/// `pvt3_session_free`. The session may outlive the classifier.
+///
+/// # Safety
+/// `c` is a live handle or null; `out` is writable or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_session_new(c: *const Pvt3Classifier, out: *mut *mut Pvt3Session) -> c_int {
+    guard(|| {
+        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
+        let out = out.as_mut().ok_or_else(|| null("out"))?;
+        let session = c.classifier.session().map_err(fail)?;
+        *out = Box::into_raw(Box::new(Pvt3Session { session, names: c.names.len() }));
+        Ok(())
+    })
+}
+
+/// Frees a session (null is ignored).
+///
+/// # Safety
+/// `s` came from `pvt3_session_new` and is not used afterwards.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_session_free(s: *mut Pvt3Session) {
+    if !s.is_null() {
+        let _ = catch_unwind(AssertUnwindSafe(|| drop(Box::from_raw(s))));
+    }
+}
+
+/// Takes the touch's next frame (`frame_len` = height × width × channels raw values).
+///
+/// # Safety
+/// `s` is a live session or null; `frame` is null or valid for `frame_len` values.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_session_push_frame(s: *mut Pvt3Session, frame: *const f32, frame_len: usize) -> c_int {
+    guard(|| {
+        let s = s.as_mut().ok_or_else(|| null("session"))?;
+        if frame.is_null() {
+            return Err(null("frame"));
+        }
+        s.session.push_frame(std::slice::from_raw_parts(frame, frame_len)).map_err(fail)
+    })
+}
+
+/// Ends the touch once all its frames are in: writes the class probabilities (room for
+/// `probabilities_len` values) and, unless `class_out` is null, the most probable class. The
+/// session is then ready for the next touch.
+///
+/// # Safety
+/// `s` is a live session or null; the other pointers are null or valid for the lengths given.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_session_finish(
+    s: *mut Pvt3Session,
+    probabilities: *mut f32,
+    probabilities_len: usize,
+    class_out: *mut usize,
+) -> c_int {
+    guard(|| {
+        let s = s.as_mut().ok_or_else(|| null("session"))?;
+        if probabilities.is_null() {
+            return Err(null("probabilities"));
+        }
+        if probabilities_len < s.names {
+            return Err((PVT3_ERR_INPUT, format!("probabilities has room for {probabilities_len} values; {} needed", s.names)));
+        }
+        let p = s.session.finish().map_err(fail)?;
+        std::slice::from_raw_parts_mut(probabilities, s.names).copy_from_slice(&p.probabilities);
+        if let Some(class) = class_out.as_mut() {
+            *class = p.class;
         }
         Ok(())
     })

@@ -12,7 +12,7 @@ use std::sync::Arc;
 use tract_onnx::pb::tensor_proto::DataType;
 use tract_onnx::prelude::*;
 
-use crate::classifier::tract_error;
+use crate::classifier::{prediction, tract_error};
 use crate::cut::{cut, Seam};
 use crate::{Classifier, Error, Prediction, Result};
 
@@ -32,6 +32,9 @@ pub(crate) struct Stages {
     kept_index: Vec<Option<usize>>,
     /// `[1, tubelet, height, width, channels]`
     token_shape: Vec<usize>,
+    tubelet: usize,
+    dim: usize,
+    classes: Vec<String>,
 }
 
 impl Stages {
@@ -44,60 +47,36 @@ impl Stages {
         }
         let kept = c.kept_frames().len() / c.tubelet;
         let frame = &c.sample_shape()[..c.sample_shape().len() - 1];
-        let token_shape = vec![
-            1,
-            c.tubelet,
-            frame[0],
-            frame[1],
-            frame.get(2).copied().unwrap_or(1),
-        ];
-        let no_seam = |reason: String| Error::NotOnnx {
-            path: c.path.clone(),
-            reason: format!("cannot stream: {reason}"),
-        };
+        let token_shape = vec![1, c.tubelet, frame[0], frame[1], frame.get(2).copied().unwrap_or(1)];
+        let no_seam = |reason: String| Error::NotOnnx { path: c.path.clone(), reason: format!("cannot stream: {reason}") };
         let spatial = cut(
             &c.proto,
             &[
-                Seam {
-                    name: TOKEN_FRAMES,
-                    data_type: DataType::Float,
-                    shape: token_shape.clone(),
-                },
-                Seam {
-                    name: TOKEN_INDEX,
-                    data_type: DataType::Int64,
-                    shape: vec![1],
-                },
+                Seam { name: TOKEN_FRAMES, data_type: DataType::Float, shape: token_shape.clone() },
+                Seam { name: TOKEN_INDEX, data_type: DataType::Int64, shape: vec![1] },
             ],
             &[TOKEN_ENCODINGS],
         )
         .map_err(no_seam)?;
-        let temporal = cut(
-            &c.proto,
-            &[Seam {
-                name: TOKEN_ENCODINGS,
-                data_type: DataType::Float,
-                shape: vec![kept, c.dim],
-            }],
-            &[PROBABILITIES],
-        )
-        .map_err(no_seam)?;
+        let temporal =
+            cut(&c.proto, &[Seam { name: TOKEN_ENCODINGS, data_type: DataType::Float, shape: vec![kept, c.dim] }], &[PROBABILITIES])
+                .map_err(no_seam)?;
         Ok(Self {
-            spatial: c.optimise(
-                &spatial,
-                vec![f32::fact(&token_shape).into(), i64::fact([1]).into()],
-            )?,
+            spatial: c.optimise(&spatial, vec![f32::fact(&token_shape).into(), i64::fact([1]).into()])?,
             temporal: c.optimise(&temporal, vec![f32::fact([kept, c.dim]).into()])?,
             kept_index,
             token_shape,
+            tubelet: c.tubelet,
+            dim: c.dim,
+            classes: c.classes().to_vec(),
         })
     }
 }
 
 /// One touch in progress. Push its frames in order with [`Session::push_frame`], then
-/// [`Session::finish`]; the session is then ready for the next touch.
-pub struct Session<'a> {
-    classifier: &'a Classifier,
+/// [`Session::finish`]; the session is then ready for the next touch. It shares the classifier's
+/// optimised stages and may outlive it.
+pub struct Session {
     stages: Arc<Stages>,
     /// Frames received so far in this touch.
     received: usize,
@@ -109,71 +88,47 @@ pub struct Session<'a> {
 
 impl Classifier {
     /// A streaming session (builds the two stages on first use).
-    pub fn session(&self) -> Result<Session<'_>> {
-        Ok(Session {
-            classifier: self,
-            stages: self.stages()?,
-            received: 0,
-            token: Vec::new(),
-            encodings: Vec::new(),
-        })
+    pub fn session(&self) -> Result<Session> {
+        Ok(Session { stages: self.stages()?, received: 0, token: Vec::new(), encodings: Vec::new() })
+    }
+}
+
+impl Session {
+    /// Frames per touch, pruned ones included.
+    pub fn frames(&self) -> usize {
+        self.stages.kept_index.len() * self.stages.tubelet
     }
 
     /// Values in one frame: `height × width × channels`.
     pub fn frame_len(&self) -> usize {
-        self.sample_shape()[..self.sample_shape().len() - 1]
-            .iter()
-            .product()
-    }
-}
-
-impl Session<'_> {
-    /// Frames the model reads per touch, pruned ones included.
-    fn frames(&self) -> usize {
-        self.stages.kept_index.len() * self.classifier.tubelet
+        self.stages.token_shape[2..].iter().product()
     }
 
     /// Takes the next frame, `[height, width, (channels)]` in row-major order. A frame the model
     /// pruned is dropped at once; the last frame of a kept token runs the spatial stage.
     pub fn push_frame(&mut self, frame: &[f32]) -> Result<()> {
-        let (expected, frames) = (self.classifier.frame_len(), self.frames());
+        let (expected, frames) = (self.frame_len(), self.frames());
         if frame.len() != expected {
-            return Err(Error::FrameLength {
-                got: frame.len(),
-                expected,
-            });
+            return Err(Error::FrameLength { got: frame.len(), expected });
         }
         if self.received == frames {
             return Err(Error::TooManyFrames { frames });
         }
-        let tubelet = self.classifier.tubelet;
+        let tubelet = self.stages.tubelet;
         let Some(kk) = self.stages.kept_index[self.received / tubelet] else {
             self.received += 1;
             return Ok(());
         };
         if let Some((index, value)) = frame.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(Error::NonFinite {
-                index,
-                value: *value,
-            });
+            return Err(Error::NonFinite { index, value: *value });
         }
         self.token.extend_from_slice(frame);
         self.received += 1;
         if self.received % tubelet == 0 {
-            let frames =
-                Tensor::from_shape(&self.stages.token_shape, &self.token).map_err(tract_error)?;
+            let frames = Tensor::from_shape(&self.stages.token_shape, &self.token).map_err(tract_error)?;
             let index = Tensor::from_shape(&[1], &[kk as i64]).map_err(tract_error)?;
-            let out = self
-                .stages
-                .spatial
-                .run(tvec!(frames.into(), index.into()))
-                .map_err(tract_error)?;
-            self.encodings.extend(
-                out[0]
-                    .to_plain_array_view::<f32>()
-                    .map_err(tract_error)?
-                    .iter(),
-            );
+            let out = self.stages.spatial.run(tvec!(frames.into(), index.into())).map_err(tract_error)?;
+            self.encodings.extend(out[0].to_plain_array_view::<f32>().map_err(tract_error)?.iter());
             self.token.clear();
         }
         Ok(())
@@ -189,27 +144,14 @@ impl Session<'_> {
     pub fn finish(&mut self) -> Result<Prediction> {
         let frames = self.frames();
         if self.received < frames {
-            return Err(Error::Incomplete {
-                got: self.received,
-                frames,
-            });
+            return Err(Error::Incomplete { got: self.received, frames });
         }
-        let kept = self.encodings.len() / self.classifier.dim;
-        let encodings = Tensor::from_shape(&[kept, self.classifier.dim], &self.encodings)
-            .map_err(tract_error)?;
-        let out = self
-            .stages
-            .temporal
-            .run(tvec!(encodings.into()))
-            .map_err(tract_error)?;
-        let probabilities: Vec<f32> = out[0]
-            .to_plain_array_view::<f32>()
-            .map_err(tract_error)?
-            .iter()
-            .copied()
-            .collect();
+        let dim = self.stages.dim;
+        let encodings = Tensor::from_shape(&[self.encodings.len() / dim, dim], &self.encodings).map_err(tract_error)?;
+        let out = self.stages.temporal.run(tvec!(encodings.into())).map_err(tract_error)?;
+        let probabilities: Vec<f32> = out[0].to_plain_array_view::<f32>().map_err(tract_error)?.iter().copied().collect();
         self.reset();
-        Ok(self.classifier.prediction(&probabilities))
+        Ok(prediction(&self.stages.classes, &probabilities))
     }
 
     /// Forgets the touch in progress.

@@ -30,9 +30,7 @@ fn strip_c_comments(text: &str) -> String {
     let mut rest = text;
     while let Some(start) = rest.find("/*") {
         out.push_str(&rest[..start]);
-        rest = rest[start..]
-            .split_once("*/")
-            .map_or("", |(_, after)| after);
+        rest = rest[start..].split_once("*/").map_or("", |(_, after)| after);
     }
     out.push_str(rest);
     out.split_whitespace().collect::<Vec<_>>().join(" ")
@@ -43,10 +41,7 @@ fn signature(decl: &str) -> Option<(String, usize)> {
     let (head, tail) = decl.split_once('(')?;
     let name = head.split([' ', '*']).rfind(|w| !w.is_empty())?.to_string();
     let params = tail.rsplit_once(')')?.0.trim();
-    let count = params
-        .split(',')
-        .filter(|p| !p.trim().is_empty() && p.trim() != "void")
-        .count();
+    let count = params.split(',').filter(|p| !p.trim().is_empty() && p.trim() != "void").count();
     Some((name, count))
 }
 
@@ -59,35 +54,26 @@ fn the_header_declares_exactly_what_the_code_exports() {
         .filter(|d| d.contains("pvt3_") && d.contains('('))
         .filter_map(|d| signature(d.split("#define").last()?))
         .collect();
-    let mut code_fns: Vec<(String, usize)> = code
-        .split("extern \"C\" fn ")
-        .skip(1)
-        .filter_map(|rest| signature(rest.split(" -> ").next()?.split('{').next()?))
-        .collect();
+    let mut code_fns: Vec<(String, usize)> =
+        code.split("extern \"C\" fn ").skip(1).filter_map(|rest| signature(rest.split(" -> ").next()?.split('{').next()?)).collect();
     header_fns.sort();
     code_fns.sort();
     assert_eq!(header_fns, code_fns, "functions and their parameter counts");
-    assert_eq!(code_fns.len(), 7);
+    assert_eq!(code_fns.len(), 12);
     let mut header_consts: Vec<(String, String)> = header
         .split("#define ")
         .skip(1)
         .filter_map(|d| {
             let mut w = d.split(' ');
             let name = w.next()?;
-            name.starts_with("PVT3_")
-                .then(|| Some((name.to_string(), w.next()?.to_string())))?
+            name.starts_with("PVT3_").then(|| Some((name.to_string(), w.next()?.to_string())))?
         })
         .filter(|(n, _)| n != "PVT3_H")
         .collect();
     let mut code_consts: Vec<(String, String)> = code
         .lines()
         .filter_map(|l| l.strip_prefix("pub const "))
-        .filter_map(|l| {
-            Some((
-                l.split(':').next()?.to_string(),
-                l.split("= ").nth(1)?.trim_end_matches(';').to_string(),
-            ))
-        })
+        .filter_map(|l| Some((l.split(':').next()?.to_string(), l.split("= ").nth(1)?.trim_end_matches(';').to_string())))
         .collect();
     header_consts.sort();
     code_consts.sort();
@@ -99,13 +85,7 @@ fn the_c_example_gives_the_rust_result() {
     let dir = scratch("example");
     let exe = dir.join("classify");
     // The test binary lives in target/<profile>/deps; the static library in target/<profile>/examples.
-    let profile_dir = std::env::current_exe()
-        .unwrap()
-        .parent()
-        .unwrap()
-        .parent()
-        .unwrap()
-        .to_path_buf();
+    let profile_dir = std::env::current_exe().unwrap().parent().unwrap().parent().unwrap().to_path_buf();
     let lib = profile_dir.join("examples/libpvt3_c.a");
     let cc = Command::new(std::env::var("CC").unwrap_or_else(|_| "cc".into()))
         .arg(root().join("examples/classify.c"))
@@ -116,63 +96,32 @@ fn the_c_example_gives_the_rust_result() {
         .arg(&exe)
         .output()
         .unwrap();
-    assert!(
-        cc.status.success(),
-        "cc failed:\n{}",
-        String::from_utf8_lossy(&cc.stderr)
-    );
+    assert!(cc.status.success(), "cc failed:\n{}", String::from_utf8_lossy(&cc.stderr));
 
     let (_, x) = read_npy(&golden("input.npy")).unwrap();
     let raw = dir.join("input.f32");
-    std::fs::write(
-        &raw,
-        x.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>(),
-    )
-    .unwrap();
-    let out = Command::new(&exe)
-        .arg(golden("model.onnx"))
-        .arg(&raw)
-        .arg("8")
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    let rust = Classifier::load(golden("model.onnx"))
-        .unwrap()
-        .classify_batch(&x, 8)
-        .unwrap();
+    std::fs::write(&raw, x.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>()).unwrap();
+    let out = Command::new(&exe).arg(golden("model.onnx")).arg(&raw).arg("8").output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let rust = Classifier::load(golden("model.onnx")).unwrap().classify_batch(&x, 8).unwrap();
     let stdout = String::from_utf8(out.stdout).unwrap();
-    assert_eq!(stdout.lines().count(), 8);
-    for (line, p) in stdout.lines().zip(&rust) {
-        let fields: Vec<&str> = line.split('\t').collect();
-        assert_eq!(fields[1].parse::<usize>().unwrap(), p.class);
-        assert_eq!(fields[2], p.label);
-        let probs: Vec<f32> = fields[4..].iter().map(|v| v.parse().unwrap()).collect();
-        assert!(
-            probs
-                .iter()
-                .zip(&p.probabilities)
-                .all(|(a, b)| (a - b).abs() < 1e-6),
-            "{line}"
-        );
+    assert_eq!(stdout.lines().count(), 16);
+    for way in ["batch", "stream"] {
+        for (line, p) in stdout.lines().filter(|l| l.starts_with(way)).zip(&rust) {
+            let fields: Vec<&str> = line.split('\t').collect();
+            assert_eq!(fields[2].parse::<usize>().unwrap(), p.class);
+            assert_eq!(fields[3], p.label);
+            let probs: Vec<f32> = fields[5..].iter().map(|v| v.parse().unwrap()).collect();
+            assert!(probs.iter().zip(&p.probabilities).all(|(a, b)| (a - b).abs() < 1e-5), "{line}");
+        }
     }
-    let bad = Command::new(&exe)
-        .arg(dir.join("absent.onnx"))
-        .arg(&raw)
-        .arg("8")
-        .output()
-        .unwrap();
+    let bad = Command::new(&exe).arg(dir.join("absent.onnx")).arg(&raw).arg("8").output().unwrap();
     assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("absent.onnx"));
     std::fs::remove_dir_all(dir).unwrap();
 }
 
 fn last_error() -> String {
-    unsafe { CStr::from_ptr(pvt3_last_error()) }
-        .to_string_lossy()
-        .to_string()
+    unsafe { CStr::from_ptr(pvt3_last_error()) }.to_string_lossy().to_string()
 }
 
 #[test]
@@ -182,31 +131,20 @@ fn every_entry_point_reports_instead_of_crashing() {
         let mut c = null_mut();
         assert_eq!(pvt3_classifier_load(null(), &mut c), PVT3_ERR_NULL);
         assert!(last_error().contains("path is a null pointer"));
-        assert_eq!(
-            pvt3_classifier_load(model.as_ptr(), null_mut()),
-            PVT3_ERR_NULL
-        );
+        assert_eq!(pvt3_classifier_load(model.as_ptr(), null_mut()), PVT3_ERR_NULL);
         let mut n = 0usize;
         assert_eq!(pvt3_classifier_sample_len(null(), &mut n), PVT3_ERR_NULL);
         assert_eq!(pvt3_classifier_num_classes(null(), &mut n), PVT3_ERR_NULL);
         let mut name = null();
-        assert_eq!(
-            pvt3_classifier_class_name(null(), 0, &mut name),
-            PVT3_ERR_NULL
-        );
+        assert_eq!(pvt3_classifier_class_name(null(), 0, &mut name), PVT3_ERR_NULL);
         let mut probs = vec![0f32; 40];
-        assert_eq!(
-            pvt3_classify(
-                null(),
-                probs.as_ptr(),
-                1,
-                1,
-                probs.as_mut_ptr(),
-                40,
-                null_mut()
-            ),
-            PVT3_ERR_NULL
-        );
+        assert_eq!(pvt3_classify(null(), probs.as_ptr(), 1, 1, probs.as_mut_ptr(), 40, null_mut()), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classifier_frames(null(), &mut n), PVT3_ERR_NULL);
+        let mut s = null_mut();
+        assert_eq!(pvt3_session_new(null(), &mut s), PVT3_ERR_NULL);
+        assert_eq!(pvt3_session_push_frame(null_mut(), probs.as_ptr(), 60), PVT3_ERR_NULL);
+        assert_eq!(pvt3_session_finish(null_mut(), probs.as_mut_ptr(), 40, null_mut()), PVT3_ERR_NULL);
+        pvt3_session_free(null_mut());
         pvt3_classifier_free(null_mut());
 
         assert_eq!(pvt3_classifier_load(model.as_ptr(), &mut c), PVT3_OK);
@@ -217,94 +155,49 @@ fn every_entry_point_reports_instead_of_crashing() {
         assert_eq!(pvt3_classifier_class_name(c, 3, &mut name), PVT3_OK);
         assert_eq!(CStr::from_ptr(name).to_str().unwrap(), "material_4");
         let frames = vec![0.5f32; 2 * 4500];
-        assert_eq!(
-            pvt3_classify(c, null(), 4500, 1, probs.as_mut_ptr(), 40, null_mut()),
-            PVT3_ERR_NULL
-        );
-        assert_eq!(
-            pvt3_classify(c, frames.as_ptr(), 4500, 1, null_mut(), 40, null_mut()),
-            PVT3_ERR_NULL
-        );
-        assert_eq!(
-            pvt3_classify(
-                c,
-                frames.as_ptr(),
-                4499,
-                1,
-                probs.as_mut_ptr(),
-                40,
-                null_mut()
-            ),
-            PVT3_ERR_INPUT
-        );
-        assert!(
-            last_error().contains("input has 4499 values; expected 4500"),
-            "{}",
-            last_error()
-        );
+        assert_eq!(pvt3_classify(c, null(), 4500, 1, probs.as_mut_ptr(), 40, null_mut()), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classify(c, frames.as_ptr(), 4500, 1, null_mut(), 40, null_mut()), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classify(c, frames.as_ptr(), 4499, 1, probs.as_mut_ptr(), 40, null_mut()), PVT3_ERR_INPUT);
+        assert!(last_error().contains("input has 4499 values; expected 4500"), "{}", last_error());
         // A window of another sensor (BioTac: 19 × 400) for this iCub model.
-        assert_eq!(
-            pvt3_classify(
-                c,
-                frames.as_ptr(),
-                7600,
-                1,
-                probs.as_mut_ptr(),
-                40,
-                null_mut()
-            ),
-            PVT3_ERR_INPUT
-        );
-        assert_eq!(
-            pvt3_classify(
-                c,
-                frames.as_ptr(),
-                9000,
-                2,
-                probs.as_mut_ptr(),
-                39,
-                null_mut()
-            ),
-            PVT3_ERR_INPUT
-        );
+        assert_eq!(pvt3_classify(c, frames.as_ptr(), 7600, 1, probs.as_mut_ptr(), 40, null_mut()), PVT3_ERR_INPUT);
+        assert_eq!(pvt3_classify(c, frames.as_ptr(), 9000, 2, probs.as_mut_ptr(), 39, null_mut()), PVT3_ERR_INPUT);
         assert!(last_error().contains("room for 39 values; 40 needed"));
         let mut nan = frames.clone();
         nan[5] = f32::NAN;
-        assert_eq!(
-            pvt3_classify(c, nan.as_ptr(), 4500, 1, probs.as_mut_ptr(), 40, null_mut()),
-            PVT3_ERR_INPUT
-        );
+        assert_eq!(pvt3_classify(c, nan.as_ptr(), 4500, 1, probs.as_mut_ptr(), 40, null_mut()), PVT3_ERR_INPUT);
         let mut best = [0usize; 2];
-        assert_eq!(
-            pvt3_classify(
-                c,
-                frames.as_ptr(),
-                9000,
-                2,
-                probs.as_mut_ptr(),
-                40,
-                best.as_mut_ptr()
-            ),
-            PVT3_OK
-        );
+        assert_eq!(pvt3_classify(c, frames.as_ptr(), 9000, 2, probs.as_mut_ptr(), 40, best.as_mut_ptr()), PVT3_OK);
         assert!((probs[..20].iter().sum::<f32>() - 1.0).abs() < 1e-5);
-        pvt3_classifier_free(c);
+        assert_eq!(pvt3_classifier_frames(c, null_mut()), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classifier_frames(c, &mut n), PVT3_OK);
+        assert_eq!(n, 75);
+        assert_eq!(pvt3_session_new(c, null_mut()), PVT3_ERR_NULL);
+        assert_eq!(pvt3_session_new(c, &mut s), PVT3_OK);
+        pvt3_classifier_free(c); // the session outlives its classifier
+        assert_eq!(pvt3_session_push_frame(s, null(), 60), PVT3_ERR_NULL);
+        assert_eq!(pvt3_session_push_frame(s, frames.as_ptr(), 59), PVT3_ERR_INPUT);
+        assert!(last_error().contains("a frame has 59 values; expected 60"), "{}", last_error());
+        assert_eq!(pvt3_session_finish(s, probs.as_mut_ptr(), 40, null_mut()), PVT3_ERR_INPUT);
+        assert!(last_error().contains("has 0 of its 75 frames"), "{}", last_error());
+        for _ in 0..75 {
+            assert_eq!(pvt3_session_push_frame(s, frames.as_ptr(), 60), PVT3_OK);
+        }
+        assert_eq!(pvt3_session_push_frame(s, frames.as_ptr(), 60), PVT3_ERR_INPUT);
+        assert_eq!(pvt3_session_finish(s, null_mut(), 40, null_mut()), PVT3_ERR_NULL);
+        assert_eq!(pvt3_session_finish(s, probs.as_mut_ptr(), 19, null_mut()), PVT3_ERR_INPUT);
+        let mut class = 99usize;
+        assert_eq!(pvt3_session_finish(s, probs.as_mut_ptr(), 20, &mut class), PVT3_OK);
+        assert_eq!(class, best[0], "a constant window streamed = the same window batched");
+        pvt3_session_free(s);
 
         let dir = scratch("files");
         let bytes = std::fs::read(golden("model.onnx")).unwrap();
-        for (name, content) in [
-            ("truncated.onnx", bytes[..bytes.len() / 3].to_vec()),
-            ("foreign.onnx", b"hello".to_vec()),
-        ] {
+        for (name, content) in [("truncated.onnx", bytes[..bytes.len() / 3].to_vec()), ("foreign.onnx", b"hello".to_vec())] {
             let path = dir.join(name);
             std::fs::write(&path, content).unwrap();
             let p = CString::new(path.to_str().unwrap()).unwrap();
-            assert_eq!(
-                pvt3_classifier_load(p.as_ptr(), &mut c),
-                PVT3_ERR_MODEL,
-                "{name}: {}",
-                last_error()
-            );
+            assert_eq!(pvt3_classifier_load(p.as_ptr(), &mut c), PVT3_ERR_MODEL, "{name}: {}", last_error());
             assert!(last_error().contains(name));
         }
         let absent = CString::new(dir.join("absent.onnx").to_str().unwrap()).unwrap();

@@ -8,10 +8,7 @@ use std::sync::OnceLock;
 
 fn workspace() -> PathBuf {
     // Every crate of the workspace is one level below its root.
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .canonicalize()
-        .expect("workspace root")
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..").canonicalize().expect("workspace root")
 }
 
 /// The venv's python, created once (test binaries run one after another; the venv is kept
@@ -27,22 +24,10 @@ fn python() -> &'static Path {
             let _ = std::fs::remove_dir_all(&venv);
             let run = |cmd: &mut Command| {
                 let out = cmd.output().expect("python3 runs");
-                assert!(
-                    out.status.success(),
-                    "{cmd:?} failed:\n{}",
-                    String::from_utf8_lossy(&out.stderr)
-                );
+                assert!(out.status.success(), "{cmd:?} failed:\n{}", String::from_utf8_lossy(&out.stderr));
             };
             run(Command::new("python3").args(["-m", "venv"]).arg(&venv));
-            run(Command::new(&python).args([
-                "-m",
-                "pip",
-                "install",
-                "-q",
-                "onnx",
-                "onnxruntime",
-                "numpy",
-            ]));
+            run(Command::new(&python).args(["-m", "pip", "install", "-q", "onnx", "onnxruntime", "numpy"]));
             std::fs::write(&ready, "").expect("marker written");
         }
         python
@@ -51,25 +36,16 @@ fn python() -> &'static Path {
 
 /// Writes `data` with `shape` as a float32 .npy file.
 pub fn write_npy(path: &Path, shape: &[usize], data: &[f32]) {
-    let array = ndarray::ArrayD::from_shape_vec(ndarray::IxDyn(shape), data.to_vec())
-        .expect("shape fits data");
+    let array = ndarray::ArrayD::from_shape_vec(ndarray::IxDyn(shape), data.to_vec()).expect("shape fits data");
     ndarray_npy::write_npy(path, &array).expect("npy written");
 }
 
 /// Checks `model` with onnx and onnxruntime against `expected` (`[batch, classes]`) on `input`.
 /// Panics with the checker's message unless every element is within `atol`.
-pub fn assert_onnxruntime_matches(
-    model: &Path,
-    input: (&[usize], &[f32]),
-    expected: &[f32],
-    atol: f64,
-) -> String {
+pub fn assert_onnxruntime_matches(model: &Path, input: (&[usize], &[f32]), expected: &[f32], atol: f64) -> String {
     let dir = model.parent().expect("model in a directory");
     let stem = model.file_stem().unwrap().to_string_lossy().to_string();
-    let (x, y) = (
-        dir.join(format!("{stem}.input.npy")),
-        dir.join(format!("{stem}.expected.npy")),
-    );
+    let (x, y) = (dir.join(format!("{stem}.input.npy")), dir.join(format!("{stem}.expected.npy")));
     write_npy(&x, input.0, input.1);
     write_npy(&y, &[input.0[0], expected.len() / input.0[0]], expected);
     let out = Command::new(python())
@@ -78,11 +54,7 @@ pub fn assert_onnxruntime_matches(
         .args(["--atol", &atol.to_string()])
         .output()
         .expect("the check runs");
-    let msg = format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stdout),
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let msg = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
     assert!(out.status.success(), "{msg}");
     msg
 }

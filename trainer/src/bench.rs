@@ -21,29 +21,15 @@ pub struct TrainSpeed {
 }
 
 /// Times `steps` optimiser steps after `warmup` untimed ones.
-pub fn train_speed(
-    cfg: &Config,
-    opts: &TrainOptions,
-    warmup: usize,
-    steps: usize,
-) -> Result<TrainSpeed> {
-    let cfg = Config {
-        dropout: opts.dropout,
-        ..cfg.clone()
-    };
+pub fn train_speed(cfg: &Config, opts: &TrainOptions, warmup: usize, steps: usize) -> Result<TrainSpeed> {
+    let cfg = Config { dropout: opts.dropout, ..cfg.clone() };
     let mut learner = Learner::new(&cfg, opts, None)?;
     let mut rng = Rng::new(opts.seed);
     let mut shape = vec![opts.batch_size];
     shape.extend(cfg.sample_shape());
     let n: usize = shape.iter().product();
-    let x = Tensor::from_vec(
-        (0..n).map(|_| rng.normal()).collect::<Vec<f32>>(),
-        shape,
-        &Device::Cpu,
-    )?;
-    let labels: Vec<u32> = (0..opts.batch_size)
-        .map(|i| (i % cfg.classes) as u32)
-        .collect();
+    let x = Tensor::from_vec((0..n).map(|_| rng.normal()).collect::<Vec<f32>>(), shape, &Device::Cpu)?;
+    let labels: Vec<u32> = (0..opts.batch_size).map(|i| (i % cfg.classes) as u32).collect();
     let y = Tensor::new(labels, &Device::Cpu)?;
     for _ in 0..warmup {
         learner.step(&x, &y, opts, opts.lr, &mut rng)?;
@@ -66,15 +52,8 @@ pub fn train_speed(
 mod tests {
     #[test]
     fn reports_a_positive_rate() {
-        let cfg = pvt3_models::Config {
-            space_depth: 1,
-            time_depth: 1,
-            ..pvt3_models::Config::icub20()
-        };
-        let opts = crate::train::TrainOptions {
-            batch_size: 4,
-            ..crate::train::TrainOptions::default()
-        };
+        let cfg = pvt3_models::Config { space_depth: 1, time_depth: 1, ..pvt3_models::Config::icub20() };
+        let opts = crate::train::TrainOptions { batch_size: 4, ..crate::train::TrainOptions::default() };
         let s = super::train_speed(&cfg, &opts, 1, 2).unwrap();
         assert!(s.samples_per_second > 0.0 && s.seconds_per_step > 0.0);
     }

@@ -45,16 +45,8 @@ impl BakedFile {
     /// Bakes the checkpoint at `path` (a run or checkpoint directory).
     pub fn from_checkpoint(path: &Path) -> Result<Self> {
         let (meta, _, varmap) = load(path)?;
-        let baked = pvt3_models::bake::bake(
-            &meta.config,
-            &pvt3_models::weights::varmap_tensors(&varmap)?,
-        )?;
-        Ok(Self {
-            baked,
-            normalization: meta.normalization,
-            classes: meta.classes,
-            provenance: meta.provenance,
-        })
+        let baked = pvt3_models::bake::bake(&meta.config, &pvt3_models::weights::varmap_tensors(&varmap)?)?;
+        Ok(Self { baked, normalization: meta.normalization, classes: meta.classes, provenance: meta.provenance })
     }
 
     /// A checkpoint directory (baked on the way) or a file written by `pvt3 bake`.
@@ -63,12 +55,8 @@ impl BakedFile {
             return Self::from_checkpoint(path);
         }
         let bytes = std::fs::read(path).map_err(Error::io(path))?;
-        serde_json::from_slice(&bytes).map_err(|e| {
-            checkpoint_error(
-                path,
-                format!("neither a checkpoint directory nor a baked model from `pvt3 bake` ({e})"),
-            )
-        })
+        serde_json::from_slice(&bytes)
+            .map_err(|e| checkpoint_error(path, format!("neither a checkpoint directory nor a baked model from `pvt3 bake` ({e})")))
     }
 
     /// The ONNX metadata: class names and where the model came from.
@@ -90,10 +78,7 @@ pub struct Meta {
 }
 
 fn checkpoint_error(path: &Path, reason: impl Into<String>) -> Error {
-    Error::Checkpoint {
-        path: path.to_path_buf(),
-        reason: reason.into(),
-    }
+    Error::Checkpoint { path: path.to_path_buf(), reason: reason.into() }
 }
 
 pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
@@ -172,38 +157,24 @@ pub fn save(dir: &Path, varmap: &VarMap, meta: &Meta) -> Result<()> {
 pub fn load_meta(path: &Path) -> Result<(PathBuf, Meta)> {
     let dir = resolve(path)?;
     let config: Config = read_json(&dir.join("config.json"))?;
-    config
-        .validate()
-        .map_err(|e| checkpoint_error(&dir, e.to_string()))?;
+    config.validate().map_err(|e| checkpoint_error(&dir, e.to_string()))?;
     let normalization: Normalization = read_json(&dir.join("normalization.json"))?;
     let classes: Vec<String> = read_json(&dir.join("classes.json"))?;
     let provenance: Provenance = read_json(&dir.join("provenance.json"))?;
     let channels = config.sample_shape().iter().product::<usize>() / config.frames;
-    if normalization.mean.len() != channels
-        || normalization.std.len() != channels
-        || normalization.frames != config.frames
-    {
-        return Err(checkpoint_error(&dir, format!("normalization.json does not fit the configuration ({channels} channels × {} frames)", config.frames)));
+    if normalization.mean.len() != channels || normalization.std.len() != channels || normalization.frames != config.frames {
+        return Err(checkpoint_error(
+            &dir,
+            format!("normalization.json does not fit the configuration ({channels} channels × {} frames)", config.frames),
+        ));
     }
     if classes.len() != config.classes {
         return Err(checkpoint_error(
             &dir,
-            format!(
-                "classes.json names {} classes, the configuration has {}",
-                classes.len(),
-                config.classes
-            ),
+            format!("classes.json names {} classes, the configuration has {}", classes.len(), config.classes),
         ));
     }
-    Ok((
-        dir,
-        Meta {
-            config,
-            normalization,
-            classes,
-            provenance,
-        },
-    ))
+    Ok((dir, Meta { config, normalization, classes, provenance }))
 }
 
 /// Loads a checkpoint: its metadata and the model with its weights.
@@ -220,10 +191,5 @@ fn resolve(path: &Path) -> Result<PathBuf> {
         .iter()
         .filter_map(|c| existing_dir(c))
         .find(|d| d.join("config.json").exists())
-        .ok_or_else(|| {
-            checkpoint_error(
-                path,
-                "not a checkpoint directory (no config.json in it or in its model/)",
-            )
-        })
+        .ok_or_else(|| checkpoint_error(path, "not a checkpoint directory (no config.json in it or in its model/)"))
 }

@@ -43,23 +43,15 @@ struct FoldResult {
     pruned: Option<RunResult>,
 }
 
-fn run_fold(
-    spec: &RunSpec,
-    stage: Option<&PruneStage>,
-    dir: &Path,
-    resume: bool,
-    bar: &ProgressBar,
-) -> Result<Option<FoldResult>> {
+fn run_fold(spec: &RunSpec, stage: Option<&PruneStage>, dir: &Path, resume: bool, bar: &ProgressBar) -> Result<Option<FoldResult>> {
     let Some(dense) = train(spec, dir, resume, bar)? else {
         return Ok(None);
     };
     let pruned = match stage {
-        Some(stage) => {
-            match prune_and_fine_tune(dir, spec.data, stage, &dir.join("pruned"), resume, bar)? {
-                Some(p) => Some(p),
-                None => return Ok(None),
-            }
-        }
+        Some(stage) => match prune_and_fine_tune(dir, spec.data, stage, &dir.join("pruned"), resume, bar)? {
+            Some(p) => Some(p),
+            None => return Ok(None),
+        },
         None => None,
     };
     Ok(Some(FoldResult { dense, pruned }))
@@ -86,13 +78,9 @@ pub fn cross_validate(
     progress: &MultiProgress,
     style: &indicatif::ProgressStyle,
 ) -> Result<Option<CvSummary>> {
-    let work: Vec<(u64, usize)> = seeds
-        .iter()
-        .flat_map(|&s| (0..TEST_FOLD).map(move |k| (s, k)))
-        .collect();
+    let work: Vec<(u64, usize)> = seeds.iter().flat_map(|&s| (0..TEST_FOLD).map(move |k| (s, k))).collect();
     let next = AtomicUsize::new(0);
-    let results: Mutex<Vec<Option<Result<Option<FoldResult>>>>> =
-        Mutex::new(work.iter().map(|_| None).collect());
+    let results: Mutex<Vec<Option<Result<Option<FoldResult>>>>> = Mutex::new(work.iter().map(|_| None).collect());
     std::thread::scope(|scope| {
         for _ in 0..jobs.clamp(1, work.len().max(1)) {
             scope.spawn(|| loop {
@@ -102,14 +90,8 @@ pub fn cross_validate(
                 };
                 let bar = progress.add(ProgressBar::new(0).with_style(style.clone()));
                 bar.set_prefix(format!("seed {seed} fold {fold}"));
-                let run_spec = RunSpec {
-                    val_fold: fold,
-                    options: crate::train::TrainOptions {
-                        seed,
-                        ..spec.options.clone()
-                    },
-                    ..spec.clone()
-                };
+                let run_spec =
+                    RunSpec { val_fold: fold, options: crate::train::TrainOptions { seed, ..spec.options.clone() }, ..spec.clone() };
                 let dir = out.join(format!("seed{seed}")).join(format!("fold{fold}"));
                 let result = run_fold(&run_spec, stage, &dir, resume, &bar);
                 bar.finish();
@@ -122,12 +104,7 @@ pub fn cross_validate(
         }
     });
     let (mut runs, mut pruned_runs) = (Vec::new(), Vec::new());
-    for r in results
-        .into_inner()
-        .expect("threads joined")
-        .into_iter()
-        .flatten()
-    {
+    for r in results.into_inner().expect("threads joined").into_iter().flatten() {
         match r? {
             Some(fold) => {
                 runs.push(fold.dense);
@@ -147,11 +124,7 @@ pub fn cross_validate(
         mean_test_accuracy,
         std_test_accuracy,
         mean_val_accuracy: mean_std(&vals).0,
-        train_seconds: runs
-            .iter()
-            .chain(&pruned_runs)
-            .map(|r| r.wall_seconds)
-            .sum(),
+        train_seconds: runs.iter().chain(&pruned_runs).map(|r| r.wall_seconds).sum(),
         runs,
         pruned_mean_test_accuracy: pruned_stats.map(|s| s.0),
         pruned_std_test_accuracy: pruned_stats.map(|s| s.1),

@@ -43,10 +43,7 @@ pub struct Split {
 }
 
 fn data_error(path: &Path, reason: impl Into<String>) -> Error {
-    Error::Data {
-        path: path.to_path_buf(),
-        reason: reason.into(),
-    }
+    Error::Data { path: path.to_path_buf(), reason: reason.into() }
 }
 
 /// Reads an array of any of the common numeric dtypes as f64.
@@ -59,22 +56,11 @@ struct Npz<R: Read + Seek>(NpzReader<R>);
 
 impl<R: Read + Seek> ArraySource for Npz<R> {
     fn read<T: ReadableElement>(&mut self, key: &str) -> std::result::Result<ArrayD<T>, String> {
-        let name = if self.keys().iter().any(|k| k == key) {
-            key.to_string()
-        } else {
-            format!("{key}.npy")
-        };
-        self.0
-            .by_name::<ndarray::OwnedRepr<T>, IxDyn>(&name)
-            .map_err(|e| e.to_string())
+        let name = if self.keys().iter().any(|k| k == key) { key.to_string() } else { format!("{key}.npy") };
+        self.0.by_name::<ndarray::OwnedRepr<T>, IxDyn>(&name).map_err(|e| e.to_string())
     }
     fn keys(&mut self) -> Vec<String> {
-        self.0
-            .names()
-            .unwrap_or_default()
-            .into_iter()
-            .map(|n| n.trim_end_matches(".npy").to_string())
-            .collect()
+        self.0.names().unwrap_or_default().into_iter().map(|n| n.trim_end_matches(".npy").to_string()).collect()
     }
 }
 
@@ -87,14 +73,7 @@ impl ArraySource for NpyDir {
     }
     fn keys(&mut self) -> Vec<String> {
         let entries = std::fs::read_dir(&self.0).into_iter().flatten().flatten();
-        entries
-            .filter_map(|e| {
-                e.file_name()
-                    .to_str()?
-                    .strip_suffix(".npy")
-                    .map(str::to_string)
-            })
-            .collect()
+        entries.filter_map(|e| e.file_name().to_str()?.strip_suffix(".npy").map(str::to_string)).collect()
     }
 }
 
@@ -127,10 +106,7 @@ impl Dataset {
     /// Loads a data set; `seed` draws stratified folds when the file has none.
     pub fn load(path: &Path, seed: u64) -> Result<Self> {
         if !path.exists() {
-            return Err(data_error(
-                path,
-                "no such file or directory (expected an .npz file or a directory of .npy files)",
-            ));
+            return Err(data_error(path, "no such file or directory (expected an .npz file or a directory of .npy files)"));
         }
         if path.is_dir() {
             Self::from_source(path, &mut NpyDir(path.to_path_buf()), seed)
@@ -144,8 +120,7 @@ impl Dataset {
 
     fn from_source(path: &Path, src: &mut impl ArraySource, seed: u64) -> Result<Self> {
         let keys = src.keys();
-        let missing =
-            |k: &str| data_error(path, format!("no array `{k}` (found: {})", keys.join(", ")));
+        let missing = |k: &str| data_error(path, format!("no array `{k}` (found: {})", keys.join(", ")));
         if !keys.iter().any(|k| k == "x") {
             return Err(missing("x"));
         }
@@ -155,59 +130,34 @@ impl Dataset {
         let x = read_numeric(src, "x").map_err(|e| data_error(path, format!("array `x`: {e}")))?;
         let y = read_numeric(src, "y").map_err(|e| data_error(path, format!("array `y`: {e}")))?;
         let fold = if keys.iter().any(|k| k == "fold") {
-            Some(
-                read_numeric(src, "fold")
-                    .map_err(|e| data_error(path, format!("array `fold`: {e}")))?,
-            )
+            Some(read_numeric(src, "fold").map_err(|e| data_error(path, format!("array `fold`: {e}")))?)
         } else {
             None
         };
         let n = x.shape()[0];
-        let sample_shape =
-            match x.shape() {
-                [_, c, t] => vec![*c, 1, *t],
-                [_, h, w, t] => vec![*h, *w, *t],
-                [_, h, w, c, t] => vec![*h, *w, *c, *t],
-                s => return Err(data_error(
-                    path,
-                    format!(
-                        "`x` has shape {s:?}; expected [N, H, W, T], [N, C, T] or [N, H, W, C, T]"
-                    ),
-                )),
-            };
+        let sample_shape = match x.shape() {
+            [_, c, t] => vec![*c, 1, *t],
+            [_, h, w, t] => vec![*h, *w, *t],
+            [_, h, w, c, t] => vec![*h, *w, *c, *t],
+            s => return Err(data_error(path, format!("`x` has shape {s:?}; expected [N, H, W, T], [N, C, T] or [N, H, W, C, T]"))),
+        };
         let labels = integers(path, "y", &y, n)?;
         let x: Vec<f32> = x.iter().map(|v| *v as f32).collect();
         let sample_len = x.len() / n.max(1);
         if let Some(i) = x.iter().position(|v| !v.is_finite()) {
-            return Err(data_error(
-                path,
-                format!(
-                    "`x` holds a NaN or infinite value in sample {}",
-                    i / sample_len
-                ),
-            ));
+            return Err(data_error(path, format!("`x` holds a NaN or infinite value in sample {}", i / sample_len)));
         }
         let (folds, folds_from_file) = match fold {
             Some(f) => {
                 let folds = integers(path, "fold", &f, n)?;
                 if let Some(bad) = folds.iter().find(|f| **f as usize >= FOLDS) {
-                    return Err(data_error(
-                        path,
-                        format!("fold {bad} is outside 0..={}", FOLDS - 1),
-                    ));
+                    return Err(data_error(path, format!("fold {bad} is outside 0..={}", FOLDS - 1)));
                 }
                 (folds.into_iter().map(|f| f as usize).collect(), true)
             }
             None => (stratified_folds(&labels, seed), false),
         };
-        Ok(Self {
-            x,
-            sample_shape,
-            labels: labels.to_vec(),
-            folds,
-            folds_from_file,
-            path: path.to_path_buf(),
-        })
+        Ok(Self { x, sample_shape, labels: labels.to_vec(), folds, folds_from_file, path: path.to_path_buf() })
     }
 
     pub fn len(&self) -> usize {
@@ -235,25 +185,13 @@ impl Dataset {
     /// The published protocol for validation fold `val_fold`: test on fold 4, train on the rest.
     pub fn split(&self, val_fold: usize) -> Result<Split> {
         if val_fold >= TEST_FOLD {
-            return Err(Error::Usage(format!(
-                "validation fold {val_fold} must be in 0..{TEST_FOLD}"
-            )));
+            return Err(Error::Usage(format!("validation fold {val_fold} must be in 0..{TEST_FOLD}")));
         }
-        let pick = |keep: &dyn Fn(usize) -> bool| {
-            (0..self.len())
-                .filter(|&i| keep(self.folds[i]))
-                .collect::<Vec<_>>()
-        };
-        let split = Split {
-            train: pick(&|f| f != val_fold && f != TEST_FOLD),
-            val: pick(&|f| f == val_fold),
-            test: pick(&|f| f == TEST_FOLD),
-        };
+        let pick = |keep: &dyn Fn(usize) -> bool| (0..self.len()).filter(|&i| keep(self.folds[i])).collect::<Vec<_>>();
+        let split =
+            Split { train: pick(&|f| f != val_fold && f != TEST_FOLD), val: pick(&|f| f == val_fold), test: pick(&|f| f == TEST_FOLD) };
         if split.train.is_empty() || split.val.is_empty() {
-            return Err(data_error(
-                &self.path,
-                format!("fold {val_fold} leaves no training or validation samples"),
-            ));
+            return Err(data_error(&self.path, format!("fold {val_fold} leaves no training or validation samples")));
         }
         Ok(split)
     }
@@ -271,13 +209,7 @@ impl Dataset {
             ));
         }
         if let Some(bad) = self.labels.iter().find(|l| **l as usize >= cfg.classes) {
-            return Err(data_error(
-                &self.path,
-                format!(
-                    "label {bad} is outside 0..{} of the model's classes",
-                    cfg.classes
-                ),
-            ));
+            return Err(data_error(&self.path, format!("label {bad} is outside 0..{} of the model's classes", cfg.classes)));
         }
         Ok(())
     }
@@ -286,13 +218,7 @@ impl Dataset {
 /// Converts a numeric array of `n` whole, non-negative values to u32.
 fn integers(path: &Path, key: &str, a: &ArrayD<f64>, n: usize) -> Result<Vec<u32>> {
     if a.shape() != [n] {
-        return Err(data_error(
-            path,
-            format!(
-                "`{key}` has shape {:?}; expected [{n}], one per sample",
-                a.shape()
-            ),
-        ));
+        return Err(data_error(path, format!("`{key}` has shape {:?}; expected [{n}], one per sample", a.shape())));
     }
     a.iter()
         .enumerate()
@@ -300,10 +226,7 @@ fn integers(path: &Path, key: &str, a: &ArrayD<f64>, n: usize) -> Result<Vec<u32
             if v.fract() == 0.0 && *v >= 0.0 && *v <= u32::MAX as f64 {
                 Ok(*v as u32)
             } else {
-                Err(data_error(
-                    path,
-                    format!("`{key}`[{i}] = {v} is not a whole number ≥ 0"),
-                ))
+                Err(data_error(path, format!("`{key}`[{i}] = {v} is not a whole number ≥ 0")))
             }
         })
         .collect()

@@ -23,11 +23,7 @@ impl Samples {
             norm.apply_into(data.sample(i), &mut x);
         }
         let labels = indices.iter().map(|&i| data.labels[i]).collect();
-        Self {
-            x,
-            labels,
-            sample_shape: data.sample_shape.clone(),
-        }
+        Self { x, labels, sample_shape: data.sample_shape.clone() }
     }
 
     pub fn len(&self) -> usize {
@@ -43,11 +39,7 @@ impl Samples {
     }
 
     /// The samples at `rows` as a tensor `[rows, …sample_shape]` and a label tensor.
-    pub fn batch(
-        &self,
-        rows: &[usize],
-        transform: impl FnMut(&mut [f32]),
-    ) -> Result<(Tensor, Tensor)> {
+    pub fn batch(&self, rows: &[usize], transform: impl FnMut(&mut [f32])) -> Result<(Tensor, Tensor)> {
         let l = self.sample_len();
         let mut x = Vec::with_capacity(rows.len() * l);
         for &r in rows {
@@ -57,10 +49,7 @@ impl Samples {
         let mut shape = vec![rows.len()];
         shape.extend_from_slice(&self.sample_shape);
         let labels: Vec<u32> = rows.iter().map(|&r| self.labels[r]).collect();
-        Ok((
-            Tensor::from_vec(x, shape, &Device::Cpu)?,
-            Tensor::new(labels, &Device::Cpu)?,
-        ))
+        Ok((Tensor::from_vec(x, shape, &Device::Cpu)?, Tensor::new(labels, &Device::Cpu)?))
     }
 }
 
@@ -81,19 +70,10 @@ pub fn evaluate(model: &Pvt3, samples: &Samples) -> Result<Evaluation> {
     for chunk in rows.chunks(EVAL_BATCH) {
         let (x, y) = samples.batch(chunk, |_| {})?;
         let logits = model.forward(&x, None)?;
-        loss_sum += candle_nn::loss::cross_entropy(&logits, &y)?.to_scalar::<f32>()? as f64
-            * chunk.len() as f64;
+        loss_sum += candle_nn::loss::cross_entropy(&logits, &y)?.to_scalar::<f32>()? as f64 * chunk.len() as f64;
         predictions.extend(logits.argmax(D::Minus1)?.to_vec1::<u32>()?);
     }
-    let correct = predictions
-        .iter()
-        .zip(&samples.labels)
-        .filter(|(p, l)| p == l)
-        .count();
+    let correct = predictions.iter().zip(&samples.labels).filter(|(p, l)| p == l).count();
     let n = samples.len().max(1) as f64;
-    Ok(Evaluation {
-        loss: loss_sum / n,
-        accuracy: correct as f64 / n,
-        predictions,
-    })
+    Ok(Evaluation { loss: loss_sum / n, accuracy: correct as f64 / n, predictions })
 }

@@ -15,15 +15,7 @@ pub fn report(cfg: &Config) -> Result<String> {
     names.sort();
     let mut s = String::new();
     let w = &mut s;
-    let _ = writeln!(
-        w,
-        "input         [batch, {}]",
-        cfg.sample_shape()
-            .iter()
-            .map(|v| v.to_string())
-            .collect::<Vec<_>>()
-            .join(", ")
-    );
+    let _ = writeln!(w, "input         [batch, {}]", cfg.sample_shape().iter().map(|v| v.to_string()).collect::<Vec<_>>().join(", "));
     let _ = writeln!(
         w,
         "tokens        {} temporal × {} spatial (+1 CLS each), patch dim {}",
@@ -31,24 +23,13 @@ pub fn report(cfg: &Config) -> Result<String> {
         cfg.num_patches(),
         cfg.patch_dim()
     );
-    let _ = writeln!(
-        w,
-        "parameters    {} trainable + {} frame-mask entries",
-        cfg.parameter_count(),
-        cfg.time_tokens()
-    );
+    let _ = writeln!(w, "parameters    {} trainable + {} frame-mask entries", cfg.parameter_count(), cfg.time_tokens());
     let _ = writeln!(w, "mult-adds     {} per sample", cfg.mult_adds());
     let _ = writeln!(w, "classes       {}", cfg.classes);
     let _ = writeln!(w, "\n{:<44} {:>16} {:>8}", "tensor", "shape", "values");
     for name in names {
         let v = &vars[name];
-        let _ = writeln!(
-            w,
-            "{:<44} {:>16} {:>8}",
-            name,
-            format!("{:?}", v.dims()),
-            v.elem_count()
-        );
+        let _ = writeln!(w, "{:<44} {:>16} {:>8}", name, format!("{:?}", v.dims()), v.elem_count());
     }
     Ok(s)
 }
@@ -58,10 +39,7 @@ mod tests {
     #[test]
     fn icub20_report_names_the_counts() {
         let r = super::report(&pvt3_models::Config::icub20()).unwrap();
-        assert!(
-            r.contains("parameters    64272 trainable + 75 frame-mask entries"),
-            "{r}"
-        );
+        assert!(r.contains("parameters    64272 trainable + 75 frame-mask entries"), "{r}");
         assert!(r.contains("space.layers.3.attn.qkv.weight"), "{r}");
     }
 }

@@ -18,11 +18,7 @@ use pvt3_trainer::prune::{prune_and_fine_tune, PruneStage};
 use pvt3_trainer::train::{train, RunSpec, TrainOptions};
 
 #[derive(Parser)]
-#[command(
-    name = "pvt3",
-    version,
-    about = "PVT³ tactile texture classification: train, cross-validate, evaluate, inspect"
-)]
+#[command(name = "pvt3", version, about = "PVT³ tactile texture classification: train, cross-validate, evaluate, inspect")]
 struct Cli {
     /// CPU threads for candle (default: all cores; one is about as fast as two for small models).
     #[arg(long, global = true)]
@@ -81,17 +77,9 @@ impl PruneArgs {
         if self.prune_channels.is_none() && self.prune_frames.is_none() {
             return None;
         }
-        let scope = if self.prune_scope == "global" {
-            Scope::Global
-        } else {
-            Scope::Local
-        };
+        let scope = if self.prune_scope == "global" { Scope::Global } else { Scope::Local };
         Some(PruneStage {
-            spec: PruneSpec {
-                channels: self.prune_channels.unwrap_or(0.0),
-                frames: self.prune_frames.unwrap_or(0.0),
-                scope,
-            },
+            spec: PruneSpec { channels: self.prune_channels.unwrap_or(0.0), frames: self.prune_frames.unwrap_or(0.0), scope },
             epochs: self.fine_tune_epochs,
             lr: self.fine_tune_lr,
         })
@@ -233,14 +221,7 @@ fn main() -> Result<()> {
         std::env::set_var("RAYON_NUM_THREADS", t.to_string());
     }
     match cli.command {
-        Command::Train {
-            model,
-            fold,
-            out,
-            resume,
-            prune,
-            export,
-        } => {
+        Command::Train { model, fold, out, resume, prune, export } => {
             let prepared = prepare(&model)?;
             let bar = ProgressBar::new(0).with_style(bar_style());
             bar.set_prefix(format!("fold {fold}"));
@@ -264,9 +245,7 @@ fn main() -> Result<()> {
                 let bar = ProgressBar::new(0).with_style(bar_style());
                 bar.set_prefix("fine-tune");
                 let pruned = out.join("pruned");
-                let Some(p) =
-                    prune_and_fine_tune(&out, &prepared.data, &stage, &pruned, resume, &bar)?
-                else {
+                let Some(p) = prune_and_fine_tune(&out, &prepared.data, &stage, &pruned, resume, &bar)? else {
                     println!("paused; continue with the same command and --resume");
                     return Ok(());
                 };
@@ -274,24 +253,12 @@ fn main() -> Result<()> {
                 report_pruned(&p, &pruned)?;
             }
             if let Some(path) = export {
-                let final_run = if prune.stage().is_some() {
-                    out.join("pruned")
-                } else {
-                    out.clone()
-                };
+                let final_run = if prune.stage().is_some() { out.join("pruned") } else { out.clone() };
                 export_onnx(&final_run, &path)?;
             }
         }
-        Command::Prune {
-            run,
-            data,
-            out,
-            resume,
-            prune,
-        } => {
-            let stage = prune
-                .stage()
-                .context("give --prune-channels and/or --prune-frames")?;
+        Command::Prune { run, data, out, resume, prune } => {
+            let stage = prune.stage().context("give --prune-channels and/or --prune-frames")?;
             let (_, meta) = checkpoint::load_meta(&run)?;
             let data_path = data.unwrap_or_else(|| PathBuf::from(&meta.provenance.data));
             let dataset = Dataset::load(&data_path, meta.provenance.seed)?;
@@ -316,49 +283,21 @@ fn main() -> Result<()> {
                 file.baked.config.time_tokens()
             );
         }
-        Command::Cv {
-            model,
-            seeds,
-            out,
-            resume,
-            jobs,
-            prune,
-        } => {
+        Command::Cv { model, seeds, out, resume, jobs, prune } => {
             let prepared = prepare(&model)?;
             let started = Instant::now();
             let multi = MultiProgress::new();
-            let s = cross_validate(
-                &prepared.spec(&model, 0),
-                prune.stage().as_ref(),
-                &seeds,
-                &out,
-                resume,
-                jobs,
-                &multi,
-                &bar_style(),
-            )?;
+            let s = cross_validate(&prepared.spec(&model, 0), prune.stage().as_ref(), &seeds, &out, resume, jobs, &multi, &bar_style())?;
             let Some(s) = s else {
                 println!("paused; continue with the same command and --resume");
                 return Ok(());
             };
-            println!(
-                "{:>6} {:>5} {:>6} {:>8} {:>8} {:>8} {:>12}",
-                "seed", "fold", "epoch", "val", "test", "seconds", "pruned test"
-            );
+            println!("{:>6} {:>5} {:>6} {:>8} {:>8} {:>8} {:>12}", "seed", "fold", "epoch", "val", "test", "seconds", "pruned test");
             for (i, r) in s.runs.iter().enumerate() {
-                let pruned = s
-                    .pruned_runs
-                    .get(i)
-                    .map_or(String::new(), |p| format!("{:.4}", p.test_accuracy));
+                let pruned = s.pruned_runs.get(i).map_or(String::new(), |p| format!("{:.4}", p.test_accuracy));
                 println!(
                     "{:>6} {:>5} {:>6} {:>8.4} {:>8.4} {:>8.0} {:>12}",
-                    r.seed,
-                    r.val_fold,
-                    r.best_epoch,
-                    r.val_accuracy,
-                    r.test_accuracy,
-                    r.wall_seconds,
-                    pruned
+                    r.seed, r.val_fold, r.best_epoch, r.val_accuracy, r.test_accuracy, r.wall_seconds, pruned
                 );
             }
             if let (Some(m), Some(sd)) = (s.pruned_mean_test_accuracy, s.pruned_std_test_accuracy) {
@@ -373,27 +312,15 @@ fn main() -> Result<()> {
                 out.join("cv.json").display()
             );
         }
-        Command::Eval {
-            checkpoint,
-            data,
-            fold,
-        } => eval(&checkpoint, &data, &fold)?,
+        Command::Eval { checkpoint, data, fold } => eval(&checkpoint, &data, &fold)?,
         Command::Export { model, out } => export_onnx(&model, &out)?,
-        Command::Bench(Bench::Train {
-            preset,
-            steps,
-            options,
-        }) => {
+        Command::Bench(Bench::Train { preset, steps, options }) => {
             let speed = train_speed(&Config::preset(&preset)?, &options, 2, steps)?;
             println!("{}", serde_json::to_string(&speed)?);
         }
         Command::Info { model, json } => {
             // A checkpoint is read once: its configuration, and its size after baking.
-            let baked = if Path::new(&model).is_dir() {
-                Some(BakedFile::from_checkpoint(Path::new(&model))?.baked)
-            } else {
-                None
-            };
+            let baked = if Path::new(&model).is_dir() { Some(BakedFile::from_checkpoint(Path::new(&model))?.baked) } else { None };
             let cfg = match &baked {
                 Some(b) => b.config.clone(),
                 None => resolve_config(&model)?,
@@ -436,10 +363,7 @@ fn report_pruned(r: &pvt3_trainer::train::RunResult, out: &Path) -> Result<()> {
 }
 
 fn bar_style() -> ProgressStyle {
-    ProgressStyle::with_template(
-        "{prefix:>14} [{elapsed_precise}] {bar:30} {percent:>3}% eta {eta} {msg}",
-    )
-    .expect("a valid template")
+    ProgressStyle::with_template("{prefix:>14} [{elapsed_precise}] {bar:30} {percent:>3}% eta {eta} {msg}").expect("a valid template")
 }
 
 /// A preset name, a JSON file, or a checkpoint directory.
@@ -450,8 +374,7 @@ fn resolve_config(model: &str) -> Result<Config> {
     }
     if path.is_file() {
         let text = std::fs::read_to_string(path).with_context(|| format!("reading {model}"))?;
-        return serde_json::from_str(&text)
-            .with_context(|| format!("{model} is not a model configuration"));
+        return serde_json::from_str(&text).with_context(|| format!("{model} is not a model configuration"));
     }
     Ok(Config::preset(model)?)
 }
@@ -500,53 +423,31 @@ fn prepare(args: &ModelArgs) -> Result<Prepared> {
     cfg.validate()?;
     let classes = match &args.class_names {
         Some(path) => {
-            let text = std::fs::read_to_string(path)
-                .with_context(|| format!("reading class names from {}", path.display()))?;
-            let names: Vec<String> = text
-                .lines()
-                .map(str::trim)
-                .filter(|l| !l.is_empty())
-                .map(String::from)
-                .collect();
+            let text = std::fs::read_to_string(path).with_context(|| format!("reading class names from {}", path.display()))?;
+            let names: Vec<String> = text.lines().map(str::trim).filter(|l| !l.is_empty()).map(String::from).collect();
             if names.len() != cfg.classes {
-                bail!(
-                    "{} names {} classes, the data has {}",
-                    path.display(),
-                    names.len(),
-                    cfg.classes
-                );
+                bail!("{} names {} classes, the data has {}", path.display(), names.len(), cfg.classes);
             }
             names
         }
         None => (0..cfg.classes).map(|k| format!("class_{k}")).collect(),
     };
     if !data.folds_from_file {
-        eprintln!(
-            "note: {} has no fold array; stratified folds were drawn with seed {}",
-            data.path.display(),
-            args.options.seed
-        );
+        eprintln!("note: {} has no fold array; stratified folds were drawn with seed {}", data.path.display(), args.options.seed);
     }
-    Ok(Prepared {
-        data,
-        config: cfg,
-        classes,
-    })
+    Ok(Prepared { data, config: cfg, classes })
 }
 
 fn apply_overrides(cfg: Config, overrides: &[String]) -> Result<Config> {
     let mut value = serde_json::to_value(&cfg)?;
     for o in overrides {
-        let (key, raw) = o
-            .split_once('=')
-            .with_context(|| format!("--set {o}: expected FIELD=VALUE"))?;
+        let (key, raw) = o.split_once('=').with_context(|| format!("--set {o}: expected FIELD=VALUE"))?;
         let fields = value.as_object_mut().expect("a config is a JSON object");
         if !fields.contains_key(key) {
             let known: Vec<&String> = fields.keys().collect();
             bail!("--set {o}: unknown field `{key}`; the fields are {known:?}");
         }
-        let parsed = serde_json::from_str(raw)
-            .with_context(|| format!("--set {o}: `{raw}` is not a number"))?;
+        let parsed = serde_json::from_str(raw).with_context(|| format!("--set {o}: `{raw}` is not a number"))?;
         fields.insert(key.to_string(), parsed);
     }
     serde_json::from_value(value).context("the overridden configuration does not parse")
@@ -559,9 +460,7 @@ fn eval(checkpoint_path: &Path, data_path: &Path, fold: &str) -> Result<()> {
     let indices: Vec<usize> = if fold == "all" {
         (0..data.len()).collect()
     } else {
-        let k: usize = fold
-            .parse()
-            .with_context(|| format!("--fold {fold}: expected a fold number or `all`"))?;
+        let k: usize = fold.parse().with_context(|| format!("--fold {fold}: expected a fold number or `all`"))?;
         (0..data.len()).filter(|&i| data.folds[i] == k).collect()
     };
     if indices.is_empty() {
@@ -569,36 +468,18 @@ fn eval(checkpoint_path: &Path, data_path: &Path, fold: &str) -> Result<()> {
     }
     let samples = Samples::new(&data, &indices, &meta.normalization);
     let e = evaluate(&model, &samples)?;
-    println!(
-        "{} samples (fold {fold}): accuracy {:.4}, loss {:.4}",
-        samples.len(),
-        e.accuracy,
-        e.loss
-    );
+    println!("{} samples (fold {fold}): accuracy {:.4}, loss {:.4}", samples.len(), e.accuracy, e.loss);
     if fold != "all" && fold.parse::<usize>().ok() == Some(TEST_FOLD) {
-        println!(
-            "(the checkpoint's own record: test accuracy {:?})",
-            meta.provenance.test_accuracy
-        );
+        println!("(the checkpoint's own record: test accuracy {:?})", meta.provenance.test_accuracy);
     }
     println!("{:<24} {:>8} {:>8}", "class", "samples", "accuracy");
     for (c, name) in meta.classes.iter().enumerate() {
-        let rows: Vec<usize> = (0..samples.len())
-            .filter(|&r| samples.labels[r] as usize == c)
-            .collect();
+        let rows: Vec<usize> = (0..samples.len()).filter(|&r| samples.labels[r] as usize == c).collect();
         if rows.is_empty() {
             continue;
         }
-        let ok = rows
-            .iter()
-            .filter(|&&r| e.predictions[r] as usize == c)
-            .count();
-        println!(
-            "{:<24} {:>8} {:>8.3}",
-            name,
-            rows.len(),
-            ok as f64 / rows.len() as f64
-        );
+        let ok = rows.iter().filter(|&&r| e.predictions[r] as usize == c).count();
+        println!("{:<24} {:>8} {:>8.3}", name, rows.len(), ok as f64 / rows.len() as f64);
     }
     Ok(())
 }

@@ -10,10 +10,7 @@ const MIN_STD: f64 = 1e-6;
 
 /// Mean and standard deviation per channel over the `indices` samples and all their frames.
 pub fn fit(data: &Dataset, indices: &[usize]) -> Normalization {
-    let frames = *data
-        .sample_shape
-        .last()
-        .expect("a sample has at least one dimension");
+    let frames = *data.sample_shape.last().expect("a sample has at least one dimension");
     let channels = data.sample_len() / frames;
     let mut sum = vec![0f64; channels];
     let mut sq = vec![0f64; channels];
@@ -37,11 +34,7 @@ pub fn fit(data: &Dataset, indices: &[usize]) -> Normalization {
             }
         })
         .collect();
-    Normalization {
-        mean: mean.into_iter().map(|m| m as f32).collect(),
-        std,
-        frames,
-    }
+    Normalization { mean: mean.into_iter().map(|m| m as f32).collect(), std, frames }
 }
 
 #[cfg(test)]
@@ -53,9 +46,7 @@ mod tests {
     fn fit_uses_only_the_given_samples_and_standardises_them() {
         // Two channels, three frames, three samples; sample 2 is an outlier left out of the fit.
         let data = Dataset {
-            x: vec![
-                1., 2., 3., 0., 0., 0., 3., 4., 5., 0., 0., 0., 100., 100., 100., 9., 9., 9.,
-            ],
+            x: vec![1., 2., 3., 0., 0., 0., 3., 4., 5., 0., 0., 0., 100., 100., 100., 9., 9., 9.],
             sample_shape: vec![2, 1, 3],
             labels: vec![0, 1, 0],
             folds: vec![0, 1, 4],

@@ -37,11 +37,7 @@ struct Param {
 
 impl AdamW {
     /// Every variable of `varmap`, each with its learning-rate multiple `lr_scale(name, var)`.
-    pub fn new(
-        varmap: &VarMap,
-        weight_decay: f64,
-        lr_scale: impl Fn(&str, &Var) -> f64,
-    ) -> Result<Self> {
+    pub fn new(varmap: &VarMap, weight_decay: f64, lr_scale: impl Fn(&str, &Var) -> f64) -> Result<Self> {
         let vars = varmap.data().lock().expect("varmap lock poisoned");
         let mut params = vars
             .iter()
@@ -49,25 +45,11 @@ impl AdamW {
                 let decay = is_weight_matrix(name, var);
                 let zeros = var.zeros_like()?;
                 let lr_scale = lr_scale(name, var);
-                Ok(Param {
-                    name: name.clone(),
-                    var: var.clone(),
-                    decay,
-                    lr_scale,
-                    m: zeros.clone(),
-                    v: zeros,
-                })
+                Ok(Param { name: name.clone(), var: var.clone(), decay, lr_scale, m: zeros.clone(), v: zeros })
             })
             .collect::<Result<Vec<_>>>()?;
         params.sort_by(|a, b| a.name.cmp(&b.name));
-        Ok(Self {
-            params,
-            step: 0,
-            weight_decay,
-            beta1: 0.9,
-            beta2: 0.999,
-            eps: 1e-8,
-        })
+        Ok(Self { params, step: 0, weight_decay, beta1: 0.9, beta2: 0.999, eps: 1e-8 })
     }
 
     /// The global L2 norm of the gradients.
@@ -117,10 +99,7 @@ impl AdamW {
     pub fn load(&mut self, path: &Path, step: usize) -> Result<()> {
         let mut tensors = candle_core::safetensors::load(path, &Device::Cpu)?;
         for p in &mut self.params {
-            let missing = |k: &str| crate::Error::Checkpoint {
-                path: path.to_path_buf(),
-                reason: format!("optimiser state has no `{k}`"),
-            };
+            let missing = |k: &str| crate::Error::Checkpoint { path: path.to_path_buf(), reason: format!("optimiser state has no `{k}`") };
             let (mk, vk) = (format!("m.{}", p.name), format!("v.{}", p.name));
             p.m = tensors.remove(&mk).ok_or_else(|| missing(&mk))?;
             p.v = tensors.remove(&vk).ok_or_else(|| missing(&vk))?;
@@ -140,9 +119,7 @@ mod tests {
     fn minimises_a_quadratic_and_decays_only_matrices() {
         let varmap = VarMap::new();
         let vb = VarBuilder::from_varmap(&varmap, DType::F32, &Device::Cpu);
-        let w = vb
-            .get_with_hints((2, 2), "fc.weight", Init::Const(1.0))
-            .unwrap();
+        let w = vb.get_with_hints((2, 2), "fc.weight", Init::Const(1.0)).unwrap();
         let b = vb.get_with_hints(2, "fc.bias", Init::Const(1.0)).unwrap();
         let mut opt = AdamW::new(&varmap, 0.1, |_, _| 1.0).unwrap();
         // Adam's first step moves every value by lr against the gradient's sign; the matrix

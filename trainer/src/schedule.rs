@@ -16,8 +16,7 @@ impl Schedule {
         }
         let span = self.total_steps.saturating_sub(self.warmup_steps).max(1);
         let progress = ((step - self.warmup_steps) as f64 / span as f64).min(1.0);
-        self.floor
-            + 0.5 * (self.peak - self.floor) * (1.0 + (std::f64::consts::PI * progress).cos())
+        self.floor + 0.5 * (self.peak - self.floor) * (1.0 + (std::f64::consts::PI * progress).cos())
     }
 }
 
@@ -27,12 +26,7 @@ mod tests {
 
     #[test]
     fn warms_up_then_decays_to_the_floor() {
-        let s = Schedule {
-            peak: 1e-3,
-            floor: 1e-5,
-            warmup_steps: 10,
-            total_steps: 110,
-        };
+        let s = Schedule { peak: 1e-3, floor: 1e-5, warmup_steps: 10, total_steps: 110 };
         assert!((s.at(0) - 1e-4).abs() < 1e-12);
         assert!((s.at(9) - 1e-3).abs() < 1e-12);
         assert!((s.at(10) - 1e-3).abs() < 1e-12);

@@ -165,9 +165,7 @@ fn smoothed_cross_entropy(logits: &Tensor, labels: &Tensor, eps: f64) -> Result<
     if eps == 0.0 {
         return Ok(nll);
     }
-    let uniform = candle_nn::ops::log_softmax(logits, D::Minus1)?
-        .mean_all()?
-        .neg()?;
+    let uniform = candle_nn::ops::log_softmax(logits, D::Minus1)?.mean_all()?.neg()?;
     Ok(((nll * (1.0 - eps))? + (uniform * eps)?)?)
 }
 
@@ -191,26 +189,10 @@ impl Learner {
         if let Some(start) = start {
             pvt3_models::weights::set_vars(&varmap, start, Path::new("(start weights)"))?;
         }
-        let masks = vars_where(&varmap, is_mask)
-            .into_iter()
-            .map(|v| v.as_tensor().clone())
-            .collect();
-        let optimizer = AdamW::new(&varmap, opts.weight_decay, |n, v| {
-            if is_mask(n, v) {
-                opts.mask_lr
-            } else {
-                1.0
-            }
-        })?;
+        let masks = vars_where(&varmap, is_mask).into_iter().map(|v| v.as_tensor().clone()).collect();
+        let optimizer = AdamW::new(&varmap, opts.weight_decay, |n, v| if is_mask(n, v) { opts.mask_lr } else { 1.0 })?;
         let matrices = vars_where(&varmap, is_weight_matrix);
-        Ok(Self {
-            model,
-            varmap,
-            optimizer,
-            masks,
-            held: Vec::new(),
-            matrices,
-        })
+        Ok(Self { model, varmap, optimizer, masks, held: Vec::new(), matrices })
     }
 
     /// From now on, mask entries that are zero stay zero.
@@ -224,22 +206,13 @@ impl Learner {
 
     /// One optimiser step on a batch: forward with dropout, smoothed cross-entropy (plus the L1
     /// penalty on the masks), backward, gradient clipping, AdamW. Returns the loss and logits.
-    pub fn step(
-        &mut self,
-        x: &Tensor,
-        y: &Tensor,
-        opts: &TrainOptions,
-        lr: f64,
-        rng: &mut Rng,
-    ) -> Result<(f64, Tensor)> {
+    pub fn step(&mut self, x: &Tensor, y: &Tensor, opts: &TrainOptions, lr: f64, rng: &mut Rng) -> Result<(f64, Tensor)> {
         let mut saved = Vec::new();
         if opts.random_prune > 0.0 {
             let p = opts.random_prune as f32;
             for var in &self.matrices {
                 let full = var.as_tensor().copy()?;
-                let keep: Vec<f32> = (0..full.elem_count())
-                    .map(|_| if rng.uniform() < p { 0.0 } else { 1.0 })
-                    .collect();
+                let keep: Vec<f32> = (0..full.elem_count()).map(|_| if rng.uniform() < p { 0.0 } else { 1.0 }).collect();
                 var.set(&(&full * Tensor::from_vec(keep, full.shape(), &Device::Cpu)?)?)?;
                 saved.push(full);
             }
@@ -247,22 +220,14 @@ impl Learner {
         let logits = self.model.forward(x, Some(rng))?;
         let mut loss = smoothed_cross_entropy(&logits, y, opts.label_smoothing)?;
         if opts.l1 > 0.0 {
-            let flat: Vec<Tensor> = self
-                .masks
-                .iter()
-                .map(|m| m.abs())
-                .collect::<candle_core::Result<_>>()?;
+            let flat: Vec<Tensor> = self.masks.iter().map(|m| m.abs()).collect::<candle_core::Result<_>>()?;
             loss = (loss + (Tensor::cat(&flat, 0)?.mean_all()? * opts.l1)?)?;
         }
         let grads = loss.backward()?;
         for (var, full) in self.matrices.iter().zip(&saved) {
             var.set(full)?;
         }
-        let scale = if opts.clip_grad > 0.0 {
-            (opts.clip_grad / self.optimizer.grad_norm(&grads)?.max(1e-12)).min(1.0)
-        } else {
-            1.0
-        };
+        let scale = if opts.clip_grad > 0.0 { (opts.clip_grad / self.optimizer.grad_norm(&grads)?.max(1e-12)).min(1.0) } else { 1.0 };
         self.optimizer.step(&grads, lr, scale)?;
         for (var, keep) in &self.held {
             var.set(&(var.as_tensor() * keep)?)?;
@@ -279,11 +244,7 @@ fn is_mask(name: &str, _: &Var) -> bool {
 /// The variables `keep` selects, in name order.
 fn vars_where(varmap: &VarMap, keep: fn(&str, &Var) -> bool) -> Vec<Var> {
     let vars = varmap.data().lock().expect("varmap lock poisoned");
-    let mut names: Vec<&String> = vars
-        .iter()
-        .filter(|(n, v)| keep(n, v))
-        .map(|(n, _)| n)
-        .collect();
+    let mut names: Vec<&String> = vars.iter().filter(|(n, v)| keep(n, v)).map(|(n, _)| n).collect();
     names.sort();
     names.into_iter().map(|n| vars[n].clone()).collect()
 }
@@ -303,23 +264,13 @@ fn augment(sample: &mut [f32], frames: usize, opts: &TrainOptions, rng: &mut Rng
     let gain = 1.0 + opts.aug_gain as f32 * (2.0 * rng.uniform() - 1.0);
     let noise = opts.aug_noise as f32;
     for v in sample.iter_mut() {
-        *v = *v * gain
-            + if noise > 0.0 {
-                noise * rng.normal()
-            } else {
-                0.0
-            };
+        *v = *v * gain + if noise > 0.0 { noise * rng.normal() } else { 0.0 };
     }
 }
 
 /// Trains one split into `out`; with `resume`, continues the run found there. `None` means the
 /// run paused (see [`RunSpec::pause_after`]) and can be resumed.
-pub fn train(
-    spec: &RunSpec,
-    out: &Path,
-    resume: bool,
-    bar: &ProgressBar,
-) -> Result<Option<RunResult>> {
+pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Result<Option<RunResult>> {
     let result_path = out.join("result.json");
     let last = out.join("last");
     let resumable = checkpoint::existing_dir(&last);
@@ -362,21 +313,13 @@ pub fn train(
     let mut run = match state {
         Some((dir, st)) => {
             pvt3_models::weights::load_weights(&learner.varmap, &dir.join("weights.safetensors"))?;
-            learner
-                .optimizer
-                .load(&dir.join("optimizer.safetensors"), st.step)?;
+            learner.optimizer.load(&dir.join("optimizer.safetensors"), st.step)?;
             truncate_metrics(&out.join("metrics.jsonl"), st.epochs_done)?;
             st
         }
         None => {
             let _ = std::fs::remove_file(out.join("metrics.jsonl"));
-            RunState {
-                epochs_done: 0,
-                step: 0,
-                rng: Rng::new(opts.seed.wrapping_add(1)),
-                best: None,
-                wall_seconds: 0.0,
-            }
+            RunState { epochs_done: 0, step: 0, rng: Rng::new(opts.seed.wrapping_add(1)), best: None, wall_seconds: 0.0 }
         }
     };
 
@@ -402,11 +345,7 @@ pub fn train(
     }
     bar.set_length((opts.epochs * steps_per_epoch) as u64);
     bar.set_position((run.epochs_done * steps_per_epoch) as u64);
-    let mut log = std::fs::OpenOptions::new()
-        .create(true)
-        .append(true)
-        .open(out.join("metrics.jsonl"))
-        .map_err(Error::io(out))?;
+    let mut log = std::fs::OpenOptions::new().create(true).append(true).open(out.join("metrics.jsonl")).map_err(Error::io(out))?;
     let first_epoch = run.epochs_done + 1;
     for epoch in first_epoch..=opts.epochs {
         if spec.pause_after.is_some_and(|p| epoch - first_epoch >= p) {
@@ -425,37 +364,18 @@ pub fn train(
             run.step += 1;
             loss_sum += loss * rows.len() as f64;
             let predicted = logits.argmax(D::Minus1)?.to_vec1::<u32>()?;
-            correct += predicted
-                .iter()
-                .zip(y.to_vec1::<u32>()?)
-                .filter(|(p, l)| **p == *l)
-                .count();
+            correct += predicted.iter().zip(y.to_vec1::<u32>()?).filter(|(p, l)| **p == *l).count();
             bar.inc(1);
         }
         let val = evaluate(&learner.model, &val_set)?;
-        let improved = run.best.as_ref().is_none_or(|b| {
-            val.accuracy > b.val_accuracy
-                || (val.accuracy == b.val_accuracy && val.loss < b.val_loss)
-        });
+        let improved =
+            run.best.as_ref().is_none_or(|b| val.accuracy > b.val_accuracy || (val.accuracy == b.val_accuracy && val.loss < b.val_loss));
         let mut test_accuracy = None;
         if improved {
-            let test = if test_set.is_empty() {
-                None
-            } else {
-                Some(evaluate(&learner.model, &test_set)?.accuracy)
-            };
+            let test = if test_set.is_empty() { None } else { Some(evaluate(&learner.model, &test_set)?.accuracy) };
             test_accuracy = test;
-            checkpoint::save(
-                &out.join("model"),
-                &learner.varmap,
-                &meta_for(epoch, val.accuracy, test),
-            )?;
-            run.best = Some(Best {
-                epoch,
-                val_accuracy: val.accuracy,
-                val_loss: val.loss,
-                test_accuracy: test.unwrap_or(f64::NAN),
-            });
+            checkpoint::save(&out.join("model"), &learner.varmap, &meta_for(epoch, val.accuracy, test))?;
+            run.best = Some(Best { epoch, val_accuracy: val.accuracy, val_loss: val.loss, test_accuracy: test.unwrap_or(f64::NAN) });
         }
         let seconds = started.elapsed().as_secs_f64();
         run.wall_seconds += seconds;
@@ -476,23 +396,14 @@ pub fn train(
             learner.optimizer.save(&dir.join("optimizer.safetensors"))?;
             write_json(&dir.join("state.json"), &run)
         })?;
-        writeln!(log, "{}", serde_json::to_string(&line).expect("plain data"))
-            .map_err(Error::io(out))?;
+        writeln!(log, "{}", serde_json::to_string(&line).expect("plain data")).map_err(Error::io(out))?;
         let best = run.best.as_ref().expect("set after the first epoch");
         bar.set_message(format!(
             "epoch {epoch}/{} loss {:.3} train {:.3} val {:.3} (best {:.3} @ {})",
-            opts.epochs,
-            line.train_loss,
-            line.train_accuracy,
-            val.accuracy,
-            best.val_accuracy,
-            best.epoch
+            opts.epochs, line.train_loss, line.train_accuracy, val.accuracy, best.val_accuracy, best.epoch
         ));
     }
-    let best = run
-        .best
-        .clone()
-        .ok_or_else(|| Error::Usage("no epoch was trained (epochs = 0)".into()))?;
+    let best = run.best.clone().ok_or_else(|| Error::Usage("no epoch was trained (epochs = 0)".into()))?;
     let result = RunResult {
         val_fold: spec.val_fold,
         seed: opts.seed,
@@ -511,11 +422,7 @@ fn truncate_metrics(path: &Path, epochs: usize) -> Result<()> {
     let Ok(text) = std::fs::read_to_string(path) else {
         return Ok(());
     };
-    let kept: String = text
-        .lines()
-        .take(epochs)
-        .map(|l| format!("{l}\n"))
-        .collect();
+    let kept: String = text.lines().take(epochs).map(|l| format!("{l}\n")).collect();
     std::fs::write(path, kept).map_err(Error::io(path))
 }
 

@@ -14,25 +14,16 @@ use super::*;
 mod onnx_check;
 
 fn golden(file: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/golden/icub20")
-        .join(file)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/golden/icub20").join(file)
 }
 
 fn identity_normalization(cfg: &Config) -> Normalization {
     let channels = cfg.sample_shape().iter().product::<usize>() / cfg.frames;
-    Normalization {
-        mean: vec![0.0; channels],
-        std: vec![1.0; channels],
-        frames: cfg.frames,
-    }
+    Normalization { mean: vec![0.0; channels], std: vec![1.0; channels], frames: cfg.frames }
 }
 
 fn meta(classes: usize) -> Metadata {
-    Metadata {
-        classes: (0..classes).map(|k| format!("class_{k}")).collect(),
-        provenance: serde_json::json!({"data": "golden"}),
-    }
+    Metadata { classes: (0..classes).map(|k| format!("class_{k}")).collect(), provenance: serde_json::json!({"data": "golden"}) }
 }
 
 fn scratch(tag: &str) -> PathBuf {
@@ -65,67 +56,21 @@ fn golden_model_in_onnxruntime_matches_the_golden_logits_at_batch_1_and_8() {
 fn pruned_frames_are_gathered_away_before_the_spatial_transformer() {
     let cfg = Config::icub20();
     let mut tensors = read_tensors(&golden("weights.safetensors")).unwrap();
-    let pruned = export(
-        &bake(&cfg, &tensors).unwrap(),
-        &identity_normalization(&cfg),
-        &meta(20),
-    )
-    .unwrap();
-    tensors
-        .get_mut("frame_mask")
-        .unwrap()
-        .1
-        .iter_mut()
-        .for_each(|v| *v = 1.0);
-    let full = export(
-        &bake(&cfg, &tensors).unwrap(),
-        &identity_normalization(&cfg),
-        &meta(20),
-    )
-    .unwrap();
+    let pruned = export(&bake(&cfg, &tensors).unwrap(), &identity_normalization(&cfg), &meta(20)).unwrap();
+    tensors.get_mut("frame_mask").unwrap().1.iter_mut().for_each(|v| *v = 1.0);
+    let full = export(&bake(&cfg, &tensors).unwrap(), &identity_normalization(&cfg), &meta(20)).unwrap();
     let graph = |m: &ModelProto| m.graph.clone().unwrap();
     let spatial_batch = |m: &ModelProto| {
         let g = graph(m);
-        g.initializer
-            .iter()
-            .find(|t| t.name.starts_with("kept_row_"))
-            .unwrap()
-            .dims[1]
+        g.initializer.iter().find(|t| t.name.starts_with("kept_row_")).unwrap().dims[1]
     };
-    assert_eq!(
-        spatial_batch(&pruned),
-        55,
-        "the golden frame mask prunes 20 of 75 frames"
-    );
+    assert_eq!(spatial_batch(&pruned), 55, "the golden frame mask prunes 20 of 75 frames");
     assert_eq!(spatial_batch(&full), 75);
-    let gathers = |m: &ModelProto| {
-        graph(m)
-            .node
-            .iter()
-            .filter(|n| n.op_type == "Gather")
-            .count()
-    };
-    assert_eq!(
-        gathers(&pruned),
-        gathers(&full) + 1,
-        "one Gather of the kept frames at the input"
-    );
-    assert_eq!(
-        graph(&pruned).node.len(),
-        graph(&full).node.len() + 3,
-        "gather, place, add constants"
-    );
-    let kept = pruned
-        .metadata_props
-        .iter()
-        .find(|p| p.key == "pvt3.kept_frames")
-        .unwrap();
-    assert_eq!(
-        serde_json::from_str::<Vec<usize>>(&kept.value)
-            .unwrap()
-            .len(),
-        55
-    );
+    let gathers = |m: &ModelProto| graph(m).node.iter().filter(|n| n.op_type == "Gather").count();
+    assert_eq!(gathers(&pruned), gathers(&full) + 1, "one Gather of the kept frames at the input");
+    assert_eq!(graph(&pruned).node.len(), graph(&full).node.len() + 3, "gather, place, add constants");
+    let kept = pruned.metadata_props.iter().find(|p| p.key == "pvt3.kept_frames").unwrap();
+    assert_eq!(serde_json::from_str::<Vec<usize>>(&kept.value).unwrap().len(), 55);
 }
 
 #[test]
@@ -133,37 +78,12 @@ fn what_cannot_be_exported_is_named() {
     let cfg = Config::icub20();
     let mut tensors = read_tensors(&golden("weights.safetensors")).unwrap();
     let baked = bake(&cfg, &tensors).unwrap();
-    let msg = export(
-        &baked,
-        &identity_normalization(&Config {
-            height: 3,
-            ..cfg.clone()
-        }),
-        &meta(20),
-    )
-    .unwrap_err()
-    .to_string();
-    assert!(
-        msg.contains("normalisation does not fit 60 channels"),
-        "{msg}"
-    );
-    let msg = export(&baked, &identity_normalization(&cfg), &meta(3))
-        .unwrap_err()
-        .to_string();
+    let msg = export(&baked, &identity_normalization(&Config { height: 3, ..cfg.clone() }), &meta(20)).unwrap_err().to_string();
+    assert!(msg.contains("normalisation does not fit 60 channels"), "{msg}");
+    let msg = export(&baked, &identity_normalization(&cfg), &meta(3)).unwrap_err().to_string();
     assert!(msg.contains("3 class names for 20 classes"), "{msg}");
-    tensors
-        .get_mut("frame_mask")
-        .unwrap()
-        .1
-        .iter_mut()
-        .for_each(|v| *v = 0.0);
-    let msg = export(
-        &bake(&cfg, &tensors).unwrap(),
-        &identity_normalization(&cfg),
-        &meta(20),
-    )
-    .unwrap_err()
-    .to_string();
+    tensors.get_mut("frame_mask").unwrap().1.iter_mut().for_each(|v| *v = 0.0);
+    let msg = export(&bake(&cfg, &tensors).unwrap(), &identity_normalization(&cfg), &meta(20)).unwrap_err().to_string();
     assert!(msg.contains("every frame is pruned"), "{msg}");
 }
 
@@ -175,20 +95,11 @@ fn committed_golden_onnx_is_what_the_exporter_writes() {
     let cfg = Config::icub20();
     let baked = bake(&cfg, &read_tensors(&golden("weights.safetensors")).unwrap()).unwrap();
     let classes = (0..20).map(|k| format!("material_{}", k + 1)).collect();
-    let meta = Metadata {
-        classes,
-        provenance: serde_json::json!({"data": "tests/golden/icub20 (independent implementation)"}),
-    };
-    let bytes = export(&baked, &identity_normalization(&cfg), &meta)
-        .unwrap()
-        .encode_to_vec();
+    let meta = Metadata { classes, provenance: serde_json::json!({"data": "tests/golden/icub20 (independent implementation)"}) };
+    let bytes = export(&baked, &identity_normalization(&cfg), &meta).unwrap().encode_to_vec();
     let path = golden("model.onnx");
     if std::env::var_os("PVT3_BLESS").is_some() {
         std::fs::write(&path, &bytes).unwrap();
     }
-    assert!(
-        std::fs::read(&path).ok() == Some(bytes),
-        "{} is stale: rerun this test with PVT3_BLESS=1",
-        path.display()
-    );
+    assert!(std::fs::read(&path).ok() == Some(bytes), "{} is stale: rerun this test with PVT3_BLESS=1", path.display());
 }

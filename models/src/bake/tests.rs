@@ -11,9 +11,7 @@ use crate::weights::{read_tensors, varmap_tensors};
 use crate::{Pvt3, Rng};
 
 fn golden(file: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/golden/icub20")
-        .join(file)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/golden/icub20").join(file)
 }
 
 /// The six real iCub samples (and the zero and constant ones) of the golden input.
@@ -23,20 +21,12 @@ fn real_samples() -> (Vec<f32>, usize) {
 }
 
 fn worst(a: &[Vec<f64>], b: impl IntoIterator<Item = f64>) -> f64 {
-    a.iter()
-        .flatten()
-        .zip(b)
-        .map(|(x, y)| (x - y).abs())
-        .fold(0.0, f64::max)
+    a.iter().flatten().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max)
 }
 
 #[test]
 fn golden_weights_baked_reproduce_the_golden_logits() {
-    let baked = bake(
-        &Config::icub20(),
-        &read_tensors(&golden("weights.safetensors")).unwrap(),
-    )
-    .unwrap();
+    let baked = bake(&Config::icub20(), &read_tensors(&golden("weights.safetensors")).unwrap()).unwrap();
     let expected: Array2<f64> = read_npy(golden("logits.npy")).unwrap();
     let (x, b) = real_samples();
     let logits = reference::forward(&baked, &x, b).unwrap();
@@ -44,11 +34,7 @@ fn golden_weights_baked_reproduce_the_golden_logits() {
     assert!(err <= 1e-5, "worst absolute error {err:e}");
     // The golden masks hold zeros: the baked model really is smaller.
     assert!(baked.kept_tokens.len() < 75);
-    assert!(baked
-        .space
-        .layers
-        .iter()
-        .any(|l| l.attn.head_dim < 64 && l.ffn.fc1.rows < 40));
+    assert!(baked.space.layers.iter().any(|l| l.attn.head_dim < 64 && l.ffn.fc1.rows < 40));
     assert!(baked.parameter_count() < Config::icub20().parameter_count());
     assert!(baked.mult_adds() < Config::icub20().mult_adds());
 }
@@ -58,17 +44,8 @@ fn set_mask(varmap: &candle_nn::VarMap, name: &str, rng: &mut Rng, zero: impl Fn
     let vars = varmap.data().lock().unwrap();
     let var = &vars[name];
     let n = var.elem_count();
-    let values: Vec<f32> = (0..n)
-        .map(|i| {
-            if zero(i) {
-                0.0
-            } else {
-                0.25 + 1.5 * rng.uniform()
-            }
-        })
-        .collect();
-    var.set(&Tensor::from_vec(values, n, &Device::Cpu).unwrap())
-        .unwrap();
+    let values: Vec<f32> = (0..n).map(|i| if zero(i) { 0.0 } else { 0.25 + 1.5 * rng.uniform() }).collect();
+    var.set(&Tensor::from_vec(values, n, &Device::Cpu).unwrap()).unwrap();
 }
 
 /// Bakes a masked icub20-shaped model and compares it with its parent on real samples.
@@ -80,60 +57,34 @@ fn check_against_parent(cfg: Config, prune_channels: bool, prune_frames: bool) {
         for i in 0..depth {
             let p = format!("{prefix}.layers.{i}");
             if !prune_channels {
-                set_mask(&varmap, &format!("{p}.attn.channel_mask"), &mut rng, |_| {
-                    false
-                });
-                set_mask(&varmap, &format!("{p}.ffn.channel_mask"), &mut rng, |_| {
-                    false
-                });
+                set_mask(&varmap, &format!("{p}.attn.channel_mask"), &mut rng, |_| false);
+                set_mask(&varmap, &format!("{p}.ffn.channel_mask"), &mut rng, |_| false);
             } else if i == 0 {
                 // Every channel but one gone (the survivor in the last head).
-                set_mask(&varmap, &format!("{p}.attn.channel_mask"), &mut rng, |c| {
-                    c != inner - 2
-                });
-                set_mask(&varmap, &format!("{p}.ffn.channel_mask"), &mut rng, |u| {
-                    u != 3
-                });
+                set_mask(&varmap, &format!("{p}.attn.channel_mask"), &mut rng, |c| c != inner - 2);
+                set_mask(&varmap, &format!("{p}.ffn.channel_mask"), &mut rng, |u| u != 3);
             } else {
                 // About half gone, unevenly across heads.
-                set_mask(&varmap, &format!("{p}.attn.channel_mask"), &mut rng, |c| {
-                    (c * 7 + i) % 3 == 0 || c < 3
-                });
-                set_mask(&varmap, &format!("{p}.ffn.channel_mask"), &mut rng, |u| {
-                    (u * 5 + i) % 2 == 0
-                });
+                set_mask(&varmap, &format!("{p}.attn.channel_mask"), &mut rng, |c| (c * 7 + i) % 3 == 0 || c < 3);
+                set_mask(&varmap, &format!("{p}.ffn.channel_mask"), &mut rng, |u| (u * 5 + i) % 2 == 0);
             }
         }
     }
-    set_mask(&varmap, "frame_mask", &mut rng, |t| {
-        prune_frames && t % 4 != 0
-    });
+    set_mask(&varmap, "frame_mask", &mut rng, |t| prune_frames && t % 4 != 0);
     let baked = bake(&cfg, &varmap_tensors(&varmap).unwrap()).unwrap();
     if prune_channels {
         assert_eq!(baked.space.layers[0].ffn.fc1.rows, 1);
-        assert_eq!(
-            baked.space.layers[0].attn.head_dim, 1,
-            "one channel in one head, a zero one in the others"
-        );
+        assert_eq!(baked.space.layers[0].attn.head_dim, 1, "one channel in one head, a zero one in the others");
     }
     if prune_frames {
         assert_eq!(baked.kept_tokens.len(), cfg.time_tokens().div_ceil(4));
     }
     let (x, b) = real_samples();
     let input = Tensor::from_vec(x.clone(), (b, 6, 10, 75), &Device::Cpu).unwrap();
-    let expected = parent
-        .forward(&input, None)
-        .unwrap()
-        .flatten_all()
-        .unwrap()
-        .to_vec1::<f32>()
-        .unwrap();
+    let expected = parent.forward(&input, None).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap();
     let got = reference::forward(&baked, &x, b).unwrap();
     let err = worst(&got, expected.iter().map(|v| *v as f64));
-    assert!(
-        err <= 1e-5,
-        "{cfg:?} channels {prune_channels} frames {prune_frames}: worst {err:e}"
-    );
+    assert!(err <= 1e-5, "{cfg:?} channels {prune_channels} frames {prune_frames}: worst {err:e}");
 }
 
 #[test]
@@ -145,12 +96,7 @@ fn baked_equals_masked_parent_with_one_head() {
 
 #[test]
 fn baked_equals_masked_parent_with_several_heads_and_tubelets() {
-    let cfg = Config {
-        heads: 4,
-        dim_head: 16,
-        tubelet: 3,
-        ..Config::icub20()
-    };
+    let cfg = Config { heads: 4, dim_head: 16, tubelet: 3, ..Config::icub20() };
     for (c, f) in [(true, false), (false, true), (true, true)] {
         check_against_parent(cfg.clone(), c, f);
     }
@@ -159,15 +105,7 @@ fn baked_equals_masked_parent_with_several_heads_and_tubelets() {
 #[test]
 fn missing_or_misshapen_tensors_cannot_be_baked() {
     let mut tensors = read_tensors(&golden("weights.safetensors")).unwrap();
-    let msg = bake(
-        &Config {
-            dim_head: 32,
-            ..Config::icub20()
-        },
-        &tensors,
-    )
-    .unwrap_err()
-    .to_string();
+    let msg = bake(&Config { dim_head: 32, ..Config::icub20() }, &tensors).unwrap_err().to_string();
     assert!(msg.contains("has shape [64], expected [32]"), "{msg}");
     tensors.remove("head.bias");
     let msg = bake(&Config::icub20(), &tensors).unwrap_err().to_string();

@@ -11,9 +11,7 @@ use crate::weights::{load_weights, save_weights};
 use crate::{Config, Error, Rng};
 
 fn golden(file: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/golden/icub20")
-        .join(file)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/golden/icub20").join(file)
 }
 
 #[test]
@@ -24,12 +22,7 @@ fn golden_icub20_logits_reproduced_in_f32() {
     let expected: Array2<f64> = read_npy(golden("logits.npy")).unwrap();
     let x = Tensor::from_vec(input.iter().copied().collect(), input.shape(), &Device::Cpu).unwrap();
     let logits = model.forward(&x, None).unwrap().to_vec2::<f32>().unwrap();
-    let worst = logits
-        .iter()
-        .flatten()
-        .zip(expected.iter())
-        .map(|(a, b)| (*a as f64 - b).abs())
-        .fold(0.0, f64::max);
+    let worst = logits.iter().flatten().zip(expected.iter()).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
     assert!(worst <= 1e-5, "worst absolute error {worst:e}");
 }
 
@@ -37,11 +30,7 @@ fn golden_icub20_logits_reproduced_in_f32() {
 fn icub20_has_64272_trainable_parameters_besides_the_frame_mask() {
     let (_, varmap) = Pvt3::init(&Config::icub20(), 0).unwrap();
     let vars = varmap.data().lock().unwrap();
-    let count: usize = vars
-        .iter()
-        .filter(|(n, _)| *n != "frame_mask")
-        .map(|(_, v)| v.elem_count())
-        .sum();
+    let count: usize = vars.iter().filter(|(n, _)| *n != "frame_mask").map(|(_, v)| v.elem_count()).sum();
     assert_eq!(count, 64_272);
     assert_eq!(vars["frame_mask"].elem_count(), 75);
     assert_eq!(count, Config::icub20().parameter_count());
@@ -49,16 +38,7 @@ fn icub20_has_64272_trainable_parameters_besides_the_frame_mask() {
 
 #[test]
 fn every_parameter_gets_a_finite_nonzero_gradient() {
-    for cfg in [
-        Config::icub20(),
-        Config {
-            heads: 2,
-            dim_head: 8,
-            tubelet: 3,
-            dropout: 0.1,
-            ..Config::icub20()
-        },
-    ] {
+    for cfg in [Config::icub20(), Config { heads: 2, dim_head: 8, tubelet: 3, dropout: 0.1, ..Config::icub20() }] {
         let (model, varmap) = Pvt3::init(&cfg, 1).unwrap();
         let mut rng = Rng::new(2);
         let data: Vec<f32> = (0..4 * 6 * 10 * 75).map(|_| rng.normal()).collect();
@@ -68,18 +48,10 @@ fn every_parameter_gets_a_finite_nonzero_gradient() {
         let loss = candle_nn::loss::cross_entropy(&logits, &labels).unwrap();
         let grads = loss.backward().unwrap();
         for (name, var) in varmap.data().lock().unwrap().iter() {
-            let g = grads
-                .get(var)
-                .unwrap_or_else(|| panic!("{name} has no gradient"));
+            let g = grads.get(var).unwrap_or_else(|| panic!("{name} has no gradient"));
             let g: Vec<f32> = g.flatten_all().unwrap().to_vec1().unwrap();
-            assert!(
-                g.iter().all(|v| v.is_finite()),
-                "{name} has a non-finite gradient"
-            );
-            assert!(
-                g.iter().any(|v| *v != 0.0),
-                "{name} has an all-zero gradient"
-            );
+            assert!(g.iter().all(|v| v.is_finite()), "{name} has a non-finite gradient");
+            assert!(g.iter().any(|v| *v != 0.0), "{name} has an all-zero gradient");
         }
     }
 }
@@ -95,31 +67,11 @@ fn weights_round_trip_and_foreign_checkpoints_are_named() {
     load_weights(&copy_vars, &path).unwrap();
     let x = Tensor::ones((1, 6, 10, 75), candle_core::DType::F32, &Device::Cpu).unwrap();
     let diff = (model.forward(&x, None).unwrap() - copy.forward(&x, None).unwrap()).unwrap();
-    assert_eq!(
-        diff.abs()
-            .unwrap()
-            .max_all()
-            .unwrap()
-            .to_scalar::<f32>()
-            .unwrap(),
-        0.0
-    );
+    assert_eq!(diff.abs().unwrap().max_all().unwrap().to_scalar::<f32>().unwrap(), 0.0);
 
-    let (_, other) = Pvt3::init(
-        &Config {
-            dim_head: 32,
-            ..Config::icub20()
-        },
-        0,
-    )
-    .unwrap();
+    let (_, other) = Pvt3::init(&Config { dim_head: 32, ..Config::icub20() }, 0).unwrap();
     let msg = load_weights(&other, &path).unwrap_err().to_string();
-    assert!(
-        msg.contains(
-            "`space.layers.0.attn.channel_mask` has shape [64], the configuration expects [32]"
-        ),
-        "{msg}"
-    );
+    assert!(msg.contains("`space.layers.0.attn.channel_mask` has shape [64], the configuration expects [32]"), "{msg}");
 
     std::fs::write(&path, b"not safetensors").unwrap();
     let msg = load_weights(&varmap, &path).unwrap_err().to_string();
@@ -142,10 +94,7 @@ fn wrong_input_shape_is_a_clear_error() {
 
 #[test]
 fn gelsight_preset_runs_on_rgb_video() {
-    let cfg = Config {
-        classes: 5,
-        ..Config::gelsight()
-    };
+    let cfg = Config { classes: 5, ..Config::gelsight() };
     let (model, _) = Pvt3::init(&cfg, 0).unwrap();
     let x = Tensor::zeros((1, 240, 320, 3, 25), candle_core::DType::F32, &Device::Cpu).unwrap();
     assert_eq!(model.forward(&x, None).unwrap().dims(), &[1, 5]);

@@ -24,20 +24,9 @@ fn main() -> ExitCode {
 fn run(model: &str, input: &str) -> pvt3_runtime::Result<()> {
     let classifier = Classifier::load(model)?;
     let (shape, values) = read_npy(std::path::Path::new(input))?;
-    let batch = if shape.len() == classifier.sample_shape().len() {
-        1
-    } else {
-        shape.first().copied().unwrap_or(0)
-    };
-    for (i, p) in classifier
-        .classify_batch(&values, batch)?
-        .iter()
-        .enumerate()
-    {
-        println!(
-            "{i}\t{}\t{}\t{:.4}",
-            p.class, p.label, p.probabilities[p.class]
-        );
+    let batch = if shape.len() == classifier.sample_shape().len() { 1 } else { shape.first().copied().unwrap_or(0) };
+    for (i, p) in classifier.classify_batch(&values, batch)?.iter().enumerate() {
+        println!("{i}\t{}\t{}\t{:.4}", p.class, p.label, p.probabilities[p.class]);
     }
     Ok(())
 }

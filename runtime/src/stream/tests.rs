@@ -7,9 +7,7 @@ use super::*;
 use crate::read_npy;
 
 fn golden(file: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../tests/golden/icub20")
-        .join(file)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/golden/icub20").join(file)
 }
 
 /// Frame `t` of window `w` of a `[batch, 6, 10, 75]` array.
@@ -30,12 +28,7 @@ fn streaming_frame_by_frame_equals_the_whole_window() {
         assert_eq!(session.received(), 75);
         let got = session.finish().unwrap();
         assert_eq!(session.received(), 0, "finishing starts the next touch");
-        let worst = got
-            .probabilities
-            .iter()
-            .zip(&expected.probabilities)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f32::max);
+        let worst = got.probabilities.iter().zip(&expected.probabilities).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
         assert!(worst <= 1e-5, "window {w}: {worst:e}");
         assert_eq!((got.class, &got.label), (expected.class, &expected.label));
     }
@@ -49,17 +42,8 @@ fn pruned_frames_are_dropped_unread_and_misuse_is_an_error() {
     let pruned = (0..75).find(|t| !kept.contains(t)).unwrap();
     let expected = c.classify(&x[..4500]).unwrap();
     let mut s = c.session().unwrap();
-    assert!(matches!(
-        s.finish(),
-        Err(Error::Incomplete { got: 0, frames: 75 })
-    ));
-    assert!(matches!(
-        s.push_frame(&[0.0; 59]),
-        Err(Error::FrameLength {
-            got: 59,
-            expected: 60
-        })
-    ));
+    assert!(matches!(s.finish(), Err(Error::Incomplete { got: 0, frames: 75 })));
+    assert!(matches!(s.push_frame(&[0.0; 59]), Err(Error::FrameLength { got: 59, expected: 60 })));
     for t in 0..75 {
         let mut f = frame(&x, 0, t);
         if t == pruned {
@@ -67,17 +51,11 @@ fn pruned_frames_are_dropped_unread_and_misuse_is_an_error() {
         } else if t == kept[0] {
             let mut bad = f.clone();
             bad[5] = f32::INFINITY;
-            assert!(matches!(
-                s.push_frame(&bad),
-                Err(Error::NonFinite { index: 5, .. })
-            ));
+            assert!(matches!(s.push_frame(&bad), Err(Error::NonFinite { index: 5, .. })));
         }
         s.push_frame(&f).unwrap();
     }
-    assert!(matches!(
-        s.push_frame(&frame(&x, 0, 0)),
-        Err(Error::TooManyFrames { frames: 75 })
-    ));
+    assert!(matches!(s.push_frame(&frame(&x, 0, 0)), Err(Error::TooManyFrames { frames: 75 })));
     assert_eq!(s.finish().unwrap().class, expected.class);
     s.push_frame(&frame(&x, 1, 0)).unwrap();
     s.reset();

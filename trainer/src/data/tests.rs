@@ -8,9 +8,7 @@ use ndarray_npy::{NpzWriter, WritableElement};
 use super::*;
 
 fn shipped(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../data")
-        .join(name)
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../data").join(name)
 }
 
 fn temp_dir(tag: &str) -> PathBuf {
@@ -32,10 +30,7 @@ fn array<T: WritableElement + Clone>(shape: &[usize], values: Vec<T>) -> ArrayD<
 #[test]
 fn shipped_icub20_loads_with_its_folds() {
     let d = Dataset::load(&shipped("icub20.npz"), 0).unwrap();
-    assert_eq!(
-        (d.len(), d.sample_shape.clone(), d.classes()),
-        (1000, vec![6, 10, 75], 20)
-    );
+    assert_eq!((d.len(), d.sample_shape.clone(), d.classes()), (1000, vec![6, 10, 75], 20));
     assert!(d.folds_from_file);
     let s = d.split(1).unwrap();
     assert_eq!((s.train.len(), s.val.len(), s.test.len()), (600, 200, 200));
@@ -49,14 +44,8 @@ fn shipped_biotac20_int16_reads_as_an_electrode_column() {
     assert_eq!(d.sample_shape, vec![19, 1, 400]);
     assert!(d.x.iter().all(|v| (0.0..=3396.0).contains(v)));
     d.check_fits(&pvt3_models::Config::biotac20()).unwrap();
-    let msg = d
-        .check_fits(&pvt3_models::Config::icub20())
-        .unwrap_err()
-        .to_string();
-    assert!(
-        msg.contains("samples are [19, 1, 400] but the model expects [6, 10, 75]"),
-        "{msg}"
-    );
+    let msg = d.check_fits(&pvt3_models::Config::icub20()).unwrap_err().to_string();
+    assert!(msg.contains("samples are [19, 1, 400] but the model expects [6, 10, 75]"), "{msg}");
 }
 
 #[test]
@@ -65,8 +54,7 @@ fn a_set_without_folds_gets_balanced_stratified_folds() {
     let path = dir.join("set.npz");
     let labels: Vec<i64> = (0..50).map(|i| i % 2).collect();
     write_npz(&path, &|w| {
-        w.add_array("x", &array(&[50, 3, 4], vec![1.0f64; 600]))
-            .unwrap();
+        w.add_array("x", &array(&[50, 3, 4], vec![1.0f64; 600])).unwrap();
         w.add_array("y", &array(&[50], labels.clone())).unwrap();
     });
     let d = Dataset::load(&path, 3).unwrap();
@@ -76,11 +64,7 @@ fn a_set_without_folds_gets_balanced_stratified_folds() {
         assert_eq!(members.len(), 10);
         assert_eq!(members.iter().filter(|&&i| d.labels[i] == 0).count(), 5);
     }
-    assert_eq!(
-        d.folds,
-        Dataset::load(&path, 3).unwrap().folds,
-        "the seed fixes the folds"
-    );
+    assert_eq!(d.folds, Dataset::load(&path, 3).unwrap().folds, "the seed fixes the folds");
     std::fs::remove_dir_all(dir).unwrap();
 }
 
@@ -102,8 +86,7 @@ fn bad_files_get_errors_that_say_what_was_expected() {
         (
             "label",
             Box::new(|w| {
-                w.add_array("x", &array(&[2, 2, 3], vec![0.0f32; 12]))
-                    .unwrap();
+                w.add_array("x", &array(&[2, 2, 3], vec![0.0f32; 12])).unwrap();
                 w.add_array("y", &array(&[2], vec![0.0f32, 1.5])).unwrap();
             }),
             "`y`[1] = 1.5 is not a whole number",
@@ -119,8 +102,7 @@ fn bad_files_get_errors_that_say_what_was_expected() {
         (
             "count",
             Box::new(|w| {
-                w.add_array("x", &array(&[2, 2, 3], vec![0.0f32; 12]))
-                    .unwrap();
+                w.add_array("x", &array(&[2, 2, 3], vec![0.0f32; 12])).unwrap();
                 w.add_array("y", &array(&[3], vec![0i64, 1, 1])).unwrap();
             }),
             "`y` has shape [3]; expected [2], one per sample",
@@ -128,40 +110,25 @@ fn bad_files_get_errors_that_say_what_was_expected() {
         (
             "fold",
             Box::new(|w| {
-                w.add_array("x", &array(&[2, 2, 3], vec![0.0f32; 12]))
-                    .unwrap();
+                w.add_array("x", &array(&[2, 2, 3], vec![0.0f32; 12])).unwrap();
                 w.add_array("y", &array(&[2], vec![0i64, 1])).unwrap();
                 w.add_array("fold", &array(&[2], vec![0i64, 7])).unwrap();
             }),
             "fold 7 is outside 0..=4",
         ),
-        (
-            "missing",
-            Box::new(|w| {
-                w.add_array("x", &array(&[2, 2, 3], vec![0.0f32; 12]))
-                    .unwrap()
-            }),
-            "no array `y` (found: x)",
-        ),
+        ("missing", Box::new(|w| w.add_array("x", &array(&[2, 2, 3], vec![0.0f32; 12])).unwrap()), "no array `y` (found: x)"),
     ];
     for (name, fill, expected) in cases {
         let path = dir.join(format!("{name}.npz"));
         write_npz(&path, &*fill);
         let msg = Dataset::load(&path, 0).unwrap_err().to_string();
         assert!(msg.contains(expected), "{name}: {msg}");
-        assert!(
-            msg.contains(&path.display().to_string()),
-            "{name}: the message names the file: {msg}"
-        );
+        assert!(msg.contains(&path.display().to_string()), "{name}: the message names the file: {msg}");
     }
-    let msg = Dataset::load(&dir.join("absent.npz"), 0)
-        .unwrap_err()
-        .to_string();
+    let msg = Dataset::load(&dir.join("absent.npz"), 0).unwrap_err().to_string();
     assert!(msg.contains("no such file or directory"), "{msg}");
     std::fs::write(dir.join("text.npz"), "hello").unwrap();
-    let msg = Dataset::load(&dir.join("text.npz"), 0)
-        .unwrap_err()
-        .to_string();
+    let msg = Dataset::load(&dir.join("text.npz"), 0).unwrap_err().to_string();
     assert!(msg.contains("not a readable .npz archive"), "{msg}");
     std::fs::remove_dir_all(dir).unwrap();
 }
@@ -170,18 +137,11 @@ fn bad_files_get_errors_that_say_what_was_expected() {
 fn a_directory_of_npy_files_loads_like_an_npz() {
     use ndarray_npy::write_npy;
     let dir = temp_dir("npydir");
-    write_npy(
-        dir.join("x.npy"),
-        &array(&[5, 2, 2, 3], (0..60).map(|v| v as u8).collect()),
-    )
-    .unwrap();
+    write_npy(dir.join("x.npy"), &array(&[5, 2, 2, 3], (0..60).map(|v| v as u8).collect())).unwrap();
     write_npy(dir.join("y.npy"), &array(&[5], vec![0i32, 1, 2, 0, 1])).unwrap();
     write_npy(dir.join("fold.npy"), &array(&[5], vec![0i64, 1, 2, 3, 4])).unwrap();
     let d = Dataset::load(&dir, 0).unwrap();
-    assert_eq!(
-        (d.sample_shape.clone(), d.classes(), d.folds.clone()),
-        (vec![2, 2, 3], 3, vec![0, 1, 2, 3, 4])
-    );
+    assert_eq!((d.sample_shape.clone(), d.classes(), d.folds.clone()), (vec![2, 2, 3], 3, vec![0, 1, 2, 3, 4]));
     assert_eq!(d.sample(1)[0], 12.0);
     std::fs::remove_dir_all(dir).unwrap();
 }

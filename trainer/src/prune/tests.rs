@@ -17,28 +17,9 @@ fn pruned_entries_stay_zero_and_the_baked_model_matches() {
     let (dense, pruned) = (out_dir("prune-dense"), out_dir("prune-ft"));
     let mut s = spec(&data, 8, None);
     s.options.l1 = 0.05;
-    train(&s, &dense, false, &ProgressBar::hidden())
-        .unwrap()
-        .unwrap();
-    let stage = PruneStage {
-        spec: PruneSpec {
-            channels: 50.0,
-            frames: 50.0,
-            scope: Scope::Local,
-        },
-        epochs: 4,
-        lr: 1e-3,
-    };
-    let r = prune_and_fine_tune(
-        &dense,
-        &data,
-        &stage,
-        &pruned,
-        false,
-        &ProgressBar::hidden(),
-    )
-    .unwrap()
-    .unwrap();
+    train(&s, &dense, false, &ProgressBar::hidden()).unwrap().unwrap();
+    let stage = PruneStage { spec: PruneSpec { channels: 50.0, frames: 50.0, scope: Scope::Local }, epochs: 4, lr: 1e-3 };
+    let r = prune_and_fine_tune(&dense, &data, &stage, &pruned, false, &ProgressBar::hidden()).unwrap().unwrap();
     assert!(r.test_accuracy > 0.0);
 
     let (meta, model, varmap) = checkpoint::load(&pruned).unwrap();
@@ -46,11 +27,7 @@ fn pruned_entries_stay_zero_and_the_baked_model_matches() {
     let tensors = varmap_tensors(&varmap).unwrap();
     let zeros = |name: &str| tensors[name].1.iter().filter(|v| **v == 0.0).count();
     assert_eq!(zeros("frame_mask"), 2, "half of the 4 temporal tokens");
-    assert_eq!(
-        zeros("space.layers.0.attn.channel_mask"),
-        4,
-        "half of each head's 4 channels"
-    );
+    assert_eq!(zeros("space.layers.0.attn.channel_mask"), 4, "half of each head's 4 channels");
     assert_eq!(zeros("temporal.layers.0.ffn.channel_mask"), 4);
 
     let baked = bake(&meta.config, &tensors).unwrap();
@@ -59,20 +36,9 @@ fn pruned_entries_stay_zero_and_the_baked_model_matches() {
     let normalised = Samples::new(&data, &split.test, &meta.normalization);
     let rows: Vec<usize> = (0..normalised.len()).collect();
     let (x, _) = normalised.batch(&rows, |_| {}).unwrap();
-    let expected = model
-        .forward(&x, None)
-        .unwrap()
-        .flatten_all()
-        .unwrap()
-        .to_vec1::<f32>()
-        .unwrap();
+    let expected = model.forward(&x, None).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap();
     let got = reference::forward(&baked, &normalised.x, rows.len()).unwrap();
-    let worst = got
-        .iter()
-        .flatten()
-        .zip(&expected)
-        .map(|(a, b)| (a - *b as f64).abs())
-        .fold(0.0, f64::max);
+    let worst = got.iter().flatten().zip(&expected).map(|(a, b)| (a - *b as f64).abs()).fold(0.0, f64::max);
     assert!(worst < 1e-5, "worst {worst:e}");
     std::fs::remove_dir_all(dense).unwrap();
     std::fs::remove_dir_all(pruned).unwrap();

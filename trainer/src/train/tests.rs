@@ -112,27 +112,16 @@ fn metrics(dir: &std::path::Path) -> Vec<serde_json::Value> {
 fn learns_a_separable_problem_and_writes_a_checkpoint() {
     let data = tiny_data();
     let dir = out_dir("learn");
-    let r = train(&spec(&data, 30, None), &dir, false, &ProgressBar::hidden())
-        .unwrap()
-        .unwrap();
+    let r = train(&spec(&data, 30, None), &dir, false, &ProgressBar::hidden()).unwrap().unwrap();
     assert!(r.test_accuracy >= 0.9, "{r:?}");
     assert_eq!(metrics(&dir).len(), 30);
     let (meta, _, _) = crate::checkpoint::load(&dir).unwrap();
     assert_eq!(meta.classes, vec!["up", "down"]);
     assert_eq!(meta.provenance.epoch, r.best_epoch);
     let split = data.split(0).unwrap();
-    assert_eq!(
-        meta.normalization,
-        crate::normalization::fit(&data, &split.train),
-        "fitted on the training split only"
-    );
-    let again = train(&spec(&data, 30, None), &dir, false, &ProgressBar::hidden())
-        .unwrap_err()
-        .to_string();
-    assert!(
-        again.contains("already holds a run; pass --resume"),
-        "{again}"
-    );
+    assert_eq!(meta.normalization, crate::normalization::fit(&data, &split.train), "fitted on the training split only");
+    let again = train(&spec(&data, 30, None), &dir, false, &ProgressBar::hidden()).unwrap_err().to_string();
+    assert!(again.contains("already holds a run; pass --resume"), "{again}");
     std::fs::remove_dir_all(dir).unwrap();
 }
 
@@ -140,28 +129,15 @@ fn learns_a_separable_problem_and_writes_a_checkpoint() {
 fn a_seed_fixes_the_run_and_a_paused_run_resumes_exactly() {
     let data = tiny_data();
     let (a, b) = (out_dir("a"), out_dir("b"));
-    let ra = train(&spec(&data, 6, None), &a, false, &ProgressBar::hidden())
-        .unwrap()
-        .unwrap();
-    assert!(
-        train(&spec(&data, 6, Some(2)), &b, false, &ProgressBar::hidden())
-            .unwrap()
-            .is_none()
-    );
+    let ra = train(&spec(&data, 6, None), &a, false, &ProgressBar::hidden()).unwrap().unwrap();
+    assert!(train(&spec(&data, 6, Some(2)), &b, false, &ProgressBar::hidden()).unwrap().is_none());
     assert_eq!(metrics(&b).len(), 2);
-    let rb = train(&spec(&data, 6, None), &b, true, &ProgressBar::hidden())
-        .unwrap()
-        .unwrap();
-    assert_eq!(
-        (ra.best_epoch, ra.val_accuracy, ra.test_accuracy),
-        (rb.best_epoch, rb.val_accuracy, rb.test_accuracy)
-    );
+    let rb = train(&spec(&data, 6, None), &b, true, &ProgressBar::hidden()).unwrap().unwrap();
+    assert_eq!((ra.best_epoch, ra.val_accuracy, ra.test_accuracy), (rb.best_epoch, rb.val_accuracy, rb.test_accuracy));
     assert_eq!(metrics(&a), metrics(&b));
     let weights = |d: &PathBuf| std::fs::read(d.join("model/weights.safetensors")).unwrap();
     assert_eq!(weights(&a), weights(&b), "identical weights, bit for bit");
-    let done = train(&spec(&data, 6, None), &b, true, &ProgressBar::hidden())
-        .unwrap()
-        .unwrap();
+    let done = train(&spec(&data, 6, None), &b, true, &ProgressBar::hidden()).unwrap().unwrap();
     assert_eq!(done, rb, "resuming a finished run returns its result");
     std::fs::remove_dir_all(a).unwrap();
     std::fs::remove_dir_all(b).unwrap();
@@ -173,42 +149,26 @@ fn random_pruning_regularises_without_leaving_zeros_behind() {
     let dir = out_dir("random-prune");
     let mut s = spec(&data, 30, None);
     s.options.random_prune = 0.05;
-    let r = train(&s, &dir, false, &ProgressBar::hidden())
-        .unwrap()
-        .unwrap();
+    let r = train(&s, &dir, false, &ProgressBar::hidden()).unwrap().unwrap();
     // A width-8 model is fragile: 5 % of its weights gone each step costs accuracy, but it learns.
     assert!(r.test_accuracy >= 0.75, "{r:?}");
     let (_, _, varmap) = crate::checkpoint::load(&dir).unwrap();
     let vars = varmap.data().lock().unwrap();
-    let w = vars["space.layers.0.ffn.fc1.weight"]
-        .flatten_all()
-        .unwrap()
-        .to_vec1::<f32>()
-        .unwrap();
-    assert!(
-        w.iter().all(|v| *v != 0.0),
-        "the pruned entries are restored after every step"
-    );
+    let w = vars["space.layers.0.ffn.fc1.weight"].flatten_all().unwrap().to_vec1::<f32>().unwrap();
+    assert!(w.iter().all(|v| *v != 0.0), "the pruned entries are restored after every step");
     std::fs::remove_dir_all(dir).unwrap();
 }
 
 #[test]
 fn time_shift_moves_frames_and_repeats_the_edge() {
-    let opts = TrainOptions {
-        aug_shift: 2,
-        aug_gain: 0.0,
-        aug_noise: 0.0,
-        ..TrainOptions::default()
-    };
+    let opts = TrainOptions { aug_shift: 2, aug_gain: 0.0, aug_noise: 0.0, ..TrainOptions::default() };
     let mut rng = Rng::new(1);
     let mut seen = std::collections::BTreeSet::new();
     for _ in 0..50 {
         let mut sample: Vec<f32> = (0..10).map(|t| t as f32).collect(); // two channels of 5 frames
         augment(&mut sample, 5, &opts, &mut rng);
         let shift = 2 - sample[2] as isize;
-        let expected: Vec<f32> = (0..10)
-            .map(|i| ((i % 5) as isize - shift).clamp(0, 4) as f32 + (i / 5 * 5) as f32)
-            .collect();
+        let expected: Vec<f32> = (0..10).map(|i| ((i % 5) as isize - shift).clamp(0, 4) as f32 + (i / 5 * 5) as f32).collect();
         assert_eq!(sample, expected);
         seen.insert(shift);
     }
