@@ -63,37 +63,44 @@ fn gelu(g: &mut Graph, x: &str) -> String {
     g.op("Mul", &[&prod, &half])
 }
 
-/// Attention over `x` `[sequences, tokens, dim]`; the scale is folded into the q weights.
-fn attention(g: &mut Graph, x: &str, a: &BakedAttention, hint: &str) -> String {
+/// Softmax over the last axis from elementwise ops and reductions. tract's Softmax op walks the
+/// rows one by one, which cost more than all matrix products together on the spatial stage's
+/// many 5-token rows; these ops vectorise over the whole tensor.
+fn softmax_rows(g: &mut Graph, x: &str) -> String {
+    let max = g.node("ReduceMax", &[x], vec![ints("axes", &[-1]), int("keepdims", 1)], None);
+    let shifted = g.op("Sub", &[x, &max]);
+    let e = g.op("Exp", &[&shifted]);
+    let last = g.i64s("last_axis", &[1], vec![-1]);
+    let sum = g.node("ReduceSum", &[&e, &last], vec![int("keepdims", 1)], None);
+    g.op("Div", &[&e, &sum])
+}
+
+/// Attention over `x` `[sequences × tokens, dim]`, `tokens` per sequence; the scale is folded
+/// into the q weights. Projections run on the flat rows as one matrix product each; only the
+/// scores and their mixing see the sequences.
+fn attention(g: &mut Graph, x: &str, tokens: usize, a: &BakedAttention, hint: &str) -> String {
     let q_scaled = Dense { weight: a.q.weight.iter().map(|w| w * a.scale).collect(), ..a.q.clone() };
     let q = linear(g, x, &q_scaled, &format!("{hint}_q"));
     let k = linear(g, x, &a.k, &format!("{hint}_k"));
     let v = linear(g, x, &a.v, &format!("{hint}_v"));
-    let mixed = if a.heads == 1 {
-        let kt = g.node("Transpose", &[&k], vec![ints("perm", &[0, 2, 1])], None);
-        let scores = g.op("MatMul", &[&q, &kt]);
-        let probs = g.node("Softmax", &[&scores], vec![int("axis", -1)], None);
-        g.op("MatMul", &[&probs, &v])
-    } else {
-        let split = g.i64s("split_heads", &[4], vec![0, 0, a.heads as i64, a.head_dim as i64]);
-        let heads = |g: &mut Graph, t: &str, perm: &[i64]| {
-            let r = g.op("Reshape", &[t, &split]);
-            g.node("Transpose", &[&r], vec![ints("perm", perm)], None)
-        };
-        let (qh, kt, vh) = (heads(g, &q, &[0, 2, 1, 3]), heads(g, &k, &[0, 2, 3, 1]), heads(g, &v, &[0, 2, 1, 3]));
-        let scores = g.op("MatMul", &[&qh, &kt]);
-        let probs = g.node("Softmax", &[&scores], vec![int("axis", -1)], None);
-        let mixed = g.op("MatMul", &[&probs, &vh]);
-        let back = g.node("Transpose", &[&mixed], vec![ints("perm", &[0, 2, 1, 3])], None);
-        let merge = g.i64s("merge_heads", &[3], vec![0, 0, (a.heads * a.head_dim) as i64]);
-        g.op("Reshape", &[&back, &merge])
+    let split = g.i64s("split_heads", &[4], vec![-1, tokens as i64, a.heads as i64, a.head_dim as i64]);
+    let heads = |g: &mut Graph, t: &str, perm: &[i64]| {
+        let r = g.op("Reshape", &[t, &split]);
+        g.node("Transpose", &[&r], vec![ints("perm", perm)], None)
     };
-    linear(g, &mixed, &a.out, &format!("{hint}_out"))
+    let (qh, kt, vh) = (heads(g, &q, &[0, 2, 1, 3]), heads(g, &k, &[0, 2, 3, 1]), heads(g, &v, &[0, 2, 1, 3]));
+    let scores = g.op("MatMul", &[&qh, &kt]);
+    let probs = softmax_rows(g, &scores);
+    let mixed = g.op("MatMul", &[&probs, &vh]);
+    let back = g.node("Transpose", &[&mixed], vec![ints("perm", &[0, 2, 1, 3])], None);
+    let rows = g.i64s("merge_heads", &[2], vec![-1, (a.heads * a.head_dim) as i64]);
+    let merged = g.op("Reshape", &[&back, &rows]);
+    linear(g, &merged, &a.out, &format!("{hint}_out"))
 }
 
-fn block(g: &mut Graph, x: &str, b: &BakedBlock, eps: f64, hint: &str) -> String {
+fn block(g: &mut Graph, x: &str, tokens: usize, b: &BakedBlock, eps: f64, hint: &str) -> String {
     let n1 = layer_norm(g, x, &b.attn_norm, eps, &format!("{hint}_attn_norm"));
-    let a = attention(g, &n1, &b.attn, &format!("{hint}_attn"));
+    let a = attention(g, &n1, tokens, &b.attn, &format!("{hint}_attn"));
     let x1 = g.op("Add", &[x, &a]);
     let n2 = layer_norm(g, &x1, &b.ffn_norm, eps, &format!("{hint}_ffn_norm"));
     let h = linear(g, &n2, &b.ffn.fc1, &format!("{hint}_fc1"));
@@ -103,11 +110,16 @@ fn block(g: &mut Graph, x: &str, b: &BakedBlock, eps: f64, hint: &str) -> String
 }
 
 /// A transformer over `x` `[sequences, tokens, dim]` → its normalised first token `[sequences, dim]`.
-fn transformer_cls(g: &mut Graph, x: &str, t: &BakedTransformer, eps: f64, hint: &str) -> String {
-    let mut x = x.to_string();
+/// The blocks work on the flat `[sequences × tokens, dim]` rows.
+fn transformer_cls(g: &mut Graph, x: &str, tokens: usize, t: &BakedTransformer, eps: f64, hint: &str) -> String {
+    let d = t.norm.weight.len() as i64;
+    let flat = g.i64s("rows", &[2], vec![-1, d]);
+    let mut x = g.op("Reshape", &[x, &flat]);
     for (i, b) in t.layers.iter().enumerate() {
-        x = block(g, &x, b, eps, &format!("{hint}{i}"));
+        x = block(g, &x, tokens, b, eps, &format!("{hint}{i}"));
     }
+    let seqs = g.i64s("sequences", &[3], vec![-1, tokens as i64, d]);
+    let x = g.op("Reshape", &[&x, &seqs]);
     let zero = g.i64s("first", &[], vec![0]);
     let cls = g.node("Gather", &[&x, &zero], vec![int("axis", 1)], None);
     layer_norm(g, &cls, &t.norm, eps, &format!("{hint}_norm"))
@@ -224,9 +236,11 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
     let grid = g.i64s("grid", &[7], grid.to_vec());
     let x = g.op("Reshape", &[&x, &grid]);
     let x = g.node("Transpose", &[&x], vec![ints("perm", &[0, 2, 4, 1, 3, 5, 6])], None);
-    let tokens_shape = g.i64s("tokens", &[3], vec![0, n as i64, c.patch_dim() as i64]);
-    let x = g.op("Reshape", &[&x, &tokens_shape]);
+    let patch_rows = g.i64s("patch_rows", &[2], vec![-1, c.patch_dim() as i64]);
+    let x = g.op("Reshape", &[&x, &patch_rows]);
     let x = linear(&mut g, &x, &m.patch_embed, "patch_embed");
+    let tokens_shape = g.i64s("tokens", &[3], vec![-1, n as i64, d as i64]);
+    let x = g.op("Reshape", &[&x, &tokens_shape]);
     let scales = g.f32s("frame_scale", &[tk], m.token_scale.clone());
     let scale = g.node("Gather", &[&scales, TOKEN_INDEX], vec![int("axis", 0)], None);
     let column = g.i64s("column", &[3], vec![-1, 1, 1]);
@@ -240,7 +254,7 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
     let positions = g.f32s("pos_embed", &[tk, n + 1, d], m.pos_embed.clone());
     let pos = g.node("Gather", &[&positions, TOKEN_INDEX], vec![int("axis", 0)], None);
     let tokens = g.op("Add", &[&tokens, &pos]);
-    let encoded = transformer_cls(&mut g, &tokens, &m.space, eps, "space");
+    let encoded = transformer_cls(&mut g, &tokens, n + 1, &m.space, eps, "space");
     g.node("Identity", &[&encoded], vec![], Some(TOKEN_ENCODINGS));
 
     // Temporal stage.
@@ -262,7 +276,7 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
     let temporal_cls = g.f32s("temporal_cls", &[1, 1, d], m.temporal_cls.clone());
     let tcls = expand_over_batch(&mut g, &temporal_cls, &batch, &[1, d]);
     let sequence = g.node("Concat", &[&tcls, &frames], vec![int("axis", 1)], None);
-    let pooled = transformer_cls(&mut g, &sequence, &m.temporal, eps, "temporal");
+    let pooled = transformer_cls(&mut g, &sequence, t + 1, &m.temporal, eps, "temporal");
     let normed = layer_norm(&mut g, &pooled, &m.head_norm, eps, "head_norm");
     let logits = linear(&mut g, &normed, &m.head, "head");
     g.node("Identity", &[&logits], vec![], Some(LOGITS));

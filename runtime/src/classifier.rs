@@ -99,6 +99,11 @@ impl Classifier {
         &self.sample_shape
     }
 
+    /// Frames per temporal token (the spatial stage encodes them together).
+    pub fn tubelet(&self) -> usize {
+        self.tubelet
+    }
+
     /// The frames of a window the model reads; the others were pruned.
     pub fn kept_frames(&self) -> &[usize] {
         &self.kept_frames

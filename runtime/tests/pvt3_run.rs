@@ -35,3 +35,18 @@ fn wrong_input_fails_with_a_message() {
     let out = Command::new(env!("CARGO_BIN_EXE_pvt3-run")).arg(golden("manifest.json")).arg(golden("input.npy")).output().unwrap();
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("manifest.json"));
 }
+
+#[test]
+fn bench_reports_batch_and_streaming_latencies() {
+    let out =
+        Command::new(env!("CARGO_BIN_EXE_pvt3-run")).args(["--bench"]).arg(golden("model.onnx")).args(["1", "0.05"]).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!((report["frames"].as_u64(), report["kept_frames"].as_u64()), (Some(75), Some(55)));
+    for key in ["batch1_median_us", "batch32_windows_per_second", "stream_kept_frame_median_us", "stream_end_of_touch_median_us"] {
+        assert!(report[key].as_f64().unwrap() > 0.0, "{key}: {report}");
+    }
+    assert!(report["batch1_p99_us"].as_f64() >= report["batch1_median_us"].as_f64());
+    let out = Command::new(env!("CARGO_BIN_EXE_pvt3-run")).args(["--bench"]).arg(golden("model.onnx")).arg("zero").output().unwrap();
+    assert_eq!(out.status.code(), Some(2), "a bad thread count gets the usage");
+}

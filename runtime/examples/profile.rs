@@ -1,0 +1,53 @@
+//! Where the runtime spends its time: `cargo run --release -p pvt3-runtime --example profile --
+//! MODEL.onnx [BATCH [RUNS]]` times every node of the optimised tract plan over RUNS runs on
+//! synthetic input and prints the time per operator kind, largest first (docs/benchmarks.md).
+
+use std::collections::HashMap;
+use std::time::Instant;
+
+use tract_onnx::prelude::*;
+use tract_onnx::tract_core::plan::{eval, SimplePlan, SimpleState};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let path = args.first().ok_or("usage: profile MODEL.onnx [BATCH [RUNS]]")?;
+    let batch: usize = args.get(1).map_or(Ok(1), |v| v.parse())?;
+    let runs: usize = args.get(2).map_or(Ok(200), |v| v.parse())?;
+    let shape = {
+        let c = pvt3_runtime::Classifier::load(path)?;
+        let mut s = vec![batch];
+        s.extend(c.sample_shape());
+        s
+    };
+    let model = tract_onnx::onnx().model_for_path(path)?.with_input_fact(0, f32::fact(&shape).into())?.into_optimized()?;
+    let plan = SimplePlan::new(model)?;
+    let n: usize = shape.iter().product();
+    let input = Tensor::from_shape(&shape, &(0..n).map(|i| (i % 7) as f32 - 3.0).collect::<Vec<_>>())?;
+    let mut by_op: HashMap<String, (f64, usize)> = HashMap::new();
+    let mut total = 0.0;
+    for run in 0..runs + 5 {
+        let mut state = SimpleState::new(&plan)?;
+        let started = Instant::now();
+        state.run_plan_with_eval(tvec!(input.clone().into()), |session, op_state, node, inputs| {
+            let t = Instant::now();
+            let out = eval(session, op_state, node, inputs);
+            if run >= 5 {
+                let e = by_op.entry(node.op().name().into_owned()).or_default();
+                e.0 += t.elapsed().as_secs_f64();
+                e.1 += 1;
+            }
+            out
+        })?;
+        if run >= 5 {
+            total += started.elapsed().as_secs_f64();
+        }
+    }
+    let mut rows: Vec<_> = by_op.into_iter().collect();
+    rows.sort_by(|a, b| b.1 .0.total_cmp(&a.1 .0));
+    println!("| operator | nodes | µs per run | share |\n|---|---:|---:|---:|");
+    for (op, (secs, calls)) in rows {
+        println!("| {op} | {} | {:.1} | {:.1} % |", calls / runs, secs / runs as f64 * 1e6, 100.0 * secs / total);
+    }
+    println!("| **whole plan** | {} | {:.1} | |", plan.model().nodes().len(), total / runs as f64 * 1e6);
+    Ok(())
+}

@@ -1,0 +1,102 @@
+//! `pvt3-run --bench MODEL.onnx`: latency on this machine, measured the way a robot runs the
+//! model. Whole windows at batch 1 (median and p99) and batch 32 (windows per second), and a
+//! streamed touch: each kept frame's spatial encoding, each pruned frame's drop, and the
+//! end-of-touch temporal stage. Inputs are synthetic (latency does not depend on the values).
+
+use std::time::{Duration, Instant};
+
+use pvt3_runtime::{Classifier, Result};
+use serde_json::json;
+
+/// Deterministic values of about unit scale.
+fn synthetic(n: usize) -> Vec<f32> {
+    let mut state = 0x2545_f491_4f6c_dd1du64;
+    (0..n)
+        .map(|_| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state >> 40) as f32 / (1u64 << 23) as f32 - 1.0
+        })
+        .collect()
+}
+
+/// Runs `f` until `budget` is spent (at least `min` times) after three untimed calls.
+fn sample(budget: Duration, min: usize, mut f: impl FnMut() -> Result<()>) -> Result<Vec<f64>> {
+    for _ in 0..3 {
+        f()?;
+    }
+    let (start, mut times) = (Instant::now(), Vec::new());
+    while times.len() < min || start.elapsed() < budget {
+        let t = Instant::now();
+        f()?;
+        times.push(t.elapsed().as_secs_f64());
+    }
+    Ok(times)
+}
+
+/// (median, p99) in microseconds (zeros for no samples).
+fn quantiles(mut times: Vec<f64>) -> (f64, f64) {
+    if times.is_empty() {
+        return (0.0, 0.0);
+    }
+    times.sort_by(f64::total_cmp);
+    let at = |q: f64| times[((times.len() - 1) as f64 * q).round() as usize] * 1e6;
+    (at(0.5), at(0.99))
+}
+
+pub fn bench(path: &str, threads: usize, seconds: f64) -> Result<serde_json::Value> {
+    let c = Classifier::load(path)?.with_threads(threads);
+    let budget = Duration::from_secs_f64(seconds);
+    let len: usize = c.sample_shape().iter().product();
+    let windows = synthetic(32 * len);
+    let one = &windows[..len];
+    let (b1_median, b1_p99) = quantiles(sample(budget, 20, || c.classify(one).map(drop))?);
+    let b32 = sample(budget, 5, || c.classify_batch(&windows, 32).map(drop))?;
+    let b32_windows_per_second = 32.0 * b32.len() as f64 / b32.iter().sum::<f64>();
+
+    // A streamed touch: frame t of the window is every `frames`-th value.
+    let frames = *c.sample_shape().last().expect("a frame axis");
+    let frame_len = len / frames;
+    let touch: Vec<Vec<f32>> = (0..frames).map(|t| (0..frame_len).map(|j| one[j * frames + t]).collect()).collect();
+    let mut session = c.session()?;
+    let (mut kept, mut dropped, mut finish) = (Vec::new(), Vec::new(), Vec::new());
+    let kept_frames = c.kept_frames().to_vec();
+    let start = Instant::now();
+    while finish.len() < 20 || start.elapsed() < budget {
+        for (t, frame) in touch.iter().enumerate() {
+            let s = Instant::now();
+            session.push_frame(frame)?;
+            let e = s.elapsed().as_secs_f64();
+            // With tubelets, a kept token's last frame runs its spatial encoding; the others wait.
+            if kept_frames.binary_search(&t).is_err() {
+                dropped.push(e);
+            } else if (t + 1) % c.tubelet() == 0 {
+                kept.push(e);
+            }
+        }
+        let s = Instant::now();
+        session.finish()?;
+        finish.push(s.elapsed().as_secs_f64());
+    }
+    let touches = finish.len() as f64;
+    let per_touch = (kept.iter().sum::<f64>() + dropped.iter().sum::<f64>() + finish.iter().sum::<f64>()) / touches * 1e6;
+    let (kept_median, kept_p99) = quantiles(kept);
+    let (dropped_median, _) = quantiles(dropped);
+    let (finish_median, finish_p99) = quantiles(finish);
+    Ok(json!({
+        "model": path,
+        "threads": threads,
+        "frames": frames,
+        "kept_frames": kept_frames.len(),
+        "batch1_median_us": b1_median,
+        "batch1_p99_us": b1_p99,
+        "batch32_windows_per_second": b32_windows_per_second,
+        "stream_kept_frame_median_us": kept_median,
+        "stream_kept_frame_p99_us": kept_p99,
+        "stream_pruned_frame_median_us": dropped_median,
+        "stream_end_of_touch_median_us": finish_median,
+        "stream_end_of_touch_p99_us": finish_p99,
+        "stream_compute_per_touch_us": per_touch,
+    }))
+}
