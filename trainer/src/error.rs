@@ -14,6 +14,10 @@ pub enum Error {
     Checkpoint { path: PathBuf, reason: String },
     #[error("{path}: {source}")]
     Io { path: PathBuf, source: std::io::Error },
+    #[error(transparent)]
+    Export(#[from] pvt3_export::Error),
+    #[error(transparent)]
+    Runtime(#[from] pvt3_runtime::Error),
     #[error("{0}")]
     Usage(String),
 }

@@ -12,6 +12,7 @@ pub mod normalization;
 pub mod optim;
 pub mod prune;
 pub mod schedule;
+pub mod stress;
 pub mod train;
 
 pub use error::{Error, Result};

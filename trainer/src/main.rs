@@ -182,15 +182,18 @@ enum Command {
     },
 }
 
-/// candle allocates fresh buffers for every op, and glibc hands large ones back to the kernel
-/// on free, so training spent a quarter of its time in page faults zeroing new pages. Keeping
-/// freed memory in the heap makes the next step reuse it.
-fn keep_freed_memory() {
-    // SAFETY: mallopt only adjusts allocator parameters; called before any other thread starts.
+/// Process settings, before any other thread starts.
+/// - Memory: candle allocates fresh buffers for every op, and glibc hands large ones back to the
+///   kernel on free, so training spent a quarter of its time in page faults zeroing new pages.
+///   Keeping freed memory in the heap makes the next step reuse it.
+/// - SIGPIPE back to its default, so that `pvt3 info | head` ends quietly instead of panicking.
+fn set_up_process() {
+    // SAFETY: both only adjust process-wide settings, and no other thread exists yet.
     unsafe {
         libc::mallopt(libc::M_MMAP_THRESHOLD, 32 << 20);
         libc::mallopt(libc::M_TRIM_THRESHOLD, 1 << 30);
         libc::mallopt(libc::M_TOP_PAD, 64 << 20);
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }
 
@@ -206,10 +209,19 @@ enum Bench {
         #[command(flatten)]
         options: TrainOptions,
     },
+    /// Numerical stress of the robot runtime: the exported model's f32 logits against the baked
+    /// f64 reference on extreme inputs and folded weights; prints a markdown table (docs/benchmarks.md).
+    Stress {
+        /// A run or checkpoint directory, or a file from `pvt3 bake`.
+        model: PathBuf,
+        /// Random windows per case.
+        #[arg(long, default_value_t = 8)]
+        windows: usize,
+    },
 }
 
 fn main() -> Result<()> {
-    keep_freed_memory();
+    set_up_process();
     let cli = Cli::parse();
     let jobs = match &cli.command {
         Command::Cv { jobs, .. } => *jobs,
@@ -317,6 +329,14 @@ fn main() -> Result<()> {
         Command::Bench(Bench::Train { preset, steps, options }) => {
             let speed = train_speed(&Config::preset(&preset)?, &options, 2, steps)?;
             println!("{}", serde_json::to_string(&speed)?);
+        }
+        Command::Bench(Bench::Stress { model, windows }) => {
+            let file = BakedFile::load(&model).with_context(|| format!("loading {}", model.display()))?;
+            let scratch = std::env::temp_dir().join(format!("pvt3-stress-{}", std::process::id()));
+            std::fs::create_dir_all(&scratch)?;
+            let rows = pvt3_trainer::stress::stress(&file, windows, false, &scratch);
+            std::fs::remove_dir_all(&scratch)?;
+            print!("{}", pvt3_trainer::stress::table(&rows?));
         }
         Command::Info { model, json } => {
             // A checkpoint is read once: its configuration, and its size after baking.
