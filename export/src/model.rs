@@ -63,15 +63,31 @@ fn gelu(g: &mut Graph, x: &str) -> String {
     g.op("Mul", &[&prod, &half])
 }
 
-/// Softmax over the last axis from elementwise ops and reductions. tract's Softmax op walks the
-/// rows one by one, which cost more than all matrix products together on the spatial stage's
-/// many 5-token rows; these ops vectorise over the whole tensor.
-fn softmax_rows(g: &mut Graph, x: &str) -> String {
-    let max = g.node("ReduceMax", &[x], vec![ints("axes", &[-1]), int("keepdims", 1)], None);
+/// Softmax over the last axis (rows of `len`) from elementwise ops and a sum. tract's Softmax op
+/// walks the rows one by one, which cost more than all matrix products together on the spatial
+/// stage's many 5-token rows; these ops vectorise over the whole tensor.
+fn softmax_rows(g: &mut Graph, x: &str, len: usize) -> String {
+    // The row maximum by halving: the larger of two overlapping halves, until one column is
+    // left. tract's ReduceMax walks the rows one by one, which on these short rows cost more than
+    // the attention's matrix products; Slice and Max vectorise over the whole tensor.
+    let (mut max, mut n) = (x.to_string(), len as i64);
+    let axis = g.i64s("last_axis", &[1], vec![-1]);
+    while n > 1 {
+        let half = (n + 1) / 2;
+        let (zero, h, rest, end) = (
+            g.i64s("start", &[1], vec![0]),
+            g.i64s("end", &[1], vec![half]),
+            g.i64s("start", &[1], vec![n - half]),
+            g.i64s("end", &[1], vec![n]),
+        );
+        let low = g.op("Slice", &[&max, &zero, &h, &axis]);
+        let high = g.op("Slice", &[&max, &rest, &end, &axis]);
+        max = g.op("Max", &[&low, &high]);
+        n = half;
+    }
     let shifted = g.op("Sub", &[x, &max]);
     let e = g.op("Exp", &[&shifted]);
-    let last = g.i64s("last_axis", &[1], vec![-1]);
-    let sum = g.node("ReduceSum", &[&e, &last], vec![int("keepdims", 1)], None);
+    let sum = g.node("ReduceSum", &[&e, &axis], vec![int("keepdims", 1)], None);
     g.op("Div", &[&e, &sum])
 }
 
@@ -90,7 +106,7 @@ fn attention(g: &mut Graph, x: &str, tokens: usize, a: &BakedAttention, hint: &s
     };
     let (qh, kt, vh) = (heads(g, &q, &[0, 2, 1, 3]), heads(g, &k, &[0, 2, 3, 1]), heads(g, &v, &[0, 2, 1, 3]));
     let scores = g.op("MatMul", &[&qh, &kt]);
-    let probs = softmax_rows(g, &scores);
+    let probs = softmax_rows(g, &scores, tokens);
     let mixed = g.op("MatMul", &[&probs, &vh]);
     let back = g.node("Transpose", &[&mixed], vec![ints("perm", &[0, 2, 1, 3])], None);
     let rows = g.i64s("merge_heads", &[2], vec![-1, (a.heads * a.head_dim) as i64]);
