@@ -3,7 +3,7 @@ with the parameters and multiply-adds of each model after baking (from `pvt3 inf
 
     python3 bench/pruning_report.py CV_DIR [FRAMES_DIR]
 
-CV_DIR is a `pvt3 cv … --prune-channels P` directory (seed0/foldK and seed0/foldK/pruned);
+CV_DIR is a `pvt3 cv` directory (seed0/foldK, and seed0/foldK/pruned if run with --prune-channels);
 FRAMES_DIR holds `foldK-pP` runs of `pvt3 prune CV_DIR/seed0/foldK --prune-frames P`.
 """
 import json
@@ -30,31 +30,32 @@ def mean_std(values):
 
 def main():
     cv = Path(sys.argv[1])
-    folds = sorted(p for p in (cv / "seed0").glob("fold*") if (p / "pruned" / "result.json").exists())
-    provenance = json.loads((folds[0] / "pruned" / "model" / "provenance.json").read_text())
-    print(f"Channel pruning ({provenance.get('pruning')}), `{cv}`:\n")
-    print("| fold | test before | test after | parameters before → after | multiply-adds before → after |")
-    print("|---|---:|---:|---:|---:|")
-    before, after = [], []
-    for f in folds:
-        b, a = baked(f / "model"), baked(f / "pruned" / "model")
-        before.append(test_accuracy(f))
-        after.append(test_accuracy(f / "pruned"))
-        print(f"| {f.name[4:]} | {before[-1]:.4f} | {after[-1]:.4f} | {b[0]:,} → {a[0]:,} ({a[0] / b[0]:.0%}) | "
-              f"{b[1] / 1e6:.2f} M → {a[1] / 1e6:.2f} M ({a[1] / b[1]:.0%}) |")
-    print(f"| mean | {mean_std(before)} | {mean_std(after)} | | |")
+    folds = sorted(p for p in (cv / "seed0").glob("fold*") if (p / "result.json").exists())
+    before = [test_accuracy(f) for f in folds]
+    pruned = [f for f in folds if (f / "pruned" / "result.json").exists()]
+    if pruned:
+        provenance = json.loads((pruned[0] / "pruned" / "model" / "provenance.json").read_text())
+        print(f"Channel pruning ({provenance.get('pruning')}), `{cv}`:\n")
+        print("| fold | test before | test after | parameters before → after | multiply-adds before → after |")
+        print("|---|---:|---:|---:|---:|")
+        after = []
+        for f in pruned:
+            b, a = baked(f / "model"), baked(f / "pruned" / "model")
+            after.append(test_accuracy(f / "pruned"))
+            print(f"| {f.name[4:]} | {test_accuracy(f):.4f} | {after[-1]:.4f} | {b[0]:,} → {a[0]:,} ({a[0] / b[0]:.0%}) | "
+                  f"{b[1] / 1e6:.2f} M → {a[1] / 1e6:.2f} M ({a[1] / b[1]:.0%}) |")
+        print(f"| mean | {mean_std([test_accuracy(f) for f in pruned])} | {mean_std(after)} | | |")
     if len(sys.argv) < 3:
         return
     frames = Path(sys.argv[2])
-    print(f"\nFrame pruning from the same unpruned checkpoints, `{frames}`:\n")
+    print(f"\nFrame pruning from the unpruned checkpoints of `{cv}`, `{frames}`:\n")
     print("| frames pruned | tokens kept | test accuracy (mean ± std) | per fold | parameters | multiply-adds |")
     print("|---:|---:|---:|---|---:|---:|")
     b = baked(folds[0] / "model")
     print(f"| 0 % | {b[2]} | {mean_std(before)} | {' / '.join(f'{v:.3f}' for v in before)} | {b[0]:,} | {b[1] / 1e6:.2f} M |")
     levels = sorted({int(p.name.split("-p")[1]) for p in frames.glob("fold*-p*") if p.is_dir()})
     for level in levels:
-        runs = [frames / f"{f.name}-p{level}" for f in folds]
-        runs = [r for r in runs if (r / "result.json").exists()]
+        runs = [r for r in (frames / f"{f.name}-p{level}" for f in folds) if (r / "result.json").exists()]
         if not runs:
             continue
         acc = [test_accuracy(r) for r in runs]
