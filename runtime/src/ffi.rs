@@ -71,6 +71,16 @@ fn guard(f: impl FnOnce() -> std::result::Result<(), (c_int, String)>) -> c_int 
     }
 }
 
+/// Drops a handle C got from `Box::into_raw` (null is ignored), catching a panic in the drop.
+///
+/// # Safety
+/// `p` came from `Box::into_raw` and is not used afterwards.
+unsafe fn free_handle<T>(p: *mut T) {
+    if !p.is_null() {
+        let _ = catch_unwind(AssertUnwindSafe(|| drop(Box::from_raw(p))));
+    }
+}
+
 fn null(what: &str) -> (c_int, String) {
     (PVT3_ERR_NULL, format!("{what} is a null pointer"))
 }
@@ -106,9 +116,7 @@ pub unsafe extern "C" fn pvt3_classifier_load(path: *const c_char, out: *mut *mu
 /// `c` came from `pvt3_classifier_load` and is not used afterwards.
 #[no_mangle]
 pub unsafe extern "C" fn pvt3_classifier_free(c: *mut Pvt3Classifier) {
-    if !c.is_null() {
-        let _ = catch_unwind(AssertUnwindSafe(|| drop(Box::from_raw(c))));
-    }
+    free_handle(c);
 }
 
 /// Values in one window (`height × width × (channels ×) frames`).
@@ -231,9 +239,7 @@ pub unsafe extern "C" fn pvt3_session_new(c: *const Pvt3Classifier, out: *mut *m
 /// `s` came from `pvt3_session_new` and is not used afterwards.
 #[no_mangle]
 pub unsafe extern "C" fn pvt3_session_free(s: *mut Pvt3Session) {
-    if !s.is_null() {
-        let _ = catch_unwind(AssertUnwindSafe(|| drop(Box::from_raw(s))));
-    }
+    free_handle(s);
 }
 
 /// Takes the touch's next frame (`frame_len` = height × width × channels raw values).
