@@ -81,6 +81,18 @@ unsafe fn free_handle<T>(p: *mut T) {
     }
 }
 
+/// Writes `size(classifier)` to `*out`: the body of every size getter.
+///
+/// # Safety
+/// `c` is a live handle or null; `out` is writable or null.
+unsafe fn write_size(c: *const Pvt3Classifier, out: *mut usize, size: impl FnOnce(&Pvt3Classifier) -> usize) -> c_int {
+    guard(|| {
+        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
+        *out.as_mut().ok_or_else(|| null("out"))? = size(c);
+        Ok(())
+    })
+}
+
 fn null(what: &str) -> (c_int, String) {
     (PVT3_ERR_NULL, format!("{what} is a null pointer"))
 }
@@ -125,12 +137,7 @@ pub unsafe extern "C" fn pvt3_classifier_free(c: *mut Pvt3Classifier) {
 /// `c` is a live handle or null; `out` is writable or null.
 #[no_mangle]
 pub unsafe extern "C" fn pvt3_classifier_sample_len(c: *const Pvt3Classifier, out: *mut usize) -> c_int {
-    guard(|| {
-        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
-        let out = out.as_mut().ok_or_else(|| null("out"))?;
-        *out = c.classifier.sample_shape().iter().product();
-        Ok(())
-    })
+    write_size(c, out, |c| c.classifier.sample_shape().iter().product())
 }
 
 /// Frames in one window (its last axis), pruned ones included.
@@ -139,12 +146,7 @@ pub unsafe extern "C" fn pvt3_classifier_sample_len(c: *const Pvt3Classifier, ou
 /// `c` is a live handle or null; `out` is writable or null.
 #[no_mangle]
 pub unsafe extern "C" fn pvt3_classifier_frames(c: *const Pvt3Classifier, out: *mut usize) -> c_int {
-    guard(|| {
-        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
-        let out = out.as_mut().ok_or_else(|| null("out"))?;
-        *out = *c.classifier.sample_shape().last().expect("a window has a frame axis");
-        Ok(())
-    })
+    write_size(c, out, |c| *c.classifier.sample_shape().last().expect("a window has a frame axis"))
 }
 
 /// Number of classes.
@@ -153,12 +155,7 @@ pub unsafe extern "C" fn pvt3_classifier_frames(c: *const Pvt3Classifier, out: *
 /// `c` is a live handle or null; `out` is writable or null.
 #[no_mangle]
 pub unsafe extern "C" fn pvt3_classifier_num_classes(c: *const Pvt3Classifier, out: *mut usize) -> c_int {
-    guard(|| {
-        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
-        let out = out.as_mut().ok_or_else(|| null("out"))?;
-        *out = c.names.len();
-        Ok(())
-    })
+    write_size(c, out, |c| c.names.len())
 }
 
 /// The name of class `index`; the string lives as long as the handle.

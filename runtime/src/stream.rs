@@ -32,7 +32,6 @@ pub(crate) struct Stages {
     kept_index: Vec<Option<usize>>,
     /// `[1, tubelet, height, width, channels]`
     token_shape: Vec<usize>,
-    tubelet: usize,
     dim: usize,
     classes: Vec<String>,
 }
@@ -66,7 +65,6 @@ impl Stages {
             temporal: c.optimise(&temporal, vec![f32::fact([kept, c.dim]).into()])?,
             kept_index,
             token_shape,
-            tubelet: c.tubelet,
             dim: c.dim,
             classes: c.classes().to_vec(),
         })
@@ -93,10 +91,17 @@ impl Classifier {
     }
 }
 
+impl Stages {
+    /// Frames per temporal token.
+    fn tubelet(&self) -> usize {
+        self.token_shape[1]
+    }
+}
+
 impl Session {
     /// Frames per touch, pruned ones included.
     pub fn frames(&self) -> usize {
-        self.stages.kept_index.len() * self.stages.tubelet
+        self.stages.kept_index.len() * self.stages.tubelet()
     }
 
     /// Values in one frame: `height × width × channels`.
@@ -114,7 +119,7 @@ impl Session {
         if self.received == frames {
             return Err(Error::TooManyFrames { frames });
         }
-        let tubelet = self.stages.tubelet;
+        let tubelet = self.stages.tubelet();
         let Some(kk) = self.stages.kept_index[self.received / tubelet] else {
             self.received += 1;
             return Ok(());
