@@ -214,6 +214,7 @@ fn bake_transformer(src: &Source, p: &str, depth: usize, cfg: &Config) -> Result
 /// Bakes the masked model `cfg` with weights `tensors` (the checkpoint names).
 pub fn bake(cfg: &Config, tensors: &Tensors) -> Result<BakedPvt3> {
     cfg.validate()?;
+    cfg.require_pvt3("baking (and so ONNX export)")?;
     let src = Source { tensors };
     let (t, n, d) = (cfg.time_tokens(), cfg.num_patches(), cfg.dim);
     let frame_mask = src.get("frame_mask", &[t])?;

@@ -4,16 +4,65 @@
 //! sensors and `[batch, height, width, channels, frames]` otherwise. A temporal patch (`tubelet`)
 //! groups consecutive frames into one token, so that long recordings train in reasonable time;
 //! the frame-selection mask then has one entry per tubelet.
+//!
+//! The same configuration describes the paper's two baselines (`model: vit` or `raec`), so that
+//! one trainer, one checkpoint format and one `pvt3 info` serve all three; each sensor preset has
+//! a `vit-` and a `raec-` variant.
 
 use serde::{Deserialize, Serialize};
 
 use crate::{Error, Result};
 
-/// The names accepted by [`Config::preset`].
+/// The sensor presets (PVT³); each also comes as `vit-NAME` and `raec-NAME`.
 pub const PRESETS: [&str; 3] = ["icub20", "biotac20", "gelsight"];
+
+/// The network a configuration describes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Architecture {
+    /// PVT³: the ViViT factorised encoder with channel- and frame-selection masks.
+    #[default]
+    Pvt3,
+    /// The paper's ViT: all frames tiled into one large frame, one transformer over its patches.
+    Vit,
+    /// The recurrent autoencoder classifier of Gao et al. (IROS 2020).
+    Raec,
+}
+
+impl Architecture {
+    pub const ALL: [Self; 3] = [Self::Pvt3, Self::Vit, Self::Raec];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Pvt3 => "pvt3",
+            Self::Vit => "vit",
+            Self::Raec => "raec",
+        }
+    }
+}
+
+impl std::fmt::Display for Architecture {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for Architecture {
+    type Err = Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        Self::ALL
+            .into_iter()
+            .find(|a| a.name() == s)
+            .ok_or_else(|| Error::Config(format!("unknown model `{s}`; expected pvt3, vit or raec")))
+    }
+}
 
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Config {
+    /// The network: `pvt3`, `vit` or `raec`.
+    #[serde(default)]
+    pub model: Architecture,
     /// Sensor grid rows (taxels or electrodes).
     pub height: usize,
     /// Sensor grid columns.
@@ -22,12 +71,15 @@ pub struct Config {
     pub channels: usize,
     /// Frames in one input window.
     pub frames: usize,
+    /// Patch rows (PVT³: of a frame; ViT: of the tiled frame; RAEC: the convolution kernel's).
     pub patch_height: usize,
+    /// Patch columns (as `patch_height`).
     pub patch_width: usize,
     /// Frames per temporal token.
     pub tubelet: usize,
     /// Embedding width.
     pub dim: usize,
+    /// Layers of the spatial transformer (ViT: its one transformer has both depths' layers).
     pub space_depth: usize,
     pub time_depth: usize,
     pub heads: usize,
@@ -40,10 +92,42 @@ pub struct Config {
     pub dropout: f64,
     #[serde(default = "default_eps")]
     pub layer_norm_eps: f64,
+    /// ViT: the frames are tiled row-major into one large frame `tile_rows` frames high.
+    #[serde(default = "one")]
+    pub tile_rows: usize,
+    /// RAEC: hidden width of the LSTM encoder and decoder.
+    #[serde(default = "default_rnn_hidden")]
+    pub rnn_hidden: usize,
+    /// RAEC: width of the latent code the classifier reads.
+    #[serde(default = "default_latent")]
+    pub latent: usize,
+    /// RAEC: output channels of the convolution (kernel patch_height × patch_width, then 2 × 2
+    /// max-pooling) in front of the encoder; 0 feeds the frames to the LSTM as they are.
+    #[serde(default)]
+    pub conv_channels: usize,
+    /// RAEC: weight of the reconstruction error (mean squared, on normalised frames) in the loss.
+    #[serde(default = "default_reconstruction_weight")]
+    pub reconstruction_weight: f64,
 }
 
 fn default_eps() -> f64 {
     1e-5
+}
+
+fn one() -> usize {
+    1
+}
+
+fn default_rnn_hidden() -> usize {
+    90
+}
+
+fn default_latent() -> usize {
+    40
+}
+
+fn default_reconstruction_weight() -> f64 {
+    0.01
 }
 
 impl Config {
@@ -51,6 +135,7 @@ impl Config {
     /// exactly 64,272 trainable parameters besides the frame mask.
     pub fn icub20() -> Self {
         Self {
+            model: Architecture::Pvt3,
             height: 6,
             width: 10,
             channels: 1,
@@ -67,6 +152,11 @@ impl Config {
             classes: 20,
             dropout: 0.0,
             layer_norm_eps: 1e-5,
+            tile_rows: 1,
+            rnn_hidden: default_rnn_hidden(),
+            latent: default_latent(),
+            conv_channels: 0,
+            reconstruction_weight: default_reconstruction_weight(),
         }
     }
 
@@ -92,12 +182,48 @@ impl Config {
         }
     }
 
+    /// A sensor preset (`icub20`, `biotac20`, `gelsight`), optionally prefixed `vit-` or `raec-`.
     pub fn preset(name: &str) -> Result<Self> {
-        match name {
-            "icub20" => Ok(Self::icub20()),
-            "biotac20" => Ok(Self::biotac20()),
-            "gelsight" => Ok(Self::gelsight()),
-            _ => Err(Error::UnknownPreset(name.to_string())),
+        let (model, sensor) = match name.split_once('-') {
+            Some(("vit", sensor)) => (Architecture::Vit, sensor),
+            Some(("raec", sensor)) => (Architecture::Raec, sensor),
+            _ => (Architecture::Pvt3, name),
+        };
+        let cfg = match sensor {
+            "icub20" => Self::icub20(),
+            "biotac20" => Self::biotac20(),
+            "gelsight" => Self::gelsight(),
+            _ => return Err(Error::UnknownPreset(name.to_string())),
+        };
+        Ok(cfg.for_model(model))
+    }
+
+    /// The baseline `model` for this configuration's sensor, with its preset sizes.
+    ///
+    /// ViT keeps the embedding, heads and all eight layers of the ViViT backbone (so it has about
+    /// its parameter count) and takes patches of the tiled frame that never straddle two frames:
+    /// half an iCub frame (6 × 5, 150 tokens), all 19 BioTac electrodes × 10 frames (40 tokens),
+    /// a GelSight frame's own 40 × 40 patches. RAEC takes Gao et al.'s sizes: a 3-channel 3 × 5
+    /// convolution for grids big enough for it, the raw frames otherwise, read in steps of the
+    /// PVT³ preset's tubelet (BioTac: 40 steps of 10 frames; 400 single-frame steps trained 9×
+    /// slower, about two hours per fold).
+    pub fn for_model(self, model: Architecture) -> Self {
+        match model {
+            Architecture::Pvt3 => Self { model, ..self },
+            Architecture::Vit => {
+                let (patch_height, patch_width, tile_rows) = match (self.height, self.width) {
+                    (h, 1) => (h, self.tubelet, 1),
+                    (h, w) if h * w <= 64 => (h, w / 2, 5.min(self.frames)),
+                    _ => (self.patch_height, self.patch_width, 1),
+                };
+                Self { model, patch_height, patch_width, tile_rows, tubelet: 1, ..self }
+            }
+            Architecture::Raec => {
+                let conv = self.height >= 3 && self.width >= 5;
+                let (patch_height, patch_width) = if conv { (3, 5) } else { (1, 1) };
+                let (conv_channels, tubelet) = if conv { (3, 1) } else { (0, self.tubelet) };
+                Self { model, patch_height, patch_width, conv_channels, tubelet, ..self }
+            }
         }
     }
 
@@ -116,29 +242,94 @@ impl Config {
             ("dim_head", self.dim_head),
             ("mlp_dim", self.mlp_dim),
             ("classes", self.classes),
+            ("tile_rows", self.tile_rows),
+            ("rnn_hidden", self.rnn_hidden),
+            ("latent", self.latent),
         ];
         if let Some((name, _)) = positive.iter().find(|(_, v)| *v == 0) {
             return Err(Error::Config(format!("{name} must be at least 1")));
         }
-        let divides = [
-            ("patch_height", self.patch_height, "height", self.height),
-            ("patch_width", self.patch_width, "width", self.width),
-            ("tubelet", self.tubelet, "frames", self.frames),
-        ];
+        if !(0.0..1.0).contains(&self.dropout) {
+            return Err(Error::Config(format!("dropout = {} is not in [0, 1)", self.dropout)));
+        }
+        if self.tubelet != 1 && (self.model == Architecture::Vit || self.conv_channels > 0) {
+            return Err(Error::Config(format!(
+                "tubelet = {} needs a model that reads frames in groups: PVT³, or RAEC without convolution",
+                self.tubelet
+            )));
+        }
+        let divides = match self.model {
+            Architecture::Pvt3 => vec![
+                ("patch_height", self.patch_height, "height", self.height),
+                ("patch_width", self.patch_width, "width", self.width),
+                ("tubelet", self.tubelet, "frames", self.frames),
+            ],
+            Architecture::Vit => {
+                let (th, tw) = self.tiled_size();
+                vec![
+                    ("tile_rows", self.tile_rows, "frames", self.frames),
+                    ("patch_height", self.patch_height, "the tiled frame's height", th),
+                    ("patch_width", self.patch_width, "the tiled frame's width", tw),
+                ]
+            }
+            Architecture::Raec => {
+                if self.frames % self.tubelet != 0 {
+                    return Err(Error::Config(format!("tubelet = {} does not divide frames = {}", self.tubelet, self.frames)));
+                }
+                if self.conv_channels > 0 && (self.conv_output().0 < 2 || self.conv_output().1 < 2) {
+                    return Err(Error::Config(format!(
+                        "a {} × {} convolution and 2 × 2 pooling do not fit a {} × {} frame",
+                        self.patch_height, self.patch_width, self.height, self.width
+                    )));
+                }
+                Vec::new()
+            }
+        };
         for (pn, p, n, v) in divides {
             if v % p != 0 {
                 return Err(Error::Config(format!("{pn} = {p} does not divide {n} = {v}")));
             }
         }
-        if !(0.0..1.0).contains(&self.dropout) {
-            return Err(Error::Config(format!("dropout = {} is not in [0, 1)", self.dropout)));
-        }
         Ok(())
     }
 
-    /// Spatial patches per temporal token.
+    /// Fails, naming `what`, unless this configuration is PVT³'s.
+    pub fn require_pvt3(&self, what: &str) -> Result<()> {
+        if self.model == Architecture::Pvt3 {
+            return Ok(());
+        }
+        Err(Error::Config(format!("{what}: PVT³ models only, and this is a {} model", self.model)))
+    }
+
+    /// ViT: rows and columns of the frame all frames are tiled into.
+    pub fn tiled_size(&self) -> (usize, usize) {
+        (self.height * self.tile_rows, self.width * self.frames.div_ceil(self.tile_rows))
+    }
+
+    /// RAEC: rows and columns of the convolution's output (before pooling).
+    fn conv_output(&self) -> (usize, usize) {
+        ((self.height + 1).saturating_sub(self.patch_height), (self.width + 1).saturating_sub(self.patch_width))
+    }
+
+    /// RAEC: the values of one step (`tubelet` raw frames) that the decoder reconstructs.
+    pub fn step_values(&self) -> usize {
+        self.tubelet * self.height * self.width * self.channels
+    }
+
+    /// RAEC: the width of one step of the encoder's input sequence (the pooled convolution's
+    /// output, or the step's raw frames).
+    pub fn rnn_input(&self) -> usize {
+        if self.conv_channels == 0 {
+            return self.step_values();
+        }
+        let (h, w) = self.conv_output();
+        self.conv_channels * (h / 2) * (w / 2)
+    }
+
+    /// Spatial patches per temporal token (ViT: patches of the tiled frame).
     pub fn num_patches(&self) -> usize {
-        (self.height / self.patch_height) * (self.width / self.patch_width)
+        let (h, w) = if self.model == Architecture::Vit { self.tiled_size() } else { (self.height, self.width) };
+        (h / self.patch_height) * (w / self.patch_width)
     }
 
     /// Values in one patch token: tubelet × patch_height × patch_width × channels.
@@ -154,6 +345,17 @@ impl Config {
     /// Width of the attention's q, k and v: heads × dim_head.
     pub fn inner_dim(&self) -> usize {
         self.heads * self.dim_head
+    }
+
+    /// Checks that `x` is a batch of samples of [`Self::sample_shape`]; returns the batch size.
+    pub fn check_input(&self, x: &candle_core::Tensor) -> Result<usize> {
+        let dims = x.dims();
+        let expected = self.sample_shape();
+        if dims.len() != expected.len() + 1 || dims[1..] != expected[..] {
+            let expected = expected.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(", ");
+            return Err(Error::InputShape { got: dims.to_vec(), expected });
+        }
+        Ok(dims[0])
     }
 
     /// The shape of one sample, without the batch dimension.
@@ -176,13 +378,28 @@ impl Config {
 
     /// Trainable parameters, channel masks included, the frame-selection mask not.
     pub fn parameter_count(&self) -> usize {
-        let d = self.dim;
-        let embed = self.patch_dim() * d + d;
-        let pos = self.time_tokens() * (self.num_patches() + 1) * d;
-        let cls = 2 * d;
-        let transformers = (self.space_depth + self.time_depth) * self.layer_parameters() + 2 * 2 * d;
-        let head = 2 * d + d * self.classes + self.classes;
-        embed + pos + cls + transformers + head
+        let (d, n, c) = (self.dim, self.num_patches(), self.classes);
+        let head = 2 * d + d * c + c;
+        match self.model {
+            Architecture::Pvt3 => {
+                let embed = self.patch_dim() * d + d;
+                let pos = self.time_tokens() * (n + 1) * d;
+                let transformers = (self.space_depth + self.time_depth) * self.layer_parameters() + 2 * 2 * d;
+                embed + pos + 2 * d + transformers + head
+            }
+            Architecture::Vit => {
+                let embed = self.patch_dim() * d + d;
+                let transformer = (self.space_depth + self.time_depth) * self.layer_parameters() + 2 * d;
+                embed + (n + 1) * d + d + transformer + head
+            }
+            Architecture::Raec => {
+                let (h, l) = (self.rnn_hidden, self.latent);
+                let lstm = |input: usize| 4 * h * (input + h) + 2 * 4 * h;
+                let conv = self.conv_channels * (self.patch_height * self.patch_width * self.channels + 1);
+                let step = self.step_values();
+                conv + lstm(self.rnn_input()) + (h * l + l) + (l * c + c) + lstm(l) + (h * step + step)
+            }
+        }
     }
 
     /// Multiply-adds of one transformer layer over `seqs` sequences of `len` tokens.
@@ -193,15 +410,33 @@ impl Config {
         (seqs * (len * per_token + attention)) as u64
     }
 
-    /// Multiply-adds for one sample (matrix products only; norms, softmax and GELU are not
-    /// counted).
+    /// Multiply-adds for one sample (matrix products and convolutions only; norms, softmax,
+    /// activations and gates are not counted).
     pub fn mult_adds(&self) -> u64 {
-        let t = self.time_tokens();
-        let n = self.num_patches();
-        let embed = (t * n * self.patch_dim() * self.dim) as u64;
-        let space = self.space_depth as u64 * self.layer_mult_adds(t, n + 1);
-        let time = self.time_depth as u64 * self.layer_mult_adds(1, t + 1);
-        embed + space + time + (self.dim * self.classes) as u64
+        let (n, d, c) = (self.num_patches(), self.dim, self.classes);
+        let head = (d * c) as u64;
+        match self.model {
+            Architecture::Pvt3 => {
+                let t = self.time_tokens();
+                let embed = (t * n * self.patch_dim() * d) as u64;
+                let space = self.space_depth as u64 * self.layer_mult_adds(t, n + 1);
+                let time = self.time_depth as u64 * self.layer_mult_adds(1, t + 1);
+                embed + space + time + head
+            }
+            Architecture::Vit => {
+                let embed = (n * self.patch_dim() * d) as u64;
+                embed + (self.space_depth + self.time_depth) as u64 * self.layer_mult_adds(1, n + 1) + head
+            }
+            Architecture::Raec => {
+                let (h, l, t) = (self.rnn_hidden, self.latent, self.time_tokens());
+                let (ch, cw) = self.conv_output();
+                let conv = if self.conv_channels == 0 { 0 } else { ch * cw * self.conv_channels * self.patch_height * self.patch_width };
+                let lstm = |input: usize| 4 * h * (input + h);
+                // The decoder's input (the latent code) is the same at every step: projected once.
+                let per_step = conv * self.channels + lstm(self.rnn_input()) + 4 * h * h + h * self.step_values();
+                (t * per_step + 4 * h * l + h * l + l * c) as u64
+            }
+        }
     }
 }
 

@@ -8,7 +8,7 @@ pub enum Error {
     Candle(#[from] candle_core::Error),
     #[error("invalid model configuration: {0}")]
     Config(String),
-    #[error("unknown preset `{0}`; the presets are {presets}", presets = crate::config::PRESETS.join(", "))]
+    #[error("unknown preset `{0}`; the presets are {presets}, each also as vit-NAME and raec-NAME", presets = crate::config::PRESETS.join(", "))]
     UnknownPreset(String),
     #[error("input has shape {got:?}, but the model expects [batch, {expected}]")]
     InputShape { got: Vec<usize>, expected: String },

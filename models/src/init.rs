@@ -1,12 +1,21 @@
 //! Seeded initialisation of every variable, replacing candle's own (whose CPU generator cannot be
 //! seeded). Linear layers follow PyTorch's default (uniform ±1/√fan_in for weight and bias), norms
 //! and masks start at one and zero, and the CLS tokens and position embedding at std 0.02: std 1
-//! there, as common ViViT code does, leaves the model at chance for many epochs.
+//! there, as common ViViT code does, leaves the model at chance for many epochs. LSTM weights
+//! and biases follow PyTorch too (uniform ±1/√hidden).
 
-use candle_core::{Result, Tensor};
-use candle_nn::VarMap;
+use candle_core::{DType, Device, Result, Tensor};
+use candle_nn::{VarBuilder, VarMap};
 
-use crate::Rng;
+use crate::{Config, Rng};
+
+/// A model built by `new` on the CPU with its variables in a new [`VarMap`], seeded by `seed`.
+pub fn seeded<M>(cfg: &Config, seed: u64, new: impl FnOnce(&Config, VarBuilder) -> crate::Result<M>) -> crate::Result<(M, VarMap)> {
+    let varmap = VarMap::new();
+    let model = new(cfg, VarBuilder::from_varmap(&varmap, DType::F32, &Device::Cpu))?;
+    init_weights(&varmap, seed)?;
+    Ok((model, varmap))
+}
 
 /// Overwrites every variable of `varmap` with values drawn from `seed`, in name order.
 pub fn init_weights(varmap: &VarMap, seed: u64) -> Result<()> {
@@ -22,11 +31,15 @@ pub fn init_weights(varmap: &VarMap, seed: u64) -> Result<()> {
             vec![1.0; n]
         } else if is_norm(name, "bias") {
             vec![0.0; n]
-        } else if name == "pos_embed" || name.ends_with("_cls") {
+        } else if name == "pos_embed" || name.ends_with("cls") {
             (0..n).map(|_| 0.02 * rng.normal()).collect()
         } else {
-            let layer = name.rsplit_once('.').map_or(name.as_str(), |(l, _)| l);
-            let fan_in = vars[&format!("{layer}.weight")].dims()[1];
+            let (layer, leaf) = name.rsplit_once('.').unwrap_or(("", name));
+            let fan_in = if leaf.ends_with("_l0") {
+                vars[&format!("{layer}.weight_hh_l0")].dims()[1]
+            } else {
+                vars[&format!("{layer}.weight")].dims()[1..].iter().product()
+            };
             let bound = 1.0 / (fan_in as f32).sqrt();
             (0..n).map(|_| bound * (2.0 * rng.uniform() - 1.0)).collect()
         };

@@ -4,25 +4,31 @@
 //! frame (or per tubelet of frames), encoded by a spatial transformer per frame and a temporal
 //! transformer across frames (the ViViT factorised encoder), and classified from the temporal CLS
 //! token. Trainable *channel-selection* masks (attention q/k/v channels, feed-forward units) and a
-//! *frame-selection* mask let training find what can be pruned.
+//! *frame-selection* mask let training find what can be pruned. The paper's baselines, ViT and
+//! RAEC, live beside it so that one trainer fits all three ([`Classifier`]).
 
 pub mod attention;
 pub mod bake;
+pub mod classifier;
 pub mod config;
 pub mod dropout;
 pub mod error;
 pub mod feed_forward;
 pub mod init;
 pub mod layer_norm;
+pub mod lstm;
 pub mod normalization;
 pub mod prune;
 pub mod pvt3;
+pub mod raec;
 pub mod reference;
 pub mod rng;
 pub mod transformer;
+pub mod vit;
 pub mod weights;
 
-pub use config::Config;
+pub use classifier::Classifier;
+pub use config::{Architecture, Config};
 pub use error::{Error, Result};
 pub use pvt3::Pvt3;
 pub use rng::Rng;

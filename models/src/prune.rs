@@ -61,6 +61,7 @@ fn share(n: usize, percent: f64) -> usize {
 
 /// The plan for `spec` over the masks in `tensors`.
 pub fn plan(cfg: &Config, tensors: &Tensors, spec: &PruneSpec) -> Result<Plan> {
+    cfg.require_pvt3("pruning")?;
     for (what, p) in [("channels", spec.channels), ("frames", spec.frames)] {
         if !(0.0..=100.0).contains(&p) {
             return Err(Error::Config(format!("cannot prune {p} % of the {what}: give a percentage from 0 to 100")));

@@ -6,13 +6,13 @@
 //! The frame mask scales each temporal token's patch embeddings before the CLS token and the
 //! position embedding are added.
 
-use candle_core::{DType, Device, Tensor, D};
+use candle_core::{Tensor, D};
 use candle_nn::{linear, Init, Linear, Module, VarBuilder, VarMap};
 
 use crate::dropout::Dropout;
 use crate::layer_norm::LayerNorm;
 use crate::transformer::Transformer;
-use crate::{Config, Error, Result, Rng};
+use crate::{Config, Result, Rng};
 
 #[cfg(test)]
 mod tests;
@@ -35,6 +35,7 @@ pub struct Pvt3 {
 impl Pvt3 {
     pub fn new(cfg: &Config, vb: VarBuilder) -> Result<Self> {
         cfg.validate()?;
+        cfg.require_pvt3("the PVT³ network")?;
         let (t, n, d) = (cfg.time_tokens(), cfg.num_patches(), cfg.dim);
         let small = Init::Randn { mean: 0.0, stdev: 0.02 };
         Ok(Self {
@@ -54,10 +55,7 @@ impl Pvt3 {
 
     /// A fresh model on the CPU with its variables in a new [`VarMap`], seeded by `seed`.
     pub fn init(cfg: &Config, seed: u64) -> Result<(Self, VarMap)> {
-        let varmap = VarMap::new();
-        let model = Self::new(cfg, VarBuilder::from_varmap(&varmap, DType::F32, &Device::Cpu))?;
-        crate::init::init_weights(&varmap, seed)?;
-        Ok((model, varmap))
+        crate::init::seeded(cfg, seed, Self::new)
     }
 
     pub fn config(&self) -> &Config {
@@ -67,13 +65,7 @@ impl Pvt3 {
     /// Cuts `[b, h, w, (c,) t]` into `[b, time_tokens, num_patches, patch_dim]`.
     pub fn patchify(&self, x: &Tensor) -> Result<Tensor> {
         let c = &self.cfg;
-        let dims = x.dims();
-        let expected = c.sample_shape();
-        if dims.len() != expected.len() + 1 || dims[1..] != expected[..] {
-            let expected = expected.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(", ");
-            return Err(Error::InputShape { got: dims.to_vec(), expected });
-        }
-        let b = dims[0];
+        let b = c.check_input(x)?;
         let (gh, gw, tt) = (c.height / c.patch_height, c.width / c.patch_width, c.time_tokens());
         let grid = x.reshape(vec![b, gh, c.patch_height, gw, c.patch_width, c.channels, tt, c.tubelet])?;
         // → [b, tt, gh, gw, tubelet, ph, pw, c]

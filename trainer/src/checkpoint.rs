@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use candle_nn::VarMap;
 use pvt3_models::weights::{load_weights, save_weights};
-use pvt3_models::{Config, Pvt3};
+use pvt3_models::{Classifier, Config};
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
@@ -178,9 +178,9 @@ pub fn load_meta(path: &Path) -> Result<(PathBuf, Meta)> {
 }
 
 /// Loads a checkpoint: its metadata and the model with its weights.
-pub fn load(path: &Path) -> Result<(Meta, Pvt3, VarMap)> {
+pub fn load(path: &Path) -> Result<(Meta, Classifier, VarMap)> {
     let (dir, meta) = load_meta(path)?;
-    let (model, varmap) = Pvt3::init(&meta.config, 0)?;
+    let (model, varmap) = Classifier::init(&meta.config, 0)?;
     load_weights(&varmap, &dir.join("weights.safetensors"))?;
     Ok((meta, model, varmap))
 }

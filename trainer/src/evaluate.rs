@@ -1,7 +1,7 @@
 //! Evaluation: loss, accuracy and predictions of a model on normalised samples, in batches.
 
 use candle_core::{Device, Tensor, D};
-use pvt3_models::Pvt3;
+use pvt3_models::Classifier;
 
 use crate::data::Dataset;
 use crate::normalization::Normalization;
@@ -63,7 +63,7 @@ pub struct Evaluation {
 
 pub const EVAL_BATCH: usize = 100;
 
-pub fn evaluate(model: &Pvt3, samples: &Samples) -> Result<Evaluation> {
+pub fn evaluate(model: &Classifier, samples: &Samples) -> Result<Evaluation> {
     let mut loss_sum = 0.0;
     let mut predictions = Vec::with_capacity(samples.len());
     let rows: Vec<usize> = (0..samples.len()).collect();

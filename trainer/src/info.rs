@@ -3,27 +3,50 @@
 
 use std::fmt::Write;
 
-use pvt3_models::{Config, Pvt3};
+use pvt3_models::{Architecture, Classifier, Config};
 
 use crate::Result;
 
 pub fn report(cfg: &Config) -> Result<String> {
     cfg.validate()?;
-    let (_, varmap) = Pvt3::init(cfg, 0)?;
+    let (_, varmap) = Classifier::init(cfg, 0)?;
     let vars = varmap.data().lock().expect("varmap lock poisoned").clone();
     let mut names: Vec<&String> = vars.keys().collect();
     names.sort();
     let mut s = String::new();
     let w = &mut s;
     let _ = writeln!(w, "input         [batch, {}]", cfg.sample_shape().iter().map(|v| v.to_string()).collect::<Vec<_>>().join(", "));
-    let _ = writeln!(
-        w,
-        "tokens        {} temporal × {} spatial (+1 CLS each), patch dim {}",
-        cfg.time_tokens(),
-        cfg.num_patches(),
-        cfg.patch_dim()
-    );
-    let _ = writeln!(w, "parameters    {} trainable + {} frame-mask entries", cfg.parameter_count(), cfg.time_tokens());
+    let _ = writeln!(w, "model         {}", cfg.model);
+    let _ = match cfg.model {
+        Architecture::Pvt3 => writeln!(
+            w,
+            "tokens        {} temporal × {} spatial (+1 CLS each), patch dim {}\nparameters    {} trainable + {} frame-mask entries",
+            cfg.time_tokens(),
+            cfg.num_patches(),
+            cfg.patch_dim(),
+            cfg.parameter_count(),
+            cfg.time_tokens()
+        ),
+        Architecture::Vit => {
+            let (h, w2) = cfg.tiled_size();
+            writeln!(
+                w,
+                "tokens        {} patches (+1 CLS) of the {h} × {w2} tiled frame, patch dim {}\nparameters    {} trainable",
+                cfg.num_patches(),
+                cfg.patch_dim(),
+                cfg.parameter_count()
+            )
+        }
+        Architecture::Raec => writeln!(
+            w,
+            "sequence      {} steps of {} values, LSTM hidden {}, latent {}\nparameters    {} trainable",
+            cfg.time_tokens(),
+            cfg.rnn_input(),
+            cfg.rnn_hidden,
+            cfg.latent,
+            cfg.parameter_count()
+        ),
+    };
     let _ = writeln!(w, "mult-adds     {} per sample", cfg.mult_adds());
     let _ = writeln!(w, "classes       {}", cfg.classes);
     let _ = writeln!(w, "\n{:<44} {:>16} {:>8}", "tensor", "shape", "values");
@@ -41,5 +64,13 @@ mod tests {
         let r = super::report(&pvt3_models::Config::icub20()).unwrap();
         assert!(r.contains("parameters    64272 trainable + 75 frame-mask entries"), "{r}");
         assert!(r.contains("space.layers.3.attn.qkv.weight"), "{r}");
+    }
+
+    #[test]
+    fn baselines_report_their_own_shapes() {
+        let r = super::report(&pvt3_models::Config::preset("vit-icub20").unwrap()).unwrap();
+        assert!(r.contains("150 patches (+1 CLS) of the 30 × 150 tiled frame"), "{r}");
+        let r = super::report(&pvt3_models::Config::preset("raec-biotac20").unwrap()).unwrap();
+        assert!(r.contains("40 steps of 190 values, LSTM hidden 90, latent 40"), "{r}");
     }
 }

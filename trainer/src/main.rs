@@ -33,7 +33,13 @@ struct ModelArgs {
     /// Data set: an .npz file (x, y, optional fold) or a directory of x.npy, y.npy, fold.npy.
     #[arg(long, default_value = "data/icub20.npz")]
     data: PathBuf,
-    /// Model preset (icub20, biotac20, gelsight); by default the one whose input fits the data.
+    /// Network: PVT³, or one of the paper's baselines: `vit` (one transformer over all frames
+    /// tiled into one frame) or `raec` (the LSTM autoencoder classifier of Gao et al.). Takes the
+    /// `vit-`/`raec-` variant of the sensor preset; only PVT³ can be pruned and exported.
+    #[arg(long = "model", value_name = "MODEL", value_parser = ["pvt3", "vit", "raec"], conflicts_with = "config")]
+    architecture: Option<String>,
+    /// Model preset (icub20, biotac20, gelsight, each also as vit-NAME and raec-NAME); by default
+    /// the one whose input fits the data.
     #[arg(long, conflicts_with = "config")]
     preset: Option<String>,
     /// Model configuration as JSON (see `pvt3 info --json`).
@@ -235,6 +241,9 @@ fn main() -> Result<()> {
     match cli.command {
         Command::Train { model, fold, out, resume, prune, export } => {
             let prepared = prepare(&model)?;
+            if prune.stage().is_some() || export.is_some() {
+                prepared.config.require_pvt3("pruning and export")?;
+            }
             let bar = ProgressBar::new(0).with_style(bar_style());
             bar.set_prefix(format!("fold {fold}"));
             let started = Instant::now();
@@ -297,6 +306,9 @@ fn main() -> Result<()> {
         }
         Command::Cv { model, seeds, out, resume, jobs, prune } => {
             let prepared = prepare(&model)?;
+            if prune.stage().is_some() {
+                prepared.config.require_pvt3("pruning")?;
+            }
             let started = Instant::now();
             let multi = MultiProgress::new();
             let s = cross_validate(&prepared.spec(&model, 0), prune.stage().as_ref(), &seeds, &out, resume, jobs, &multi, &bar_style())?;
@@ -424,12 +436,17 @@ impl Prepared {
 /// Loads the data set and builds the model configuration for it.
 fn prepare(args: &ModelArgs) -> Result<Prepared> {
     let data = Dataset::load(&args.data, args.options.seed)?;
+    // `--model vit` turns preset `icub20` into `vit-icub20`.
+    let preset = |name: &str| match args.architecture.as_deref() {
+        Some(model) if model != "pvt3" => Config::preset(&format!("{model}-{name}")),
+        _ => Config::preset(name),
+    };
     let mut cfg = match (&args.preset, &args.config) {
-        (Some(p), _) => Config::preset(p)?,
+        (Some(p), _) => preset(p)?,
         (None, Some(path)) => resolve_config(&path.display().to_string())?,
         (None, None) => pvt3_models::config::PRESETS
             .iter()
-            .map(|p| Config::preset(p).expect("known preset"))
+            .map(|p| preset(p).expect("known preset"))
             .find(|c| c.sample_shape() == data.sample_shape)
             .with_context(|| {
                 format!(

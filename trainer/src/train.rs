@@ -15,7 +15,7 @@ use candle_nn::VarMap;
 use indicatif::ProgressBar;
 use pvt3_models::bake::Tensors;
 use pvt3_models::prune::PruneSpec;
-use pvt3_models::{Config, Pvt3, Rng};
+use pvt3_models::{Classifier, Config, Rng};
 use serde::{Deserialize, Serialize};
 
 use crate::checkpoint::{self, read_json, write_json, Meta, Provenance};
@@ -171,7 +171,7 @@ fn smoothed_cross_entropy(logits: &Tensor, labels: &Tensor, eps: f64) -> Result<
 
 /// A model with its optimiser: what one training step needs.
 pub struct Learner {
-    pub model: Pvt3,
+    pub model: Classifier,
     pub varmap: VarMap,
     pub optimizer: AdamW,
     /// The selection masks, for the L1 penalty.
@@ -185,7 +185,7 @@ pub struct Learner {
 impl Learner {
     /// A seeded model, or one starting from `start` weights.
     pub fn new(config: &Config, opts: &TrainOptions, start: Option<&Tensors>) -> Result<Self> {
-        let (model, varmap) = Pvt3::init(config, opts.seed)?;
+        let (model, varmap) = Classifier::init(config, opts.seed)?;
         if let Some(start) = start {
             pvt3_models::weights::set_vars(&varmap, start, Path::new("(start weights)"))?;
         }
@@ -217,9 +217,12 @@ impl Learner {
                 saved.push(full);
             }
         }
-        let logits = self.model.forward(x, Some(rng))?;
+        let (logits, extra) = self.model.forward_with_loss(x, Some(rng))?;
         let mut loss = smoothed_cross_entropy(&logits, y, opts.label_smoothing)?;
-        if opts.l1 > 0.0 {
+        if let Some(extra) = extra {
+            loss = (loss + extra)?;
+        }
+        if opts.l1 > 0.0 && !self.masks.is_empty() {
             let flat: Vec<Tensor> = self.masks.iter().map(|m| m.abs()).collect::<candle_core::Result<_>>()?;
             loss = (loss + (Tensor::cat(&flat, 0)?.mean_all()? * opts.l1)?)?;
         }

@@ -8,7 +8,7 @@ use ndarray_npy::read_npy;
 
 use super::Pvt3;
 use crate::weights::{load_weights, save_weights};
-use crate::{Config, Error, Rng};
+use crate::{Config, Error};
 
 fn golden(file: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/golden/icub20").join(file)
@@ -34,26 +34,6 @@ fn icub20_has_64272_trainable_parameters_besides_the_frame_mask() {
     assert_eq!(count, 64_272);
     assert_eq!(vars["frame_mask"].elem_count(), 75);
     assert_eq!(count, Config::icub20().parameter_count());
-}
-
-#[test]
-fn every_parameter_gets_a_finite_nonzero_gradient() {
-    for cfg in [Config::icub20(), Config { heads: 2, dim_head: 8, tubelet: 3, dropout: 0.1, ..Config::icub20() }] {
-        let (model, varmap) = Pvt3::init(&cfg, 1).unwrap();
-        let mut rng = Rng::new(2);
-        let data: Vec<f32> = (0..4 * 6 * 10 * 75).map(|_| rng.normal()).collect();
-        let x = Tensor::from_vec(data, (4, 6, 10, 75), &Device::Cpu).unwrap();
-        let labels = Tensor::new(&[0u32, 3, 7, 19], &Device::Cpu).unwrap();
-        let logits = model.forward(&x, Some(&mut rng)).unwrap();
-        let loss = candle_nn::loss::cross_entropy(&logits, &labels).unwrap();
-        let grads = loss.backward().unwrap();
-        for (name, var) in varmap.data().lock().unwrap().iter() {
-            let g = grads.get(var).unwrap_or_else(|| panic!("{name} has no gradient"));
-            let g: Vec<f32> = g.flatten_all().unwrap().to_vec1().unwrap();
-            assert!(g.iter().all(|v| v.is_finite()), "{name} has a non-finite gradient");
-            assert!(g.iter().any(|v| *v != 0.0), "{name} has an all-zero gradient");
-        }
-    }
 }
 
 #[test]
