@@ -117,6 +117,31 @@ fn cv_runs_folds_side_by_side_and_resumes_without_retraining() {
 }
 
 #[test]
+fn baselines_train_and_evaluate_but_do_not_export() {
+    let dir = scratch("baselines");
+    let data = icub_slice(&dir, 12);
+    let d = data.to_str().unwrap();
+    for model in ["vit", "raec"] {
+        let run = dir.join(model);
+        let r = run.to_str().unwrap();
+        let mut args = vec!["train", "--data", d, "--out", r, "--epochs", "1", "--model", model];
+        args.extend(SMALL);
+        let out = ok(&args);
+        assert!(out.contains("best epoch"), "{out}");
+        let eval = ok(&["eval", r, "--data", d]);
+        assert!(eval.contains("accuracy"), "{eval}");
+        let info = ok(&["info", r]);
+        assert!(info.contains(&format!("model         {model}")), "{info}");
+        let err = fails(&["export", r, "-o", dir.join("x.onnx").to_str().unwrap()]);
+        assert!(err.contains(&format!("PVT³ models only, and this is a {model} model")), "{err}");
+    }
+    let err = fails(&["train", "--data", d, "--out", dir.join("p").to_str().unwrap(), "--model", "raec", "--prune-channels", "50"]);
+    assert!(err.contains("pruning and export: PVT³ models only"), "{err}");
+    assert!(!dir.join("p").exists(), "refused before training");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
 fn bad_input_gets_a_clear_error() {
     let dir = scratch("errors");
     let missing = dir.join("absent.npz");

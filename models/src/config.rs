@@ -273,16 +273,13 @@ impl Config {
                 ]
             }
             Architecture::Raec => {
-                if self.frames % self.tubelet != 0 {
-                    return Err(Error::Config(format!("tubelet = {} does not divide frames = {}", self.tubelet, self.frames)));
-                }
                 if self.conv_channels > 0 && (self.conv_output().0 < 2 || self.conv_output().1 < 2) {
                     return Err(Error::Config(format!(
                         "a {} × {} convolution and 2 × 2 pooling do not fit a {} × {} frame",
                         self.patch_height, self.patch_width, self.height, self.width
                     )));
                 }
-                Vec::new()
+                vec![("tubelet", self.tubelet, "frames", self.frames)]
             }
         };
         for (pn, p, n, v) in divides {

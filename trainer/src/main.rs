@@ -7,7 +7,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use pvt3_models::prune::{PruneSpec, Scope};
-use pvt3_models::Config;
+use pvt3_models::{Architecture, Config};
 use pvt3_trainer::bench::train_speed;
 use pvt3_trainer::checkpoint::{self, BakedFile};
 use pvt3_trainer::cv::cross_validate;
@@ -351,11 +351,11 @@ fn main() -> Result<()> {
             print!("{}", pvt3_trainer::stress::table(&rows?));
         }
         Command::Info { model, json } => {
-            // A checkpoint is read once: its configuration, and its size after baking.
-            let baked = if Path::new(&model).is_dir() { Some(BakedFile::from_checkpoint(Path::new(&model))?.baked) } else { None };
-            let cfg = match &baked {
-                Some(b) => b.config.clone(),
-                None => resolve_config(&model)?,
+            // A PVT³ checkpoint is read once: its configuration, and its size after baking.
+            let cfg = resolve_config(&model)?;
+            let baked = match Path::new(&model).is_dir() && cfg.model == Architecture::Pvt3 {
+                true => Some(BakedFile::from_checkpoint(Path::new(&model))?.baked),
+                false => None,
             };
             if json {
                 println!("{}", serde_json::to_string_pretty(&cfg)?);

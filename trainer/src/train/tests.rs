@@ -25,8 +25,7 @@ fn tiny_config() -> Config {
         dim_head: 4,
         mlp_dim: 8,
         classes: 2,
-        dropout: 0.0,
-        layer_norm_eps: 1e-5,
+        ..Config::icub20()
     }
 }
 
