@@ -52,6 +52,24 @@ fn layer_norm(g: &mut Graph, x: &str, n: &Norm, eps: f64, hint: &str) -> String 
     g.node("LayerNormalization", &[x, &w, &b], vec![int("axis", -1), float("epsilon", eps as f32)], None)
 }
 
+/// Layer norm without its scale and bias, for when the next matrix product absorbs them: tract
+/// runs a broadcast scale and bias as two slow generic ops, a bias after a product for free.
+fn plain_layer_norm(g: &mut Graph, x: &str, d: usize, eps: f64, hint: &str) -> String {
+    layer_norm(g, x, &Norm { weight: vec![1.0; d], bias: vec![0.0; d] }, eps, hint)
+}
+
+/// `l` applied after the affine part of `n`: `W (γ ∘ x + β) + b = (W diag γ) x + (W β + b)`.
+fn absorb_norm(l: &Dense, n: &Norm) -> Dense {
+    let weight = (0..l.rows * l.cols).map(|i| l.weight[i] * n.weight[i % l.cols]).collect();
+    let bias = (0..l.rows)
+        .map(|r| {
+            let shift: f64 = (0..l.cols).map(|c| l.weight[r * l.cols + c] as f64 * n.bias[c] as f64).sum();
+            (l.bias.as_ref().map_or(0.0, |b| b[r] as f64) + shift) as f32
+        })
+        .collect();
+    Dense { weight, bias: Some(bias), ..l.clone() }
+}
+
 fn gelu(g: &mut Graph, x: &str) -> String {
     let root2 = g.f32s("sqrt2", &[], vec![std::f32::consts::SQRT_2]);
     let one = g.f32s("one", &[], vec![1.0]);
@@ -65,13 +83,20 @@ fn gelu(g: &mut Graph, x: &str) -> String {
 
 /// Softmax over the last axis (rows of `len`) from elementwise ops and a sum. tract's Softmax op
 /// walks the rows one by one, which cost more than all matrix products together on the spatial
-/// stage's many 5-token rows; these ops vectorise over the whole tensor.
-fn softmax_rows(g: &mut Graph, x: &str, len: usize) -> String {
+/// stage's many 5-token rows; these ops vectorise over the whole tensor. `bound`, if known, is
+/// the largest |x| possible: below [`EXP_SAFE`] the row maximum is not subtracted, since `exp`
+/// can neither overflow nor underflow a whole row.
+fn softmax_rows(g: &mut Graph, x: &str, len: usize, bound: Option<f64>) -> String {
+    let axis = g.i64s("last_axis", &[1], vec![-1]);
+    if bound.is_some_and(|b| b < EXP_SAFE) {
+        let e = g.op("Exp", &[x]);
+        let sum = g.node("ReduceSum", &[&e, &axis], vec![int("keepdims", 1)], None);
+        return g.op("Div", &[&e, &sum]);
+    }
     // The row maximum by halving: the larger of two overlapping halves, until one column is
     // left. tract's ReduceMax walks the rows one by one, which on these short rows cost more than
     // the attention's matrix products; Slice and Max vectorise over the whole tensor.
     let (mut max, mut n) = (x.to_string(), len as i64);
-    let axis = g.i64s("last_axis", &[1], vec![-1]);
     while n > 1 {
         let half = (n + 1) / 2;
         let (zero, h, rest, end) = (
@@ -91,10 +116,104 @@ fn softmax_rows(g: &mut Graph, x: &str, len: usize) -> String {
     g.op("Div", &[&e, &sum])
 }
 
-/// Attention over `x` `[sequences × tokens, dim]`, `tokens` per sequence; the scale is folded
-/// into the q weights. Projections run on the flat rows as one matrix product each; only the
-/// scores and their mixing see the sequences.
-fn attention(g: &mut Graph, x: &str, tokens: usize, a: &BakedAttention, hint: &str) -> String {
+/// Attention over the layer norm `n` of `x` `[sequences × tokens, dim]`, `tokens` per sequence:
+/// folded where that is cheaper, else with the projections as baked.
+fn attention(g: &mut Graph, x: &str, tokens: usize, a: &BakedAttention, n: &Norm, eps: f64, hint: &str) -> String {
+    if folds(a, tokens) {
+        let normed = plain_layer_norm(g, x, n.weight.len(), eps, &format!("{hint}_norm"));
+        folded_attention(g, &normed, tokens, a, n, hint)
+    } else {
+        let normed = layer_norm(g, x, n, eps, &format!("{hint}_norm"));
+        projected_attention(g, &normed, tokens, a, hint)
+    }
+}
+
+/// Whether [`folded_attention`] needs fewer multiply-adds per token than the projections:
+/// `2 · heads · dim²` + scores and mixing at width `dim`, against `4 · dim · inner` + scores and
+/// mixing at width `head_dim`. The iCub model (dim 20, one head of 64) needs 3–6× fewer.
+fn folds(a: &BakedAttention, tokens: usize) -> bool {
+    let (d, h, inner) = (a.out.rows, a.heads, a.heads * a.head_dim);
+    let biased = [&a.q, &a.k, &a.v].iter().any(|l| l.bias.is_some());
+    !biased && a.head_dim > 0 && 2 * h * d * d + 2 * tokens * h * d < 4 * d * inner + 2 * tokens * inner
+}
+
+/// Attention with each head's four matrices multiplied out, exact up to float rounding. With
+/// `y = γ ∘ x + β` the layer norm's output: the scores `(y Wqᵀ)(y Wkᵀ)ᵀ = (y M) yᵀ` with
+/// `M = scale · Wqᵀ Wk`, and the head's share of the output `P (y Wvᵀ) Woᵀ = P (y U)` with
+/// `U = Wvᵀ Woᵀ`, both `[dim, dim]`. The keys' `β` adds the same `(y M) β` to every score of a
+/// row, which the softmax ignores, so the keys are `γ ∘ x` and `γ` moves into `M`: the plain norm
+/// `x` is all that the graph computes besides one product, `x [ΓMΓ | ΓU] + β [MΓ | U]`. The
+/// scores and mixing run at width `dim`; the heads are summed.
+fn folded_attention(g: &mut Graph, x: &str, tokens: usize, a: &BakedAttention, n: &Norm, hint: &str) -> String {
+    let (d, h, hd) = (a.out.rows, a.heads, a.head_dim);
+    let inner = h * hd;
+    let (gamma, beta) = (|i: usize| n.weight[i] as f64, |i: usize| n.bias[i] as f64);
+    // Row-major [dim, 2 · heads · dim]: columns head by head, first every M, then every U.
+    let width = 2 * h * d;
+    let (mut w, mut bias) = (vec![0f64; d * width], vec![0f64; width]);
+    for head in 0..h {
+        for i in 0..d {
+            for j in 0..d {
+                let (mut m, mut u) = (0f64, 0f64);
+                for c in head * hd..(head + 1) * hd {
+                    m += a.q.weight[c * d + i] as f64 * a.k.weight[c * d + j] as f64;
+                    u += a.v.weight[c * d + i] as f64 * a.out.weight[j * inner + c] as f64;
+                }
+                let (mc, uc) = (head * d + j, (h + head) * d + j);
+                let m = m * a.scale as f64 * gamma(j);
+                w[i * width + mc] = gamma(i) * m;
+                w[i * width + uc] = gamma(i) * u;
+                bias[mc] += beta(i) * m;
+                bias[uc] += beta(i) * u;
+            }
+        }
+    }
+    // A score is `(x A + c) · x` with a plain norm `x` (|x|² ≤ dim) and A, c the head's columns
+    // of w and bias: at most √dim (‖A‖_F √dim + |c|).
+    let bound = (0..h)
+        .map(|head| {
+            let a: f64 = (0..d * d).map(|k| w[(k / d) * width + head * d + k % d].powi(2)).sum::<f64>().sqrt();
+            let c: f64 = (0..d).map(|j| bias[head * d + j].powi(2)).sum::<f64>().sqrt();
+            (d as f64).sqrt() * (a * (d as f64).sqrt() + c)
+        })
+        .fold(0.0, f64::max);
+    let w = g.f32s(&format!("{hint}_mu"), &[d, width], w.into_iter().map(|v| v as f32).collect());
+    let bias = g.f32s(&format!("{hint}_mu_b"), &[width], bias.into_iter().map(|v| v as f32).collect());
+    let mu = g.op("MatMul", &[x, &w]);
+    let mu = g.op("Add", &[&mu, &bias]);
+    let split = g.i64s("split_heads", &[4], vec![-1, tokens as i64, 2 * h as i64, d as i64]);
+    let r = g.op("Reshape", &[&mu, &split]);
+    let heads = g.node("Transpose", &[&r], vec![ints("perm", &[0, 2, 1, 3])], None);
+    let axis = g.i64s("head_axis", &[1], vec![1]);
+    let (zero, mid, end) = (g.i64s("start", &[1], vec![0]), g.i64s("mid", &[1], vec![h as i64]), g.i64s("end", &[1], vec![2 * h as i64]));
+    let xm = g.op("Slice", &[&heads, &zero, &mid, &axis]);
+    let xu = g.op("Slice", &[&heads, &mid, &end, &axis]);
+    let per_seq = g.i64s("keys", &[4], vec![-1, 1, tokens as i64, d as i64]);
+    let keys = g.op("Reshape", &[x, &per_seq]);
+    let kt = g.node("Transpose", &[&keys], vec![ints("perm", &[0, 1, 3, 2])], None);
+    let scores = g.op("MatMul", &[&xm, &kt]);
+    let probs = softmax_rows(g, &scores, tokens, Some(bound));
+    let mixed = g.op("MatMul", &[&probs, &xu]);
+    let summed = if h == 1 { mixed } else { g.node("ReduceSum", &[&mixed, &axis], vec![int("keepdims", 0)], None) };
+    let rows = g.i64s("rows", &[2], vec![-1, d as i64]);
+    let flat = g.op("Reshape", &[&summed, &rows]);
+    match &a.out.bias {
+        Some(b) => {
+            let b = g.f32s(&format!("{hint}_out_b"), &[d], b.clone());
+            g.op("Add", &[&flat, &b])
+        }
+        None => flat,
+    }
+}
+
+/// Scores up to this size in magnitude need no max-subtraction: `exp(±60)` is far from f32's
+/// overflow (`exp(88.7)`) and from underflowing every entry of a row.
+const EXP_SAFE: f64 = 60.0;
+
+/// Attention with the baked projections; the scale is folded into the q weights. Projections
+/// run on the flat rows as one matrix product each; only the scores and their mixing see the
+/// sequences.
+fn projected_attention(g: &mut Graph, x: &str, tokens: usize, a: &BakedAttention, hint: &str) -> String {
     let q_scaled = Dense { weight: a.q.weight.iter().map(|w| w * a.scale).collect(), ..a.q.clone() };
     let q = linear(g, x, &q_scaled, &format!("{hint}_q"));
     let k = linear(g, x, &a.k, &format!("{hint}_k"));
@@ -106,7 +225,7 @@ fn attention(g: &mut Graph, x: &str, tokens: usize, a: &BakedAttention, hint: &s
     };
     let (qh, kt, vh) = (heads(g, &q, &[0, 2, 1, 3]), heads(g, &k, &[0, 2, 3, 1]), heads(g, &v, &[0, 2, 1, 3]));
     let scores = g.op("MatMul", &[&qh, &kt]);
-    let probs = softmax_rows(g, &scores, tokens);
+    let probs = softmax_rows(g, &scores, tokens, None);
     let mixed = g.op("MatMul", &[&probs, &vh]);
     let back = g.node("Transpose", &[&mixed], vec![ints("perm", &[0, 2, 1, 3])], None);
     let rows = g.i64s("merge_heads", &[2], vec![-1, (a.heads * a.head_dim) as i64]);
@@ -115,11 +234,10 @@ fn attention(g: &mut Graph, x: &str, tokens: usize, a: &BakedAttention, hint: &s
 }
 
 fn block(g: &mut Graph, x: &str, tokens: usize, b: &BakedBlock, eps: f64, hint: &str) -> String {
-    let n1 = layer_norm(g, x, &b.attn_norm, eps, &format!("{hint}_attn_norm"));
-    let a = attention(g, &n1, tokens, &b.attn, &format!("{hint}_attn"));
+    let a = attention(g, x, tokens, &b.attn, &b.attn_norm, eps, &format!("{hint}_attn"));
     let x1 = g.op("Add", &[x, &a]);
-    let n2 = layer_norm(g, &x1, &b.ffn_norm, eps, &format!("{hint}_ffn_norm"));
-    let h = linear(g, &n2, &b.ffn.fc1, &format!("{hint}_fc1"));
+    let n2 = plain_layer_norm(g, &x1, b.ffn_norm.weight.len(), eps, &format!("{hint}_ffn_norm"));
+    let h = linear(g, &n2, &absorb_norm(&b.ffn.fc1, &b.ffn_norm), &format!("{hint}_fc1"));
     let h = gelu(g, &h);
     let f = linear(g, &h, &b.ffn.fc2, &format!("{hint}_fc2"));
     g.op("Add", &[&x1, &f])

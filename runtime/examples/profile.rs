@@ -1,6 +1,7 @@
 //! Where the runtime spends its time: `cargo run --release -p pvt3-runtime --example profile --
 //! MODEL.onnx [BATCH [RUNS]]` times every node of the optimised tract plan over RUNS runs on
 //! synthetic input and prints the time per operator kind, largest first (docs/benchmarks.md).
+//! With `PVT3_PROFILE_NODES=N` it also lists the N slowest single nodes with their output shapes.
 
 use std::collections::HashMap;
 use std::time::Instant;
@@ -24,6 +25,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let n: usize = shape.iter().product();
     let input = Tensor::from_shape(&shape, &(0..n).map(|i| (i % 7) as f32 - 3.0).collect::<Vec<_>>())?;
     let mut by_op: HashMap<String, (f64, usize)> = HashMap::new();
+    let mut by_node: HashMap<usize, f64> = HashMap::new();
     let mut total = 0.0;
     for run in 0..runs + 5 {
         let mut state = SimpleState::new(&plan)?;
@@ -35,6 +37,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 let e = by_op.entry(node.op().name().into_owned()).or_default();
                 e.0 += t.elapsed().as_secs_f64();
                 e.1 += 1;
+                *by_node.entry(node.id).or_default() += t.elapsed().as_secs_f64();
             }
             out
         })?;
@@ -49,5 +52,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         println!("| {op} | {} | {:.1} | {:.1} % |", calls / runs, secs / runs as f64 * 1e6, 100.0 * secs / total);
     }
     println!("| **whole plan** | {} | {:.1} | |", plan.model().nodes().len(), total / runs as f64 * 1e6);
+    if let Some(n) = std::env::var("PVT3_PROFILE_NODES").ok().and_then(|v| v.parse().ok()) {
+        let mut nodes: Vec<_> = by_node.into_iter().collect();
+        nodes.sort_by(|a, b| b.1.total_cmp(&a.1));
+        println!("\n| node | operator | output | µs per run |\n|---|---|---|---:|");
+        for (id, secs) in nodes.into_iter().take(n) {
+            let node = plan.model().node(id);
+            println!("| {} | {} | {:?} | {:.1} |", node.name, node.op().name(), node.outputs[0].fact.shape, secs / runs as f64 * 1e6);
+        }
+    }
     Ok(())
 }

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 use ndarray::{Array2, Array4};
 use ndarray_npy::read_npy;
 use pvt3_models::bake::bake;
+use pvt3_models::reference;
 use pvt3_models::weights::read_tensors;
 use pvt3_models::Config;
 
@@ -49,6 +50,45 @@ fn golden_model_in_onnxruntime_matches_the_golden_logits_at_batch_1_and_8() {
     let one = dir.join("golden1.onnx");
     write(&model, &one).unwrap();
     onnx_check::assert_onnxruntime_matches(&one, (&[1, 6, 10, 75], &x[..4500]), &y[..20], 1e-5);
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// Folded attention (several heads; layer norms with non-trivial scale and bias absorbed; the
+/// softmax with and without its maximum subtracted) equals the f64 reference of the baked model.
+#[test]
+fn folded_attention_matches_the_reference_with_heads_norms_and_large_scores() {
+    let cfg = Config { heads: 2, dim_head: 32, frames: 12, ..Config::icub20() };
+    let (_, varmap) = pvt3_models::Pvt3::init(&cfg, 5).unwrap();
+    let mut tensors = pvt3_models::weights::varmap_tensors(&varmap).unwrap();
+    let mut rng = pvt3_models::Rng::new(9);
+    for (name, (_, values)) in tensors.iter_mut() {
+        if name.contains("norm.") {
+            values.iter_mut().for_each(|v| *v = if name.ends_with("weight") { 1.0 + 0.5 * rng.normal() } else { 0.5 * rng.normal() });
+        }
+    }
+    let x: Vec<f32> = (0..2 * 6 * 10 * 12).map(|_| rng.normal()).collect();
+    let dir = scratch("folded");
+    for (tag, q_scale) in [("bounded", 1.0), ("large", 40.0)] {
+        let mut t = tensors.clone();
+        for (name, (_, values)) in t.iter_mut() {
+            if name.ends_with("attn.qkv.weight") {
+                let third = values.len() / 3;
+                values[..third].iter_mut().for_each(|v| *v *= q_scale);
+            }
+        }
+        let baked = bake(&cfg, &t).unwrap();
+        let model = export(&baked, &identity_normalization(&cfg), &meta(20)).unwrap();
+        let graph = model.graph.as_ref().unwrap();
+        let folded = graph.initializer.iter().filter(|t| t.name.contains("attn_mu_")).count();
+        assert_eq!(folded, 2 * 8, "{tag}: all 8 attentions fold (weights and bias each)");
+        let maxes = graph.node.iter().filter(|n| n.op_type == "Max").count();
+        assert_eq!(maxes > 0, tag == "large", "{tag}: the row maximum is subtracted only where scores can be large");
+        let expected: Vec<f32> = reference::forward(&baked, &x, 2).unwrap().into_iter().flatten().map(|v| v as f32).collect();
+        let path = dir.join(format!("{tag}.onnx"));
+        write(&model, &path).unwrap();
+        let msg = onnx_check::assert_onnxruntime_matches(&path, (&[2, 6, 10, 12], &x), &expected, 1e-4);
+        assert!(msg.starts_with("ok"), "{tag}: {msg}");
+    }
     std::fs::remove_dir_all(dir).unwrap();
 }
 
