@@ -2,7 +2,7 @@
 `NAME=GLOB` per argument: the run directories of that model, one per fold), it takes the mean
 test accuracy over the folds, the baked parameters and multiply-adds (`pvt3 info`), and, for the
 first fold's model exported to ONNX, the latency in the pvt3 runtime (`pvt3-run --bench`, robot
-profile) and in onnxruntime (`bench/ort_latency.py`), measured side by side in rounds. Prints a
+profile unless `--runner` names another build) and in onnxruntime (`bench/ort_latency.py`), measured side by side in rounds. Prints a
 markdown table and writes the plot as SVG.
 
     target/onnx-venv/bin/python bench/grid.py --svg docs/frontier.svg \\
@@ -18,7 +18,6 @@ import sys
 from pathlib import Path
 
 PVT3 = "./target/release/pvt3"
-RUN = "./target/robot/pvt3-run"
 
 
 def info(run):
@@ -67,6 +66,7 @@ def main():
     p.add_argument("--svg", required=True)
     p.add_argument("--rounds", type=int, default=3)
     p.add_argument("--seconds", type=float, default=1.0)
+    p.add_argument("--runner", default="./target/robot/pvt3-run", help="the pvt3-run binary to time")
     p.add_argument("models", nargs="+", help="NAME=GLOB of run directories, one per fold")
     a = p.parse_args()
     Path("target/grid").mkdir(parents=True, exist_ok=True)
@@ -83,7 +83,7 @@ def main():
     for i in range(a.rounds):
         for r in rows:
             print(f"round {i + 1}/{a.rounds}: {r['name']}", file=sys.stderr)
-            r["pvt3"].append(bench([RUN, "--bench", r["onnx"], "1", str(a.seconds)]))
+            r["pvt3"].append(bench([a.runner, "--bench", r["onnx"], "1", str(a.seconds)]))
             r["ort"].append(bench([sys.executable, "bench/ort_latency.py", r["onnx"], str(a.seconds)]))
     med = lambda xs, k: statistics.median(x[k] for x in xs)
     print("| model | folds | test accuracy | parameters | multiply-adds | tokens kept | pvt3 batch 1 median / p99 (µs) | pvt3 batch 32 (windows/s) | onnxruntime batch 1 median (µs) | onnxruntime batch 32 (windows/s) | pvt3 / onnxruntime | speed-up over unpruned (pvt3, batch 1) |")

@@ -14,6 +14,7 @@ pub mod config;
 pub mod dropout;
 pub mod error;
 pub mod feed_forward;
+pub mod head;
 pub mod init;
 pub mod layer_norm;
 pub mod lstm;

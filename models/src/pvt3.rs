@@ -10,7 +10,7 @@ use candle_core::{Tensor, D};
 use candle_nn::{linear, Init, Linear, Module, VarBuilder, VarMap};
 
 use crate::dropout::Dropout;
-use crate::layer_norm::LayerNorm;
+use crate::head::Head;
 use crate::transformer::Transformer;
 use crate::{Config, Result, Rng};
 
@@ -26,8 +26,7 @@ pub struct Pvt3 {
     temporal_cls: Tensor,
     space: Transformer,
     temporal: Transformer,
-    head_norm: LayerNorm,
-    head: Linear,
+    head: Head,
     dropout: Dropout,
     cfg: Config,
 }
@@ -46,8 +45,7 @@ impl Pvt3 {
             temporal_cls: vb.get_with_hints((1, 1, d), "temporal_cls", small)?,
             space: Transformer::new(cfg, cfg.space_depth, vb.pp("space"))?,
             temporal: Transformer::new(cfg, cfg.time_depth, vb.pp("temporal"))?,
-            head_norm: LayerNorm::new(d, cfg.layer_norm_eps, vb.pp("head_norm"))?,
-            head: linear(d, cfg.classes, vb.pp("head"))?,
+            head: Head::new(cfg, vb.clone())?,
             dropout: Dropout::new(cfg.dropout),
             cfg: cfg.clone(),
         })
@@ -87,7 +85,7 @@ impl Pvt3 {
         let cls = self.temporal_cls.broadcast_as((b, 1, d))?;
         let sequence = Tensor::cat(&[&cls, &frames.reshape((b, t, d))?], 1)?;
         let pooled = self.temporal.forward_cls(&sequence, rng)?;
-        Ok(self.head.forward(&self.head_norm.forward(&pooled)?)?)
+        Ok(self.head.forward(&pooled)?)
     }
 
     /// Class probabilities `[b, classes]` (evaluation mode).

@@ -7,7 +7,7 @@ use candle_core::{Tensor, D};
 use candle_nn::{linear, Init, Linear, Module, VarBuilder, VarMap};
 
 use crate::dropout::Dropout;
-use crate::layer_norm::LayerNorm;
+use crate::head::Head;
 use crate::transformer::Transformer;
 use crate::{Config, Result, Rng};
 
@@ -17,8 +17,7 @@ pub struct Vit {
     cls: Tensor,
     pos_embed: Tensor,
     transformer: Transformer,
-    head_norm: LayerNorm,
-    head: Linear,
+    head: Head,
     dropout: Dropout,
     cfg: Config,
 }
@@ -33,8 +32,7 @@ impl Vit {
             cls: vb.get_with_hints((1, 1, d), "cls", small)?,
             pos_embed: vb.get_with_hints((1, n + 1, d), "pos_embed", small)?,
             transformer: Transformer::new(cfg, cfg.space_depth + cfg.time_depth, vb.pp("transformer"))?,
-            head_norm: LayerNorm::new(d, cfg.layer_norm_eps, vb.pp("head_norm"))?,
-            head: linear(d, cfg.classes, vb.pp("head"))?,
+            head: Head::new(cfg, vb.clone())?,
             dropout: Dropout::new(cfg.dropout),
             cfg: cfg.clone(),
         })
@@ -70,7 +68,7 @@ impl Vit {
         let tokens = Tensor::cat(&[&cls, &embedded], 1)?.broadcast_add(&self.pos_embed)?;
         let tokens = self.dropout.forward(&tokens, rng.as_deref_mut())?;
         let pooled = self.transformer.forward_cls(&tokens, rng)?;
-        Ok(self.head.forward(&self.head_norm.forward(&pooled)?)?)
+        Ok(self.head.forward(&pooled)?)
     }
 
     /// Class probabilities `[b, classes]` (evaluation mode).
