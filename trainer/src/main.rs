@@ -34,8 +34,9 @@ struct ModelArgs {
     #[arg(long, default_value = "data/icub20.npz")]
     data: PathBuf,
     /// Network: PVT³, or one of the paper's baselines: `vit` (one transformer over all frames
-    /// tiled into one frame) or `raec` (the LSTM autoencoder classifier of Gao et al.). Takes the
-    /// `vit-`/`raec-` variant of the sensor preset; only PVT³ can be pruned and exported.
+    /// tiled into one frame) or `raec` (the LSTM autoencoder classifier of Gao et al.; add
+    /// `--lr 5e-4 --weight-decay 0` to train it as published). Takes the `vit-`/`raec-` variant
+    /// of the sensor preset; only PVT³ can be pruned and exported.
     #[arg(long = "model", value_name = "MODEL", value_parser = ["pvt3", "vit", "raec"], conflicts_with = "config")]
     architecture: Option<String>,
     /// Model preset (icub20, biotac20, gelsight, each also as vit-NAME and raec-NAME); by default
