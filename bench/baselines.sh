@@ -6,7 +6,8 @@
 #
 #   bash bench/baselines.sh [ROW ...]     rows: raec-icub vit-biotac raec-biotac vit-icub rp-icub rp-biotac
 #
-# One thread per run (one is as fast as two for these models); PVT3=path/to/pvt3 picks the binary.
+# One thread per run (one is as fast as two for these models); JOBS=2 trains two folds side by side;
+# PVT3=path/to/pvt3 picks the binary.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 pvt3=${PVT3:-target/release/pvt3}
@@ -28,5 +29,5 @@ for row in "${rows[@]}"; do
     resume=()
     [ -d "$out" ] && resume=(--resume)
     echo "== $row: $pvt3 --threads 1 cv ${args[*]} --seeds 0 --epochs 100 --out $out"
-    "$pvt3" --threads 1 cv "${args[@]}" --seeds 0 --epochs 100 --out "$out" "${resume[@]}"
+    "$pvt3" --threads 1 cv "${args[@]}" --seeds 0 --epochs 100 --jobs "${JOBS:-1}" --out "$out" "${resume[@]}"
 done

@@ -3,7 +3,8 @@ with the parameters and multiply-adds of each model after baking (from `pvt3 inf
 
     python3 bench/pruning_report.py CV_DIR [FRAMES_DIR]
 
-CV_DIR is a `pvt3 cv` directory (seed0/foldK, and seed0/foldK/pruned if run with --prune-channels);
+CV_DIR is a `pvt3 cv` directory (seed0/foldK, and seed0/foldK/pruned if run with --prune-channels
+or --prune-frames; frames alone join the frame table);
 FRAMES_DIR holds `foldK-pP` runs of `pvt3 prune CV_DIR/seed0/foldK --prune-frames P`.
 """
 import json
@@ -35,7 +36,7 @@ def main():
     pruned = [f for f in folds if (f / "pruned" / "result.json").exists()]
     if pruned:
         provenance = json.loads((pruned[0] / "pruned" / "model" / "provenance.json").read_text())
-        print(f"Channel pruning ({provenance.get('pruning')}), `{cv}`:\n")
+        print(f"Pruning ({provenance.get('pruning')}), `{cv}`:\n")
         print("| fold | test before | test after | parameters before → after | multiply-adds before → after |")
         print("|---|---:|---:|---:|---:|")
         after = []
@@ -53,9 +54,15 @@ def main():
     print("|---:|---:|---:|---|---:|---:|")
     b = baked(folds[0] / "model")
     print(f"| 0 % | {b[2]} | {mean_std(before)} | {' / '.join(f'{v:.3f}' for v in before)} | {b[0]:,} | {b[1] / 1e6:.2f} M |")
-    levels = sorted({int(p.name.split("-p")[1]) for p in frames.glob("fold*-p*") if p.is_dir()})
-    for level in levels:
-        runs = [r for r in (frames / f"{f.name}-p{level}" for f in folds) if (r / "result.json").exists()]
+    by_level = {}
+    for level in {int(p.name.split("-p")[1]) for p in frames.glob("fold*-p*") if p.is_dir()}:
+        by_level[level] = [r for r in (frames / f"{f.name}-p{level}" for f in folds) if (r / "result.json").exists()]
+    # A cross-validation run with --prune-frames alone supplies its own level.
+    if pruned:
+        spec = json.loads((pruned[0] / "pruned" / "model" / "provenance.json").read_text())["pruning"]
+        if spec["channels"] == 0:
+            by_level[round(spec["frames"])] = [f / "pruned" for f in pruned]
+    for level, runs in sorted(by_level.items()):
         if not runs:
             continue
         acc = [test_accuracy(r) for r in runs]
