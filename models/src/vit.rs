@@ -3,7 +3,7 @@
 //! CLS token and one learned position embedding per patch. It sees the same data as PVT³ without
 //! the factorisation into space and time, and without frame selection.
 
-use candle_core::{Tensor, D};
+use candle_core::Tensor;
 use candle_nn::{linear, Init, Linear, Module, VarBuilder, VarMap};
 
 use crate::dropout::Dropout;
@@ -69,11 +69,6 @@ impl Vit {
         let tokens = self.dropout.forward(&tokens, rng.as_deref_mut())?;
         let pooled = self.transformer.forward_cls(&tokens, rng)?;
         Ok(self.head.forward(&pooled)?)
-    }
-
-    /// Class probabilities `[b, classes]` (evaluation mode).
-    pub fn probabilities(&self, x: &Tensor) -> Result<Tensor> {
-        Ok(candle_nn::ops::softmax(&self.forward(x, None)?, D::Minus1)?)
     }
 }
 
