@@ -7,8 +7,10 @@
 //! computes the spatial transformer for the kept frames alone. Named seams between the spatial
 //! and the temporal stage let the runtime stream a touch frame by frame from the same file.
 
+mod attention;
 mod error;
 mod graph;
+mod layers;
 mod model;
 
 pub use error::{Error, Result};

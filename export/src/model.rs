@@ -3,14 +3,16 @@
 use std::path::Path;
 
 use prost::Message;
-use pvt3_models::bake::{BakedAttention, BakedBlock, BakedPvt3, BakedTransformer, Dense, Norm};
+use pvt3_models::bake::{BakedBlock, BakedPvt3, BakedTransformer};
 use pvt3_models::normalization::Normalization;
 use tract_onnx::pb::{
     tensor_proto::DataType, tensor_shape_proto::dimension::Value as Dim, tensor_shape_proto::Dimension, type_proto, GraphProto, ModelProto,
     OperatorSetIdProto, StringStringEntryProto, TensorShapeProto, TypeProto, ValueInfoProto,
 };
 
-use crate::graph::{float, int, ints, Graph};
+use crate::attention::{attention, Heads, Layout, Rows};
+use crate::graph::{int, ints, Graph};
+use crate::layers::{absorb_norm, centre_rows, centred, gelu, layer_norm, linear, norm_affine, rms_norm};
 use crate::{Error, Result};
 
 /// The input: raw sensor frames `[batch, height, width, (channels,) frames]`.
@@ -32,231 +34,35 @@ pub struct Metadata {
     pub provenance: serde_json::Value,
 }
 
-fn linear(g: &mut Graph, x: &str, l: &Dense, hint: &str) -> String {
-    let wt: Vec<f32> = (0..l.cols).flat_map(|c| (0..l.rows).map(move |r| (r, c))).map(|(r, c)| l.weight[r * l.cols + c]).collect();
-    let w = g.f32s(&format!("{hint}_w"), &[l.cols, l.rows], wt);
-    let y = g.op("MatMul", &[x, &w]);
-    match &l.bias {
-        Some(b) => {
-            let b = g.f32s(&format!("{hint}_b"), &[l.rows], b.clone());
-            g.op("Add", &[&y, &b])
-        }
-        None => y,
-    }
-}
-
-fn layer_norm(g: &mut Graph, x: &str, n: &Norm, eps: f64, hint: &str) -> String {
-    let d = n.weight.len();
-    let w = g.f32s(&format!("{hint}_scale"), &[d], n.weight.clone());
-    let b = g.f32s(&format!("{hint}_bias"), &[d], n.bias.clone());
-    g.node("LayerNormalization", &[x, &w, &b], vec![int("axis", -1), float("epsilon", eps as f32)], None)
-}
-
-/// Layer norm without its scale and bias, for when the next matrix product absorbs them: tract
-/// runs a broadcast scale and bias as two slow generic ops, a bias after a product for free.
-fn plain_layer_norm(g: &mut Graph, x: &str, d: usize, eps: f64, hint: &str) -> String {
-    layer_norm(g, x, &Norm { weight: vec![1.0; d], bias: vec![0.0; d] }, eps, hint)
-}
-
-/// `l` applied after the affine part of `n`: `W (γ ∘ x + β) + b = (W diag γ) x + (W β + b)`.
-fn absorb_norm(l: &Dense, n: &Norm) -> Dense {
-    let weight = (0..l.rows * l.cols).map(|i| l.weight[i] * n.weight[i % l.cols]).collect();
-    let bias = (0..l.rows)
-        .map(|r| {
-            let shift: f64 = (0..l.cols).map(|c| l.weight[r * l.cols + c] as f64 * n.bias[c] as f64).sum();
-            (l.bias.as_ref().map_or(0.0, |b| b[r] as f64) + shift) as f32
-        })
-        .collect();
-    Dense { weight, bias: Some(bias), ..l.clone() }
-}
-
-fn gelu(g: &mut Graph, x: &str) -> String {
-    let root2 = g.f32s("sqrt2", &[], vec![std::f32::consts::SQRT_2]);
-    let one = g.f32s("one", &[], vec![1.0]);
-    let half = g.f32s("half", &[], vec![0.5]);
-    let scaled = g.op("Div", &[x, &root2]);
-    let erf = g.op("Erf", &[&scaled]);
-    let plus = g.op("Add", &[&erf, &one]);
-    let prod = g.op("Mul", &[x, &plus]);
-    g.op("Mul", &[&prod, &half])
-}
-
-/// Softmax over the last axis (rows of `len`) from elementwise ops and a sum. tract's Softmax op
-/// walks the rows one by one, which cost more than all matrix products together on the spatial
-/// stage's many 5-token rows; these ops vectorise over the whole tensor. `bound`, if known, is
-/// the largest |x| possible: below [`EXP_SAFE`] the row maximum is not subtracted, since `exp`
-/// can neither overflow nor underflow a whole row.
-fn softmax_rows(g: &mut Graph, x: &str, len: usize, bound: Option<f64>) -> String {
-    let axis = g.i64s("last_axis", &[1], vec![-1]);
-    if bound.is_some_and(|b| b < EXP_SAFE) {
-        let e = g.op("Exp", &[x]);
-        let sum = g.node("ReduceSum", &[&e, &axis], vec![int("keepdims", 1)], None);
-        return g.op("Div", &[&e, &sum]);
-    }
-    // The row maximum by halving: the larger of two overlapping halves, until one column is
-    // left. tract's ReduceMax walks the rows one by one, which on these short rows cost more than
-    // the attention's matrix products; Slice and Max vectorise over the whole tensor.
-    let (mut max, mut n) = (x.to_string(), len as i64);
-    while n > 1 {
-        let half = (n + 1) / 2;
-        let (zero, h, rest, end) = (
-            g.i64s("start", &[1], vec![0]),
-            g.i64s("end", &[1], vec![half]),
-            g.i64s("start", &[1], vec![n - half]),
-            g.i64s("end", &[1], vec![n]),
-        );
-        let low = g.op("Slice", &[&max, &zero, &h, &axis]);
-        let high = g.op("Slice", &[&max, &rest, &end, &axis]);
-        max = g.op("Max", &[&low, &high]);
-        n = half;
-    }
-    let shifted = g.op("Sub", &[x, &max]);
-    let e = g.op("Exp", &[&shifted]);
-    let sum = g.node("ReduceSum", &[&e, &axis], vec![int("keepdims", 1)], None);
-    g.op("Div", &[&e, &sum])
-}
-
-/// Attention over the layer norm `n` of `x` `[sequences × tokens, dim]`, `tokens` per sequence:
-/// folded where that is cheaper, else with the projections as baked.
-fn attention(g: &mut Graph, x: &str, tokens: usize, a: &BakedAttention, n: &Norm, eps: f64, hint: &str) -> String {
-    if folds(a, tokens) {
-        let normed = plain_layer_norm(g, x, n.weight.len(), eps, &format!("{hint}_norm"));
-        folded_attention(g, &normed, tokens, a, n, hint)
-    } else {
-        let normed = layer_norm(g, x, n, eps, &format!("{hint}_norm"));
-        projected_attention(g, &normed, tokens, a, hint)
-    }
-}
-
-/// Whether [`folded_attention`] needs fewer multiply-adds per token than the projections:
-/// `2 · heads · dim²` + scores and mixing at width `dim`, against `4 · dim · inner` + scores and
-/// mixing at width `head_dim`. The iCub model (dim 20, one head of 64) needs 3–6× fewer.
-fn folds(a: &BakedAttention, tokens: usize) -> bool {
-    let (d, h, inner) = (a.out.rows, a.heads, a.heads * a.head_dim);
-    let biased = [&a.q, &a.k, &a.v].iter().any(|l| l.bias.is_some());
-    !biased && a.head_dim > 0 && 2 * h * d * d + 2 * tokens * h * d < 4 * d * inner + 2 * tokens * inner
-}
-
-/// Attention with each head's four matrices multiplied out, exact up to float rounding. With
-/// `y = γ ∘ x + β` the layer norm's output: the scores `(y Wqᵀ)(y Wkᵀ)ᵀ = (y M) yᵀ` with
-/// `M = scale · Wqᵀ Wk`, and the head's share of the output `P (y Wvᵀ) Woᵀ = P (y U)` with
-/// `U = Wvᵀ Woᵀ`, both `[dim, dim]`. The keys' `β` adds the same `(y M) β` to every score of a
-/// row, which the softmax ignores, so the keys are `γ ∘ x` and `γ` moves into `M`: the plain norm
-/// `x` is all that the graph computes besides one product, `x [ΓMΓ | ΓU] + β [MΓ | U]`. The
-/// scores and mixing run at width `dim`; the heads are summed.
-fn folded_attention(g: &mut Graph, x: &str, tokens: usize, a: &BakedAttention, n: &Norm, hint: &str) -> String {
-    let (d, h, hd) = (a.out.rows, a.heads, a.head_dim);
-    let inner = h * hd;
-    let (gamma, beta) = (|i: usize| n.weight[i] as f64, |i: usize| n.bias[i] as f64);
-    // Row-major [dim, 2 · heads · dim]: columns head by head, first every M, then every U.
-    let width = 2 * h * d;
-    let (mut w, mut bias) = (vec![0f64; d * width], vec![0f64; width]);
-    for head in 0..h {
-        for i in 0..d {
-            for j in 0..d {
-                let (mut m, mut u) = (0f64, 0f64);
-                for c in head * hd..(head + 1) * hd {
-                    m += a.q.weight[c * d + i] as f64 * a.k.weight[c * d + j] as f64;
-                    u += a.v.weight[c * d + i] as f64 * a.out.weight[j * inner + c] as f64;
-                }
-                let (mc, uc) = (head * d + j, (h + head) * d + j);
-                let m = m * a.scale as f64 * gamma(j);
-                w[i * width + mc] = gamma(i) * m;
-                w[i * width + uc] = gamma(i) * u;
-                bias[mc] += beta(i) * m;
-                bias[uc] += beta(i) * u;
-            }
-        }
-    }
-    // A score is `(x A + c) · x` with a plain norm `x` (|x|² ≤ dim) and A, c the head's columns
-    // of w and bias: at most √dim (‖A‖_F √dim + |c|).
-    let bound = (0..h)
-        .map(|head| {
-            let a: f64 = (0..d * d).map(|k| w[(k / d) * width + head * d + k % d].powi(2)).sum::<f64>().sqrt();
-            let c: f64 = (0..d).map(|j| bias[head * d + j].powi(2)).sum::<f64>().sqrt();
-            (d as f64).sqrt() * (a * (d as f64).sqrt() + c)
-        })
-        .fold(0.0, f64::max);
-    let w = g.f32s(&format!("{hint}_mu"), &[d, width], w.into_iter().map(|v| v as f32).collect());
-    let bias = g.f32s(&format!("{hint}_mu_b"), &[width], bias.into_iter().map(|v| v as f32).collect());
-    let mu = g.op("MatMul", &[x, &w]);
-    let mu = g.op("Add", &[&mu, &bias]);
-    let split = g.i64s("split_heads", &[4], vec![-1, tokens as i64, 2 * h as i64, d as i64]);
-    let r = g.op("Reshape", &[&mu, &split]);
-    let heads = g.node("Transpose", &[&r], vec![ints("perm", &[0, 2, 1, 3])], None);
-    let axis = g.i64s("head_axis", &[1], vec![1]);
-    let (zero, mid, end) = (g.i64s("start", &[1], vec![0]), g.i64s("mid", &[1], vec![h as i64]), g.i64s("end", &[1], vec![2 * h as i64]));
-    let xm = g.op("Slice", &[&heads, &zero, &mid, &axis]);
-    let xu = g.op("Slice", &[&heads, &mid, &end, &axis]);
-    let per_seq = g.i64s("keys", &[4], vec![-1, 1, tokens as i64, d as i64]);
-    let keys = g.op("Reshape", &[x, &per_seq]);
-    let kt = g.node("Transpose", &[&keys], vec![ints("perm", &[0, 1, 3, 2])], None);
-    let scores = g.op("MatMul", &[&xm, &kt]);
-    let probs = softmax_rows(g, &scores, tokens, Some(bound));
-    let mixed = g.op("MatMul", &[&probs, &xu]);
-    let summed = if h == 1 { mixed } else { g.node("ReduceSum", &[&mixed, &axis], vec![int("keepdims", 0)], None) };
-    let rows = g.i64s("rows", &[2], vec![-1, d as i64]);
-    let flat = g.op("Reshape", &[&summed, &rows]);
-    match &a.out.bias {
-        Some(b) => {
-            let b = g.f32s(&format!("{hint}_out_b"), &[d], b.clone());
-            g.op("Add", &[&flat, &b])
-        }
-        None => flat,
-    }
-}
-
-/// Scores up to this size in magnitude need no max-subtraction: `exp(±60)` is far from f32's
-/// overflow (`exp(88.7)`) and from underflowing every entry of a row.
-const EXP_SAFE: f64 = 60.0;
-
-/// Attention with the baked projections; the scale is folded into the q weights. Projections
-/// run on the flat rows as one matrix product each; only the scores and their mixing see the
-/// sequences.
-fn projected_attention(g: &mut Graph, x: &str, tokens: usize, a: &BakedAttention, hint: &str) -> String {
-    let q_scaled = Dense { weight: a.q.weight.iter().map(|w| w * a.scale).collect(), ..a.q.clone() };
-    let q = linear(g, x, &q_scaled, &format!("{hint}_q"));
-    let k = linear(g, x, &a.k, &format!("{hint}_k"));
-    let v = linear(g, x, &a.v, &format!("{hint}_v"));
-    let split = g.i64s("split_heads", &[4], vec![-1, tokens as i64, a.heads as i64, a.head_dim as i64]);
-    let heads = |g: &mut Graph, t: &str, perm: &[i64]| {
-        let r = g.op("Reshape", &[t, &split]);
-        g.node("Transpose", &[&r], vec![ints("perm", perm)], None)
-    };
-    let (qh, kt, vh) = (heads(g, &q, &[0, 2, 1, 3]), heads(g, &k, &[0, 2, 3, 1]), heads(g, &v, &[0, 2, 1, 3]));
-    let scores = g.op("MatMul", &[&qh, &kt]);
-    let probs = softmax_rows(g, &scores, tokens, None);
-    let mixed = g.op("MatMul", &[&probs, &vh]);
-    let back = g.node("Transpose", &[&mixed], vec![ints("perm", &[0, 2, 1, 3])], None);
-    let rows = g.i64s("merge_heads", &[2], vec![-1, (a.heads * a.head_dim) as i64]);
-    let merged = g.op("Reshape", &[&back, &rows]);
-    linear(g, &merged, &a.out, &format!("{hint}_out"))
-}
-
-fn block(g: &mut Graph, x: &str, tokens: usize, b: &BakedBlock, eps: f64, hint: &str) -> String {
-    let a = attention(g, x, tokens, &b.attn, &b.attn_norm, eps, &format!("{hint}_attn"));
-    let x1 = g.op("Add", &[x, &a]);
-    let n2 = plain_layer_norm(g, &x1, b.ffn_norm.weight.len(), eps, &format!("{hint}_ffn_norm"));
+/// One pre-norm block on the (centred) stream `x`: `[rows, dim]` out, or with `cls_only` the
+/// first token of each sequence alone, `[sequences, dim]`.
+fn block(g: &mut Graph, x: &str, rows: Rows, cls_only: bool, b: &BakedBlock, eps: f64, hint: &str) -> String {
+    let d = b.ffn_norm.weight.len();
+    let xhat = rms_norm(g, x, eps);
+    let heads = Heads::new(&b.attn, &b.attn_norm, rows.tokens);
+    let a = attention(g, &xhat, rows, cls_only, &heads, &format!("{hint}_attn"));
+    let residual = if cls_only { rows.first(g, x, d) } else { x.to_string() };
+    let x1 = g.op("Add", &[&residual, &a]);
+    let n2 = rms_norm(g, &x1, eps);
     let h = linear(g, &n2, &absorb_norm(&b.ffn.fc1, &b.ffn_norm), &format!("{hint}_fc1"));
     let h = gelu(g, &h);
-    let f = linear(g, &h, &b.ffn.fc2, &format!("{hint}_fc2"));
+    let f = linear(g, &h, &centred(&b.ffn.fc2), &format!("{hint}_fc2"));
     g.op("Add", &[&x1, &f])
 }
 
-/// A transformer over `x` `[sequences, tokens, dim]` → its normalised first token `[sequences, dim]`.
-/// The blocks work on the flat `[sequences × tokens, dim]` rows.
-fn transformer_cls(g: &mut Graph, x: &str, tokens: usize, t: &BakedTransformer, eps: f64, hint: &str) -> String {
-    let d = t.norm.weight.len() as i64;
-    let flat = g.i64s("rows", &[2], vec![-1, d]);
-    let mut x = g.op("Reshape", &[x, &flat]);
+/// A transformer over the flat rows `x` of a centred stream laid out as `rows`: its first token
+/// after the last block, not yet normalised, `[sequences, dim]`. The last block asks only the
+/// first token's query, since nothing else is read.
+fn transformer_cls(g: &mut Graph, x: &str, rows: Rows, t: &BakedTransformer, eps: f64, hint: &str) -> String {
+    let last = t.layers.len().checked_sub(1);
+    let mut x = x.to_string();
     for (i, b) in t.layers.iter().enumerate() {
-        x = block(g, &x, tokens, b, eps, &format!("{hint}{i}"));
+        x = block(g, &x, rows, Some(i) == last, b, eps, &format!("{hint}{i}"));
     }
-    let seqs = g.i64s("sequences", &[3], vec![-1, tokens as i64, d]);
-    let x = g.op("Reshape", &[&x, &seqs]);
-    let zero = g.i64s("first", &[], vec![0]);
-    let cls = g.node("Gather", &[&x, &zero], vec![int("axis", 1)], None);
-    layer_norm(g, &cls, &t.norm, eps, &format!("{hint}_norm"))
+    if last.is_none() {
+        x = rows.first(g, &x, t.norm.weight.len());
+    }
+    x
 }
 
 /// The first entry of a shape, as a 1-element shape.
@@ -362,8 +168,8 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
     // Spatial stage. Normalise per channel: (x - mean) / std.
     let mean = g.f32s("norm_mean", &[h, w, ch], norm.mean.clone());
     let std = g.f32s("norm_std", &[h, w, ch], norm.std.clone());
-    let centred = g.op("Sub", &[TOKEN_FRAMES, &mean]);
-    let x = g.op("Div", &[&centred, &std]);
+    let shifted = g.op("Sub", &[TOKEN_FRAMES, &mean]);
+    let x = g.op("Div", &[&shifted, &std]);
     // Patches: [N, tt, gh, ph, gw, pw, c] → [N, gh, gw, tt, ph, pw, c] → [N, n, patch_dim].
     let (gh, gw) = (h / c.patch_height, w / c.patch_width);
     let grid = [0, tt, gh, c.patch_height, gw, c.patch_width, ch].map(|v| v as i64);
@@ -372,7 +178,10 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
     let x = g.node("Transpose", &[&x], vec![ints("perm", &[0, 2, 4, 1, 3, 5, 6])], None);
     let patch_rows = g.i64s("patch_rows", &[2], vec![-1, c.patch_dim() as i64]);
     let x = g.op("Reshape", &[&x, &patch_rows]);
-    let x = linear(&mut g, &x, &m.patch_embed, "patch_embed");
+    // Everything written to the residual stream is centred (see `layers`), so every pre-norm
+    // is a root-mean-square norm: the patch embedding, the CLS tokens, the position embedding,
+    // each block's outputs, and the spatial encodings handed to the temporal stage.
+    let x = linear(&mut g, &x, &centred(&m.patch_embed), "patch_embed");
     let tokens_shape = g.i64s("tokens", &[3], vec![-1, n as i64, d as i64]);
     let x = g.op("Reshape", &[&x, &tokens_shape]);
     let scales = g.f32s("frame_scale", &[tk], m.token_scale.clone());
@@ -382,13 +191,20 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
     let embedded = g.op("Mul", &[&x, &scale]);
     let token_shape = g.op("Shape", &[TOKEN_FRAMES]);
     let count = first_dim(&mut g, &token_shape);
-    let space_cls = g.f32s("space_cls", &[1, 1, d], m.space_cls.clone());
+    let space_cls = g.f32s("space_cls", &[1, 1, d], centre_rows(&m.space_cls, d));
     let cls = expand_over_batch(&mut g, &space_cls, &count, &[1, d]);
     let tokens = g.node("Concat", &[&cls, &embedded], vec![int("axis", 1)], None);
-    let positions = g.f32s("pos_embed", &[tk, n + 1, d], m.pos_embed.clone());
+    let positions = g.f32s("pos_embed", &[tk, n + 1, d], centre_rows(&m.pos_embed, d));
     let pos = g.node("Gather", &[&positions, TOKEN_INDEX], vec![int("axis", 0)], None);
     let tokens = g.op("Add", &[&tokens, &pos]);
-    let encoded = transformer_cls(&mut g, &tokens, n + 1, &m.space, eps, "space");
+    // Token-major rows [n + 1, sequences, dim] for the spatial attention (see `attention`).
+    let tokens = g.node("Transpose", &[&tokens], vec![ints("perm", &[1, 0, 2])], None);
+    let flat = g.i64s("rows", &[2], vec![-1, d as i64]);
+    let tokens = g.op("Reshape", &[&tokens, &flat]);
+    let space = Rows { layout: Layout::TokenMajor, tokens: n + 1 };
+    let cls = transformer_cls(&mut g, &tokens, space, &m.space, eps, "space");
+    let cls = rms_norm(&mut g, &cls, eps);
+    let encoded = linear(&mut g, &cls, &centred(&norm_affine(&m.space.norm)), "space_norm");
     g.node("Identity", &[&encoded], vec![], Some(TOKEN_ENCODINGS));
 
     // Temporal stage.
@@ -403,14 +219,17 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
             place[k * tk + kk] = 1.0;
         }
         let place = g.f32s("place_kept", &[t, tk], place);
-        let constants = g.f32s("pruned_encodings", &[t, d], m.pruned_encodings.clone());
+        let constants = g.f32s("pruned_encodings", &[t, d], centre_rows(&m.pruned_encodings, d));
         let placed = g.op("MatMul", &[&place, &frames]);
         frames = g.op("Add", &[&placed, &constants]);
     }
-    let temporal_cls = g.f32s("temporal_cls", &[1, 1, d], m.temporal_cls.clone());
+    let temporal_cls = g.f32s("temporal_cls", &[1, 1, d], centre_rows(&m.temporal_cls, d));
     let tcls = expand_over_batch(&mut g, &temporal_cls, &batch, &[1, d]);
     let sequence = g.node("Concat", &[&tcls, &frames], vec![int("axis", 1)], None);
-    let pooled = transformer_cls(&mut g, &sequence, t + 1, &m.temporal, eps, "temporal");
+    let sequence = g.op("Reshape", &[&sequence, &flat]);
+    let temporal = Rows { layout: Layout::SequenceMajor, tokens: t + 1 };
+    let pooled = transformer_cls(&mut g, &sequence, temporal, &m.temporal, eps, "temporal");
+    let pooled = layer_norm(&mut g, &pooled, &m.temporal.norm, eps, "temporal_norm");
     let normed = layer_norm(&mut g, &pooled, &m.head_norm, eps, "head_norm");
     let logits = linear(&mut g, &normed, &m.head, "head");
     g.node("Identity", &[&logits], vec![], Some(LOGITS));

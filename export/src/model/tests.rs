@@ -79,8 +79,9 @@ fn folded_attention_matches_the_reference_with_heads_norms_and_large_scores() {
         let baked = bake(&cfg, &t).unwrap();
         let model = export(&baked, &identity_normalization(&cfg), &meta(20)).unwrap();
         let graph = model.graph.as_ref().unwrap();
-        let folded = graph.initializer.iter().filter(|t| t.name.contains("attn_mu_")).count();
-        assert_eq!(folded, 2 * 8, "{tag}: all 8 attentions fold (weights and bias each)");
+        let named = |part: &str| graph.initializer.iter().filter(|t| t.name.contains(part)).count();
+        assert_eq!(named("attn_queries"), 2 * 8, "{tag}: 8 attentions, query weights and bias each");
+        assert_eq!(named("attn_keys"), 0, "{tag}: all 8 attentions fold, so the keys are the norm itself");
         let maxes = graph.node.iter().filter(|n| n.op_type == "Max").count();
         assert_eq!(maxes > 0, tag == "large", "{tag}: the row maximum is subtracted only where scores can be large");
         let expected: Vec<f32> = reference::forward(&baked, &x, 2).unwrap().into_iter().flatten().map(|v| v as f32).collect();
