@@ -14,7 +14,7 @@
 use pvt3_models::bake::{BakedAttention, Dense, Norm};
 
 use crate::graph::{int, ints, Graph};
-use crate::layers::{absorb_norm, centred, linear, linear_columns};
+use crate::layers::{absorb_norm, centred, linear, linear_columns, residual_linear};
 
 /// How a stage lays out its rows `[rows, dim]`.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -143,14 +143,15 @@ impl Heads {
     }
 }
 
-/// Attention over `xhat`, the plain norm of the stream, laid out as `rows`: `[rows, dim]` out,
-/// before the residual; with `cls_only`, the first token of each sequence alone, `[sequences, dim]`.
-pub(crate) fn attention(g: &mut Graph, xhat: &str, rows: Rows, cls_only: bool, h: &Heads, hint: &str) -> String {
+/// The stream `x` updated by attention over `xhat`, its plain norm, both laid out as `rows`:
+/// `[rows, dim]`; with `cls_only`, the first token of each sequence alone, `[sequences, dim]`.
+pub(crate) fn attention(g: &mut Graph, x: &str, xhat: &str, rows: Rows, cls_only: bool, h: &Heads, hint: &str) -> String {
     let mixed = match rows.layout {
         Layout::TokenMajor => rolled(g, xhat, rows, cls_only, h, hint),
         Layout::SequenceMajor => batched(g, xhat, rows, cls_only, h, hint),
     };
-    linear(g, &mixed, &h.out, &format!("{hint}_out"))
+    let x = if cls_only { rows.first(g, x, h.out.rows) } else { x.to_string() };
+    residual_linear(g, &x, &mixed, &h.out, &format!("{hint}_out"))
 }
 
 /// `[1 or heads, …]` repeated to `[heads, …]` along axis 0.

@@ -30,6 +30,16 @@ pub(crate) fn linear_columns(g: &mut Graph, x: &str, l: &Dense, hint: &str) -> S
     }
 }
 
+/// `x + (y Wᵀ + b)`, the residual update by the layer `l`, written `x - (y (-W)ᵀ - b)`. tract
+/// fuses an Add that follows a product into the product's store, which ran at half the speed of
+/// the product and a separate sum (iCub rows: 19 µs against 9 + 1); it leaves a Sub alone.
+pub(crate) fn residual_linear(g: &mut Graph, x: &str, y: &str, l: &Dense, hint: &str) -> String {
+    let negated =
+        Dense { weight: l.weight.iter().map(|w| -w).collect(), bias: l.bias.as_ref().map(|b| b.iter().map(|v| -v).collect()), ..l.clone() };
+    let update = linear(g, y, &negated, hint);
+    g.op("Sub", &[x, &update])
+}
+
 pub(crate) fn add_bias(g: &mut Graph, y: &str, bias: Option<&[f32]>, hint: &str) -> String {
     match bias {
         Some(b) => {

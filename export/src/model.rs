@@ -12,7 +12,7 @@ use tract_onnx::pb::{
 
 use crate::attention::{attention, Heads, Layout, Rows};
 use crate::graph::{int, ints, Graph};
-use crate::layers::{absorb_norm, centre_rows, centred, gelu, layer_norm, linear, norm_affine, rms_norm};
+use crate::layers::{absorb_norm, centre_rows, centred, gelu, layer_norm, linear, norm_affine, residual_linear, rms_norm};
 use crate::{Error, Result};
 
 /// The input: raw sensor frames `[batch, height, width, (channels,) frames]`.
@@ -37,17 +37,13 @@ pub struct Metadata {
 /// One pre-norm block on the (centred) stream `x`: `[rows, dim]` out, or with `cls_only` the
 /// first token of each sequence alone, `[sequences, dim]`.
 fn block(g: &mut Graph, x: &str, rows: Rows, cls_only: bool, b: &BakedBlock, eps: f64, hint: &str) -> String {
-    let d = b.ffn_norm.weight.len();
     let xhat = rms_norm(g, x, eps);
     let heads = Heads::new(&b.attn, &b.attn_norm, rows.tokens);
-    let a = attention(g, &xhat, rows, cls_only, &heads, &format!("{hint}_attn"));
-    let residual = if cls_only { rows.first(g, x, d) } else { x.to_string() };
-    let x1 = g.op("Add", &[&residual, &a]);
+    let x1 = attention(g, x, &xhat, rows, cls_only, &heads, &format!("{hint}_attn"));
     let n2 = rms_norm(g, &x1, eps);
     let h = linear(g, &n2, &absorb_norm(&b.ffn.fc1, &b.ffn_norm), &format!("{hint}_fc1"));
     let h = gelu(g, &h);
-    let f = linear(g, &h, &centred(&b.ffn.fc2), &format!("{hint}_fc2"));
-    g.op("Add", &[&x1, &f])
+    residual_linear(g, &x1, &h, &centred(&b.ffn.fc2), &format!("{hint}_fc2"))
 }
 
 /// A transformer over the flat rows `x` of a centred stream laid out as `rows`: its first token
