@@ -9,6 +9,7 @@ use tract_onnx::pb::ModelProto;
 use tract_onnx::prelude::*;
 use tract_onnx::tract_core::runtime::RunOptions;
 
+use crate::plan::Plan;
 use crate::stream::Stages;
 use crate::{Error, Result};
 
@@ -31,7 +32,7 @@ pub struct Classifier {
     pub(crate) tubelet: usize,
     /// Width of a token's encoding.
     pub(crate) dim: usize,
-    plans: Mutex<HashMap<usize, Arc<TypedRunnableModel>>>,
+    plans: Mutex<HashMap<usize, Arc<Plan>>>,
     stages: Mutex<Option<Arc<Stages>>>,
     threads: usize,
     pub(crate) path: String,
@@ -114,7 +115,7 @@ impl Classifier {
     }
 
     /// `model` with fixed input facts, optimised and made runnable on the caller's threads.
-    pub(crate) fn optimise(&self, model: &ModelProto, inputs: Vec<InferenceFact>) -> Result<Arc<TypedRunnableModel>> {
+    pub(crate) fn optimise(&self, model: &ModelProto, inputs: Vec<InferenceFact>) -> Result<Plan> {
         let mut model = tract_onnx::onnx()
             .model_for_proto_model(model)
             .map_err(|e| Error::NotOnnx { path: self.path.clone(), reason: format!("{e:#}") })?;
@@ -128,18 +129,19 @@ impl Classifier {
         model
             .into_optimized()
             .and_then(|m| m.into_runnable_with_options(&RunOptions { executor: Some(executor), ..Default::default() }))
+            .map(Plan::new)
             .map_err(|e| Error::NotOnnx { path: self.path.clone(), reason: format!("{e:#}") })
     }
 
     /// The optimised plan for `batch` windows, built on first use.
-    fn plan(&self, batch: usize) -> Result<Arc<TypedRunnableModel>> {
+    fn plan(&self, batch: usize) -> Result<Arc<Plan>> {
         let mut plans = self.plans.lock().unwrap_or_else(|p| p.into_inner());
         if let Some(p) = plans.get(&batch) {
             return Ok(p.clone());
         }
         let mut shape = vec![batch];
         shape.extend(&self.sample_shape);
-        let plan = self.optimise(&self.proto, vec![f32::fact(&shape).into()])?;
+        let plan = Arc::new(self.optimise(&self.proto, vec![f32::fact(&shape).into()])?);
         plans.insert(batch, plan.clone());
         Ok(plan)
     }
@@ -176,7 +178,7 @@ impl Classifier {
         let mut shape = vec![batch];
         shape.extend(&self.sample_shape);
         let input = Tensor::from_shape(&shape, frames).map_err(tract_error)?;
-        let outputs = self.plan(batch)?.run(tvec!(input.into())).map_err(tract_error)?;
+        let outputs = self.plan(batch)?.run(tvec!(input.into()))?;
         let values =
             |i: usize| -> Result<Vec<f32>> { Ok(outputs[i].to_plain_array_view::<f32>().map_err(tract_error)?.iter().copied().collect()) };
         Ok((values(0)?, values(1)?))

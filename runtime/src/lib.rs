@@ -11,6 +11,7 @@ mod cut;
 mod error;
 pub mod ffi;
 mod npy;
+mod plan;
 mod stream;
 
 pub use classifier::{Classifier, Prediction};

@@ -14,6 +14,7 @@ use tract_onnx::prelude::*;
 
 use crate::classifier::{prediction, tract_error};
 use crate::cut::{cut, Seam};
+use crate::plan::Plan;
 use crate::{Classifier, Error, Prediction, Result};
 
 /// The seams the exporter names (see `pvt3_export::model`).
@@ -25,9 +26,9 @@ const PROBABILITIES: &str = "probabilities";
 /// The two stages of a classifier, each optimised for its streaming shape.
 pub(crate) struct Stages {
     /// One kept token's frames `[1, tubelet, height, width, channels]` and its index → `[1, dim]`.
-    spatial: Arc<TypedRunnableModel>,
+    spatial: Plan,
     /// All kept tokens' encodings `[kept, dim]` → probabilities `[1, classes]`.
-    temporal: Arc<TypedRunnableModel>,
+    temporal: Plan,
     /// For each temporal token, its index among the kept tokens.
     kept_index: Vec<Option<usize>>,
     /// `[1, tubelet, height, width, channels]`
@@ -132,7 +133,7 @@ impl Session {
         if self.received % tubelet == 0 {
             let frames = Tensor::from_shape(&self.stages.token_shape, &self.token).map_err(tract_error)?;
             let index = Tensor::from_shape(&[1], &[kk as i64]).map_err(tract_error)?;
-            let out = self.stages.spatial.run(tvec!(frames.into(), index.into())).map_err(tract_error)?;
+            let out = self.stages.spatial.run(tvec!(frames.into(), index.into()))?;
             self.encodings.extend(out[0].to_plain_array_view::<f32>().map_err(tract_error)?.iter());
             self.token.clear();
         }
@@ -153,7 +154,7 @@ impl Session {
         }
         let dim = self.stages.dim;
         let encodings = Tensor::from_shape(&[self.encodings.len() / dim, dim], &self.encodings).map_err(tract_error)?;
-        let out = self.stages.temporal.run(tvec!(encodings.into())).map_err(tract_error)?;
+        let out = self.stages.temporal.run(tvec!(encodings.into()))?;
         let probabilities: Vec<f32> = out[0].to_plain_array_view::<f32>().map_err(tract_error)?.iter().copied().collect();
         self.reset();
         Ok(prediction(&self.stages.classes, &probabilities))

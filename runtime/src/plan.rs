@@ -1,0 +1,54 @@
+//! [`Plan`]: an optimised tract plan with its run states kept for reuse. Spawning a fresh state
+//! per run (what `SimplePlan::run` does) cost about 15 µs of the iCub model's 580 µs at batch 1.
+
+use std::sync::Mutex;
+
+use tract_onnx::prelude::*;
+
+use crate::classifier::tract_error;
+use crate::Result;
+
+pub(crate) struct Plan {
+    plan: Arc<TypedRunnableModel>,
+    /// States not in use; a caller running concurrently with another spawns its own.
+    idle: Mutex<Vec<TypedSimpleState>>,
+}
+
+impl Plan {
+    pub(crate) fn new(plan: Arc<TypedRunnableModel>) -> Self {
+        Self { plan, idle: Mutex::new(Vec::new()) }
+    }
+
+    pub(crate) fn run(&self, inputs: TVec<TValue>) -> Result<TVec<TValue>> {
+        let idle = self.idle.lock().unwrap_or_else(|p| p.into_inner()).pop();
+        let mut state = match idle {
+            Some(state) => state,
+            None => self.plan.spawn().map_err(tract_error)?,
+        };
+        let outputs = state.run(inputs).map_err(tract_error)?;
+        self.idle.lock().unwrap_or_else(|p| p.into_inner()).push(state);
+        Ok(outputs)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A reused state gives the same answer as a fresh one, run after run.
+    #[test]
+    fn a_reused_state_runs_like_a_fresh_one() {
+        let mut model = TypedModel::default();
+        let x = model.add_source("x", f32::fact([3])).unwrap();
+        let two = model.add_const("two", tensor1(&[2f32, 2.0, 2.0])).unwrap();
+        let y = model.wire_node("y", tract_onnx::tract_core::ops::math::mul(), &[x, two]).unwrap();
+        model.select_output_outlets(&y).unwrap();
+        let plan = Plan::new(model.into_runnable().unwrap());
+        for k in 0..3 {
+            let v = k as f32;
+            let out = plan.run(tvec!(tensor1(&[v, 1.0, -v]).into())).unwrap();
+            assert_eq!(out[0].to_plain_array_view::<f32>().unwrap().iter().copied().collect::<Vec<_>>(), vec![2.0 * v, 2.0, -2.0 * v]);
+        }
+        assert_eq!(plan.idle.lock().unwrap().len(), 1, "one state, reused");
+    }
+}
