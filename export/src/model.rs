@@ -205,23 +205,25 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
 
     // Temporal stage.
     let per_sample = g.i64s("per_sample", &[3], vec![-1, tk as i64, d as i64]);
-    let mut frames = g.op("Reshape", &[TOKEN_ENCODINGS, &per_sample]);
+    let frames = g.op("Reshape", &[TOKEN_ENCODINGS, &per_sample]);
     let frames_shape = g.op("Shape", &[&frames]);
     let batch = first_dim(&mut g, &frames_shape);
-    // Pruned tokens: their constant encodings, placed around the kept ones.
+    // The sequence: the CLS token, then every time token in order, a pruned one as its constant
+    // encoding. The constants come first, [CLS, pruned…, kept…], and one gather orders them.
+    let pruned: Vec<usize> = (0..t).filter(|k| !m.kept_tokens.contains(k)).collect();
+    let mut constants = centre_rows(&m.temporal_cls, d);
+    constants.extend(pruned.iter().flat_map(|&k| centre_rows(&m.pruned_encodings[k * d..(k + 1) * d], d)));
+    let constants = g.f32s("temporal_constants", &[1, 1 + pruned.len(), d], constants);
+    let constants = expand_over_batch(&mut g, &constants, &batch, &[1 + pruned.len(), d]);
+    let mut sequence = g.node("Concat", &[&constants, &frames], vec![int("axis", 1)], None);
     if tk < t {
-        let mut place = vec![0f32; t * tk];
-        for (kk, &k) in m.kept_tokens.iter().enumerate() {
-            place[k * tk + kk] = 1.0;
-        }
-        let place = g.f32s("place_kept", &[t, tk], place);
-        let constants = g.f32s("pruned_encodings", &[t, d], centre_rows(&m.pruned_encodings, d));
-        let placed = g.op("MatMul", &[&place, &frames]);
-        frames = g.op("Add", &[&placed, &constants]);
+        let place = |k: usize| match m.kept_tokens.binary_search(&k) {
+            Ok(kept) => 1 + pruned.len() + kept,
+            Err(_) => 1 + pruned.binary_search(&k).expect("a token is kept or pruned"),
+        };
+        let order = g.i64s("token_order", &[t + 1], std::iter::once(0).chain((0..t).map(|k| place(k) as i64)).collect());
+        sequence = g.node("Gather", &[&sequence, &order], vec![int("axis", 1)], None);
     }
-    let temporal_cls = g.f32s("temporal_cls", &[1, 1, d], centre_rows(&m.temporal_cls, d));
-    let tcls = expand_over_batch(&mut g, &temporal_cls, &batch, &[1, d]);
-    let sequence = g.node("Concat", &[&tcls, &frames], vec![int("axis", 1)], None);
     let sequence = g.op("Reshape", &[&sequence, &flat]);
     let temporal = Rows { layout: Layout::SequenceMajor, tokens: t + 1 };
     let pooled = transformer_cls(&mut g, &sequence, temporal, &m.temporal, eps, "temporal");
