@@ -8,6 +8,7 @@
 //! and the temporal stage let the runtime stream a touch frame by frame from the same file.
 
 mod attention;
+mod embedding;
 mod error;
 mod graph;
 mod layers;

@@ -11,6 +11,7 @@ use tract_onnx::pb::{
 };
 
 use crate::attention::{attention, Heads, Layout, Rows};
+use crate::embedding::embed;
 use crate::graph::{int, ints, Graph};
 use crate::layers::{absorb_norm, centre_rows, centred, gelu, layer_norm, linear, norm_affine, residual_linear, rms_norm};
 use crate::{Error, Result};
@@ -161,25 +162,10 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
     let index = g.op("Reshape", &[&index, &flat]);
     g.node("Identity", &[&index], vec![], Some(TOKEN_INDEX));
 
-    // Spatial stage. Normalise per channel: (x - mean) / std.
-    let mean = g.f32s("norm_mean", &[h, w, ch], norm.mean.clone());
-    let std = g.f32s("norm_std", &[h, w, ch], norm.std.clone());
-    let shifted = g.op("Sub", &[TOKEN_FRAMES, &mean]);
-    let x = g.op("Div", &[&shifted, &std]);
-    // Patches: [N, tt, gh, ph, gw, pw, c] → [N, gh, gw, tt, ph, pw, c] → [N, n, patch_dim].
-    let (gh, gw) = (h / c.patch_height, w / c.patch_width);
-    let grid = [0, tt, gh, c.patch_height, gw, c.patch_width, ch].map(|v| v as i64);
-    let grid = g.i64s("grid", &[7], grid.to_vec());
-    let x = g.op("Reshape", &[&x, &grid]);
-    let x = g.node("Transpose", &[&x], vec![ints("perm", &[0, 2, 4, 1, 3, 5, 6])], None);
-    let patch_rows = g.i64s("patch_rows", &[2], vec![-1, c.patch_dim() as i64]);
-    let x = g.op("Reshape", &[&x, &patch_rows]);
-    // Everything written to the residual stream is centred (see `layers`), so every pre-norm
-    // is a root-mean-square norm: the patch embedding, the CLS tokens, the position embedding,
-    // each block's outputs, and the spatial encodings handed to the temporal stage.
-    let x = linear(&mut g, &x, &centred(&m.patch_embed), "patch_embed");
-    let tokens_shape = g.i64s("tokens", &[3], vec![-1, n as i64, d as i64]);
-    let x = g.op("Reshape", &[&x, &tokens_shape]);
+    // Spatial stage. Everything written to the residual stream is centred (see `layers`), so
+    // every pre-norm is a root-mean-square norm: the patch embedding, the CLS tokens, the
+    // position embedding, each block's outputs, and the encodings handed to the temporal stage.
+    let x = embed(&mut g, TOKEN_FRAMES, m, norm);
     let scales = g.f32s("frame_scale", &[tk], m.token_scale.clone());
     let scale = g.node("Gather", &[&scales, TOKEN_INDEX], vec![int("axis", 0)], None);
     let column = g.i64s("column", &[3], vec![-1, 1, 1]);
