@@ -144,3 +144,33 @@ fn committed_golden_onnx_is_what_the_exporter_writes() {
     }
     assert!(std::fs::read(&path).ok() == Some(bytes), "{} is stale: rerun this test with PVT3_BLESS=1", path.display());
 }
+
+/// Frames too large for one block-diagonal embedding are cut into patches (and their rows,
+/// padded for the normalisation, sliced back first): the graph still equals the f64 reference,
+/// with a normalisation that is not the identity.
+#[test]
+fn large_frames_are_cut_into_patches_and_normalised() {
+    let cfg = Config { height: 32, width: 32, channels: 2, frames: 4, patch_height: 4, patch_width: 4, ..Config::icub20() };
+    let (_, varmap) = pvt3_models::Pvt3::init(&cfg, 3).unwrap();
+    let baked = bake(&cfg, &pvt3_models::weights::varmap_tensors(&varmap).unwrap()).unwrap();
+    let mut rng = pvt3_models::Rng::new(4);
+    let channels = 32 * 32 * 2;
+    let norm = Normalization {
+        mean: (0..channels).map(|_| 5.0 * rng.normal()).collect(),
+        std: (0..channels).map(|_| 0.5 + rng.normal().abs()).collect(),
+        frames: 4,
+    };
+    let raw: Vec<f32> = (0..2 * channels * 4).map(|i| norm.mean[(i / 4) % channels] + 3.0 * rng.normal()).collect();
+    let model = export(&baked, &norm, &meta(20)).unwrap();
+    let graph = model.graph.as_ref().unwrap();
+    assert!(graph.node.iter().any(|n| n.op_type == "Slice"), "the padded rows are sliced back before the patches");
+    let mut normalised = Vec::new();
+    raw.chunks(channels * 4).for_each(|sample| norm.apply_into(sample, &mut normalised));
+    let expected: Vec<f32> = reference::forward(&baked, &normalised, 2).unwrap().into_iter().flatten().map(|v| v as f32).collect();
+    let dir = scratch("large");
+    let path = dir.join("large.onnx");
+    write(&model, &path).unwrap();
+    let msg = onnx_check::assert_onnxruntime_matches(&path, (&[2, 32, 32, 2, 4], &raw), &expected, 1e-4);
+    assert!(msg.starts_with("ok"), "{msg}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
