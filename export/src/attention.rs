@@ -55,8 +55,18 @@ pub(crate) struct Heads {
     projections: Option<(Dense, Dense)>,
     /// Every head's mixed values `↦` the stream, centred.
     out: Dense,
-    /// The largest |score| the weights allow, where they bound it.
-    bound: Option<f64>,
+    /// The largest |score| the weights allow.
+    bound: f64,
+}
+
+/// The largest |y| of a head's rows `y = A x̂ + c` of `l` (`width` rows from `head · width`), for
+/// any plain norm `x̂` (|x̂|² ≤ dim): ‖A‖_F √dim + |c|. A score is the product of a query and a
+/// key, so the product of their reaches bounds it.
+fn reach(l: &Dense, head: usize, width: usize) -> f64 {
+    let rows = head * width..(head + 1) * width;
+    let a: f64 = l.weight[rows.start * l.cols..rows.end * l.cols].iter().map(|v| (*v as f64).powi(2)).sum::<f64>().sqrt();
+    let c: f64 = l.bias.as_ref().map_or(0.0, |b| b[rows].iter().map(|v| (*v as f64).powi(2)).sum::<f64>().sqrt());
+    a * (l.cols as f64).sqrt() + c
 }
 
 /// Scores up to this size in magnitude need no max-subtraction: `exp(±60)` is far from f32's
@@ -80,13 +90,9 @@ impl Heads {
         let folds = !biased && hd > 0 && 2 * h * d * d + 2 * tokens * h * d < 4 * d * inner + 2 * tokens * inner;
         if !folds {
             let q_scaled = Dense { weight: a.q.weight.iter().map(|w| w * a.scale).collect(), ..a.q.clone() };
-            return Self {
-                heads: h,
-                queries: absorb_norm(&q_scaled, n),
-                projections: Some((absorb_norm(&a.k, n), absorb_norm(&a.v, n))),
-                out: centred(&a.out),
-                bound: None,
-            };
+            let (queries, keys) = (absorb_norm(&q_scaled, n), absorb_norm(&a.k, n));
+            let bound = (0..h).map(|head| reach(&queries, head, hd) * reach(&keys, head, hd)).fold(0.0, f64::max);
+            return Self { heads: h, queries, projections: Some((keys, absorb_norm(&a.v, n))), out: centred(&a.out), bound };
         }
         let (gamma, beta) = (|i: usize| n.weight[i] as f64, |i: usize| n.bias[i] as f64);
         let (mut q, mut qb) = (vec![0f64; h * d * d], vec![0f64; h * d]);
@@ -108,29 +114,22 @@ impl Heads {
                 }
             }
         }
-        // A score is `(A x̂ + c) · x̂` with |x̂|² ≤ dim and A, c the head's rows: at most
-        // √dim (‖A‖_F √dim + |c|).
-        let sd = (d as f64).sqrt();
-        let bound = (0..h)
-            .map(|head| {
-                let a: f64 = q[head * d * d..(head + 1) * d * d].iter().map(|v| v * v).sum::<f64>().sqrt();
-                let c: f64 = qb[head * d..(head + 1) * d].iter().map(|v| v * v).sum::<f64>().sqrt();
-                sd * (a * sd + c)
-            })
-            .fold(0.0, f64::max);
         let f32s = |v: Vec<f64>| v.into_iter().map(|x| x as f32).collect::<Vec<_>>();
+        let queries = Dense { rows: h * d, cols: d, weight: f32s(q), bias: Some(f32s(qb)) };
+        // The keys are x̂ itself, |x̂| ≤ √dim.
+        let bound = (0..h).map(|head| reach(&queries, head, d) * (d as f64).sqrt()).fold(0.0, f64::max);
         Self {
             heads: h,
-            queries: Dense { rows: h * d, cols: d, weight: f32s(q), bias: Some(f32s(qb)) },
+            queries,
             projections: None,
             out: centred(&Dense { rows: d, cols: h * d, weight: f32s(o), bias: Some(f32s(ob)) }),
-            bound: Some(bound),
+            bound,
         }
     }
 
     /// Whether the softmax can skip subtracting its row maximum.
     fn bounded(&self) -> bool {
-        self.bound.is_some_and(|b| b < EXP_SAFE)
+        self.bound < EXP_SAFE
     }
 
     /// Width of a head's queries and keys, and of its values.
