@@ -2,6 +2,8 @@
 //! MODEL.onnx [BATCH [RUNS]]` times every node of the optimised tract plan over RUNS runs on
 //! synthetic input and prints the time per operator kind, largest first (docs/benchmarks.md).
 //! With `PVT3_PROFILE_NODES=N` it also lists the N slowest single nodes with their output shapes.
+//! With `PVT3_PROFILE_SHAPE=D0,D1,…` it runs any one-input ONNX file at that input shape
+//! (`bench/products.py` times single products this way).
 
 use std::collections::HashMap;
 use std::time::Instant;
@@ -14,11 +16,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = args.first().ok_or("usage: profile MODEL.onnx [BATCH [RUNS]]")?;
     let batch: usize = args.get(1).map_or(Ok(1), |v| v.parse())?;
     let runs: usize = args.get(2).map_or(Ok(200), |v| v.parse())?;
-    let shape = {
-        let c = pvt3_runtime::Classifier::load(path)?;
-        let mut s = vec![batch];
-        s.extend(c.sample_shape());
-        s
+    let shape = match std::env::var("PVT3_PROFILE_SHAPE") {
+        Ok(dims) => dims.split(',').map(str::parse).collect::<Result<Vec<usize>, _>>()?,
+        Err(_) => {
+            let c = pvt3_runtime::Classifier::load(path)?;
+            let mut s = vec![batch];
+            s.extend(c.sample_shape());
+            s
+        }
     };
     let model = tract_onnx::onnx().model_for_path(path)?.with_input_fact(0, f32::fact(&shape).into())?.into_optimized()?;
     let plan = SimplePlan::new(model)?;

@@ -1,0 +1,84 @@
+"""The iCub model's matrix products one at a time, in both engines: tract, the engine of the pvt3
+runtime (timed by `runtime/examples/profile`, built with `cargo build --release -p pvt3-runtime
+--example profile`), and onnxruntime (one intra-op thread). Each file is one product with a bias,
+`[m, k] x [k, n]`; an Identity file shows what a call that does nothing costs each engine.
+Prints a markdown table (docs/benchmarks.md).
+
+    target/onnx-venv/bin/python bench/products.py [RUNS]
+"""
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+import onnx
+import onnxruntime as ort
+from onnx import TensorProto, helper, numpy_helper
+
+PROFILE = "target/release/examples/profile"
+SHAPES = [
+    ("a call that does nothing (Identity)", 375, 20, None),
+    ("spatial queries, output projection (unpruned)", 375, 20, 20),
+    ("spatial fc1 (unpruned)", 375, 20, 40),
+    ("spatial fc2 (unpruned)", 375, 40, 20),
+    ("temporal scores", 76, 20, 76),
+    ("temporal fc1", 76, 20, 40),
+]
+
+
+def write(path, m, k, n):
+    x = helper.make_tensor_value_info("x", TensorProto.FLOAT, [m, k])
+    y = helper.make_tensor_value_info("y", TensorProto.FLOAT, None)
+    if n is None:
+        nodes, inits = [helper.make_node("Identity", ["x"], ["y"])], []
+    else:
+        rng = np.random.default_rng(0)
+        w = numpy_helper.from_array(rng.standard_normal((k, n)).astype(np.float32), "w")
+        b = numpy_helper.from_array(rng.standard_normal(n).astype(np.float32), "b")
+        nodes, inits = [helper.make_node("MatMul", ["x", "w"], ["p"]), helper.make_node("Add", ["p", "b"], ["y"])], [w, b]
+    model = helper.make_model(helper.make_graph(nodes, "product", [x], [y], inits), opset_imports=[helper.make_opsetid("", 17)])
+    model.ir_version = 8
+    onnx.save(model, path)
+
+
+def tract_us(path, m, k, runs):
+    env = dict(os.environ, PVT3_PROFILE_SHAPE=f"{m},{k}")
+    out = subprocess.run([PROFILE, path, "1", str(runs)], env=env, capture_output=True, text=True, check=True).stdout
+    return float(re.search(r"\*\*whole plan\*\* \| \d+ \| ([\d.]+)", out)[1])
+
+
+def ort_us(path, m, k, runs):
+    options = ort.SessionOptions()
+    options.intra_op_num_threads = 1
+    options.inter_op_num_threads = 1
+    session = ort.InferenceSession(path, options, providers=["CPUExecutionProvider"])
+    x = np.random.default_rng(1).standard_normal((m, k)).astype(np.float32)
+    for _ in range(50):
+        session.run(None, {"x": x})
+    times = []
+    for _ in range(runs):
+        t = time.perf_counter()
+        session.run(None, {"x": x})
+        times.append(time.perf_counter() - t)
+    return float(np.mean(times) * 1e6)
+
+
+def main():
+    runs = int(sys.argv[1]) if len(sys.argv) > 1 else 3000
+    print(f"onnxruntime {ort.__version__}; tract as linked by pvt3-runtime; {runs} runs each, one thread.\n")
+    print("| product | m × k × n | tract (µs per call, mean) | onnxruntime (µs per call, mean) | tract / onnxruntime |")
+    print("|---|---|---:|---:|---:|")
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, m, k, n in SHAPES:
+            path = os.path.join(tmp, "product.onnx")
+            write(path, m, k, n)
+            t, o = tract_us(path, m, k, runs), ort_us(path, m, k, runs)
+            shape = f"{m} × {k}" if n is None else f"{m} × {k} × {n}"
+            print(f"| {name} | {shape} | {t:.1f} | {o:.1f} | {t / o:.2f} |")
+
+
+if __name__ == "__main__":
+    main()
