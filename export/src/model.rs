@@ -23,7 +23,8 @@ pub const LOGITS: &str = "logits";
 pub const TOKEN_FRAMES: &str = "token_frames";
 /// Seam of the spatial stage: each token's place among the kept tokens, int64 `[tokens]`.
 pub const TOKEN_INDEX: &str = "token_index";
-/// Seam between the stages: the spatial encoding of each kept token, `[tokens, dim]`.
+/// Seam between the stages: the spatial encoding of each kept token, centred over its features
+/// like everything the temporal stream reads (see `layers`), `[tokens, dim]`.
 pub const TOKEN_ENCODINGS: &str = "token_encodings";
 pub const PROBABILITIES: &str = "probabilities";
 
