@@ -1,20 +1,21 @@
 //! Raw frames to patch embeddings: normalisation per channel, then the patch embedding.
 //!
 //! Both steps avoid work that tract runs element by element. The normalisation works on rows
-//! padded to whole vectors (on the raw iCub rows of 60 values it cost a quarter of the model). The embedding of small frames is one product with a block-diagonal matrix that
-//! maps a token's whole frame to all of its patch embeddings, which spares the rearrangement
-//! into patches; large frames (where that matrix would be large) are cut into patches first.
+//! padded to whole vectors (on the raw iCub rows of 60 values it cost a sixth of the model). The
+//! embedding of small frames is one product with a block-diagonal matrix that maps a token's
+//! whole frame to all of its patch embeddings, which spares the rearrangement into patches; large
+//! frames (where that matrix would be large) are cut into patches first.
 
 use pvt3_models::bake::{BakedPvt3, Dense};
 use pvt3_models::normalization::Normalization;
 
-use crate::graph::{ints, Graph};
+use crate::graph::{int, ints, Graph};
 use crate::layers::{centred, linear};
 
 /// Values per vector that tract's broadcasts need to take their fast path (AVX-512: 64).
 const ALIGN: usize = 64;
 
-/// Largest block-diagonal embedding matrix, in values (4 MB): iCub needs 4,800, BioTac 3,800.
+/// Largest block-diagonal embedding matrix, in values (4 MB): iCub needs 5,120, BioTac 3,840.
 const DENSE_LIMIT: usize = 1 << 20;
 
 /// `frames` `[tokens, tubelet, height, width, channels]` → centred patch embeddings
@@ -30,7 +31,7 @@ pub(crate) fn embed(g: &mut Graph, frames: &str, m: &BakedPvt3, norm: &Normaliza
     let padded = features.div_ceil(ALIGN) * ALIGN;
     let rows = if padded > features {
         let columns = g.i64s("pad_columns", &[padded], (0..padded).map(|i| (i % features) as i64).collect());
-        g.node("Gather", &[&rows, &columns], vec![crate::graph::int("axis", 1)], None)
+        g.node("Gather", &[&rows, &columns], vec![int("axis", 1)], None)
     } else {
         rows
     };
@@ -44,7 +45,7 @@ pub(crate) fn embed(g: &mut Graph, frames: &str, m: &BakedPvt3, norm: &Normaliza
     let shifted = g.op("Sub", &[&rows, &mean]);
     let rows = g.op("Div", &[&shifted, &std]);
     let embedding = centred(&m.patch_embed);
-    let x = if features * n * d <= DENSE_LIMIT {
+    let x = if padded * n * d <= DENSE_LIMIT {
         linear(g, &rows, &block_diagonal(m, &embedding, padded), "patch_embed")
     } else {
         let (start, end, axis) =

@@ -14,19 +14,24 @@ pub(crate) fn linear(g: &mut Graph, x: &str, l: &Dense, hint: &str) -> String {
     let wt: Vec<f32> = (0..l.cols).flat_map(|c| (0..l.rows).map(move |r| (r, c))).map(|(r, c)| l.weight[r * l.cols + c]).collect();
     let w = g.f32s(&format!("{hint}_w"), &[l.cols, l.rows], wt);
     let y = g.op("MatMul", &[x, &w]);
-    add_bias(g, &y, l.bias.as_deref(), hint)
+    add_bias(g, &y, l, &[l.rows], hint)
 }
 
 /// `W x + b` on feature-major `x` `[cols, n]`: the transposed product, `[rows, n]`.
 pub(crate) fn linear_columns(g: &mut Graph, x: &str, l: &Dense, hint: &str) -> String {
     let w = g.f32s(&format!("{hint}_w"), &[l.rows, l.cols], l.weight.clone());
     let y = g.op("MatMul", &[&w, x]);
+    add_bias(g, &y, l, &[l.rows, 1], hint)
+}
+
+/// `y` plus the bias of `l`, if it has one, shaped `dims` to broadcast along `y`.
+fn add_bias(g: &mut Graph, y: &str, l: &Dense, dims: &[usize], hint: &str) -> String {
     match &l.bias {
         Some(b) => {
-            let b = g.f32s(&format!("{hint}_b"), &[l.rows, 1], b.clone());
-            g.op("Add", &[&y, &b])
+            let b = g.f32s(&format!("{hint}_b"), dims, b.clone());
+            g.op("Add", &[y, &b])
         }
-        None => y,
+        None => y.to_string(),
     }
 }
 
@@ -38,16 +43,6 @@ pub(crate) fn residual_linear(g: &mut Graph, x: &str, y: &str, l: &Dense, hint: 
         Dense { weight: l.weight.iter().map(|w| -w).collect(), bias: l.bias.as_ref().map(|b| b.iter().map(|v| -v).collect()), ..l.clone() };
     let update = linear(g, y, &negated, hint);
     g.op("Sub", &[x, &update])
-}
-
-pub(crate) fn add_bias(g: &mut Graph, y: &str, bias: Option<&[f32]>, hint: &str) -> String {
-    match bias {
-        Some(b) => {
-            let b = g.f32s(&format!("{hint}_b"), &[b.len()], b.to_vec());
-            g.op("Add", &[y, &b])
-        }
-        None => y.to_string(),
-    }
 }
 
 /// A full layer norm with scale and bias, for rows whose mean is not known to be zero.
