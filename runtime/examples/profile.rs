@@ -3,7 +3,9 @@
 //! synthetic input and prints the time per operator kind, largest first (docs/benchmarks.md).
 //! With `PVT3_PROFILE_NODES=N` it also lists the N slowest single nodes with their output shapes.
 //! With `PVT3_PROFILE_SHAPE=D0,D1,…` it runs any one-input ONNX file at that input shape
-//! (`bench/products.py` times single products this way).
+//! (`bench/products.py` times single products this way). The plan's products get the kernels
+//! the runtime would tune them to, unless `PVT3_PROFILE_UNTUNED` is set (tract's own choice);
+//! `PVT3_PROFILE_INFO` adds each node's details (for a product: its shape and kernel).
 
 use std::collections::HashMap;
 use std::time::Instant;
@@ -25,7 +27,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             s
         }
     };
-    let model = tract_onnx::onnx().model_for_path(path)?.with_input_fact(0, f32::fact(&shape).into())?.into_optimized()?;
+    let mut model = tract_onnx::onnx().model_for_path(path)?.with_input_fact(0, f32::fact(&shape).into())?.into_optimized()?;
+    if std::env::var("PVT3_PROFILE_UNTUNED").is_err() {
+        pvt3_runtime::tune_kernels(&mut model)?;
+    }
     let plan = SimplePlan::new(model)?;
     let n: usize = shape.iter().product();
     let input = Tensor::from_shape(&shape, &(0..n).map(|i| (i % 7) as f32 - 3.0).collect::<Vec<_>>())?;
@@ -60,10 +65,22 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if let Some(n) = std::env::var("PVT3_PROFILE_NODES").ok().and_then(|v| v.parse().ok()) {
         let mut nodes: Vec<_> = by_node.into_iter().collect();
         nodes.sort_by(|a, b| b.1.total_cmp(&a.1));
-        println!("\n| node | operator | output | µs per run |\n|---|---|---|---:|");
+        let info = std::env::var("PVT3_PROFILE_INFO").is_ok();
+        println!(
+            "\n| node | operator | output | µs per run |{}\n|---|---|---|---:|{}",
+            if info { " details |" } else { "" },
+            if info { "---|" } else { "" }
+        );
         for (id, secs) in nodes.into_iter().take(n) {
             let node = plan.model().node(id);
-            println!("| {} | {} | {:?} | {:.1} |", node.name, node.op().name(), node.outputs[0].fact.shape, secs / runs as f64 * 1e6);
+            let details = if info { format!(" {} |", node.op().info().unwrap_or_default().join("; ")) } else { String::new() };
+            println!(
+                "| {} | {} | {:?} | {:.1} |{details}",
+                node.name,
+                node.op().name(),
+                node.outputs[0].fact.shape,
+                secs / runs as f64 * 1e6
+            );
         }
     }
     Ok(())

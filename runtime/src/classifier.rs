@@ -35,6 +35,8 @@ pub struct Classifier {
     plans: Mutex<HashMap<usize, Arc<Plan>>>,
     stages: Mutex<Option<Arc<Stages>>>,
     threads: usize,
+    /// Whether plans get the fastest kernel measured here for each product ([`crate::tune_kernels`]).
+    tune: bool,
     pub(crate) path: String,
 }
 
@@ -80,12 +82,22 @@ impl Classifier {
         let (tubelet, dim) = (dim("tubelet")?, dim("dim")?);
         let plans = Mutex::new(HashMap::new());
         let stages = Mutex::new(None);
-        Ok(Self { proto, classes, sample_shape, kept_frames, tubelet, dim, plans, stages, threads: 1, path: name })
+        Ok(Self { proto, classes, sample_shape, kept_frames, tubelet, dim, plans, stages, threads: 1, tune: true, path: name })
     }
 
     /// Runs on `threads` threads from now on (default 1; small models rarely gain from more).
     pub fn with_threads(mut self, threads: usize) -> Self {
         self.threads = threads.max(1);
+        self.plans.get_mut().unwrap_or_else(|p| p.into_inner()).clear();
+        *self.stages.get_mut().unwrap_or_else(|p| p.into_inner()) = None;
+        self
+    }
+
+    /// Whether each plan times the matrix-product kernels tract can run and keeps the fastest
+    /// (default on). Tuning costs about 50 ms per plan of the iCub model at batch 1, and made the
+    /// plan 10–15 % faster (docs/benchmarks.md); without it, tract's own cost model picks.
+    pub fn with_kernel_tuning(mut self, tune: bool) -> Self {
+        self.tune = tune;
         self.plans.get_mut().unwrap_or_else(|p| p.into_inner()).clear();
         *self.stages.get_mut().unwrap_or_else(|p| p.into_inner()) = None;
         self
@@ -128,6 +140,12 @@ impl Classifier {
         };
         model
             .into_optimized()
+            .and_then(|mut m| {
+                if self.tune {
+                    crate::kernels::tune(&mut m)?;
+                }
+                Ok(m)
+            })
             .and_then(|m| m.into_runnable_with_options(&RunOptions { executor: Some(executor), ..Default::default() }))
             .map(Plan::new)
             .map_err(|e| Error::NotOnnx { path: self.path.clone(), reason: format!("{e:#}") })

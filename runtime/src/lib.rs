@@ -10,11 +10,13 @@ mod classifier;
 mod cut;
 mod error;
 pub mod ffi;
+mod kernels;
 mod npy;
 mod plan;
 mod stream;
 
 pub use classifier::{Classifier, Prediction};
 pub use error::{Error, Result};
+pub use kernels::tune as tune_kernels;
 pub use npy::read_npy;
 pub use stream::Session;

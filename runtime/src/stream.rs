@@ -130,7 +130,7 @@ impl Session {
         }
         self.token.extend_from_slice(frame);
         self.received += 1;
-        if self.received % tubelet == 0 {
+        if self.received.is_multiple_of(tubelet) {
             let frames = Tensor::from_shape(&self.stages.token_shape, &self.token).map_err(tract_error)?;
             let index = Tensor::from_shape(&[1], &[kk as i64]).map_err(tract_error)?;
             let out = self.stages.spatial.run(tvec!(frames.into(), index.into()))?;

@@ -2,6 +2,8 @@
 //! model. Whole windows at batch 1 (median and p99) and batch 32 (windows per second), and a
 //! streamed touch: each kept frame's spatial encoding, each pruned frame's drop, and the
 //! end-of-touch temporal stage. Inputs are synthetic (latency does not depend on the values).
+//! Also: batch 1 with tract's own kernel choice (no tuning), and the first call, which builds
+//! and tunes the plan.
 
 use std::time::{Duration, Instant};
 
@@ -51,7 +53,12 @@ pub fn bench(path: &str, threads: usize, seconds: f64) -> Result<serde_json::Val
     let len: usize = c.sample_shape().iter().product();
     let windows = synthetic(32 * len);
     let one = &windows[..len];
+    let started = Instant::now();
+    c.classify(one)?;
+    let plan_ms = started.elapsed().as_secs_f64() * 1e3;
     let (b1_median, b1_p99) = quantiles(sample(budget, 20, || c.classify(one).map(drop))?);
+    let untuned = Classifier::load(path)?.with_threads(threads).with_kernel_tuning(false);
+    let (untuned_median, _) = quantiles(sample(budget, 20, || untuned.classify(one).map(drop))?);
     let b32 = sample(budget, 5, || c.classify_batch(&windows, 32).map(drop))?;
     let b32_windows_per_second = 32.0 * b32.len() as f64 / b32.iter().sum::<f64>();
 
@@ -91,6 +98,8 @@ pub fn bench(path: &str, threads: usize, seconds: f64) -> Result<serde_json::Val
         "kept_frames": kept_frames.len(),
         "batch1_median_us": b1_median,
         "batch1_p99_us": b1_p99,
+        "batch1_untuned_median_us": untuned_median,
+        "batch1_first_call_ms": plan_ms,
         "batch32_windows_per_second": b32_windows_per_second,
         "stream_kept_frame_median_us": kept_median,
         "stream_kept_frame_p99_us": kept_p99,

@@ -17,8 +17,8 @@ const USAGE: &str = "usage: pvt3-run MODEL.onnx INPUT.npy
 Classifies the window(s) in INPUT (raw sensor values, [batch,] height, width, [channels,] frames)
 with the exported model, one line per window: index, class, label, probability.
 --bench measures latency instead, on THREADS threads (default 1) for about SECONDS (default 2)
-per measurement: batch 1 and 32, and a streamed touch (per kept frame, per pruned frame, end of
-touch). Prints one JSON line.";
+per measurement: batch 1 and 32, batch 1 without kernel tuning, and a streamed touch (per kept
+frame, per pruned frame, end of touch). Prints one JSON line.";
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();

@@ -1,0 +1,405 @@
+//! Kernel choice for the plan's matrix products, measured on this machine. tract picks a
+//! product's kernel (its tile of mr × nr outputs) from a cost model fitted on large products.
+//! On this model's small ones (k = 20, a few hundred rows) that model prefers a 40 × 2 tile,
+//! which ran 20–30 % slower here than the best tile (docs/benchmarks.md, kernel choice).
+//! [`tune`] times every kernel tract could run for each product whose other operand is a
+//! constant, on the product's own shape, and keeps the fastest. The arithmetic is the same:
+//! only the tile, the packing of the operands and the order of the sums change.
+
+use std::collections::HashMap;
+use std::time::{Duration, Instant};
+
+use tract_onnx::prelude::*;
+use tract_onnx::tract_core::internal::*;
+use tract_onnx::tract_core::ops::matmul::optimized::{MatMulOperand, OptMatMul, ProtoFusedSpec};
+use tract_onnx::tract_core::ops::matmul::pack::{DynPackedExoticFact, OptMatMulPack};
+use tract_onnx::tract_core::ops::matmul::ModePicker;
+use tract_onnx::tract_core::tract_linalg::mmm::{
+    retain_best, AsInputValue, EagerPackedInput, FusedSpec, MMMInputFormat, MMMInputValue, MatMatMul, MmmDispatch, OutputStoreSpec,
+    PackedMatrixStorage, Query,
+};
+use tract_onnx::tract_core::tract_linalg::pack::PackedFormat;
+
+/// Time spent measuring one kernel on one product, at most (and at least `MIN_RUNS` runs).
+const BUDGET: Duration = Duration::from_millis(1);
+const MIN_RUNS: usize = 3;
+const MAX_RUNS: usize = 30;
+/// A kernel replaces tract's pick only when it is faster by more than this fraction, so that
+/// noise alone does not move a product.
+const MARGIN: f64 = 0.05;
+
+/// A kernel and the index of the packing it runs with.
+type Choice = (Box<dyn MatMatMul>, usize);
+
+/// One operand of a product as the tuner sees it.
+enum Operand {
+    /// A constant, by its plain `[k, mn]` values.
+    Const(Tensor),
+    /// An input packed by node `pack` (for this product alone); `zeros` has its unpacked shape.
+    Packed { pack: usize, zeros: Tensor, k_axis: usize, mn_axis: usize },
+}
+
+impl Operand {
+    /// What the time of a product depends on: the operand's kind, shape and axes.
+    fn key(&self) -> String {
+        match self {
+            Operand::Const(_) => "const".into(),
+            Operand::Packed { zeros, k_axis, mn_axis, .. } => format!("{:?} k{k_axis} mn{mn_axis}", zeros.shape()),
+        }
+    }
+
+    /// This operand packed in `format`.
+    fn prepare(&self, format: &dyn MMMInputFormat) -> TractResult<Box<dyn MMMInputValue>> {
+        match self {
+            Operand::Const(w) => format.prepare_one(w, 0, 1),
+            Operand::Packed { zeros, k_axis, mn_axis, .. } => format.prepare_one(zeros, *k_axis, *mn_axis),
+        }
+    }
+}
+
+/// A product the tuner can rewire: `a` (m rows) times `b` (n columns) over k.
+struct Product {
+    node: usize,
+    a: Operand,
+    b: Operand,
+    m: usize,
+    k: usize,
+    n: usize,
+}
+
+/// Gives every product of `model`, optimised by tract, the fastest kernel measured on this
+/// machine, and returns how many products changed kernel. [`Classifier`](crate::Classifier) does
+/// this to every plan it builds; it is public for callers who build their own tract plans.
+pub fn tune(model: &mut TypedModel) -> TractResult<usize> {
+    let mut changed = 0;
+    // Products of one shape (the same layer in every block) are measured once.
+    let mut choices: HashMap<String, Option<Choice>> = HashMap::new();
+    for node in model.eval_order()? {
+        let Some(product) = product(model, node)? else { continue };
+        let op = model.node(node).op_as::<OptMatMul>().unwrap();
+        let current = (op.mmm[0].name().to_string(), packing(op));
+        let key = format!("{}x{}x{} {} | {} | {current:?}", product.m, product.k, product.n, product.a.key(), product.b.key());
+        let choice = match choices.get(&key) {
+            Some(choice) => choice.clone(),
+            None => {
+                let choice = fastest(&product, &current)?;
+                choices.insert(key, choice.clone());
+                choice
+            }
+        };
+        if let Some((mmm, ix)) = choice {
+            replace(model, &product, mmm, ix)?;
+            changed += 1;
+        }
+    }
+    Ok(changed)
+}
+
+/// The kernel (and packing) that beats `current` on `p` by more than the margin, if any.
+fn fastest(p: &Product, current: &(String, usize)) -> TractResult<Option<Choice>> {
+    let mut best: Option<(f64, Box<dyn MatMatMul>, usize)> = None;
+    let mut current_time = f64::MAX;
+    for (mmm, ix) in candidates(p) {
+        let t = time(&*mmm, ix, p)?;
+        if mmm.name() == current.0 && ix == current.1 {
+            current_time = t;
+        } else if best.as_ref().is_none_or(|b| t < b.0) {
+            best = Some((t, mmm, ix));
+        }
+    }
+    Ok(best.filter(|b| b.0 < current_time * (1.0 - MARGIN)).map(|(_, mmm, ix)| (mmm, ix)))
+}
+
+/// The packing a single-kernel product runs with.
+fn packing(op: &OptMatMul) -> usize {
+    op.micro_ops
+        .iter()
+        .find_map(|u| match u {
+            ProtoFusedSpec::AddMatMul { packings, .. } => Some(packings[0].0),
+            _ => None,
+        })
+        .unwrap_or(0)
+}
+
+/// `node` as a tunable product: one f32 kernel, one product, no batch axes, each operand a
+/// constant or an input packed for this product alone. `None` for anything else, which keeps
+/// tract's pick.
+fn product(model: &TypedModel, node: usize) -> TractResult<Option<Product>> {
+    let n = model.node(node);
+    let Some(op) = n.op_as::<OptMatMul>() else { return Ok(None) };
+    if op.mmm.len() != 1 || op.mode_picker != ModePicker::Single || !op.trivial_path || op.c_fact.datum_type != f32::datum_type() {
+        return Ok(None);
+    }
+    let products: Vec<_> = op
+        .micro_ops
+        .iter()
+        .filter_map(|u| match u {
+            ProtoFusedSpec::AddMatMul { a, b, packings, geo } => Some((a, b, packings, geo)),
+            _ => None,
+        })
+        .collect();
+    let [(a, b, packings, geo)] = products[..] else { return Ok(None) };
+    if packings.len() != 1 || packings[0].1.is_some() {
+        return Ok(None);
+    }
+    let (Some(a), Some(b)) = (operand(model, n, a)?, operand(model, n, b)?) else { return Ok(None) };
+    let dim = |axis: Option<usize>| axis.map_or(Ok(1), |ax| op.c_fact.shape[ax].to_usize());
+    Ok(Some(Product { node, a, b, m: dim(op.c_m_axis)?, k: geo.k.to_usize()?, n: dim(op.c_n_axis)? }))
+}
+
+fn operand(model: &TypedModel, node: &TypedNode, operand: &MatMulOperand) -> TractResult<Option<Operand>> {
+    let input = match operand {
+        MatMulOperand::Const(v) => return Ok(unpack(&**v)?.map(Operand::Const)),
+        MatMulOperand::Input(i) => node.inputs[*i],
+    };
+    let pack = model.node(input.node);
+    if pack.op_as::<OptMatMulPack>().is_none() || model.outlet_successors(input).len() != 1 {
+        return Ok(None);
+    }
+    let in_fact = model.outlet_fact(pack.inputs[0])?;
+    let Some(shape) = in_fact.shape.as_concrete() else { return Ok(None) };
+    if in_fact.datum_type != f32::datum_type() || shape.iter().filter(|d| **d != 1).count() > 2 {
+        return Ok(None);
+    }
+    let mapping = pack.op.as_typed().unwrap().axes_mapping(&[in_fact], &[model.outlet_fact(input)?])?;
+    Ok(Some(Operand::Packed {
+        pack: pack.id,
+        zeros: Tensor::zero::<f32>(shape)?,
+        k_axis: mapping.axis('K')?.inputs[0][0],
+        mn_axis: mapping.axis('M')?.inputs[0][0],
+    }))
+}
+
+/// The plain `[k, mn]` values of a constant operand packed in a plain f32 format.
+fn unpack(value: &dyn MMMInputValue) -> TractResult<Option<Tensor>> {
+    let Some(eager) = value.downcast_ref::<EagerPackedInput>() else { return Ok(None) };
+    let Some(format) = eager.fact.format.downcast_ref::<PackedFormat>() else { return Ok(None) };
+    if format.dt != f32::datum_type() {
+        return Ok(None);
+    }
+    let (k, mn) = (eager.k(), eager.mn());
+    let mut weights = Tensor::zero::<f32>(&[k, mn])?;
+    let mut column = vec![0f32; k];
+    {
+        let mut w = weights.to_plain_array_view_mut::<f32>()?;
+        for j in 0..mn {
+            format.extract_at_mn_f32(eager, j, &mut column)?;
+            for (i, v) in column.iter().enumerate() {
+                w[[i, j]] = *v;
+            }
+        }
+    }
+    Ok(Some(weights))
+}
+
+/// The kernels tract could run for this product: compiled for this CPU's best instruction sets,
+/// packing plain f32 on both sides, with a tile of more than one column unless n is 1.
+fn candidates(p: &Product) -> Vec<Choice> {
+    let mut suitable = MmmDispatch::native().suitable(&Query::plain(f32::datum_type(), Some(p.m), Some(p.k), Some(p.n)));
+    suitable.retain(|(mmm, _, pe)| pe.is_none() && mmm.arch().is_some());
+    retain_best(&mut suitable);
+    suitable
+        .into_iter()
+        .filter(|(mmm, ix, _)| {
+            let (a, b) = &mmm.packings()[*ix];
+            let plain = |f: &dyn MMMInputFormat| f.downcast_ref::<PackedFormat>().is_some_and(|f| f.dt == f32::datum_type());
+            plain(&**a) && plain(&**b) && (mmm.nr() > 1 || p.n == 1)
+        })
+        .map(|(mmm, ix, _)| (mmm.clone(), ix))
+        .collect()
+}
+
+/// The fastest of a few runs of packing the inputs and multiplying, in seconds.
+fn time(mmm: &dyn MatMatMul, packing: usize, p: &Product) -> TractResult<f64> {
+    let (fa, fb) = &mmm.packings()[packing];
+    let konst = |o: &Operand, f: &dyn MMMInputFormat| match o {
+        Operand::Const(_) => o.prepare(f).map(Some),
+        Operand::Packed { .. } => Ok(None),
+    };
+    let (ka, kb) = (konst(&p.a, &**fa)?, konst(&p.b, &**fb)?);
+    let mut c = Tensor::zero::<f32>(&[p.m, p.n])?;
+    let store = unsafe { mmm.c_from_data_and_strides(4, p.n as isize, 1) };
+    let started = Instant::now();
+    let mut best = f64::MAX;
+    for run in 0..MAX_RUNS {
+        let t = Instant::now();
+        let a = match &ka {
+            Some(k) => AsInputValue::Borrowed(&**k),
+            None => AsInputValue::Owned(p.a.prepare(&**fa)?),
+        };
+        let b = match &kb {
+            Some(k) => AsInputValue::Borrowed(&**k),
+            None => AsInputValue::Owned(p.b.prepare(&**fb)?),
+        };
+        unsafe {
+            let view = c.view_mut();
+            mmm.run(p.m, p.n, &[FusedSpec::AddMatMul { a, b, packing }, FusedSpec::Store(store.wrap(&view))])?;
+        }
+        best = best.min(t.elapsed().as_secs_f64());
+        if run + 1 >= MIN_RUNS && started.elapsed() > BUDGET {
+            break;
+        }
+    }
+    Ok(best)
+}
+
+/// Rewires `p` to `mmm`: its inputs packed for that kernel, its constants repacked, its stores
+/// tiled by the kernel's mr × nr.
+fn replace(model: &mut TypedModel, p: &Product, mmm: Box<dyn MatMatMul>, packing: usize) -> TractResult<()> {
+    let (fa, fb) = mmm.packings()[packing].clone();
+    let mut constants = [None, None];
+    for (i, (operand, format)) in [(&p.a, fa), (&p.b, fb)].into_iter().enumerate() {
+        match operand {
+            Operand::Const(_) => constants[i] = Some(operand.prepare(&*format)?),
+            Operand::Packed { pack, k_axis, mn_axis, .. } => {
+                let op = Pack { format, k_axis: *k_axis, mn_axis: *mn_axis };
+                let in_fact = model.outlet_fact(model.node(*pack).inputs[0])?.clone();
+                let fact = op.output_facts(&[&in_fact])?.remove(0);
+                let node = model.node_mut(*pack);
+                node.op = Box::new(op);
+                node.outputs[0].fact = fact;
+            }
+        }
+    }
+    let (mr, nr) = (mmm.mr(), mmm.nr());
+    let mut op = model.node(p.node).op_as::<OptMatMul>().unwrap().clone();
+    for uop in &mut op.micro_ops {
+        match uop {
+            ProtoFusedSpec::AddMatMul { a, b, packings, .. } => {
+                *packings = vec![(packing, None)];
+                for (operand, konst) in [a, b].into_iter().zip(&constants) {
+                    if let Some(k) = konst {
+                        *operand = MatMulOperand::Const(k.clone());
+                    }
+                }
+            }
+            ProtoFusedSpec::Store(specs) => specs.iter_mut().for_each(|s| retile(s, mr, nr)),
+            ProtoFusedSpec::AddUnicast(spec, _, _) => retile(spec, mr, nr),
+            _ => (),
+        }
+    }
+    op.mmm = vec![mmm];
+    model.node_mut(p.node).op = Box::new(op);
+    Ok(())
+}
+
+fn retile(spec: &mut OutputStoreSpec, tile_m: usize, tile_n: usize) {
+    match spec {
+        OutputStoreSpec::View { mr, nr, .. } | OutputStoreSpec::Strides { mr, nr, .. } => {
+            *mr = tile_m;
+            *nr = tile_n;
+        }
+    }
+}
+
+/// Packs a product's input for the kernel [`tune`] chose: tract's own packing op, with a
+/// format tract's selection would not have given it.
+#[derive(Debug, Clone, Hash, PartialEq, Eq)]
+struct Pack {
+    format: Box<dyn MMMInputFormat>,
+    k_axis: usize,
+    mn_axis: usize,
+}
+
+impl Pack {
+    /// The input's shape without its k and mn axes (all ones: [`product`] checks it).
+    fn rest<D: Clone>(&self, shape: &[D]) -> TVec<D> {
+        shape.iter().enumerate().filter(|(ax, _)| *ax != self.k_axis && *ax != self.mn_axis).map(|(_, d)| d.clone()).collect()
+    }
+}
+
+impl Op for Pack {
+    fn name(&self) -> StaticName {
+        "TunedPack".into()
+    }
+
+    fn info(&self) -> TractResult<Vec<String>> {
+        Ok(vec![format!("{:?}, k axis {}, mn axis {}", self.format, self.k_axis, self.mn_axis)])
+    }
+
+    op_as_typed_op!();
+}
+
+impl EvalOp for Pack {
+    op_out_of_plan!();
+
+    fn eval(&self, _ctx: &EvalContext, inputs: TVec<TValue>) -> TractResult<TVec<TValue>> {
+        let input = &inputs[0];
+        let packed = self.format.prepare_one_view(&input.view(), self.k_axis, self.mn_axis)?;
+        let shape: TVec<usize> = self.rest(input.shape());
+        Ok(tvec!(PackedMatrixStorage::new_batched(&shape, tvec!(packed)).into_tensor(input.datum_type()).into_tvalue()))
+    }
+}
+
+impl TypedOp for Pack {
+    fn output_facts(&self, inputs: &[&TypedFact]) -> TractResult<TVec<TypedFact>> {
+        let shape = &inputs[0].shape;
+        let exotic =
+            DynPackedExoticFact { k: shape[self.k_axis].clone(), mn: shape[self.mn_axis].clone(), packers: vec![self.format.clone()] };
+        Ok(tvec!(inputs[0].datum_type.fact(&*self.rest(shape)).with_exotic_fact(exotic)))
+    }
+
+    as_op!();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use tract_onnx::tract_core::ops::einsum::EinSum;
+    use tract_onnx::tract_core::ops::math::add;
+
+    /// `h = x W + b` (a constant operand) and `h hᵀ` (two packed inputs), optimised by tract.
+    fn two_products() -> TypedModel {
+        let mut model = TypedModel::default();
+        let x = model.add_source("x", f32::fact([37, 20])).unwrap();
+        let w: Vec<f32> = (0..20 * 40).map(|i| ((i * 7 % 23) as f32 - 11.0) / 17.0).collect();
+        let w = model.add_const("w", Tensor::from_shape(&[20, 40], &w).unwrap()).unwrap();
+        let b = model.add_const("b", Tensor::from_shape(&[1, 40], &(0..40).map(|i| i as f32 / 10.0).collect::<Vec<_>>()).unwrap()).unwrap();
+        let einsum = |expr: &str| EinSum::new(expr.parse().unwrap(), f32::datum_type());
+        let xw = model.wire_node("xw", einsum("mk,kn->mn"), &[x, w]).unwrap()[0];
+        let h = model.wire_node("h", add(), &[xw, b]).unwrap()[0];
+        let s = model.wire_node("s", einsum("mk,nk->mn"), &[h, h]).unwrap()[0];
+        model.select_output_outlets(&[h, s]).unwrap();
+        model.into_optimized().unwrap()
+    }
+
+    fn run(model: &TypedModel, x: &Tensor) -> Vec<Vec<f32>> {
+        let outputs = model.clone().into_runnable().unwrap().run(tvec!(x.clone().into())).unwrap();
+        outputs.iter().map(|o| o.to_plain_array_view::<f32>().unwrap().iter().copied().collect()).collect()
+    }
+
+    fn worst(a: &[Vec<f32>], b: &[Vec<f32>]) -> f32 {
+        a.iter().flatten().zip(b.iter().flatten()).map(|(p, q)| (p - q).abs() / q.abs().max(1.0)).fold(0.0, f32::max)
+    }
+
+    /// Every kernel the tuner may pick, put in by `replace`, computes what tract's pick computes.
+    #[test]
+    fn every_candidate_kernel_computes_the_same_products() {
+        let model = two_products();
+        let x = Tensor::from_shape(&[37, 20], &(0..37 * 20).map(|i| ((i * 13 % 29) as f32 - 14.0) / 9.0).collect::<Vec<_>>()).unwrap();
+        let expected = run(&model, &x);
+        let products: Vec<Product> = model.eval_order().unwrap().into_iter().filter_map(|n| product(&model, n).unwrap()).collect();
+        assert!(products.iter().any(|p| matches!(p.b, Operand::Const(_)) || matches!(p.a, Operand::Const(_))), "a product by a constant");
+        assert!(
+            products.iter().any(|p| matches!((&p.a, &p.b), (Operand::Packed { .. }, Operand::Packed { .. }))),
+            "a product of two inputs"
+        );
+        let mut tried = 0;
+        for p in &products {
+            let candidates = candidates(p);
+            assert!(candidates.len() > 1, "{}x{}x{}: {} candidates", p.m, p.k, p.n, candidates.len());
+            for (mmm, ix) in candidates {
+                let name = mmm.name().to_string();
+                let mut rewired = model.clone();
+                replace(&mut rewired, p, mmm, ix).unwrap();
+                let err = worst(&run(&rewired, &x), &expected);
+                assert!(err < 1e-5, "{name} on {}x{}x{}: {err:e}", p.m, p.k, p.n);
+                tried += 1;
+            }
+        }
+        let mut tuned = model.clone();
+        tune(&mut tuned).unwrap();
+        assert!(worst(&run(&tuned, &x), &expected) < 1e-5);
+        assert!(tried >= 4);
+    }
+}
