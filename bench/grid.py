@@ -2,8 +2,9 @@
 `NAME=GLOB` per argument: the run directories of that model, one per fold), it takes the mean
 test accuracy over the folds, the baked parameters and multiply-adds (`pvt3 info`), and, for the
 first fold's model exported to ONNX, the latency in the pvt3 runtime (`pvt3-run --bench`, robot
-profile unless `--runner` names another build) and in onnxruntime (`bench/ort_latency.py`), measured side by side in rounds. Prints a
-markdown table and writes the plot as SVG.
+profile unless `--runner` names another build; also with tract's own kernel choice, untuned) and in
+onnxruntime (`bench/ort_latency.py`), measured side by side in rounds. Prints a markdown table and
+writes the plot as SVG.
 
     target/onnx-venv/bin/python bench/grid.py --svg docs/frontier.svg \\
         unpruned='runs/cv-icub20-l1/seed0/fold?' channels50='runs/cv-icub20-l1/seed0/fold?/pruned' …
@@ -86,13 +87,14 @@ def main():
             r["pvt3"].append(bench([a.runner, "--bench", r["onnx"], "1", str(a.seconds)]))
             r["ort"].append(bench([sys.executable, "bench/ort_latency.py", r["onnx"], str(a.seconds)]))
     med = lambda xs, k: statistics.median(x[k] for x in xs)
-    print("| model | folds | test accuracy | parameters | multiply-adds | tokens kept | pvt3 batch 1 median / p99 (µs) | pvt3 batch 32 (windows/s) | onnxruntime batch 1 median (µs) | onnxruntime batch 32 (windows/s) | pvt3 / onnxruntime | speed-up over unpruned (pvt3, batch 1) |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    print("| model | folds | test accuracy | parameters | multiply-adds | tokens kept | pvt3 batch 1 median / p99 (µs) | pvt3 batch 1, untuned kernels (µs) | pvt3 batch 32 (windows/s) | onnxruntime batch 1 median (µs) | onnxruntime batch 32 (windows/s) | pvt3 / onnxruntime | speed-up over unpruned (pvt3, batch 1) |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     base = med(rows[0]["pvt3"], "batch1_median_us")
     for r in rows:
         r["pvt3_us"], r["ort_us"] = med(r["pvt3"], "batch1_median_us"), med(r["ort"], "batch1_median_us")
         print(f"| {r['name']} | {r['runs']} | {r['accuracy']:.4f} | {r['params']:,} | {r['macs'] / 1e6:.2f} M | {r['kept']} | "
-              f"{r['pvt3_us']:.0f} / {med(r['pvt3'], 'batch1_p99_us'):.0f} | {med(r['pvt3'], 'batch32_windows_per_second'):.0f} | "
+              f"{r['pvt3_us']:.0f} / {med(r['pvt3'], 'batch1_p99_us'):.0f} | {med(r['pvt3'], 'batch1_untuned_median_us'):.0f} | "
+              f"{med(r['pvt3'], 'batch32_windows_per_second'):.0f} | "
               f"{r['ort_us']:.0f} | {med(r['ort'], 'batch32_windows_per_second'):.0f} | {r['pvt3_us'] / r['ort_us']:.2f} | {base / r['pvt3_us']:.2f}× |")
     svg(rows, a.svg)
 
