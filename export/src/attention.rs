@@ -253,18 +253,20 @@ fn batched(g: &mut Graph, xhat: &str, rows: Rows, cls_only: bool, h: &Heads, hin
         }
     };
     let scores = g.op("MatMul", &[&q, &keys_t]);
-    let probs = softmax_rows(g, &scores, t, h.bounded());
-    let mixed = g.op("MatMul", &[&probs, &values]);
+    let (weights, total) = softmax_terms(g, &scores, t, h.bounded());
+    let mixed = g.op("MatMul", &[&weights, &values]);
+    // Normalised after mixing: a division of `[queries, width]` rather than `[queries, keys]`.
+    let mixed = g.op("Div", &[&mixed, &total]);
     let back = g.node("Transpose", &[&mixed], vec![ints("perm", &[0, 2, 1, 3])], None);
     let flat = g.i64s("merge_heads", &[2], vec![-1, (heads * ev) as i64]);
     g.op("Reshape", &[&back, &flat])
 }
 
-/// Softmax over the last axis (rows of `len`) from elementwise ops and a sum. tract's Softmax op
-/// walks the rows one by one, which costs more than the products on short rows; these ops
-/// vectorise over the whole tensor. `bounded`: no score can overflow `exp`, so the row maximum
-/// is not subtracted.
-fn softmax_rows(g: &mut Graph, x: &str, len: usize, bounded: bool) -> String {
+/// A softmax over the last axis (rows of `len`) as its two terms, the exponentials and their row
+/// sums, from elementwise ops and a sum. tract's Softmax op walks the rows one by one, which
+/// costs more than the products on short rows; these ops vectorise over the whole tensor.
+/// `bounded`: no score can overflow `exp`, so the row maximum is not subtracted.
+fn softmax_terms(g: &mut Graph, x: &str, len: usize, bounded: bool) -> (String, String) {
     let axis = g.i64s("last_axis", &[1], vec![-1]);
     let shifted = if bounded {
         x.to_string()
@@ -274,7 +276,7 @@ fn softmax_rows(g: &mut Graph, x: &str, len: usize, bounded: bool) -> String {
     };
     let e = g.op("Exp", &[&shifted]);
     let sum = g.node("ReduceSum", &[&e, &axis], vec![int("keepdims", 1)], None);
-    g.op("Div", &[&e, &sum])
+    (e, sum)
 }
 
 /// The maximum over `axis` (of length `len`), kept as a unit axis, by halving: the larger of two
