@@ -1,6 +1,7 @@
 //! Where the runtime spends its time: `cargo run --release -p pvt3-runtime --example profile --
 //! MODEL.onnx [BATCH [RUNS]]` times every node of the optimised tract plan over RUNS runs on
-//! synthetic input and prints the time per operator kind, largest first (docs/benchmarks.md).
+//! synthetic input and prints the time per operator kind, largest first (docs/benchmarks.md),
+//! then the plan's median time without the per-node timing.
 //! With `PVT3_PROFILE_NODES=N` it also lists the N slowest single nodes with their output shapes.
 //! With `PVT3_PROFILE_SHAPE=D0,D1,…` it runs any one-input ONNX file at that input shape
 //! (`bench/products.py` times single products this way). The plan's products get the kernels
@@ -62,6 +63,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         println!("| {op} | {} | {:.1} | {:.1} % |", calls / runs, secs / runs as f64 * 1e6, 100.0 * secs / total);
     }
     println!("| **whole plan** | {} | {:.1} | |", plan.model().nodes().len(), total / runs as f64 * 1e6);
+    // The same plan run plainly: one reused state, no timing per node (median).
+    let mut state = SimpleState::new(&plan)?;
+    let mut plain: Vec<f64> = (0..runs + 5)
+        .map(|_| {
+            let started = Instant::now();
+            state.run(tvec!(input.clone().into())).map(|_| started.elapsed().as_secs_f64())
+        })
+        .collect::<TractResult<_>>()?;
+    plain.sort_by(f64::total_cmp);
+    println!("| whole plan, untimed nodes (median) | | {:.1} | |", plain[plain.len() / 2] * 1e6);
     if let Some(n) = std::env::var("PVT3_PROFILE_NODES").ok().and_then(|v| v.parse().ok()) {
         let mut nodes: Vec<_> = by_node.into_iter().collect();
         nodes.sort_by(|a, b| b.1.total_cmp(&a.1));
