@@ -1,5 +1,5 @@
 """The iCub model's matrix products one at a time, in both engines: tract, the engine of the pvt3
-runtime (timed by `runtime/examples/profile`, built with `cargo build --release -p pvt3-runtime
+runtime (timed by `runtime/examples/profile`, kernels tuned as the runtime tunes them, built with `cargo build --release -p pvt3-runtime
 --example profile`), and onnxruntime (one intra-op thread). Each file is one product with a bias,
 `[m, k] x [k, n]`; an Identity file shows what a call that does nothing costs each engine.
 Prints a markdown table (docs/benchmarks.md).
@@ -47,7 +47,7 @@ def write(path, m, k, n):
 def tract_us(path, m, k, runs):
     env = dict(os.environ, PVT3_PROFILE_SHAPE=f"{m},{k}")
     out = subprocess.run([PROFILE, path, "1", str(runs)], env=env, capture_output=True, text=True, check=True).stdout
-    return float(re.search(r"\*\*whole plan\*\* \| \d+ \| ([\d.]+)", out)[1])
+    return float(re.search(r"untimed nodes \(median\) \| \| ([\d.]+)", out)[1])
 
 
 def ort_us(path, m, k, runs):
@@ -63,13 +63,13 @@ def ort_us(path, m, k, runs):
         t = time.perf_counter()
         session.run(None, {"x": x})
         times.append(time.perf_counter() - t)
-    return float(np.mean(times) * 1e6)
+    return float(np.median(times) * 1e6)
 
 
 def main():
     runs = int(sys.argv[1]) if len(sys.argv) > 1 else 3000
     print(f"onnxruntime {ort.__version__}; tract as linked by pvt3-runtime; {runs} runs each, one thread.\n")
-    print("| product | m × k × n | tract (µs per call, mean) | onnxruntime (µs per call, mean) | tract / onnxruntime, less the empty call |")
+    print("| product | m × k × n | tract (µs per call, median) | onnxruntime (µs per call, median) | tract / onnxruntime, less the empty call |")
     print("|---|---|---:|---:|---:|")
     empty = None
     with tempfile.TemporaryDirectory() as tmp:
