@@ -158,16 +158,14 @@ fn operand(model: &TypedModel, node: &TypedNode, operand: &MatMulOperand) -> Tra
     }
     let in_fact = model.outlet_fact(pack.inputs[0])?;
     let Some(shape) = in_fact.shape.as_concrete() else { return Ok(None) };
-    if in_fact.datum_type != f32::datum_type() || shape.iter().filter(|d| **d != 1).count() > 2 {
+    let mapping = pack.op.as_typed().unwrap().axes_mapping(&[in_fact], &[model.outlet_fact(input)?])?;
+    let (k_axis, mn_axis) = (mapping.axis('K')?.inputs[0][0], mapping.axis('M')?.inputs[0][0]);
+    // One matrix: every other axis is a unit axis (what `Pack` packs).
+    let one_matrix = shape.iter().enumerate().all(|(ax, d)| ax == k_axis || ax == mn_axis || *d == 1);
+    if in_fact.datum_type != f32::datum_type() || !one_matrix {
         return Ok(None);
     }
-    let mapping = pack.op.as_typed().unwrap().axes_mapping(&[in_fact], &[model.outlet_fact(input)?])?;
-    Ok(Some(Operand::Packed {
-        pack: pack.id,
-        zeros: Tensor::zero::<f32>(shape)?,
-        k_axis: mapping.axis('K')?.inputs[0][0],
-        mn_axis: mapping.axis('M')?.inputs[0][0],
-    }))
+    Ok(Some(Operand::Packed { pack: pack.id, zeros: Tensor::zero::<f32>(shape)?, k_axis, mn_axis }))
 }
 
 /// The plain `[k, mn]` values of a constant operand packed in a plain f32 format.
@@ -302,7 +300,7 @@ struct Pack {
 }
 
 impl Pack {
-    /// The input's shape without its k and mn axes (all ones: [`product`] checks it).
+    /// The input's shape without its k and mn axes (all ones: [`operand`] checks it).
     fn rest<D: Clone>(&self, shape: &[D]) -> TVec<D> {
         shape.iter().enumerate().filter(|(ax, _)| *ax != self.k_axis && *ax != self.mn_axis).map(|(_, d)| d.clone()).collect()
     }
