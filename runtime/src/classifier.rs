@@ -88,16 +88,19 @@ impl Classifier {
     /// Runs on `threads` threads from now on (default 1; small models rarely gain from more).
     pub fn with_threads(mut self, threads: usize) -> Self {
         self.threads = threads.max(1);
-        self.plans.get_mut().unwrap_or_else(|p| p.into_inner()).clear();
-        *self.stages.get_mut().unwrap_or_else(|p| p.into_inner()) = None;
-        self
+        self.forget_plans()
     }
 
     /// Whether each plan times the matrix-product kernels tract can run and keeps the fastest
-    /// (default on). Tuning costs about 50 ms per plan of the iCub model at batch 1, and made the
-    /// plan 10–15 % faster (docs/benchmarks.md); without it, tract's own cost model picks.
+    /// (default on). Tuning costs 50–100 ms per plan of the iCub model, at its first call, and
+    /// made batch 1 7–18 % faster (docs/benchmarks.md); without it, tract's own cost model picks.
     pub fn with_kernel_tuning(mut self, tune: bool) -> Self {
         self.tune = tune;
+        self.forget_plans()
+    }
+
+    /// Drops the plans built so far, so that the next call builds them with the new settings.
+    fn forget_plans(mut self) -> Self {
         self.plans.get_mut().unwrap_or_else(|p| p.into_inner()).clear();
         *self.stages.get_mut().unwrap_or_else(|p| p.into_inner()) = None;
         self
