@@ -44,24 +44,26 @@ def write(path, m, k, n):
     onnx.save(model, path)
 
 
-def tract_us(path, m, k, runs):
-    env = dict(os.environ, PVT3_PROFILE_SHAPE=f"{m},{k}")
+def tract_us(path, shape, runs):
+    """tract's median time for one-input `path` at `shape`: the runtime's plan (kernels tuned), untimed nodes."""
+    env = dict(os.environ, PVT3_PROFILE_SHAPE=",".join(map(str, shape)))
     out = subprocess.run([PROFILE, path, "1", str(runs)], env=env, capture_output=True, text=True, check=True).stdout
     return float(re.search(r"untimed nodes \(median\) \| \| ([\d.]+)", out)[1])
 
 
-def ort_us(path, m, k, runs):
+def ort_us(path, shape, runs):
+    """onnxruntime's median time for one-input `path` at `shape`, one intra-op thread."""
     options = ort.SessionOptions()
     options.intra_op_num_threads = 1
     options.inter_op_num_threads = 1
     session = ort.InferenceSession(path, options, providers=["CPUExecutionProvider"])
-    x = np.random.default_rng(1).standard_normal((m, k)).astype(np.float32)
+    feed = {session.get_inputs()[0].name: np.random.default_rng(1).standard_normal(shape).astype(np.float32)}
     for _ in range(50):
-        session.run(None, {"x": x})
+        session.run(None, feed)
     times = []
     for _ in range(runs):
         t = time.perf_counter()
-        session.run(None, {"x": x})
+        session.run(None, feed)
         times.append(time.perf_counter() - t)
     return float(np.median(times) * 1e6)
 
@@ -76,7 +78,7 @@ def main():
         for name, m, k, n in SHAPES:
             path = os.path.join(tmp, "product.onnx")
             write(path, m, k, n)
-            t, o = tract_us(path, m, k, runs), ort_us(path, m, k, runs)
+            t, o = tract_us(path, [m, k], runs), ort_us(path, [m, k], runs)
             if n is None:
                 empty = (t, o)
                 print(f"| {name} | {m} × {k} | {t:.1f} | {o:.1f} | |")

@@ -11,17 +11,14 @@ markdown table (docs/benchmarks.md).
 import argparse
 import json
 import os
-import re
-import subprocess
 import tempfile
-import time
 
 import numpy as np
 import onnx
 import onnx.utils
 import onnxruntime as ort
 
-PROFILE = "target/release/examples/profile"
+from products import ort_us, tract_us
 
 
 def cut(src, dst, inputs, outputs):
@@ -32,28 +29,6 @@ def cut(src, dst, inputs, outputs):
     for o in m.graph.output:
         o.type.tensor_type.ClearField("shape")
     onnx.save(m, dst)
-
-
-def tract_us(path, shape, runs):
-    env = dict(os.environ, PVT3_PROFILE_SHAPE=",".join(map(str, shape)))
-    out = subprocess.run([PROFILE, path, "1", str(runs)], env=env, capture_output=True, text=True, check=True).stdout
-    return float(re.search(r"untimed nodes \(median\) \| \| ([\d.]+)", out)[1])
-
-
-def ort_us(path, shape, runs):
-    options = ort.SessionOptions()
-    options.intra_op_num_threads = 1
-    options.inter_op_num_threads = 1
-    session = ort.InferenceSession(path, options, providers=["CPUExecutionProvider"])
-    feed = {session.get_inputs()[0].name: np.random.default_rng(1).standard_normal(shape).astype(np.float32)}
-    for _ in range(50):
-        session.run(None, feed)
-    times = []
-    for _ in range(runs):
-        t = time.perf_counter()
-        session.run(None, feed)
-        times.append(time.perf_counter() - t)
-    return float(np.median(times) * 1e6)
 
 
 def main():

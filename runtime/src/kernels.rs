@@ -216,7 +216,7 @@ fn time(mmm: &dyn MatMatMul, packing: usize, p: &Product) -> TractResult<f64> {
     };
     let (ka, kb) = (konst(&p.a, &**fa)?, konst(&p.b, &**fb)?);
     let mut c = Tensor::zero::<f32>(&[p.m, p.n])?;
-    let store = unsafe { mmm.c_from_data_and_strides(4, p.n as isize, 1) };
+    let store = unsafe { mmm.c_from_data_and_strides(size_of::<f32>(), p.n as isize, 1) };
     let started = Instant::now();
     let mut best = f64::MAX;
     for run in 0..MAX_RUNS {
@@ -290,8 +290,8 @@ fn retile(spec: &mut OutputStoreSpec, tile_m: usize, tile_n: usize) {
     }
 }
 
-/// Packs a product's input for the kernel [`tune`] chose: tract's own packing op, with a
-/// format tract's selection would not have given it.
+/// Packs a product's input for the kernel [`tune`] chose, as tract's `OptMatMulPack` does, in a
+/// format tract's own selection would not have given it (whose fields tract keeps private).
 #[derive(Debug, Clone, Hash, PartialEq, Eq)]
 struct Pack {
     format: Box<dyn MMMInputFormat>,
