@@ -30,7 +30,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let mut model = tract_onnx::onnx().model_for_path(path)?.with_input_fact(0, f32::fact(&shape).into())?.into_optimized()?;
     if std::env::var("PVT3_PROFILE_UNTUNED").is_err() {
-        pvt3_runtime::tune_kernels(&mut model)?;
+        pvt3_runtime::tune_kernels(&mut model, 1)?;
     }
     let plan = SimplePlan::new(model)?;
     let n: usize = shape.iter().product();

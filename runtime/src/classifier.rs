@@ -145,7 +145,7 @@ impl Classifier {
             .into_optimized()
             .and_then(|mut m| {
                 if self.tune {
-                    crate::kernels::tune(&mut m)?;
+                    crate::kernels::tune(&mut m, self.threads)?;
                 }
                 Ok(m)
             })

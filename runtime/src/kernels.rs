@@ -20,6 +20,8 @@ use tract_onnx::tract_core::tract_linalg::mmm::{
 };
 use tract_onnx::tract_core::tract_linalg::pack::PackedFormat;
 
+use crate::small_products::{self, Combine, Epilogue, SmallProduct, Source};
+
 /// Time spent measuring one kernel on one product, at most (and at least `MIN_RUNS` runs).
 const BUDGET: Duration = Duration::from_millis(1);
 const MIN_RUNS: usize = 3;
@@ -28,15 +30,22 @@ const MAX_RUNS: usize = 30;
 /// noise alone does not move a product.
 const MARGIN: f64 = 0.05;
 
-/// A kernel and the index of the packing it runs with.
-type Choice = (Box<dyn MatMatMul>, usize);
+/// What a product runs with.
+#[derive(Clone)]
+enum Choice {
+    /// One of tract's kernels, with the index of its packing.
+    Tract(Box<dyn MatMatMul>, usize),
+    /// [`SmallProduct`].
+    Small,
+}
 
 /// One operand of a product as the tuner sees it.
 enum Operand {
     /// A constant, by its plain `[k, mn]` values.
     Const(Tensor),
-    /// An input packed by node `pack` (for this product alone); `zeros` has its unpacked shape.
-    Packed { pack: usize, zeros: Tensor, k_axis: usize, mn_axis: usize },
+    /// Input `slot` of the product, packed by node `pack` (for this product alone); `zeros` has
+    /// its unpacked shape.
+    Packed { slot: usize, pack: usize, zeros: Tensor, k_axis: usize, mn_axis: usize },
 }
 
 impl Operand {
@@ -70,7 +79,9 @@ struct Product {
 /// Gives every product of `model`, optimised by tract, the fastest kernel measured on this
 /// machine, and returns how many products changed kernel. [`Classifier`](crate::Classifier) does
 /// this to every plan it builds; it is public for callers who build their own tract plans.
-pub fn tune(model: &mut TypedModel) -> TractResult<usize> {
+/// `threads`: the threads the plan will run on. With more than one, products keep tract's
+/// kernels, which split their tiles across threads, and [`SmallProduct`] (one thread) is not tried.
+pub fn tune(model: &mut TypedModel, threads: usize) -> TractResult<usize> {
     let mut changed = 0;
     // Products of one shape (the same layer in every block) are measured once.
     let mut choices: HashMap<String, Option<Choice>> = HashMap::new();
@@ -78,36 +89,111 @@ pub fn tune(model: &mut TypedModel) -> TractResult<usize> {
         let Some(product) = product(model, node)? else { continue };
         let op = model.node(node).op_as::<OptMatMul>().unwrap();
         let current = (op.mmm[0].name().to_string(), packing(op));
-        let key = format!("{}x{}x{} {} | {} | {current:?}", product.m, product.k, product.n, product.a.key(), product.b.key());
+        let c = (&op.c_fact.shape, op.c_m_axis, op.c_n_axis, op.micro_ops.len());
+        let key = format!("{}x{}x{} {} | {} | {current:?} {c:?}", product.m, product.k, product.n, product.a.key(), product.b.key());
+        let small = if threads == 1 && small_products::available() { small(model, &product)? } else { None };
         let choice = match choices.get(&key) {
             Some(choice) => choice.clone(),
             None => {
-                let choice = fastest(&product, &current)?;
+                let choice = fastest(model, &product, &current, small.as_ref())?;
                 choices.insert(key, choice.clone());
                 choice
             }
         };
-        if let Some((mmm, ix)) = choice {
-            replace(model, &product, mmm, ix)?;
-            changed += 1;
+        match (choice, small) {
+            (Some(Choice::Tract(mmm, ix)), _) => replace(model, &product, mmm, ix)?,
+            (Some(Choice::Small), Some((op, inputs))) => rewire(model, &product, op, &inputs)?,
+            _ => continue,
         }
+        changed += 1;
     }
     Ok(changed)
 }
 
-/// The kernel (and packing) that beats `current` on `p` by more than the margin, if any.
-fn fastest(p: &Product, current: &(String, usize)) -> TractResult<Option<Choice>> {
-    let mut best: Option<(f64, Box<dyn MatMatMul>, usize)> = None;
+/// What beats `current` on `p` by more than the margin, if anything: one of tract's kernels
+/// (and packing), or `small`, the product as a [`SmallProduct`] reading `inputs`.
+fn fastest(
+    model: &TypedModel,
+    p: &Product,
+    current: &(String, usize),
+    small: Option<&(SmallProduct, TVec<OutletId>)>,
+) -> TractResult<Option<Choice>> {
+    let mut best: Option<(f64, Choice)> = None;
     let mut current_time = f64::MAX;
     for (mmm, ix) in candidates(p) {
         let t = time(&*mmm, ix, p)?;
         if mmm.name() == current.0 && ix == current.1 {
             current_time = t;
         } else if best.as_ref().is_none_or(|b| t < b.0) {
-            best = Some((t, mmm, ix));
+            best = Some((t, Choice::Tract(mmm, ix)));
         }
     }
-    Ok(best.filter(|b| b.0 < current_time * (1.0 - MARGIN)).map(|(_, mmm, ix)| (mmm, ix)))
+    if let Some((op, inputs)) = small {
+        let values = inputs
+            .iter()
+            .map(|o| {
+                let fact = model.outlet_fact(*o)?;
+                match &fact.konst {
+                    Some(k) => Ok(k.clone().into_tvalue()),
+                    None => Ok(Tensor::zero::<f32>(fact.shape.as_concrete().context("a symbolic input")?)?.into_tvalue()),
+                }
+            })
+            .collect::<TractResult<Vec<_>>>()?;
+        let t = best_of(|| op.run(&values).map(drop))?;
+        if best.as_ref().is_none_or(|b| t < b.0) {
+            best = Some((t, Choice::Small));
+        }
+    }
+    Ok(best.filter(|b| b.0 < current_time * (1.0 - MARGIN)).map(|b| b.1))
+}
+
+/// `p` as a [`SmallProduct`], with the inputs it reads (each packed operand's unpacked input),
+/// if everything tract fused into it is an operation the small product runs.
+fn small(model: &TypedModel, p: &Product) -> TractResult<Option<(SmallProduct, TVec<OutletId>)>> {
+    let node = model.node(p.node);
+    let op = node.op_as::<OptMatMul>().unwrap();
+    let (Some(c_m_axis), Some(c_n_axis), Some(c_shape)) = (op.c_m_axis, op.c_n_axis, op.c_fact.shape.as_concrete()) else {
+        return Ok(None);
+    };
+    let mut inputs = node.inputs.clone();
+    let mut source = |o: &Operand| match o {
+        Operand::Const(t) => Source::Const(Arc::new(t.clone())),
+        Operand::Packed { slot, pack, k_axis, mn_axis, .. } => {
+            inputs[*slot] = model.node(*pack).inputs[0];
+            Source::Input { input: *slot, k_axis: *k_axis, mn_axis: *mn_axis }
+        }
+    };
+    let (a, b) = (source(&p.a), source(&p.b));
+    let mut epilogues = vec![];
+    for u in &op.micro_ops {
+        let (input, op, per_row) = match u {
+            ProtoFusedSpec::AddMatMul { .. } | ProtoFusedSpec::Store(_) => continue,
+            ProtoFusedSpec::BinPerRow(v, op, _) => (*v, *op, true),
+            ProtoFusedSpec::BinPerCol(v, op, _) => (*v, *op, false),
+            _ => return Ok(None),
+        };
+        let fact = model.outlet_fact(node.inputs[input])?;
+        let len = if per_row { p.m } else { p.n };
+        let (Some(op), true) = (Combine::from_tract(op), fact.datum_type == f32::datum_type() && fact.shape.volume() == len.to_dim())
+        else {
+            return Ok(None);
+        };
+        epilogues.push(Epilogue { input, op, per_row });
+    }
+    let op = SmallProduct { m: p.m, k: p.k, n: p.n, a, b, epilogues, c_shape: c_shape.into(), c_m_axis, c_n_axis };
+    Ok(op.supported().then_some((op, inputs.into())))
+}
+
+/// Puts `op` in place of product `p`, reading `inputs`; the packing nodes it no longer reads
+/// drop out of the plan.
+fn rewire(model: &mut TypedModel, p: &Product, op: SmallProduct, inputs: &[OutletId]) -> TractResult<()> {
+    for (slot, outlet) in inputs.iter().enumerate() {
+        if model.node(p.node).inputs[slot] != *outlet {
+            model.add_edge(*outlet, InletId::new(p.node, slot))?;
+        }
+    }
+    model.node_mut(p.node).op = Box::new(op);
+    Ok(())
 }
 
 /// The packing a single-kernel product runs with.
@@ -148,9 +234,9 @@ fn product(model: &TypedModel, node: usize) -> TractResult<Option<Product>> {
 }
 
 fn operand(model: &TypedModel, node: &TypedNode, operand: &MatMulOperand) -> TractResult<Option<Operand>> {
-    let input = match operand {
+    let (i, input) = match operand {
         MatMulOperand::Const(v) => return Ok(unpack(&**v)?.map(Operand::Const)),
-        MatMulOperand::Input(i) => node.inputs[*i],
+        MatMulOperand::Input(i) => (i, node.inputs[*i]),
     };
     let pack = model.node(input.node);
     if pack.op_as::<OptMatMulPack>().is_none() || model.outlet_successors(input).len() != 1 {
@@ -165,7 +251,7 @@ fn operand(model: &TypedModel, node: &TypedNode, operand: &MatMulOperand) -> Tra
     if in_fact.datum_type != f32::datum_type() || !one_matrix {
         return Ok(None);
     }
-    Ok(Some(Operand::Packed { pack: pack.id, zeros: Tensor::zero::<f32>(shape)?, k_axis, mn_axis }))
+    Ok(Some(Operand::Packed { slot: *i, pack: pack.id, zeros: Tensor::zero::<f32>(shape)?, k_axis, mn_axis }))
 }
 
 /// The plain `[k, mn]` values of a constant operand packed in a plain f32 format.
@@ -192,7 +278,7 @@ fn unpack(value: &dyn MMMInputValue) -> TractResult<Option<Tensor>> {
 
 /// The kernels tract could run for this product: compiled for this CPU's best instruction sets,
 /// packing plain f32 on both sides, with a tile of more than one column unless n is 1.
-fn candidates(p: &Product) -> Vec<Choice> {
+fn candidates(p: &Product) -> Vec<(Box<dyn MatMatMul>, usize)> {
     let mut suitable = MmmDispatch::native().suitable(&Query::plain(f32::datum_type(), Some(p.m), Some(p.k), Some(p.n)));
     suitable.retain(|(mmm, _, pe)| pe.is_none() && mmm.arch().is_some());
     retain_best(&mut suitable);
@@ -217,10 +303,7 @@ fn time(mmm: &dyn MatMatMul, packing: usize, p: &Product) -> TractResult<f64> {
     let (ka, kb) = (konst(&p.a, &**fa)?, konst(&p.b, &**fb)?);
     let mut c = Tensor::zero::<f32>(&[p.m, p.n])?;
     let store = unsafe { mmm.c_from_data_and_strides(size_of::<f32>(), p.n as isize, 1) };
-    let started = Instant::now();
-    let mut best = f64::MAX;
-    for run in 0..MAX_RUNS {
-        let t = Instant::now();
+    best_of(|| {
         let a = match &ka {
             Some(k) => AsInputValue::Borrowed(&**k),
             None => AsInputValue::Owned(p.a.prepare(&**fa)?),
@@ -231,8 +314,18 @@ fn time(mmm: &dyn MatMatMul, packing: usize, p: &Product) -> TractResult<f64> {
         };
         unsafe {
             let view = c.view_mut();
-            mmm.run(p.m, p.n, &[FusedSpec::AddMatMul { a, b, packing }, FusedSpec::Store(store.wrap(&view))])?;
+            mmm.run(p.m, p.n, &[FusedSpec::AddMatMul { a, b, packing }, FusedSpec::Store(store.wrap(&view))])
         }
+    })
+}
+
+/// The fastest of a few runs of `f` (within the budget), in seconds.
+fn best_of(mut f: impl FnMut() -> TractResult<()>) -> TractResult<f64> {
+    let started = Instant::now();
+    let mut best = f64::MAX;
+    for run in 0..MAX_RUNS {
+        let t = Instant::now();
+        f()?;
         best = best.min(t.elapsed().as_secs_f64());
         if run + 1 >= MIN_RUNS && started.elapsed() > BUDGET {
             break;
@@ -370,7 +463,8 @@ mod tests {
         a.iter().flatten().zip(b.iter().flatten()).map(|(p, q)| (p - q).abs() / q.abs().max(1.0)).fold(0.0, f32::max)
     }
 
-    /// Every kernel the tuner may pick, put in by `replace`, computes what tract's pick computes.
+    /// Every kernel the tuner may pick, put in by `replace` (or [`SmallProduct`] by `rewire`),
+    /// computes what tract's pick computes.
     #[test]
     fn every_candidate_kernel_computes_the_same_products() {
         let model = two_products();
@@ -394,9 +488,16 @@ mod tests {
                 assert!(err < 1e-5, "{name} on {}x{}x{}: {err:e}", p.m, p.k, p.n);
                 tried += 1;
             }
+            if small_products::available() {
+                let (op, inputs) = small(&model, p).unwrap().expect("a product the small kernel runs");
+                let mut rewired = model.clone();
+                rewire(&mut rewired, p, op, &inputs).unwrap();
+                let err = worst(&run(&rewired, &x), &expected);
+                assert!(err < 1e-5, "SmallProduct on {}x{}x{}: {err:e}", p.m, p.k, p.n);
+            }
         }
         let mut tuned = model.clone();
-        tune(&mut tuned).unwrap();
+        tune(&mut tuned, 1).unwrap();
         assert!(worst(&run(&tuned, &x), &expected) < 1e-5);
         assert!(tried >= 4);
     }

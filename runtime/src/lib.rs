@@ -13,6 +13,7 @@ pub mod ffi;
 mod kernels;
 mod npy;
 mod plan;
+mod small_products;
 mod stream;
 
 pub use classifier::{Classifier, Prediction};
