@@ -1,6 +1,7 @@
-"""The iCub model's matrix products one at a time, in both engines: tract, the engine of the pvt3
-runtime (timed by `runtime/examples/profile`, kernels tuned as the runtime tunes them, built with `cargo build --release -p pvt3-runtime
---example profile`), and onnxruntime (one intra-op thread). Each file is one product with a bias,
+"""The iCub model's matrix products one at a time, in both engines: the pvt3 runtime (tract, timed
+by `runtime/examples/profile`, built with `cargo build --release -p pvt3-runtime --example
+profile`), with its products tuned as the runtime tunes them and with tract's own kernels, and
+onnxruntime (one intra-op thread). Each file is one product with a bias,
 `[m, k] x [k, n]`; an Identity file shows what a call that does nothing costs each engine.
 Prints a markdown table (docs/benchmarks.md).
 
@@ -44,9 +45,12 @@ def write(path, m, k, n):
     onnx.save(model, path)
 
 
-def tract_us(path, shape, runs):
-    """tract's median time for one-input `path` at `shape`: the runtime's plan (kernels tuned), untimed nodes."""
+def tract_us(path, shape, runs, untuned=False):
+    """tract's median time for one-input `path` at `shape`: the runtime's plan (kernels tuned, or
+    tract's own kernels with `untuned`), untimed nodes."""
     env = dict(os.environ, PVT3_PROFILE_SHAPE=",".join(map(str, shape)))
+    if untuned:
+        env["PVT3_PROFILE_UNTUNED"] = "1"
     out = subprocess.run([PROFILE, path, "1", str(runs)], env=env, capture_output=True, text=True, check=True).stdout
     return float(re.search(r"untimed nodes \(median\) \| \| ([\d.]+)", out)[1])
 
@@ -71,20 +75,19 @@ def ort_us(path, shape, runs):
 def main():
     runs = int(sys.argv[1]) if len(sys.argv) > 1 else 3000
     print(f"onnxruntime {ort.__version__}; tract as linked by pvt3-runtime; {runs} runs each, one thread.\n")
-    print("| product | m × k × n | tract (µs per call, median) | onnxruntime (µs per call, median) | tract / onnxruntime, less the empty call |")
-    print("|---|---|---:|---:|---:|")
+    print("| product | m × k × n | pvt3 runtime (µs per call, median) | tract's own kernels (µs) | onnxruntime (µs) | pvt3 / onnxruntime, less the empty call |")
+    print("|---|---|---:|---:|---:|---:|")
     empty = None
     with tempfile.TemporaryDirectory() as tmp:
         for name, m, k, n in SHAPES:
             path = os.path.join(tmp, "product.onnx")
             write(path, m, k, n)
-            t, o = tract_us(path, [m, k], runs), ort_us(path, [m, k], runs)
+            t, u, o = tract_us(path, [m, k], runs), tract_us(path, [m, k], runs, untuned=True), ort_us(path, [m, k], runs)
             if n is None:
                 empty = (t, o)
-                print(f"| {name} | {m} × {k} | {t:.1f} | {o:.1f} | |")
+                print(f"| {name} | {m} × {k} | {t:.1f} | {u:.1f} | {o:.1f} | |")
             else:
-                print(f"| {name} | {m} × {k} × {n} | {t:.1f} | {o:.1f} | {(t - empty[0]) / (o - empty[1]):.2f} |")
-
+                print(f"| {name} | {m} × {k} × {n} | {t:.1f} | {u:.1f} | {o:.1f} | {(t - empty[0]) / (o - empty[1]):.2f} |")
 
 if __name__ == "__main__":
     main()
