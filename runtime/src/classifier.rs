@@ -92,7 +92,7 @@ impl Classifier {
     }
 
     /// Whether each plan times the matrix-product kernels it can run (tract's, and on x86-64 with
-    /// AVX-512 the runtime's own for short sums) and keeps the fastest (default on). Tuning costs
+    /// AVX-512 or AVX2 the runtime's own for short sums) and keeps the fastest (default on). Tuning costs
     /// 50–100 ms per plan of the iCub model, at its first call, and makes batch 1 markedly faster
     /// (docs/benchmarks.md, steps 15 and 17); without it, tract's own cost model picks.
     pub fn with_kernel_tuning(mut self, tune: bool) -> Self {

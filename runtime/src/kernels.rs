@@ -3,8 +3,8 @@
 //! On this model's small ones (k = 20, a few hundred rows) that model prefers a 40 × 2 tile,
 //! which ran 20–30 % slower here than the best tile (docs/benchmarks.md, kernel choice).
 //! [`tune`] times every kernel tract could run for each product (by a constant or of two inputs)
-//! on the product's own shape, and [`SmallProduct`] where the machine has it, and keeps the
-//! fastest. The arithmetic is the same: only the tile, the packing of the operands and the order
+//! on the product's own shape, and [`SmallProduct`] with each instruction set the machine has, and
+//! keeps the fastest. The arithmetic is the same: only the tile, the packing of the operands and the order
 //! of the sums change.
 
 use std::collections::HashMap;
@@ -21,7 +21,7 @@ use tract_onnx::tract_core::tract_linalg::mmm::{
 };
 use tract_onnx::tract_core::tract_linalg::pack::PackedFormat;
 
-use crate::small_products::{self, Combine, Epilogue, SmallProduct, Source};
+use crate::small_products::{self, Combine, Epilogue, Isa, SmallProduct, Source};
 
 /// Time spent measuring one kernel on one product, at most (and at least `MIN_RUNS` runs).
 const BUDGET: Duration = Duration::from_millis(1);
@@ -36,8 +36,8 @@ const MARGIN: f64 = 0.05;
 enum Choice {
     /// One of tract's kernels, with the index of its packing.
     Tract(Box<dyn MatMatMul>, usize),
-    /// [`SmallProduct`].
-    Small,
+    /// [`SmallProduct`] with these instructions.
+    Small(Isa),
 }
 
 /// One operand of a product as the tuner sees it.
@@ -92,7 +92,7 @@ pub fn tune(model: &mut TypedModel, threads: usize) -> TractResult<usize> {
         let current = (op.mmm[0].name().to_string(), packing(op));
         let c = (&op.c_fact.shape, op.c_m_axis, op.c_n_axis, op.micro_ops.len());
         let key = format!("{}x{}x{} {} | {} | {current:?} {c:?}", product.m, product.k, product.n, product.a.key(), product.b.key());
-        let small = if threads == 1 && small_products::available() { small(model, &product)? } else { None };
+        let small = if threads == 1 { small(model, &product)? } else { None };
         let choice = match choices.get(&key) {
             Some(choice) => choice.clone(),
             None => {
@@ -103,7 +103,7 @@ pub fn tune(model: &mut TypedModel, threads: usize) -> TractResult<usize> {
         };
         match (choice, small) {
             (Some(Choice::Tract(mmm, ix)), _) => replace(model, &product, mmm, ix)?,
-            (Some(Choice::Small), Some((op, inputs))) => rewire(model, &product, op, &inputs)?,
+            (Some(Choice::Small(isa)), Some((op, inputs))) => rewire(model, &product, SmallProduct { isa, ..op }, &inputs)?,
             _ => continue,
         }
         changed += 1;
@@ -140,17 +140,22 @@ fn fastest(
                 }
             })
             .collect::<TractResult<Vec<_>>>()?;
-        let t = best_of(|| op.run(&values).map(drop))?;
-        if best.as_ref().is_none_or(|b| t < b.0) {
-            best = Some((t, Choice::Small));
+        for isa in small_products::instruction_sets() {
+            let op = SmallProduct { isa, ..op.clone() };
+            let t = best_of(|| op.run(&values).map(drop))?;
+            if best.as_ref().is_none_or(|b| t < b.0) {
+                best = Some((t, Choice::Small(isa)));
+            }
         }
     }
     Ok(best.filter(|b| b.0 < current_time * (1.0 - MARGIN)).map(|b| b.1))
 }
 
-/// `p` as a [`SmallProduct`], with the inputs it reads (each packed operand's unpacked input),
-/// if everything tract fused into it is an operation the small product runs.
+/// `p` as a [`SmallProduct`] (with the first instruction set this machine has), with the inputs
+/// it reads (each packed operand's unpacked input), if the machine can run one and everything
+/// tract fused into the product is an operation the small product runs.
 fn small(model: &TypedModel, p: &Product) -> TractResult<Option<(SmallProduct, TVec<OutletId>)>> {
+    let Some(&isa) = small_products::instruction_sets().first() else { return Ok(None) };
     let node = model.node(p.node);
     let op = node.op_as::<OptMatMul>().unwrap();
     let (Some(c_m_axis), Some(c_n_axis), Some(c_shape)) = (op.c_m_axis, op.c_n_axis, op.c_fact.shape.as_concrete()) else {
@@ -181,7 +186,7 @@ fn small(model: &TypedModel, p: &Product) -> TractResult<Option<(SmallProduct, T
         };
         epilogues.push(Epilogue { input, op, per_row });
     }
-    let op = SmallProduct { m: p.m, k: p.k, n: p.n, a, b, epilogues, c_shape: c_shape.into(), c_m_axis, c_n_axis };
+    let op = SmallProduct { m: p.m, k: p.k, n: p.n, a, b, epilogues, c_shape: c_shape.into(), c_m_axis, c_n_axis, isa };
     Ok(op.supported().then_some((op, inputs.into())))
 }
 
@@ -489,12 +494,12 @@ mod tests {
                 assert!(err < 1e-5, "{name} on {}x{}x{}: {err:e}", p.m, p.k, p.n);
                 tried += 1;
             }
-            if small_products::available() {
+            for isa in small_products::instruction_sets() {
                 let (op, inputs) = small(&model, p).unwrap().expect("a product the small kernel runs");
                 let mut rewired = model.clone();
-                rewire(&mut rewired, p, op, &inputs).unwrap();
+                rewire(&mut rewired, p, SmallProduct { isa, ..op }, &inputs).unwrap();
                 let err = worst(&run(&rewired, &x), &expected);
-                assert!(err < 1e-5, "SmallProduct on {}x{}x{}: {err:e}", p.m, p.k, p.n);
+                assert!(err < 1e-5, "SmallProduct ({isa:?}) on {}x{}x{}: {err:e}", p.m, p.k, p.n);
             }
         }
         let mut tuned = model.clone();

@@ -1,17 +1,56 @@
 //! [`SmallProduct`]: a matrix product for short sums (k of a few dozen), which the tuner puts in
 //! place of tract's where it measures faster. tract calls its kernel once per tile of outputs,
-//! and each call has a fixed cost (about 100 ns here, against 2 ns per step of k; part of it is
+//! and each call has a fixed cost (about 130 ns here, against 2–3 ns per step of k; part of it is
 //! saving and setting the float control register), so at k = 20 most of a product's time is that
 //! cost, after packing the input. This product reads its inputs where they lie and computes
-//! register blocks of up to 6 rows by 64 columns within one call (docs/benchmarks.md, step 17).
-//! x86-64 with AVX-512 only; elsewhere tract's kernels run.
+//! register blocks of outputs within one call (docs/benchmarks.md, step 17): on x86-64 with
+//! AVX-512 or with AVX2 and FMA. Elsewhere tract's kernels run.
 
 use tract_onnx::prelude::*;
 use tract_onnx::tract_core::internal::*;
 use tract_onnx::tract_core::tract_linalg::BinOp;
 
 #[cfg(target_arch = "x86_64")]
-mod avx512;
+mod kernel;
+#[cfg(target_arch = "x86_64")]
+mod lanes;
+
+/// The vector instructions a [`SmallProduct`] runs with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub(crate) enum Isa {
+    /// AVX-512F: 16 lanes, register blocks of 6 rows by 4 vectors.
+    Avx512,
+    /// AVX2 and FMA: 8 lanes, register blocks of 4 rows by 3 vectors.
+    Avx2,
+}
+
+impl Isa {
+    fn name(self) -> &'static str {
+        match self {
+            Isa::Avx512 => "avx512",
+            Isa::Avx2 => "avx2",
+        }
+    }
+
+    /// Whether this machine has these instructions.
+    fn present(self) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        return match self {
+            Isa::Avx512 => is_x86_feature_detected!("avx512f"),
+            Isa::Avx2 => is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma"),
+        };
+        #[cfg(not(target_arch = "x86_64"))]
+        false
+    }
+}
+
+/// The instruction sets this machine can run [`SmallProduct`] with (none off x86-64). The
+/// environment variable `PVT3_SMALL_PRODUCTS` narrows them when set (not empty): `avx512` or `avx2` for that
+/// set alone, anything else (`none`) for none, so that tract's kernels run every product.
+pub(crate) fn instruction_sets() -> Vec<Isa> {
+    let only = std::env::var("PVT3_SMALL_PRODUCTS").ok().filter(|v| !v.is_empty());
+    [Isa::Avx512, Isa::Avx2].into_iter().filter(|isa| isa.present() && only.as_deref().is_none_or(|o| o == isa.name())).collect()
+}
 
 /// Where one operand of a product comes from.
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
@@ -61,6 +100,7 @@ pub(crate) struct SmallProduct {
     pub c_shape: TVec<usize>,
     pub c_m_axis: usize,
     pub c_n_axis: usize,
+    pub isa: Isa,
 }
 
 /// An operand as the kernel reads it: entry (i, j) of a `[mn, k]` matrix at `ptr + i·mn + j·k`.
@@ -69,14 +109,6 @@ pub(crate) struct Matrix {
     ptr: *const f32,
     mn: isize,
     k: isize,
-}
-
-/// Whether this machine can run [`SmallProduct`].
-pub(crate) fn available() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    return is_x86_feature_detected!("avx512f");
-    #[cfg(not(target_arch = "x86_64"))]
-    false
 }
 
 impl SmallProduct {
@@ -134,7 +166,7 @@ impl Op for SmallProduct {
     }
 
     fn info(&self) -> TractResult<Vec<String>> {
-        Ok(vec![format!("m:{} k:{} n:{}, epilogues {:?}, c {:?}", self.m, self.k, self.n, self.epilogues, self.c_shape)])
+        Ok(vec![format!("m:{} k:{} n:{}, {:?}, epilogues {:?}, c {:?}", self.m, self.k, self.n, self.isa, self.epilogues, self.c_shape)])
     }
 
     op_as_typed_op!();
@@ -151,7 +183,7 @@ impl EvalOp for SmallProduct {
 impl SmallProduct {
     /// The product of `inputs` (the node's inputs).
     pub(crate) fn run(&self, inputs: &[TValue]) -> TractResult<Tensor> {
-        ensure!(available(), "SmallProduct needs x86-64 with AVX-512");
+        ensure!(self.isa.present() && self.supported(), "SmallProduct {:?} cannot run here", self.isa);
         let a = self.matrix(&self.a, inputs, self.m)?;
         let b = self.matrix(&self.b, inputs, self.n)?;
         let vector = |e: &Epilogue| -> TractResult<*const f32> {
@@ -177,7 +209,7 @@ impl SmallProduct {
         let out = c.as_ptr_mut::<f32>()?;
         #[cfg(target_arch = "x86_64")]
         unsafe {
-            avx512::multiply(p, q, self.k, l, r, out, c_row, &ops)
+            kernel::multiply(self.isa, p, q, self.k, l, r, out, c_row, &ops)
         };
         #[cfg(not(target_arch = "x86_64"))]
         let _ = (p, q, l, r, out, c_row, ops);
