@@ -31,18 +31,14 @@ pub(super) unsafe fn multiply(
     }
 }
 
-// Each ends by clearing the upper halves of the vector registers: left set, they slowed the SSE
-// code of the ops after it (tract's RmsNorm took 30 % longer in the whole plan).
 #[target_feature(enable = "avx512f")]
 unsafe fn with_avx512(block: Block, p: usize, q: usize) {
-    blocks::<Avx512>(block, p, q);
-    std::arch::x86_64::_mm256_zeroupper();
+    blocks::<Avx512>(block, p, q)
 }
 
 #[target_feature(enable = "avx2,fma")]
 unsafe fn with_avx2(block: Block, p: usize, q: usize) {
-    blocks::<Avx2>(block, p, q);
-    std::arch::x86_64::_mm256_zeroupper();
+    blocks::<Avx2>(block, p, q)
 }
 
 /// C block by block: `I::VECTORS` vectors of columns at a time, `I::ROWS` rows at a time.
