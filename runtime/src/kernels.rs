@@ -3,9 +3,9 @@
 //! On this model's small ones (k = 20, a few hundred rows) that model prefers a 40 × 2 tile,
 //! which ran 20–30 % slower here than the best tile (docs/benchmarks.md, kernel choice).
 //! [`tune`] times every kernel tract could run for each product (by a constant or of two inputs)
-//! on the product's own shape, and [`SmallProduct`] with each instruction set the machine has, and
-//! keeps the fastest. The arithmetic is the same: only the tile, the packing of the operands and the order
-//! of the sums change.
+//! on the product's own shape, and [`SmallProduct`] with each instruction set the machine has,
+//! and keeps the fastest. The arithmetic is the same: only the tile, the packing of the operands
+//! and the order of the sums change.
 
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
