@@ -50,7 +50,7 @@ def tract_us(path, shape, runs, untuned=False):
     tract's own kernels with `untuned`), untimed nodes."""
     env = dict(os.environ, PVT3_PROFILE_SHAPE=",".join(map(str, shape)))
     if untuned:
-        env["PVT3_PROFILE_UNTUNED"] = "1"
+        env["PVT3_PROFILE_KERNELS"] = "tract"
     out = subprocess.run([PROFILE, path, "1", str(runs)], env=env, capture_output=True, text=True, check=True).stdout
     return float(re.search(r"untimed nodes \(median\) \| \| ([\d.]+)", out)[1])
 
@@ -88,6 +88,7 @@ def main():
                 print(f"| {name} | {m} × {k} | {t:.1f} | {u:.1f} | {o:.1f} | |")
             else:
                 print(f"| {name} | {m} × {k} × {n} | {t:.1f} | {u:.1f} | {o:.1f} | {(t - empty[0]) / (o - empty[1]):.2f} |")
+
 
 if __name__ == "__main__":
     main()

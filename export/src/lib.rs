@@ -1,7 +1,9 @@
 //! Export a baked PVT³ to ONNX (opset 17): one file that takes raw sensor frames in the data
 //! set's own layout (batch dimension symbolic), normalises them and gathers the kept frames
 //! inside the graph, and outputs logits and class probabilities. Metadata properties name the
-//! classes, the input layout, the kept frames, the configuration and where the model came from.
+//! classes, the input layout, the kept frames, the configuration and where the model came from,
+//! and a digest covers all of it (names, keys and digest live in `pvt3-format`, the contract the
+//! runtime reads too).
 //!
 //! Depends on the baked form only: pruned channels and frames are already gone, so the graph
 //! computes the spatial transformer for the kept frames alone. Named seams between the spatial
@@ -15,4 +17,4 @@ mod layers;
 mod model;
 
 pub use error::{Error, Result};
-pub use model::{export, write, Metadata, INPUT, LOGITS, PROBABILITIES, TOKEN_ENCODINGS, TOKEN_FRAMES, TOKEN_INDEX};
+pub use model::{export, write, Metadata};

@@ -15,18 +15,7 @@ use crate::embedding::embed;
 use crate::graph::{int, ints, Graph};
 use crate::layers::{absorb_norm, centre_rows, centred, gelu, layer_norm, linear, norm_affine, residual_linear, rms_norm};
 use crate::{Error, Result};
-
-/// The input: raw sensor frames `[batch, height, width, (channels,) frames]`.
-pub const INPUT: &str = "frames";
-pub const LOGITS: &str = "logits";
-/// Seam of the spatial stage: the raw frames of each kept temporal token, `[tokens, tubelet, height, width, channels]`.
-pub const TOKEN_FRAMES: &str = "token_frames";
-/// Seam of the spatial stage: each token's place among the kept tokens, int64 `[tokens]`.
-pub const TOKEN_INDEX: &str = "token_index";
-/// Seam between the stages: the spatial encoding of each kept token, centred over its features
-/// like everything the temporal stream reads (see `layers`), `[tokens, dim]`.
-pub const TOKEN_ENCODINGS: &str = "token_encodings";
-pub const PROBABILITIES: &str = "probabilities";
+use pvt3_format::{keys, INPUT, LOGITS, PROBABILITIES, TOKEN_ENCODINGS, TOKEN_FRAMES, TOKEN_INDEX};
 
 /// What the file says about itself, besides the graph.
 #[derive(Clone, Debug)]
@@ -129,8 +118,8 @@ fn value_info(name: &str, dims: &[Option<usize>]) -> ValueInfoProto {
 /// The ONNX model of a baked PVT³ with its normalisation.
 ///
 /// The graph has two named seams so that a streaming runtime can cut it: the spatial stage maps
-/// [`TOKEN_FRAMES`] (the raw frames of each kept temporal token) and [`TOKEN_INDEX`] (its place
-/// among the kept tokens) to [`TOKEN_ENCODINGS`]; the temporal stage maps those to the outputs.
+/// `TOKEN_FRAMES` (the raw frames of each kept temporal token) and `TOKEN_INDEX` (its place
+/// among the kept tokens) to `TOKEN_ENCODINGS`; the temporal stage maps those to the outputs.
 /// Both stages are written for any number of tokens, so the same nodes serve a whole batch and a
 /// single token as it arrives.
 pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<ModelProto> {
@@ -233,20 +222,20 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
     };
     let layout = if c.channels == 1 { "[batch, height, width, frames]" } else { "[batch, height, width, channels, frames]" };
     let props = [
-        ("pvt3.classes", serde_json::to_string(&meta.classes).expect("strings serialise")),
+        (keys::CLASSES, serde_json::to_string(&meta.classes).expect("strings serialise")),
         (
-            "pvt3.input_layout",
+            keys::INPUT_LAYOUT,
             format!(
                 "{layout} = [batch, {}], raw sensor values as float32",
                 sample.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(", ")
             ),
         ),
-        ("pvt3.input_units", "the data set's raw units (normalisation is inside the graph)".into()),
-        ("pvt3.kept_frames", serde_json::to_string(&kept_frames).expect("integers serialise")),
-        ("pvt3.config", serde_json::to_string(c).expect("the configuration serialises")),
-        ("pvt3.provenance", meta.provenance.to_string()),
+        (keys::INPUT_UNITS, "the data set's raw units (normalisation is inside the graph)".into()),
+        (keys::KEPT_FRAMES, serde_json::to_string(&kept_frames).expect("integers serialise")),
+        (keys::CONFIG, serde_json::to_string(c).expect("the configuration serialises")),
+        (keys::PROVENANCE, meta.provenance.to_string()),
     ];
-    Ok(ModelProto {
+    let mut model = ModelProto {
         ir_version: 8,
         opset_import: vec![OperatorSetIdProto { domain: String::new(), version: 17 }],
         producer_name: "pvt3".into(),
@@ -254,7 +243,11 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
         graph: Some(graph),
         metadata_props: props.into_iter().map(|(k, v)| StringStringEntryProto { key: k.into(), value: v }).collect(),
         ..Default::default()
-    })
+    };
+    // Last: the digest of everything above, which the runtime checks before it reads the file.
+    let digest = pvt3_format::digest(&model.encode_to_vec()).expect("prost writes well-formed messages");
+    model.metadata_props.push(StringStringEntryProto { key: keys::DIGEST.into(), value: digest });
+    Ok(model)
 }
 
 /// Writes the model to `path` through a temporary file and a rename.

@@ -5,8 +5,8 @@
 //! With `PVT3_PROFILE_NODES=N` it also lists the N slowest single nodes with their output shapes.
 //! With `PVT3_PROFILE_SHAPE=D0,D1,…` it runs any one-input ONNX file at that input shape
 //! (`bench/products.py` times single products this way). The plan's products get the kernels
-//! the runtime would tune them to, unless `PVT3_PROFILE_UNTUNED` is set (tract's own choice);
-//! `PVT3_PROFILE_INFO` adds each node's details (for a product: its shape and kernel).
+//! the runtime would give them by default, or as `PVT3_PROFILE_KERNELS=fixed|tract|measured`
+//! says (`pvt3_runtime::Kernels`); `PVT3_PROFILE_INFO` adds each node's details (for a product: its shape and kernel).
 
 use std::collections::HashMap;
 use std::time::Instant;
@@ -29,9 +29,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     };
     let mut model = tract_onnx::onnx().model_for_path(path)?.with_input_fact(0, f32::fact(&shape).into())?.into_optimized()?;
-    if std::env::var("PVT3_PROFILE_UNTUNED").is_err() {
-        pvt3_runtime::tune_kernels(&mut model, 1)?;
-    }
+    let kernels = std::env::var("PVT3_PROFILE_KERNELS").map_or(Ok(pvt3_runtime::Kernels::default()), |k| k.parse())?;
+    pvt3_runtime::tune_kernels(&mut model, 1, kernels)?;
     let plan = SimplePlan::new(model)?;
     let n: usize = shape.iter().product();
     let input = Tensor::from_shape(&shape, &(0..n).map(|i| (i % 7) as f32 - 3.0).collect::<Vec<_>>())?;

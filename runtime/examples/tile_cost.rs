@@ -29,10 +29,13 @@ fn main() -> TractResult<()> {
         for k in ks {
             let (a, b) = (fa.prepare_one(&Tensor::zero::<f32>(&[k, M])?, 0, 1)?, fb.prepare_one(&Tensor::zero::<f32>(&[k, N])?, 0, 1)?);
             let mut c = Tensor::zero::<f32>(&[M, N])?;
+            // SAFETY: the store describes `c`, a contiguous `[M, N]` f32 tensor.
             let store = unsafe { mmm.c_from_data_and_strides(4, N as isize, 1) };
             let mut best = f64::MAX;
             for _ in 0..2000 {
                 let t = Instant::now();
+                // SAFETY: `a` and `b` were packed for this kernel's packing `ix` with k, M and N;
+                // the store wraps a view of `c`, which holds M × N values.
                 unsafe {
                     let view = c.view_mut();
                     let specs = [

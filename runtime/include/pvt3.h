@@ -20,13 +20,25 @@ extern "C" {
 #define PVT3_ERR_INPUT 4
 #define PVT3_ERR_INTERNAL 5
 
+/* How plans choose their matrix-product kernels (pvt3_classifier_set_kernels). */
+#define PVT3_KERNELS_FIXED 0
+#define PVT3_KERNELS_TRACT 1
+#define PVT3_KERNELS_MEASURED 2
+
 typedef struct Pvt3Classifier pvt3_classifier;
 typedef struct Pvt3Session pvt3_session;
 
-/* Loads an .onnx written by `pvt3 export`; *out owns a handle to free with pvt3_classifier_free. */
+/* Loads an .onnx written by `pvt3 export`; *out owns a handle to free with pvt3_classifier_free.
+ * The file's integrity digest is checked first: a file altered or damaged after export is
+ * refused with PVT3_ERR_MODEL. */
 int pvt3_classifier_load(const char *path, pvt3_classifier **out);
 /* Frees a handle (NULL is ignored). */
 void pvt3_classifier_free(pvt3_classifier *c);
+/* How plans choose their matrix-product kernels from now on: PVT3_KERNELS_FIXED (the default, a
+ * fixed rule: the same outputs, bit for bit, at every load), PVT3_KERNELS_TRACT (tract's own
+ * choice) or PVT3_KERNELS_MEASURED (timed at each plan's first call, 50-100 ms; outputs can differ
+ * in the last bits between loads). Call it before sharing the classifier between threads. */
+int pvt3_classifier_set_kernels(pvt3_classifier *c, int kernels);
 /* Values in one window: height x width x (channels x) frames, raw sensor values. */
 int pvt3_classifier_sample_len(const pvt3_classifier *c, size_t *out);
 /* Frames in one window (its last axis); a frame has sample_len / frames values. */

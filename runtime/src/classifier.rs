@@ -1,6 +1,7 @@
 //! [`Classifier`]: an exported model, its metadata, and a plan per batch size.
 
 use std::collections::HashMap;
+use std::panic::{AssertUnwindSafe, UnwindSafe};
 use std::path::Path;
 use std::sync::{Arc, Mutex};
 
@@ -9,6 +10,9 @@ use tract_onnx::pb::ModelProto;
 use tract_onnx::prelude::*;
 use tract_onnx::tract_core::runtime::RunOptions;
 
+use pvt3_format::keys;
+
+use crate::kernels::Kernels;
 use crate::plan::Plan;
 use crate::stream::Stages;
 use crate::{Error, Result};
@@ -35,8 +39,8 @@ pub struct Classifier {
     plans: Mutex<HashMap<usize, Arc<Plan>>>,
     stages: Mutex<Option<Arc<Stages>>>,
     threads: usize,
-    /// Whether plans get the fastest kernel measured here for each product ([`crate::tune_kernels`]).
-    tune: bool,
+    /// How plans choose their matrix-product kernels ([`crate::tune_kernels`]).
+    kernels: Kernels,
     pub(crate) path: String,
 }
 
@@ -46,18 +50,48 @@ pub(crate) fn prediction(classes: &[String], probabilities: &[f32]) -> Predictio
     Prediction { class, label: classes[class].clone(), probabilities: probabilities.to_vec() }
 }
 
+/// Output `i` of a plan's `outputs`, which must hold `len` f32 values.
+pub(crate) fn outputs_of(outputs: &[TValue], i: usize, len: usize) -> Result<Vec<f32>> {
+    let values = outputs.get(i).ok_or_else(|| Error::Tract(format!("the plan has no output {i}")))?;
+    let values: Vec<f32> = values.to_plain_array_view::<f32>().map_err(tract_error)?.iter().copied().collect();
+    if values.len() != len {
+        return Err(Error::Tract(format!("output {i} has {} values, not the {len} the metadata implies", values.len())));
+    }
+    Ok(values)
+}
+
 pub(crate) fn tract_error(e: impl std::fmt::Display) -> Error {
     Error::Tract(e.to_string())
 }
 
+/// Runs `f`, turning a panic into [`Error::Tract`] with its message. tract can panic on a graph
+/// it did not expect; a file that passed the integrity check was written by the exporter, but
+/// no panic may reach a caller of the library either way.
+pub(crate) fn catch_panic<T>(f: impl FnOnce() -> T + UnwindSafe) -> Result<T> {
+    std::panic::catch_unwind(f).map_err(|panic| {
+        let what = panic.downcast_ref::<&str>().map(|s| s.to_string()).or_else(|| panic.downcast_ref::<String>().cloned());
+        Error::Tract(format!("panicked: {}", what.unwrap_or_else(|| "(no message)".into())))
+    })
+}
+
 impl Classifier {
-    /// Loads an `.onnx` written by `pvt3 export`.
+    /// Loads an `.onnx` written by `pvt3 export` (see [`Classifier::from_bytes`]).
     pub fn load(path: impl AsRef<Path>) -> Result<Self> {
         let path = path.as_ref();
         let name = path.display().to_string();
         let bytes = std::fs::read(path).map_err(|source| Error::Io { path: name.clone(), source })?;
+        Self::from_bytes(&bytes, &name)
+    }
+
+    /// A model from the bytes of an `.onnx` file written by `pvt3 export`, named `name` in
+    /// errors. The file's integrity digest is checked first (about a millisecond for the iCub
+    /// model): a file altered or damaged after export, or one without a digest, is refused
+    /// before anything parses it.
+    pub fn from_bytes(bytes: &[u8], name: &str) -> Result<Self> {
+        let name = name.to_string();
+        pvt3_format::verify(bytes).map_err(|reason| Error::Corrupted { path: name.clone(), reason })?;
         let proto = tract_onnx::onnx()
-            .proto_model_for_read(&mut bytes.as_slice())
+            .proto_model_for_read(&mut &*bytes)
             .map_err(|e| Error::NotOnnx { path: name.clone(), reason: e.to_string() })?;
         let meta = |key: &'static str| -> Result<serde_json::Value> {
             let entry = proto.metadata_props.iter().find(|p| p.key == key);
@@ -69,10 +103,10 @@ impl Classifier {
             })
         };
         let bad = |key: &'static str| Error::NotPvt3 { path: name.clone(), key, problem: "has an unexpected form".into() };
-        let classes: Vec<String> = serde_json::from_value(meta("pvt3.classes")?).map_err(|_| bad("pvt3.classes"))?;
-        let kept_frames: Vec<usize> = serde_json::from_value(meta("pvt3.kept_frames")?).map_err(|_| bad("pvt3.kept_frames"))?;
-        let config = meta("pvt3.config")?;
-        let dim = |k: &str| config.get(k).and_then(|v| v.as_u64()).map(|v| v as usize).ok_or_else(|| bad("pvt3.config"));
+        let classes: Vec<String> = serde_json::from_value(meta(keys::CLASSES)?).map_err(|_| bad(keys::CLASSES))?;
+        let kept_frames: Vec<usize> = serde_json::from_value(meta(keys::KEPT_FRAMES)?).map_err(|_| bad(keys::KEPT_FRAMES))?;
+        let config = meta(keys::CONFIG)?;
+        let dim = |k: &str| config.get(k).and_then(|v| v.as_u64()).map(|v| v as usize).ok_or_else(|| bad(keys::CONFIG));
         let channels = dim("channels")?;
         let mut sample_shape = vec![dim("height")?, dim("width")?];
         if channels > 1 {
@@ -80,31 +114,46 @@ impl Classifier {
         }
         sample_shape.push(dim("frames")?);
         let (tubelet, dim) = (dim("tubelet")?, dim("dim")?);
+        let frames = sample_shape[sample_shape.len() - 1];
+        let consistent = !classes.is_empty()
+            && tubelet > 0
+            && frames.is_multiple_of(tubelet)
+            && kept_frames.len().is_multiple_of(tubelet)
+            && kept_frames.windows(2).all(|w| w[0] < w[1])
+            && kept_frames.iter().all(|f| *f < frames);
+        if !consistent {
+            return Err(Error::NotPvt3 { path: name, key: keys::KEPT_FRAMES, problem: "does not fit the configuration".into() });
+        }
         let plans = Mutex::new(HashMap::new());
         let stages = Mutex::new(None);
-        Ok(Self { proto, classes, sample_shape, kept_frames, tubelet, dim, plans, stages, threads: 1, tune: true, path: name })
+        let kernels = Kernels::default();
+        Ok(Self { proto, classes, sample_shape, kept_frames, tubelet, dim, plans, stages, threads: 1, kernels, path: name })
     }
 
     /// Runs on `threads` threads from now on (default 1; small models rarely gain from more).
     pub fn with_threads(mut self, threads: usize) -> Self {
         self.threads = threads.max(1);
-        self.forget_plans()
+        self.forget_plans();
+        self
     }
 
-    /// Whether each plan times the matrix-product kernels it can run (tract's, and on x86-64 with
-    /// AVX-512 or AVX2 the runtime's own for short sums) and keeps the fastest (default on). Tuning costs
-    /// 50–100 ms per plan of the iCub model, at its first call, and makes batch 1 markedly faster
-    /// (docs/benchmarks.md, steps 15 and 17); without it, tract's own cost model picks.
-    pub fn with_kernel_tuning(mut self, tune: bool) -> Self {
-        self.tune = tune;
-        self.forget_plans()
+    /// How each plan chooses its matrix-product kernels from now on ([`Kernels`]; by default
+    /// [`Kernels::Fixed`], which gives the same outputs, bit for bit, at every load).
+    pub fn with_kernels(mut self, kernels: Kernels) -> Self {
+        self.set_kernels(kernels);
+        self
+    }
+
+    /// [`Classifier::with_kernels`] in place.
+    pub fn set_kernels(&mut self, kernels: Kernels) {
+        self.kernels = kernels;
+        self.forget_plans();
     }
 
     /// Drops the plans built so far, so that the next call builds them with the new settings.
-    fn forget_plans(mut self) -> Self {
+    fn forget_plans(&mut self) {
         self.plans.get_mut().unwrap_or_else(|p| p.into_inner()).clear();
         *self.stages.get_mut().unwrap_or_else(|p| p.into_inner()) = None;
-        self
     }
 
     pub fn classes(&self) -> &[String] {
@@ -130,29 +179,24 @@ impl Classifier {
         self.sample_shape.iter().product()
     }
 
-    /// `model` with fixed input facts, optimised and made runnable on the caller's threads.
+    /// `model` with fixed input facts, optimised, its kernels chosen, and made runnable on the
+    /// caller's threads.
     pub(crate) fn optimise(&self, model: &ModelProto, inputs: Vec<InferenceFact>) -> Result<Plan> {
-        let mut model = tract_onnx::onnx()
-            .model_for_proto_model(model)
-            .map_err(|e| Error::NotOnnx { path: self.path.clone(), reason: format!("{e:#}") })?;
-        for (i, fact) in inputs.into_iter().enumerate() {
-            model = model.with_input_fact(i, fact).map_err(tract_error)?;
-        }
         let executor = match self.threads {
             1 => Executor::SingleThread,
             n => Executor::multithread(n),
         };
-        model
-            .into_optimized()
-            .and_then(|mut m| {
-                if self.tune {
-                    crate::kernels::tune(&mut m, self.threads)?;
-                }
-                Ok(m)
-            })
-            .and_then(|m| m.into_runnable_with_options(&RunOptions { executor: Some(executor), ..Default::default() }))
-            .map(Plan::new)
-            .map_err(|e| Error::NotOnnx { path: self.path.clone(), reason: format!("{e:#}") })
+        let build = || {
+            let mut model = tract_onnx::onnx().model_for_proto_model(model)?;
+            for (i, fact) in inputs.into_iter().enumerate() {
+                model = model.with_input_fact(i, fact)?;
+            }
+            let mut model = model.into_optimized()?;
+            crate::kernels::tune(&mut model, self.threads, self.kernels)?;
+            model.into_runnable_with_options(&RunOptions { executor: Some(executor), ..Default::default() })
+        };
+        let plan = catch_panic(AssertUnwindSafe(build))?;
+        plan.map(Plan::new).map_err(|e| Error::NotOnnx { path: self.path.clone(), reason: format!("{e:#}") })
     }
 
     /// The optimised plan for `batch` windows, built on first use.
@@ -201,9 +245,7 @@ impl Classifier {
         shape.extend(&self.sample_shape);
         let input = Tensor::from_shape(&shape, frames).map_err(tract_error)?;
         let outputs = self.plan(batch)?.run(tvec!(input.into()))?;
-        let values =
-            |i: usize| -> Result<Vec<f32>> { Ok(outputs[i].to_plain_array_view::<f32>().map_err(tract_error)?.iter().copied().collect()) };
-        Ok((values(0)?, values(1)?))
+        Ok((outputs_of(&outputs, 0, batch * self.classes.len())?, outputs_of(&outputs, 1, batch * self.classes.len())?))
     }
 
     /// Classifies `batch` windows laid out back to back.

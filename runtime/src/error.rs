@@ -6,6 +6,8 @@ pub enum Error {
     Io { path: String, source: std::io::Error },
     #[error("{path} is not a readable ONNX model: {reason}")]
     NotOnnx { path: String, reason: String },
+    #[error("{path} is refused: {reason}")]
+    Corrupted { path: String, reason: pvt3_format::Integrity },
     #[error("{path} is not a pvt3 model: metadata `{key}` {problem}")]
     NotPvt3 { path: String, key: &'static str, problem: String },
     #[error("input has {got} values; expected {expected} ({batch} × {sample})")]
@@ -22,6 +24,7 @@ pub enum Error {
     Incomplete { got: usize, frames: usize },
     #[error("batch size must be at least 1")]
     EmptyBatch,
+    /// tract failed (or panicked, caught) on a file that passed every check.
     #[error("tract: {0}")]
     Tract(String),
 }

@@ -6,7 +6,7 @@ use std::cell::RefCell;
 use std::ffi::{c_char, c_int, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
-use crate::{Classifier, Error, Session};
+use crate::{Classifier, Error, Kernels, Session};
 
 pub const PVT3_OK: c_int = 0;
 pub const PVT3_ERR_NULL: c_int = 1;
@@ -14,6 +14,9 @@ pub const PVT3_ERR_IO: c_int = 2;
 pub const PVT3_ERR_MODEL: c_int = 3;
 pub const PVT3_ERR_INPUT: c_int = 4;
 pub const PVT3_ERR_INTERNAL: c_int = 5;
+pub const PVT3_KERNELS_FIXED: c_int = 0;
+pub const PVT3_KERNELS_TRACT: c_int = 1;
+pub const PVT3_KERNELS_MEASURED: c_int = 2;
 
 /// What C holds: the classifier and its class names as C strings.
 pub struct Pvt3Classifier {
@@ -39,7 +42,7 @@ fn set_last_error(msg: String) {
 fn status(e: &Error) -> c_int {
     match e {
         Error::Io { .. } => PVT3_ERR_IO,
-        Error::NotOnnx { .. } | Error::NotPvt3 { .. } => PVT3_ERR_MODEL,
+        Error::NotOnnx { .. } | Error::NotPvt3 { .. } | Error::Corrupted { .. } => PVT3_ERR_MODEL,
         Error::InputLength { .. }
         | Error::NonFinite { .. }
         | Error::EmptyBatch
@@ -129,6 +132,28 @@ pub unsafe extern "C" fn pvt3_classifier_load(path: *const c_char, out: *mut *mu
 #[no_mangle]
 pub unsafe extern "C" fn pvt3_classifier_free(c: *mut Pvt3Classifier) {
     free_handle(c);
+}
+
+/// How the classifier's plans choose their matrix-product kernels from now on:
+/// `PVT3_KERNELS_FIXED` (the default: a fixed rule, bit-identical outputs at every load),
+/// `PVT3_KERNELS_TRACT` (tract's own choice) or `PVT3_KERNELS_MEASURED` (timed at each plan's
+/// first call; outputs can differ in the last bits between loads). Plans built so far are dropped.
+///
+/// # Safety
+/// `c` is a live handle or null, not in use by another thread during the call.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_classifier_set_kernels(c: *mut Pvt3Classifier, kernels: c_int) -> c_int {
+    guard(|| {
+        let c = c.as_mut().ok_or_else(|| null("classifier"))?;
+        let kernels = match kernels {
+            PVT3_KERNELS_FIXED => Kernels::Fixed,
+            PVT3_KERNELS_TRACT => Kernels::Tract,
+            PVT3_KERNELS_MEASURED => Kernels::Measured,
+            other => return Err((PVT3_ERR_INPUT, format!("kernel choice {other} is none of PVT3_KERNELS_FIXED, _TRACT, _MEASURED"))),
+        };
+        c.classifier.set_kernels(kernels);
+        Ok(())
+    })
 }
 
 /// Values in one window (`height × width × (channels ×) frames`).

@@ -1,10 +1,10 @@
-//! Kernel choice for the plan's matrix products, measured on this machine. tract picks a
-//! product's kernel (its tile of mr × nr outputs) from a cost model fitted on large products.
-//! On this model's small ones (k = 20, a few hundred rows) that model prefers a 40 × 2 tile,
-//! which ran 20–30 % slower here than the best tile (docs/benchmarks.md, kernel choice).
-//! [`tune`] times every kernel tract could run for each product (by a constant or of two inputs)
-//! on the product's own shape, and [`SmallProduct`] with each instruction set the machine has,
-//! and keeps the fastest. The arithmetic is the same: only the tile, the packing of the operands
+//! Kernel choice for the plan's matrix products. tract picks a product's kernel (its tile of
+//! mr × nr outputs) from a cost model fitted on large products. On this model's small ones
+//! (k = 20, a few hundred rows) that model prefers a 40 × 2 tile, which ran 20–30 % slower here
+//! than the best tile, and every tract kernel call has a fixed cost that dominates short sums
+//! (docs/benchmarks.md, steps 15 and 17). [`Kernels`] says how a plan chooses instead: by a fixed
+//! rule (the default, deterministic), tract's own way, or by timing every candidate on the
+//! product's own shape. The arithmetic is the same: only the tile, the packing of the operands
 //! and the order of the sums change.
 
 use std::collections::HashMap;
@@ -21,7 +21,48 @@ use tract_onnx::tract_core::tract_linalg::mmm::{
 };
 use tract_onnx::tract_core::tract_linalg::pack::PackedFormat;
 
+#[cfg(target_arch = "x86_64")]
 use crate::small_products::{self, Combine, Epilogue, Isa, SmallProduct, Source};
+
+/// How a plan chooses the kernel of each matrix product.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Kernels {
+    /// By a fixed rule (the default): on one thread, on x86-64 with AVX-512 or with AVX2 and FMA,
+    /// the runtime's own product for short sums wherever it applies and k ≤ [`FIXED_MAX_K`], in
+    /// the widest instruction set (both sum in the same order, so they give the same bits);
+    /// tract's own choice for every other product. Nothing is timed: the same file on the same
+    /// machine gets the same plan, hence bit-identical outputs, and a plan costs only tract's
+    /// optimisation to build.
+    #[default]
+    Fixed,
+    /// tract's own choice for every product.
+    Tract,
+    /// Timed at each plan's first call (50–100 ms per plan of the iCub model): every kernel tract
+    /// could run on the product's own shape, and the runtime's product in each instruction set
+    /// the machine has; the fastest stays. Two loads can choose differently, so outputs can
+    /// differ in the last bits. Worth it where the fixed rule keeps tract's kernels: other CPUs
+    /// (ARM), multi-threaded plans.
+    Measured,
+}
+
+impl std::str::FromStr for Kernels {
+    type Err = String;
+
+    /// `fixed`, `tract` or `measured`.
+    fn from_str(name: &str) -> Result<Self, String> {
+        match name {
+            "fixed" => Ok(Kernels::Fixed),
+            "tract" => Ok(Kernels::Tract),
+            "measured" => Ok(Kernels::Measured),
+            other => Err(format!("kernel choice `{other}` is none of fixed, tract, measured")),
+        }
+    }
+}
+
+/// The longest sum the fixed rule gives the runtime's product: it reads its operands where they
+/// lie, unpacked, which stays cheaper than tract's packing only while a register block's
+/// operands stay in the first-level cache (docs/benchmarks.md, kernel choice).
+pub const FIXED_MAX_K: usize = 128;
 
 /// Time spent measuring one kernel on one product, at most (and at least `MIN_RUNS` runs).
 const BUDGET: Duration = Duration::from_millis(1);
@@ -36,7 +77,8 @@ const MARGIN: f64 = 0.05;
 enum Choice {
     /// One of tract's kernels, with the index of its packing.
     Tract(Box<dyn MatMatMul>, usize),
-    /// [`SmallProduct`] with these instructions.
+    /// The runtime's [`SmallProduct`] with these instructions.
+    #[cfg(target_arch = "x86_64")]
     Small(Isa),
 }
 
@@ -77,48 +119,74 @@ struct Product {
     n: usize,
 }
 
-/// Gives every product of `model`, optimised by tract, the fastest kernel measured on this
-/// machine, and returns how many products changed kernel. [`Classifier`](crate::Classifier) does
-/// this to every plan it builds; it is public for callers who build their own tract plans.
-/// `threads`: the threads the plan will run on. With more than one, products keep tract's
-/// kernels, which split their tiles across threads, and [`SmallProduct`] (one thread) is not tried.
-pub fn tune(model: &mut TypedModel, threads: usize) -> TractResult<usize> {
+/// A product as the runtime's own [`SmallProduct`], with the node inputs it reads.
+#[cfg(target_arch = "x86_64")]
+type Small = (SmallProduct, TVec<OutletId>);
+/// Off x86-64 the runtime has no product of its own: a type without values.
+#[cfg(not(target_arch = "x86_64"))]
+enum Small {}
+
+/// Chooses the kernel of every product of `model`, optimised by tract, as `kernels` says, and
+/// returns how many products changed kernel. [`Classifier`](crate::Classifier) does this to
+/// every plan it builds; it is public for callers who build their own tract plans. `threads`:
+/// the threads the plan will run on. With more than one, products keep tract's kernels, which
+/// split their tiles across threads, and the runtime's product (one thread) is not used.
+pub fn tune(model: &mut TypedModel, threads: usize, kernels: Kernels) -> TractResult<usize> {
+    if kernels == Kernels::Tract {
+        return Ok(0);
+    }
     let mut changed = 0;
     // Products of one shape (the same layer in every block) are measured once.
-    let mut choices: HashMap<String, Option<Choice>> = HashMap::new();
+    let mut measured: HashMap<String, Option<Choice>> = HashMap::new();
     for node in model.eval_order()? {
         let Some(product) = product(model, node)? else { continue };
-        let op = model.node(node).op_as::<OptMatMul>().unwrap();
-        let current = (op.mmm[0].name().to_string(), packing(op));
-        let c = (&op.c_fact.shape, op.c_m_axis, op.c_n_axis, op.micro_ops.len());
-        let key = format!("{}x{}x{} {} | {} | {current:?} {c:?}", product.m, product.k, product.n, product.a.key(), product.b.key());
         let small = if threads == 1 { small(model, &product)? } else { None };
-        let choice = match choices.get(&key) {
-            Some(choice) => choice.clone(),
-            None => {
-                let choice = fastest(model, &product, &current, small.as_ref())?;
-                choices.insert(key, choice.clone());
-                choice
+        let choice = match kernels {
+            Kernels::Fixed => fixed(&product, small.as_ref()),
+            _ => {
+                let op = model.node(node).op_as::<OptMatMul>().unwrap();
+                let current = (op.mmm[0].name().to_string(), packing(op));
+                let c = (&op.c_fact.shape, op.c_m_axis, op.c_n_axis, op.micro_ops.len());
+                let key = format!("{}x{}x{} {} | {} | {current:?} {c:?}", product.m, product.k, product.n, product.a.key(), product.b.key());
+                match measured.get(&key) {
+                    Some(choice) => choice.clone(),
+                    None => {
+                        let choice = fastest(model, &product, &current, small.as_ref())?;
+                        measured.insert(key, choice.clone());
+                        choice
+                    }
+                }
             }
         };
-        match (choice, small) {
-            (Some(Choice::Tract(mmm, ix)), _) => replace(model, &product, mmm, ix)?,
-            (Some(Choice::Small(isa)), Some((op, inputs))) => rewire(model, &product, SmallProduct { isa, ..op }, &inputs)?,
-            _ => continue,
+        match choice {
+            Some(Choice::Tract(mmm, ix)) => replace(model, &product, mmm, ix)?,
+            #[cfg(target_arch = "x86_64")]
+            Some(Choice::Small(isa)) => {
+                let (op, inputs) = small.expect("chosen only where it applies");
+                rewire(model, &product, SmallProduct { isa, ..op }, &inputs)?
+            }
+            None => continue,
         }
         changed += 1;
     }
     Ok(changed)
 }
 
+/// The fixed rule's choice for `p`: the runtime's product in the widest instruction set, where
+/// it applies and the sum is short; otherwise tract's own pick (`None`).
+fn fixed(p: &Product, small: Option<&Small>) -> Option<Choice> {
+    #[cfg(target_arch = "x86_64")]
+    return small.filter(|_| p.k <= FIXED_MAX_K).and_then(|_| small_products::instruction_sets().first().map(|isa| Choice::Small(*isa)));
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = p;
+        small.map(|s| match *s {})
+    }
+}
+
 /// What beats `current` on `p` by more than the margin, if anything: one of tract's kernels
-/// (and packing), or `small`, the product as a [`SmallProduct`] reading `inputs`.
-fn fastest(
-    model: &TypedModel,
-    p: &Product,
-    current: &(String, usize),
-    small: Option<&(SmallProduct, TVec<OutletId>)>,
-) -> TractResult<Option<Choice>> {
+/// (and packing), or `small`, the product as the runtime's own.
+fn fastest(model: &TypedModel, p: &Product, current: &(String, usize), small: Option<&Small>) -> TractResult<Option<Choice>> {
     let mut best: Option<(f64, Choice)> = None;
     let mut current_time = f64::MAX;
     for (mmm, ix) in candidates(p) {
@@ -129,6 +197,7 @@ fn fastest(
             best = Some((t, Choice::Tract(mmm, ix)));
         }
     }
+    #[cfg(target_arch = "x86_64")]
     if let Some((op, inputs)) = small {
         let values = inputs
             .iter()
@@ -148,13 +217,22 @@ fn fastest(
             }
         }
     }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (model, small.map(|s| match *s {}));
     Ok(best.filter(|b| b.0 < current_time * (1.0 - MARGIN)).map(|b| b.1))
+}
+
+/// Off x86-64 no product runs as the runtime's own.
+#[cfg(not(target_arch = "x86_64"))]
+fn small(_: &TypedModel, _: &Product) -> TractResult<Option<Small>> {
+    Ok(None)
 }
 
 /// `p` as a [`SmallProduct`] (with the first instruction set this machine has), with the inputs
 /// it reads (each packed operand's unpacked input), if the machine can run one and everything
 /// tract fused into the product is an operation the small product runs.
-fn small(model: &TypedModel, p: &Product) -> TractResult<Option<(SmallProduct, TVec<OutletId>)>> {
+#[cfg(target_arch = "x86_64")]
+fn small(model: &TypedModel, p: &Product) -> TractResult<Option<Small>> {
     let Some(&isa) = small_products::instruction_sets().first() else { return Ok(None) };
     let node = model.node(p.node);
     let op = node.op_as::<OptMatMul>().unwrap();
@@ -192,6 +270,7 @@ fn small(model: &TypedModel, p: &Product) -> TractResult<Option<(SmallProduct, T
 
 /// Puts `op` in place of product `p`, reading `inputs`; the packing nodes it no longer reads
 /// drop out of the plan.
+#[cfg(target_arch = "x86_64")]
 fn rewire(model: &mut TypedModel, p: &Product, op: SmallProduct, inputs: &[OutletId]) -> TractResult<()> {
     for (slot, outlet) in inputs.iter().enumerate() {
         if model.node(p.node).inputs[slot] != *outlet {
@@ -308,6 +387,8 @@ fn time(mmm: &dyn MatMatMul, packing: usize, p: &Product) -> TractResult<f64> {
     };
     let (ka, kb) = (konst(&p.a, &**fa)?, konst(&p.b, &**fb)?);
     let mut c = Tensor::zero::<f32>(&[p.m, p.n])?;
+    // SAFETY: the store describes `c`, a contiguous `[m, n]` f32 tensor: items of f32's size,
+    // rows n items apart, columns adjacent.
     let store = unsafe { mmm.c_from_data_and_strides(size_of::<f32>(), p.n as isize, 1) };
     best_of(|| {
         let a = match &ka {
@@ -318,6 +399,8 @@ fn time(mmm: &dyn MatMatMul, packing: usize, p: &Product) -> TractResult<f64> {
             Some(k) => AsInputValue::Borrowed(&**k),
             None => AsInputValue::Owned(p.b.prepare(&**fb)?),
         };
+        // SAFETY: `a` and `b` were packed for this kernel's `packing`, with k and the m and n
+        // the run is given; the store wraps a view of `c`, which holds m × n values.
         unsafe {
             let view = c.view_mut();
             mmm.run(p.m, p.n, &[FusedSpec::AddMatMul { a, b, packing }, FusedSpec::Store(store.wrap(&view))])
@@ -469,8 +552,8 @@ mod tests {
         a.iter().flatten().zip(b.iter().flatten()).map(|(p, q)| (p - q).abs() / q.abs().max(1.0)).fold(0.0, f32::max)
     }
 
-    /// Every kernel the tuner may pick, put in by `replace` (or [`SmallProduct`] by `rewire`),
-    /// computes what tract's pick computes.
+    /// Every kernel the tuner may pick, put in by `replace` (or [`SmallProduct`] by `rewire`, in
+    /// every instruction set the tests cover), computes what tract's pick computes.
     #[test]
     fn every_candidate_kernel_computes_the_same_products() {
         let model = two_products();
@@ -494,17 +577,49 @@ mod tests {
                 assert!(err < 1e-5, "{name} on {}x{}x{}: {err:e}", p.m, p.k, p.n);
                 tried += 1;
             }
-            for isa in small_products::instruction_sets() {
+            #[cfg(target_arch = "x86_64")]
+            for isa in small_products::covered() {
                 let (op, inputs) = small(&model, p).unwrap().expect("a product the small kernel runs");
                 let mut rewired = model.clone();
                 rewire(&mut rewired, p, SmallProduct { isa, ..op }, &inputs).unwrap();
                 let err = worst(&run(&rewired, &x), &expected);
                 assert!(err < 1e-5, "SmallProduct ({isa:?}) on {}x{}x{}: {err:e}", p.m, p.k, p.n);
+                tried += 1;
             }
         }
-        let mut tuned = model.clone();
-        tune(&mut tuned, 1).unwrap();
-        assert!(worst(&run(&tuned, &x), &expected) < 1e-5);
+        for kernels in [Kernels::Fixed, Kernels::Measured] {
+            let mut tuned = model.clone();
+            tune(&mut tuned, 1, kernels).unwrap();
+            assert!(worst(&run(&tuned, &x), &expected) < 1e-5, "{kernels:?}");
+        }
         assert!(tried >= 4);
+    }
+
+    /// The plan tract makes of the committed golden model has the structure the kernel choice
+    /// relies on: every matrix product is one the tuner recognises (one kernel, one product, a
+    /// constant or singly packed operand each), and on x86-64 the fixed rule gives every one of
+    /// them to the runtime's product. A tract whose plans look otherwise fails here, loudly,
+    /// rather than leaving products silently untuned.
+    #[test]
+    fn the_golden_plan_has_the_structure_the_kernel_choice_expects() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/golden/icub20/model.onnx");
+        let model = tract_onnx::onnx().model_for_path(path).unwrap().with_input_fact(0, f32::fact([1, 6, 10, 75]).into()).unwrap();
+        let model = model.into_optimized().unwrap();
+        let products: Vec<usize> = model.nodes().iter().filter(|n| n.op_is::<OptMatMul>()).map(|n| n.id).collect();
+        let recognised = products.iter().filter(|n| product(&model, **n).unwrap().is_some()).count();
+        assert!(products.len() >= 40, "{} matrix products in the golden plan", products.len());
+        assert_eq!(recognised, products.len(), "products the tuner recognises");
+        let mut fixed = model.clone();
+        let changed = tune(&mut fixed, 1, Kernels::Fixed).unwrap();
+        #[cfg(target_arch = "x86_64")]
+        {
+            assert_eq!(changed, products.len(), "the fixed rule gives every product to the runtime's own");
+            assert_eq!(fixed.nodes().iter().filter(|n| n.op_is::<SmallProduct>()).count(), products.len());
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        assert_eq!(changed, 0, "off x86-64 the fixed rule keeps tract's choice");
+        let mut off = model.clone();
+        assert_eq!(tune(&mut off, 1, Kernels::Tract).unwrap(), 0);
+        assert_eq!(tune(&mut off, 2, Kernels::Fixed).unwrap(), 0, "multi-threaded plans keep tract's kernels");
     }
 }

@@ -1,10 +1,18 @@
 //! The robot side of pvt3: load one exported `.onnx` and classify tactile windows with tract.
-//! Depends on tract alone (no candle, no trainer), so a robot links only what it runs.
+//! Depends on tract and the file contract (`pvt3-format`) alone: no candle, no trainer, so a robot
+//! links only what it runs.
 //!
 //! The file says what it expects: class names, the input layout and the kept frames are read
 //! from its metadata. Inputs are validated before they reach tract: a wrong length or a NaN or
 //! infinite value is a typed [`Error`], never a panic. Each batch size gets its own optimised plan
 //! with a fixed input shape (a fixed shape ran markedly faster than a symbolic batch in tract).
+//!
+//! A file is checked before it is parsed: the exporter writes a digest of everything in it, and a
+//! file altered or damaged since is refused ([`Error::Corrupted`]). Kernels are chosen by a fixed
+//! rule by default ([`Kernels`]), so the same file on the same machine gives the same outputs, bit
+//! for bit, at every load. No panic reaches the caller: tract's are caught as [`Error::Tract`].
+
+#![deny(clippy::undocumented_unsafe_blocks)]
 
 mod classifier;
 mod cut;
@@ -13,11 +21,12 @@ pub mod ffi;
 mod kernels;
 mod npy;
 mod plan;
+#[cfg(target_arch = "x86_64")]
 mod small_products;
 mod stream;
 
 pub use classifier::{Classifier, Prediction};
 pub use error::{Error, Result};
-pub use kernels::tune as tune_kernels;
+pub use kernels::{tune as tune_kernels, Kernels, FIXED_MAX_K};
 pub use npy::read_npy;
 pub use stream::Session;

@@ -3,16 +3,14 @@
 //! and each call has a fixed cost (about 130 ns here, against 2–3 ns per step of k; part of it is
 //! saving and setting the float control register), so at k = 20 most of a product's time is that
 //! cost, after packing the input. This product reads its inputs where they lie and computes
-//! register blocks of outputs within one call (docs/benchmarks.md, step 17): on x86-64 with
-//! AVX-512 or with AVX2 and FMA. Elsewhere tract's kernels run.
+//! register blocks of outputs within one call (docs/benchmarks.md, step 17), with AVX-512 or with
+//! AVX2 and FMA. The module exists on x86-64 only (`lib.rs`); elsewhere tract's kernels run.
 
 use tract_onnx::prelude::*;
 use tract_onnx::tract_core::internal::*;
 use tract_onnx::tract_core::tract_linalg::BinOp;
 
-#[cfg(target_arch = "x86_64")]
 mod kernel;
-#[cfg(target_arch = "x86_64")]
 mod lanes;
 
 /// The vector instructions a [`SmallProduct`] runs with.
@@ -33,23 +31,41 @@ impl Isa {
     }
 
     /// Whether this machine has these instructions.
-    fn present(self) -> bool {
-        #[cfg(target_arch = "x86_64")]
-        return match self {
+    pub(crate) fn present(self) -> bool {
+        match self {
             Isa::Avx512 => is_x86_feature_detected!("avx512f"),
             Isa::Avx2 => is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma"),
-        };
-        #[cfg(not(target_arch = "x86_64"))]
-        false
+        }
     }
+
+    /// Every set the kernel is compiled for, widest first.
+    pub(crate) const ALL: [Isa; 2] = [Isa::Avx512, Isa::Avx2];
 }
 
-/// The instruction sets this machine can run [`SmallProduct`] with (none off x86-64). The
-/// environment variable `PVT3_SMALL_PRODUCTS` narrows them when set (not empty): `avx512` or `avx2` for that
-/// set alone, anything else (`none`) for none, so that tract's kernels run every product.
+/// The instruction sets this machine can run [`SmallProduct`] with, widest first. The
+/// environment variable `PVT3_SMALL_PRODUCTS` narrows them when set and not empty: `avx512` or
+/// `avx2` for that set alone, anything else (`none`) for none, so that tract's kernels run every
+/// product.
 pub(crate) fn instruction_sets() -> Vec<Isa> {
     let only = std::env::var("PVT3_SMALL_PRODUCTS").ok().filter(|v| !v.is_empty());
-    [Isa::Avx512, Isa::Avx2].into_iter().filter(|isa| isa.present() && only.as_deref().is_none_or(|o| o == isa.name())).collect()
+    Isa::ALL.into_iter().filter(|isa| isa.present() && only.as_deref().is_none_or(|o| o == isa.name())).collect()
+}
+
+/// The instruction sets a test must cover: those named in `PVT3_TEST_ISAS` (comma-separated),
+/// or every set the kernel is compiled for. Panics, failing the test, when the machine lacks one
+/// of them: a kernel test never passes by checking nothing. On a machine without AVX-512, run
+/// the tests with `PVT3_TEST_ISAS=avx2` to say so.
+#[cfg(test)]
+pub(crate) fn covered() -> Vec<Isa> {
+    let asked = std::env::var("PVT3_TEST_ISAS").unwrap_or_else(|_| "avx512,avx2".into());
+    let sets: Vec<Isa> = asked
+        .split(',')
+        .map(|name| Isa::ALL.into_iter().find(|i| i.name() == name.trim()).unwrap_or_else(|| panic!("PVT3_TEST_ISAS: no set `{name}`")))
+        .collect();
+    for isa in &sets {
+        assert!(isa.present(), "this machine lacks {isa:?}, which the tests were asked to cover (PVT3_TEST_ISAS={asked})");
+    }
+    sets
 }
 
 /// Where one operand of a product comes from.
@@ -112,21 +128,60 @@ pub(crate) struct Matrix {
 }
 
 impl SmallProduct {
-    /// Whether C's columns (n) are contiguous; otherwise its rows (m) are, and the kernel computes
-    /// Cᵀ = Bᵀ Aᵀ so that its vectors still run along contiguous outputs.
-    fn n_contiguous(&self) -> bool {
-        let strides = Tensor::natural_strides(&self.c_shape);
-        if self.n == 1 && strides[self.c_m_axis] == 1 {
-            return false;
-        }
-        strides[self.c_n_axis] == 1
-    }
-
-    /// Checks what the kernel relies on: C's vectors run along a contiguous axis.
-    pub(crate) fn supported(&self) -> bool {
+    /// How the kernel writes C, if it can: whether the vectors run along C's columns (n) or, with
+    /// Cᵀ = Bᵀ Aᵀ, along its rows (m), whichever is contiguous; and the stride between the
+    /// kernel's rows. `None` when neither is contiguous or C has other axes than unit ones.
+    fn layout(&self) -> Option<(bool, isize)> {
         let strides = Tensor::natural_strides(&self.c_shape);
         let others_unit = self.c_shape.iter().enumerate().all(|(ax, d)| ax == self.c_m_axis || ax == self.c_n_axis || *d == 1);
-        others_unit && (strides[self.c_n_axis] == 1 || strides[self.c_m_axis] == 1)
+        let (m_unit, n_unit) = (strides[self.c_m_axis] == 1, strides[self.c_n_axis] == 1);
+        let along_n = n_unit && !(self.n == 1 && m_unit);
+        (others_unit && (m_unit || n_unit)).then_some(if along_n {
+            (true, strides[self.c_m_axis])
+        } else {
+            (false, strides[self.c_n_axis])
+        })
+    }
+
+    /// Whether the kernel can write C (see [`Self::layout`]).
+    pub(crate) fn supported(&self) -> bool {
+        self.layout().is_some()
+    }
+
+    /// The product of `inputs` (the node's inputs).
+    pub(crate) fn run(&self, inputs: &[TValue]) -> TractResult<Tensor> {
+        let layout = self.layout().filter(|_| self.isa.present());
+        let Some((n_contiguous, c_row)) = layout else { bail!("SmallProduct {:?} cannot run here", self.isa) };
+        let a = self.matrix(&self.a, inputs, self.m)?;
+        let b = self.matrix(&self.b, inputs, self.n)?;
+        let vector = |e: &Epilogue| -> TractResult<*const f32> {
+            let t = &inputs[e.input];
+            ensure!(t.len() == if e.per_row { self.m } else { self.n } && t.datum_type() == f32::datum_type());
+            t.as_ptr::<f32>()
+        };
+        let mut ops = TVec::new();
+        for e in &self.epilogues {
+            // Along the kernel's rows (scalars) or along its vectors.
+            ops.push((e.op, e.per_row == n_contiguous, vector(e)?));
+        }
+        // SAFETY: f32 has no invalid bit patterns, and the kernel writes every value of C before
+        // it is returned (each register block stores all its rows and, masked, its columns).
+        let mut c = unsafe { Tensor::uninitialized::<f32>(&self.c_shape)? };
+        let mut scratch = Vec::new();
+        // The kernel's vectors run along C's contiguous axis: C = A B, or Cᵀ = Bᵀ Aᵀ.
+        let (p, q, l, r) = if n_contiguous {
+            (self.m, self.n, a, rows_contiguous(b, self.k, self.n, &mut scratch))
+        } else {
+            (self.n, self.m, b, rows_contiguous(a, self.k, self.m, &mut scratch))
+        };
+        let out = c.as_ptr_mut::<f32>()?;
+        // SAFETY: `self.isa` is present (checked above). `l` and `r` cover the `[p, k]` and
+        // `[k, q]` matrices: `matrix` checked each input's shape against m, k and n and took its
+        // own strides, and `rows_contiguous` copied any strided right-hand side. `out` is C,
+        // `c_shape` holds m × n values (other axes are unit axes, `layout`) with rows `c_row`
+        // apart, and every epilogue vector was checked to hold m or n values.
+        unsafe { kernel::multiply(self.isa, p, q, self.k, l, r, out, c_row, &ops) };
+        Ok(c)
     }
 
     /// `source` as a `[mn, k]` matrix over `inputs`; a constant is `[k, mn]` row by row.
@@ -155,6 +210,7 @@ fn rows_contiguous(m: Matrix, k: usize, mn: usize, scratch: &mut Vec<f32>) -> Ma
     }
     scratch.clear();
     for j in 0..k as isize {
+        // SAFETY: `m` describes a `[mn, k]` matrix its pointer covers (`SmallProduct::matrix`).
         scratch.extend((0..mn as isize).map(|i| unsafe { *m.ptr.offset(i * m.mn + j * m.k) }));
     }
     Matrix { ptr: scratch.as_ptr(), mn: 1, k: mn as isize }
@@ -177,43 +233,6 @@ impl EvalOp for SmallProduct {
 
     fn eval(&self, _ctx: &EvalContext, inputs: TVec<TValue>) -> TractResult<TVec<TValue>> {
         Ok(tvec!(self.run(&inputs)?.into_tvalue()))
-    }
-}
-
-impl SmallProduct {
-    /// The product of `inputs` (the node's inputs).
-    pub(crate) fn run(&self, inputs: &[TValue]) -> TractResult<Tensor> {
-        ensure!(self.isa.present() && self.supported(), "SmallProduct {:?} cannot run here", self.isa);
-        let a = self.matrix(&self.a, inputs, self.m)?;
-        let b = self.matrix(&self.b, inputs, self.n)?;
-        let vector = |e: &Epilogue| -> TractResult<*const f32> {
-            let t = &inputs[e.input];
-            ensure!(t.len() == if e.per_row { self.m } else { self.n } && t.datum_type() == f32::datum_type());
-            t.as_ptr::<f32>()
-        };
-        let n_contiguous = self.n_contiguous();
-        let mut ops = TVec::new();
-        for e in &self.epilogues {
-            // Along the kernel's rows (scalars) or along its vectors.
-            ops.push((e.op, e.per_row == n_contiguous, vector(e)?));
-        }
-        let mut c = unsafe { Tensor::uninitialized::<f32>(&self.c_shape)? };
-        let strides = Tensor::natural_strides(&self.c_shape);
-        let mut scratch = Vec::new();
-        // The kernel's vectors run along C's contiguous axis: C = A B, or Cᵀ = Bᵀ Aᵀ.
-        let (p, q, l, r, c_row) = if n_contiguous {
-            (self.m, self.n, a, rows_contiguous(b, self.k, self.n, &mut scratch), strides[self.c_m_axis])
-        } else {
-            (self.n, self.m, b, rows_contiguous(a, self.k, self.m, &mut scratch), strides[self.c_n_axis])
-        };
-        let out = c.as_ptr_mut::<f32>()?;
-        #[cfg(target_arch = "x86_64")]
-        unsafe {
-            kernel::multiply(self.isa, p, q, self.k, l, r, out, c_row, &ops)
-        };
-        #[cfg(not(target_arch = "x86_64"))]
-        let _ = (p, q, l, r, out, c_row, ops);
-        Ok(c)
     }
 }
 

@@ -9,19 +9,15 @@
 
 use std::sync::Arc;
 
+use pvt3_format::{PROBABILITIES, TOKEN_ENCODINGS, TOKEN_FRAMES, TOKEN_INDEX};
 use tract_onnx::pb::tensor_proto::DataType;
 use tract_onnx::prelude::*;
 
-use crate::classifier::{prediction, tract_error};
+use crate::classifier::{outputs_of, prediction, tract_error};
 use crate::cut::{cut, Seam};
 use crate::plan::Plan;
 use crate::{Classifier, Error, Prediction, Result};
 
-/// The seams the exporter names (see `pvt3_export::model`).
-const TOKEN_FRAMES: &str = "token_frames";
-const TOKEN_INDEX: &str = "token_index";
-const TOKEN_ENCODINGS: &str = "token_encodings";
-const PROBABILITIES: &str = "probabilities";
 
 /// The two stages of a classifier, each optimised for its streaming shape.
 pub(crate) struct Stages {
@@ -134,7 +130,7 @@ impl Session {
             let frames = Tensor::from_shape(&self.stages.token_shape, &self.token).map_err(tract_error)?;
             let index = Tensor::from_shape(&[1], &[kk as i64]).map_err(tract_error)?;
             let out = self.stages.spatial.run(tvec!(frames.into(), index.into()))?;
-            self.encodings.extend(out[0].to_plain_array_view::<f32>().map_err(tract_error)?.iter());
+            self.encodings.extend(outputs_of(&out, 0, self.stages.dim)?);
             self.token.clear();
         }
         Ok(())
@@ -155,7 +151,7 @@ impl Session {
         let dim = self.stages.dim;
         let encodings = Tensor::from_shape(&[self.encodings.len() / dim, dim], &self.encodings).map_err(tract_error)?;
         let out = self.stages.temporal.run(tvec!(encodings.into()))?;
-        let probabilities: Vec<f32> = out[0].to_plain_array_view::<f32>().map_err(tract_error)?.iter().copied().collect();
+        let probabilities = outputs_of(&out, 0, self.stages.classes.len())?;
         self.reset();
         Ok(prediction(&self.stages.classes, &probabilities))
     }

@@ -2,27 +2,14 @@
 //! against the static library) gives the Rust result, and no entry point crashes on null
 //! pointers, wrong lengths, or truncated, foreign or missing files.
 
+mod support;
+
 use std::ffi::{CStr, CString};
-use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::ptr::{null, null_mut};
 
 use pvt3_runtime::ffi::*;
 use pvt3_runtime::{read_npy, Classifier};
-
-fn root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).to_path_buf()
-}
-
-fn golden(file: &str) -> PathBuf {
-    root().join("../tests/golden/icub20").join(file)
-}
-
-fn scratch(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("pvt3-cabi-{tag}-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use support::{golden, root, scratch, target_cc, target_command};
 
 /// Removes `/* … */` comments and folds white space.
 fn strip_c_comments(text: &str) -> String {
@@ -59,7 +46,7 @@ fn the_header_declares_exactly_what_the_code_exports() {
     header_fns.sort();
     code_fns.sort();
     assert_eq!(header_fns, code_fns, "functions and their parameter counts");
-    assert_eq!(code_fns.len(), 12);
+    assert_eq!(code_fns.len(), 13);
     let mut header_consts: Vec<(String, String)> = header
         .split("#define ")
         .skip(1)
@@ -87,7 +74,7 @@ fn the_c_example_gives_the_rust_result() {
     // The test binary lives in target/<profile>/deps; the static library in target/<profile>/examples.
     let profile_dir = std::env::current_exe().unwrap().parent().unwrap().parent().unwrap().to_path_buf();
     let lib = profile_dir.join("examples/libpvt3_c.a");
-    let cc = Command::new(std::env::var("CC").unwrap_or_else(|_| "cc".into()))
+    let cc = target_cc()
         .arg(root().join("examples/classify.c"))
         .arg("-I")
         .arg(root().join("include"))
@@ -101,7 +88,7 @@ fn the_c_example_gives_the_rust_result() {
     let (_, x) = read_npy(&golden("input.npy")).unwrap();
     let raw = dir.join("input.f32");
     std::fs::write(&raw, x.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>()).unwrap();
-    let out = Command::new(&exe).arg(golden("model.onnx")).arg(&raw).arg("8").output().unwrap();
+    let out = target_command(&exe).arg(golden("model.onnx")).arg(&raw).arg("8").output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let rust = Classifier::load(golden("model.onnx")).unwrap().classify_batch(&x, 8).unwrap();
     let stdout = String::from_utf8(out.stdout).unwrap();
@@ -115,7 +102,7 @@ fn the_c_example_gives_the_rust_result() {
             assert!(probs.iter().zip(&p.probabilities).all(|(a, b)| (a - b).abs() < 1e-5), "{line}");
         }
     }
-    let bad = Command::new(&exe).arg(dir.join("absent.onnx")).arg(&raw).arg("8").output().unwrap();
+    let bad = target_command(&exe).arg(dir.join("absent.onnx")).arg(&raw).arg("8").output().unwrap();
     assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("absent.onnx"));
     std::fs::remove_dir_all(dir).unwrap();
 }
@@ -147,7 +134,14 @@ fn every_entry_point_reports_instead_of_crashing() {
         pvt3_session_free(null_mut());
         pvt3_classifier_free(null_mut());
 
+        assert_eq!(pvt3_classifier_set_kernels(null_mut(), PVT3_KERNELS_TRACT), PVT3_ERR_NULL);
+
         assert_eq!(pvt3_classifier_load(model.as_ptr(), &mut c), PVT3_OK);
+        assert_eq!(pvt3_classifier_set_kernels(c, 7), PVT3_ERR_INPUT);
+        assert!(last_error().contains("kernel choice 7"), "{}", last_error());
+        for kernels in [PVT3_KERNELS_TRACT, PVT3_KERNELS_MEASURED, PVT3_KERNELS_FIXED] {
+            assert_eq!(pvt3_classifier_set_kernels(c, kernels), PVT3_OK);
+        }
         assert_eq!(pvt3_classifier_sample_len(c, null_mut()), PVT3_ERR_NULL);
         assert_eq!(pvt3_classifier_num_classes(c, null_mut()), PVT3_ERR_NULL);
         assert_eq!(pvt3_classifier_class_name(c, 0, null_mut()), PVT3_ERR_NULL);
@@ -193,12 +187,15 @@ fn every_entry_point_reports_instead_of_crashing() {
 
         let dir = scratch("files");
         let bytes = std::fs::read(golden("model.onnx")).unwrap();
-        for (name, content) in [("truncated.onnx", bytes[..bytes.len() / 3].to_vec()), ("foreign.onnx", b"hello".to_vec())] {
+        let mut flipped = bytes.clone();
+        flipped[bytes.len() / 2] ^= 4;
+        let damaged = [("truncated.onnx", bytes[..bytes.len() / 3].to_vec()), ("foreign.onnx", b"hello".to_vec()), ("flipped.onnx", flipped)];
+        for (name, content) in damaged {
             let path = dir.join(name);
             std::fs::write(&path, content).unwrap();
             let p = CString::new(path.to_str().unwrap()).unwrap();
             assert_eq!(pvt3_classifier_load(p.as_ptr(), &mut c), PVT3_ERR_MODEL, "{name}: {}", last_error());
-            assert!(last_error().contains(name));
+            assert!(last_error().contains(name) && last_error().contains("refused"), "{}", last_error());
         }
         let absent = CString::new(dir.join("absent.onnx").to_str().unwrap()).unwrap();
         assert_eq!(pvt3_classifier_load(absent.as_ptr(), &mut c), PVT3_ERR_IO);

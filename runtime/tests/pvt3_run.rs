@@ -1,20 +1,22 @@
 //! The robot-side command on the committed golden model: one line per window, the class the
 //! golden logits pick, and clear failures.
 
-use std::path::{Path, PathBuf};
+mod support;
+
 use std::process::Command;
 
 use pvt3_runtime::read_npy;
+use support::{golden, target_command};
 
-fn golden(file: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/golden/icub20").join(file)
+fn pvt3_run() -> Command {
+    target_command(env!("CARGO_BIN_EXE_pvt3-run"))
 }
 
 #[test]
 fn classifies_every_window_of_an_npy_batch_as_the_golden_logits_do() {
     let (shape, logits) = read_npy(&golden("logits.npy")).unwrap();
     assert_eq!(shape, vec![8, 20]);
-    let out = Command::new(env!("CARGO_BIN_EXE_pvt3-run")).arg(golden("model.onnx")).arg(golden("input.npy")).output().unwrap();
+    let out = pvt3_run().arg(golden("model.onnx")).arg(golden("input.npy")).output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let lines: Vec<String> = String::from_utf8(out.stdout).unwrap().lines().map(String::from).collect();
     assert_eq!(lines.len(), 8);
@@ -26,27 +28,33 @@ fn classifies_every_window_of_an_npy_batch_as_the_golden_logits_do() {
 
 #[test]
 fn wrong_input_fails_with_a_message() {
-    let out = Command::new(env!("CARGO_BIN_EXE_pvt3-run")).arg(golden("model.onnx")).arg(golden("logits.npy")).output().unwrap();
+    let out = pvt3_run().arg(golden("model.onnx")).arg(golden("logits.npy")).output().unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("input has 160 values; expected"), "{err}");
-    let out = Command::new(env!("CARGO_BIN_EXE_pvt3-run")).output().unwrap();
+    let out = pvt3_run().output().unwrap();
     assert_eq!(out.status.code(), Some(2));
-    let out = Command::new(env!("CARGO_BIN_EXE_pvt3-run")).arg(golden("manifest.json")).arg(golden("input.npy")).output().unwrap();
+    let out = pvt3_run().arg(golden("manifest.json")).arg(golden("input.npy")).output().unwrap();
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("manifest.json"));
 }
 
 #[test]
 fn bench_reports_batch_and_streaming_latencies() {
-    let out =
-        Command::new(env!("CARGO_BIN_EXE_pvt3-run")).args(["--bench"]).arg(golden("model.onnx")).args(["1", "0.05"]).output().unwrap();
+    let out = pvt3_run().args(["--bench"]).arg(golden("model.onnx")).args(["1", "0.05"]).output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!((report["frames"].as_u64(), report["kept_frames"].as_u64()), (Some(75), Some(55)));
-    for key in ["batch1_median_us", "batch32_windows_per_second", "stream_kept_frame_median_us", "stream_end_of_touch_median_us"] {
+    for key in [
+        "batch1_median_us",
+        "batch1_untuned_median_us",
+        "batch1_measured_median_us",
+        "batch32_windows_per_second",
+        "stream_kept_frame_median_us",
+        "stream_end_of_touch_median_us",
+    ] {
         assert!(report[key].as_f64().unwrap() > 0.0, "{key}: {report}");
     }
     assert!(report["batch1_p99_us"].as_f64() >= report["batch1_median_us"].as_f64());
-    let out = Command::new(env!("CARGO_BIN_EXE_pvt3-run")).args(["--bench"]).arg(golden("model.onnx")).arg("zero").output().unwrap();
+    let out = pvt3_run().args(["--bench"]).arg(golden("model.onnx")).arg("zero").output().unwrap();
     assert_eq!(out.status.code(), Some(2), "a bad thread count gets the usage");
 }

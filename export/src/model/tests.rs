@@ -110,7 +110,7 @@ fn pruned_frames_are_gathered_away_before_the_spatial_transformer() {
     let gathers = |m: &ModelProto| graph(m).node.iter().filter(|n| n.op_type == "Gather").count();
     assert_eq!(gathers(&pruned), gathers(&full) + 2, "a Gather of the kept frames at the input, one that orders the time tokens");
     assert_eq!(graph(&pruned).node.len(), graph(&full).node.len() + 2, "the two gathers");
-    let kept = pruned.metadata_props.iter().find(|p| p.key == "pvt3.kept_frames").unwrap();
+    let kept = pruned.metadata_props.iter().find(|p| p.key == pvt3_format::keys::KEPT_FRAMES).unwrap();
     assert_eq!(serde_json::from_str::<Vec<usize>>(&kept.value).unwrap().len(), 55);
 }
 

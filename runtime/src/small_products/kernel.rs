@@ -133,37 +133,83 @@ impl Block<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::small_products::instruction_sets;
+    use crate::small_products::covered;
 
     fn values(len: usize, seed: usize) -> Vec<f32> {
         (0..len).map(|i| (((i + seed) * 7919 % 211) as f32 - 105.0) / 53.0).collect()
     }
 
-    /// On every instruction set this machine has: every block shape (all row counts, one to four
-    /// vectors, masked tails), strided operands and both epilogue kinds, against a triple loop.
+    /// One product on `isa` against a triple loop: L `[p, k]` with row stride `l_mn` and column
+    /// stride `l_k` (room for it in `lv`), R `[k, q]` rows `q + r_pad` apart, C rows
+    /// `q + c_pad` apart, then `ops` (each: combine, per row, which vector). Values past each
+    /// row of C must stay untouched.
+    #[allow(clippy::too_many_arguments)]
+    fn check(isa: Isa, p: usize, q: usize, k: usize, l_mn: usize, l_k: usize, r_pad: usize, c_pad: usize, ops: &[(Combine, bool)]) {
+        let r_row = q + r_pad;
+        let (lv, rv) = (values((p - 1) * l_mn + (k - 1) * l_k + 1, 1), values(k * r_row, 2));
+        let l = Matrix { ptr: lv.as_ptr(), mn: l_mn as isize, k: l_k as isize };
+        let r = Matrix { ptr: rv.as_ptr(), mn: 1, k: r_row as isize };
+        let (rows, cols) = (values(p, 3), values(q, 4));
+        let vector = |per_row: bool| if per_row { rows.as_ptr() } else { cols.as_ptr() };
+        let kernel_ops: Vec<_> = ops.iter().map(|&(op, per_row)| (op, per_row, vector(per_row))).collect();
+        let c_row = q + c_pad;
+        let mut c = vec![f32::NAN; p * c_row];
+        // SAFETY: the tests cover only sets this machine has (`covered`); `lv`, `rv` and `c`
+        // were sized for the strides given, `rows` and `cols` hold p and q values.
+        unsafe { multiply(isa, p, q, k, l, r, c.as_mut_ptr(), c_row as isize, &kernel_ops) };
+        for i in 0..p {
+            for j in 0..q {
+                let mut want: f32 = (0..k).map(|s| lv[i * l_mn + s * l_k] * rv[s * r_row + j]).sum();
+                for &(op, per_row) in ops {
+                    let v = if per_row { rows[i] } else { cols[j] };
+                    want = match op {
+                        Combine::Add => want + v,
+                        Combine::Mul => want * v,
+                    };
+                }
+                let got = c[i * c_row + j];
+                let scale = (0..k).map(|s| (lv[i * l_mn + s * l_k] * rv[s * r_row + j]).abs()).sum::<f32>().max(1.0);
+                assert!((got - want).abs() <= 1e-5 * scale * 4.0, "{isa:?} {p}x{q}x{k} at {i},{j}: {got} vs {want}");
+            }
+            assert!(c[i * c_row + q..(i + 1) * c_row].iter().all(|v| v.is_nan()), "{isa:?} {p}x{q}x{k} wrote past row {i}");
+        }
+    }
+
+    /// Every block shape (all row counts, one to four vectors, masked tails), strided operands
+    /// and both epilogue kinds, on every instruction set the tests cover.
     #[test]
     fn the_kernel_computes_plain_products() {
-        for isa in instruction_sets() {
+        let ops = [(Combine::Add, false), (Combine::Mul, true), (Combine::Add, true)];
+        for isa in covered() {
             for (p, q, k) in [(1, 1, 1), (7, 20, 20), (13, 40, 3), (76, 76, 20), (375, 20, 40), (6, 64, 5), (5, 65, 2), (12, 130, 7)] {
-                let (lv, rv) = (values(p * k * 2, 1), values(k * q, 2));
                 // L strided: row i, column j at 2·(i + j·p).
-                let l = Matrix { ptr: lv.as_ptr(), mn: 2, k: 2 * p as isize };
-                let r = Matrix { ptr: rv.as_ptr(), mn: 1, k: q as isize };
-                let (rows, cols) = (values(p, 3), values(q, 4));
-                let ops = [(Combine::Add, false, cols.as_ptr()), (Combine::Mul, true, rows.as_ptr()), (Combine::Add, true, rows.as_ptr())];
-                let c_row = q as isize + 3;
-                let mut c = vec![f32::NAN; p * c_row as usize];
-                unsafe { multiply(isa, p, q, k, l, r, c.as_mut_ptr(), c_row, &ops) };
-                for i in 0..p {
-                    for j in 0..q {
-                        let sum: f32 = (0..k).map(|s| lv[2 * (i + s * p)] * rv[s * q + j]).sum();
-                        let want = (sum + cols[j]) * rows[i] + rows[i];
-                        let got = c[i * c_row as usize + j];
-                        assert!((got - want).abs() <= 1e-5 * want.abs().max(1.0), "{isa:?} {p}x{q}x{k} at {i},{j}: {got} vs {want}");
-                    }
-                    assert!(c[i * c_row as usize + q..(i + 1) * c_row as usize].iter().all(|v| v.is_nan()), "{isa:?} wrote past the row");
-                }
+                check(isa, p, q, k, 2, 2 * p, 0, 3, &ops);
             }
         }
+    }
+
+    /// A randomised sweep: 300 products per instruction set with random sizes (up to 3 blocks
+    /// of rows and columns beyond the widest block), row- or column-major left operands, padded
+    /// rows and random epilogues, against the triple loop.
+    #[test]
+    fn a_random_sweep_of_shapes_matches_the_triple_loop() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = |n: usize| {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            (state % n as u64) as usize
+        };
+        let mut checked = 0;
+        for isa in covered() {
+            for _ in 0..300 {
+                let (p, q, k) = (1 + next(20), 1 + next(200), 1 + next(70));
+                let (l_mn, l_k) = if next(2) == 0 { (k + next(3), 1) } else { (1, p + next(3)) };
+                let ops: Vec<_> = (0..next(4)).map(|_| (if next(2) == 0 { Combine::Add } else { Combine::Mul }, next(2) == 0)).collect();
+                check(isa, p, q, k, l_mn, l_k, next(5), next(5), &ops);
+                checked += 1;
+            }
+        }
+        assert!(checked >= 300);
     }
 }

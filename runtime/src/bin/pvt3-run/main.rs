@@ -5,6 +5,8 @@
 //! `pvt3-run --bench MODEL.onnx [THREADS [SECONDS]]` measures latency on this machine instead
 //! (one JSON line; see `bench.rs`).
 
+#![deny(clippy::undocumented_unsafe_blocks)]
+
 use std::process::ExitCode;
 
 use pvt3_runtime::{read_npy, Classifier};
@@ -17,8 +19,9 @@ const USAGE: &str = "usage: pvt3-run MODEL.onnx INPUT.npy
 Classifies the window(s) in INPUT (raw sensor values, [batch,] height, width, [channels,] frames)
 with the exported model, one line per window: index, class, label, probability.
 --bench measures latency instead, on THREADS threads (default 1) for about SECONDS (default 2)
-per measurement: batch 1 and 32, batch 1 without kernel tuning, and a streamed touch (per kept
-frame, per pruned frame, end of touch). Prints one JSON line.";
+per measurement: batch 1 and 32, batch 1 with tract's own kernels and with kernels timed at load,
+the first call, and a streamed touch (per kept frame, per pruned frame, end of touch). Prints one
+JSON line.";
 
 /// Keeps freed memory in the heap (glibc). tract allocates every intermediate tensor afresh on
 /// each run, and glibc hands large ones back to the kernel on free, so the next run page-faults

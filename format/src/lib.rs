@@ -1,0 +1,40 @@
+//! The contract between `pvt3 export` and the robot runtime: what an exported `.onnx` file is
+//! called inside (tensor names, metadata keys) and how it proves it is the file that was written
+//! (the integrity digest). Both sides read these names from here and nowhere else; the runtime
+//! depends on this crate and tract alone.
+
+mod digest;
+
+pub use digest::{digest, verify, Integrity};
+
+/// Input: raw sensor frames `[batch, height, width, (channels,) frames]`.
+pub const INPUT: &str = "frames";
+/// Output: logits `[batch, classes]`.
+pub const LOGITS: &str = "logits";
+/// Output: class probabilities `[batch, classes]`.
+pub const PROBABILITIES: &str = "probabilities";
+/// Seam of the spatial stage: the raw frames of each kept temporal token, `[tokens, tubelet, height, width, channels]`.
+pub const TOKEN_FRAMES: &str = "token_frames";
+/// Seam of the spatial stage: each token's place among the kept tokens, int64 `[tokens]`.
+pub const TOKEN_INDEX: &str = "token_index";
+/// Seam between the stages: the spatial encoding of each kept token, `[tokens, dim]`.
+pub const TOKEN_ENCODINGS: &str = "token_encodings";
+
+/// Metadata keys (`metadata_props` of the ONNX model).
+pub mod keys {
+    /// The class names, a JSON array of strings.
+    pub const CLASSES: &str = "pvt3.classes";
+    /// The input layout, in words.
+    pub const INPUT_LAYOUT: &str = "pvt3.input_layout";
+    /// The input's units, in words.
+    pub const INPUT_UNITS: &str = "pvt3.input_units";
+    /// The frames of a window the model reads, a JSON array of indices.
+    pub const KEPT_FRAMES: &str = "pvt3.kept_frames";
+    /// The model's configuration, a JSON object.
+    pub const CONFIG: &str = "pvt3.config";
+    /// Where the model came from, a JSON object.
+    pub const PROVENANCE: &str = "pvt3.provenance";
+    /// The integrity digest: `sha256:` and the hex SHA-256 of everything else in the file
+    /// ([`crate::digest`]).
+    pub const DIGEST: &str = "pvt3.digest";
+}

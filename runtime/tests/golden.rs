@@ -1,0 +1,77 @@
+//! The runtime alone (no exporter, no candle: these run on the robot's architecture too) on the
+//! committed golden model: its logits equal the independent implementation's to 1e-5 with every
+//! kernel choice, the default choice gives bit-identical outputs at every load and run, and a
+//! classifier shared by several threads answers each as it answers one.
+
+mod support;
+
+use pvt3_runtime::{Classifier, Kernels};
+use support::{golden, golden_vectors};
+
+fn bits(v: &[f32]) -> Vec<u32> {
+    v.iter().map(|x| x.to_bits()).collect()
+}
+
+#[test]
+fn golden_logits_match_with_every_kernel_choice_at_batch_1_and_8() {
+    let (x, expected) = golden_vectors();
+    for kernels in [Kernels::Fixed, Kernels::Tract, Kernels::Measured] {
+        let c = Classifier::load(golden("model.onnx")).unwrap().with_kernels(kernels);
+        for batch in [8, 1] {
+            let (logits, probabilities) = c.run(&x[..batch * 4500], batch).unwrap();
+            assert_eq!(logits.len(), batch * 20);
+            let err = logits.iter().zip(&expected).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+            assert!(err <= 1e-5, "{kernels:?}, batch {batch}: {err:e}");
+            for p in probabilities.chunks(20) {
+                assert!((p.iter().sum::<f32>() - 1.0).abs() < 1e-5);
+            }
+        }
+    }
+}
+
+/// Window `w` of the golden input, frame by frame.
+fn frames(x: &[f32], w: usize) -> Vec<Vec<f32>> {
+    (0..75).map(|t| (0..60).map(|i| x[w * 4500 + i * 75 + t]).collect()).collect()
+}
+
+/// Everything one load answers for the golden input: batch 8, batch 1 per window, streamed.
+fn answers(c: &Classifier, x: &[f32]) -> Vec<Vec<u32>> {
+    let mut out = vec![bits(&c.run(x, 8).unwrap().0)];
+    let mut session = c.session().unwrap();
+    for w in 0..8 {
+        out.push(bits(&c.run(&x[w * 4500..(w + 1) * 4500], 1).unwrap().0));
+        for f in frames(x, w) {
+            session.push_frame(&f).unwrap();
+        }
+        out.push(bits(&session.finish().unwrap().probabilities));
+    }
+    out
+}
+
+#[test]
+fn the_default_kernels_give_bit_identical_outputs_across_loads_and_runs() {
+    let (x, _) = golden_vectors();
+    let first = Classifier::load(golden("model.onnx")).unwrap();
+    let expected = answers(&first, &x);
+    assert_eq!(answers(&first, &x), expected, "a second run of one load");
+    for load in 0..3 {
+        let again = Classifier::load(golden("model.onnx")).unwrap();
+        assert_eq!(answers(&again, &x), expected, "load {load}");
+    }
+}
+
+#[test]
+fn a_classifier_shared_by_threads_answers_each_as_it_answers_one() {
+    let (x, _) = golden_vectors();
+    let c = Classifier::load(golden("model.onnx")).unwrap();
+    let expected = answers(&c, &x);
+    let shared = Classifier::load(golden("model.onnx")).unwrap();
+    std::thread::scope(|s| {
+        let threads: Vec<_> = (0..4).map(|_| s.spawn(|| (0..3).map(|_| answers(&shared, &x)).collect::<Vec<_>>())).collect();
+        for t in threads {
+            for got in t.join().unwrap() {
+                assert_eq!(got, expected);
+            }
+        }
+    });
+}

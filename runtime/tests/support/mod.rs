@@ -1,0 +1,54 @@
+//! What the runtime's end-to-end tests share: the committed golden model and its vectors, scratch
+//! directories, and running a program built for the target (under the emulator that
+//! `PVT3_TARGET_RUNNER` names when the tests run for another architecture, as `tests/run.sh`
+//! does for aarch64).
+
+#![allow(dead_code)] // each test file uses part of it
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+pub fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).to_path_buf()
+}
+
+/// A file of the committed golden iCub model (`tests/golden/icub20`).
+pub fn golden(file: &str) -> PathBuf {
+    root().join("../tests/golden/icub20").join(file)
+}
+
+/// A fresh directory for one test.
+pub fn scratch(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("pvt3-runtime-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A command running `program`, a binary built for the target: through `PVT3_TARGET_RUNNER`
+/// (an emulator command line, e.g. `qemu-aarch64 -L /usr/aarch64-linux-gnu`) when it is set.
+pub fn target_command(program: impl AsRef<Path>) -> Command {
+    match std::env::var("PVT3_TARGET_RUNNER").ok().filter(|r| !r.trim().is_empty()) {
+        Some(runner) => {
+            let mut words = runner.split_whitespace();
+            let mut c = Command::new(words.next().unwrap());
+            c.args(words).arg(program.as_ref());
+            c
+        }
+        None => Command::new(program.as_ref()),
+    }
+}
+
+/// The C compiler for the target: `TARGET_CC` (as the `cc` crate reads it when cross-compiling),
+/// else `CC`, else `cc`.
+pub fn target_cc() -> Command {
+    Command::new(std::env::var("TARGET_CC").or_else(|_| std::env::var("CC")).unwrap_or_else(|_| "cc".into()))
+}
+
+/// The golden input, `[8, 6, 10, 75]`, and logits, `[8, 20]`.
+pub fn golden_vectors() -> (Vec<f32>, Vec<f32>) {
+    let (shape, x) = pvt3_runtime::read_npy(&golden("input.npy")).unwrap();
+    assert_eq!(shape, vec![8, 6, 10, 75]);
+    let (shape, logits) = pvt3_runtime::read_npy(&golden("logits.npy")).unwrap();
+    assert_eq!(shape, vec![8, 20]);
+    (x, logits)
+}

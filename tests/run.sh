@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# The tests, exactly as CI runs them (.ci/run):
+#   1. the whole workspace on this machine (cargo test --release --workspace);
+#   2. the runtime's lints: clippy with warnings denied (every unsafe block has a SAFETY note);
+#   3. the robot runtime cross-built for aarch64 (64-bit ARM: Jetson Orin, Raspberry Pi 4/5) and
+#      its tests run under qemu: golden logits, bit-identical loads, threads, damaged files,
+#      streaming, every C-ABI error path, and runtime/examples/classify.c built with
+#      aarch64-linux-gnu-gcc and run. What needs onnxruntime or candle stays on the host.
+# It installs what it needs (rustup's aarch64 target and clippy; Debian's gcc-aarch64-linux-gnu,
+# libc6-dev-arm64-cross and qemu-user, with apt-get as root) or says exactly what is missing.
+# Times under qemu mean nothing; outputs do.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+step() { printf '\n== %s\n' "$*"; }
+missing() { echo "tests/run.sh: missing $1" >&2; exit 1; }
+
+step "host: cargo test --release --workspace"
+cargo test --release --workspace
+
+step "runtime lints: cargo clippy -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings"
+cargo clippy --version >/dev/null 2>&1 || rustup component add clippy || missing "clippy (rustup component add clippy)"
+cargo clippy --release -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings
+
+step "aarch64: the cross toolchain and qemu"
+target=aarch64-unknown-linux-gnu
+sysroot=/usr/aarch64-linux-gnu
+need=()
+command -v aarch64-linux-gnu-gcc >/dev/null || need+=(gcc-aarch64-linux-gnu)
+[ -e "$sysroot/lib/ld-linux-aarch64.so.1" ] || need+=(libc6-dev-arm64-cross)
+command -v qemu-aarch64 >/dev/null || need+=(qemu-user)
+if [ ${#need[@]} -gt 0 ]; then
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
+    echo "installing ${need[*]}"
+    apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${need[@]}" >/dev/null
+  else
+    missing "the Debian packages ${need[*]}: as root, apt-get install ${need[*]}"
+  fi
+fi
+rustup target list --installed | grep -qx "$target" || rustup target add "$target" || missing "the Rust target $target (rustup target add $target)"
+
+step "aarch64: cargo test --release --target $target -p pvt3-runtime -p pvt3-format (under qemu)"
+export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc
+export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER="qemu-aarch64 -L $sysroot"
+# The tests run the C example and pvt3-run through the same emulator, built by the same compiler.
+export PVT3_TARGET_RUNNER="$CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER"
+export TARGET_CC=aarch64-linux-gnu-gcc
+cargo test --release --target "$target" -p pvt3-runtime -p pvt3-format
