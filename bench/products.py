@@ -5,7 +5,12 @@ onnxruntime (one intra-op thread). Each file is one product with a bias,
 `[m, k] x [k, n]`; an Identity file shows what a call that does nothing costs each engine.
 Prints a markdown table (docs/benchmarks.md).
 
-    target/onnx-venv/bin/python bench/products.py [RUNS]
+With `--k-sweep`, it instead times one product shape over growing k in the runtime alone: the
+default fixed kernel rule, tract's own kernels, and kernels measured at load (and which one that
+measurement kept), to show where the fixed rule's limit on k (`pvt3_runtime::FIXED_MAX_K`)
+stands against measurement.
+
+    target/onnx-venv/bin/python bench/products.py [RUNS] [--k-sweep]
 """
 import os
 import re
@@ -45,14 +50,14 @@ def write(path, m, k, n):
     onnx.save(model, path)
 
 
-def tract_us(path, shape, runs, untuned=False):
-    """tract's median time for one-input `path` at `shape`: the runtime's plan (kernels tuned, or
-    tract's own kernels with `untuned`), untimed nodes."""
-    env = dict(os.environ, PVT3_PROFILE_SHAPE=",".join(map(str, shape)))
-    if untuned:
-        env["PVT3_PROFILE_KERNELS"] = "tract"
+def tract_us(path, shape, runs, kernels="fixed"):
+    """tract's median time for one-input `path` at `shape` with the runtime's plan, its products'
+    kernels chosen as `kernels` says (fixed, tract or measured), untimed nodes; and the operator
+    that ran the slowest node (the product)."""
+    env = dict(os.environ, PVT3_PROFILE_SHAPE=",".join(map(str, shape)), PVT3_PROFILE_KERNELS=kernels, PVT3_PROFILE_NODES="1")
     out = subprocess.run([PROFILE, path, "1", str(runs)], env=env, capture_output=True, text=True, check=True).stdout
-    return float(re.search(r"untimed nodes \(median\) \| \| ([\d.]+)", out)[1])
+    slowest = out.split("| node | operator |")[1].splitlines()[2].split("|")[2].strip()
+    return float(re.search(r"untimed nodes \(median\) \| \| ([\d.]+)", out)[1]), slowest
 
 
 def ort_us(path, shape, runs):
@@ -72,8 +77,23 @@ def ort_us(path, shape, runs):
     return float(np.median(times) * 1e6)
 
 
+def k_sweep(runs):
+    m, n = 375, 40
+    print(f"tract as linked by pvt3-runtime; `{m} × k × {n}` plus a bias, {runs} runs each, one thread.\n")
+    print("| k | fixed rule (µs) | tract's own kernels (µs) | measured at load (µs) | kernel the measurement kept |")
+    print("|---:|---:|---:|---:|---|")
+    with tempfile.TemporaryDirectory() as tmp:
+        for k in [20, 40, 64, 96, 128, 192, 256, 512, 1024]:
+            path = os.path.join(tmp, "product.onnx")
+            write(path, m, k, n)
+            (f, _), (t, _), (w, kept) = (tract_us(path, [m, k], runs, kernels) for kernels in ("fixed", "tract", "measured"))
+            print(f"| {k} | {f:.1f} | {t:.1f} | {w:.1f} | {kept} |")
+
+
 def main():
-    runs = int(sys.argv[1]) if len(sys.argv) > 1 else 3000
+    runs = int(next((a for a in sys.argv[1:] if not a.startswith("-")), 3000))
+    if "--k-sweep" in sys.argv:
+        return k_sweep(runs)
     print(f"onnxruntime {ort.__version__}; tract as linked by pvt3-runtime; {runs} runs each, one thread.\n")
     print("| product | m × k × n | pvt3 runtime (µs per call, median) | tract's own kernels (µs) | onnxruntime (µs) | pvt3 / onnxruntime, less the empty call |")
     print("|---|---|---:|---:|---:|---:|")
@@ -82,7 +102,7 @@ def main():
         for name, m, k, n in SHAPES:
             path = os.path.join(tmp, "product.onnx")
             write(path, m, k, n)
-            t, u, o = tract_us(path, [m, k], runs), tract_us(path, [m, k], runs, untuned=True), ort_us(path, [m, k], runs)
+            (t, _), (u, _), o = tract_us(path, [m, k], runs), tract_us(path, [m, k], runs, "tract"), ort_us(path, [m, k], runs)
             if n is None:
                 empty = (t, o)
                 print(f"| {name} | {m} × {k} | {t:.1f} | {u:.1f} | {o:.1f} | |")

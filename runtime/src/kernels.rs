@@ -528,23 +528,25 @@ mod tests {
     use tract_onnx::tract_core::ops::einsum::EinSum;
     use tract_onnx::tract_core::ops::math::add;
 
-    /// `h = x W + b` (a constant operand) and `h hᵀ` (two packed inputs), optimised by tract.
+    /// `h = x W + b` (a constant operand) and `h yᵀ` (two packed inputs), optimised by tract.
     fn two_products() -> TypedModel {
         let mut model = TypedModel::default();
         let x = model.add_source("x", f32::fact([37, 20])).unwrap();
+        let y = model.add_source("y", f32::fact([29, 40])).unwrap();
         let w: Vec<f32> = (0..20 * 40).map(|i| ((i * 7 % 23) as f32 - 11.0) / 17.0).collect();
         let w = model.add_const("w", Tensor::from_shape(&[20, 40], &w).unwrap()).unwrap();
         let b = model.add_const("b", Tensor::from_shape(&[1, 40], &(0..40).map(|i| i as f32 / 10.0).collect::<Vec<_>>()).unwrap()).unwrap();
         let einsum = |expr: &str| EinSum::new(expr.parse().unwrap(), f32::datum_type());
         let xw = model.wire_node("xw", einsum("mk,kn->mn"), &[x, w]).unwrap()[0];
         let h = model.wire_node("h", add(), &[xw, b]).unwrap()[0];
-        let s = model.wire_node("s", einsum("mk,nk->mn"), &[h, h]).unwrap()[0];
+        let s = model.wire_node("s", einsum("mk,nk->mn"), &[h, y]).unwrap()[0];
         model.select_output_outlets(&[h, s]).unwrap();
         model.into_optimized().unwrap()
     }
 
     fn run(model: &TypedModel, x: &Tensor) -> Vec<Vec<f32>> {
-        let outputs = model.clone().into_runnable().unwrap().run(tvec!(x.clone().into())).unwrap();
+        let y = Tensor::from_shape(&[29, 40], &(0..29 * 40).map(|i| ((i * 11 % 31) as f32 - 15.0) / 8.0).collect::<Vec<_>>()).unwrap();
+        let outputs = model.clone().into_runnable().unwrap().run(tvec!(x.clone().into(), y.into())).unwrap();
         outputs.iter().map(|o| o.to_plain_array_view::<f32>().unwrap().iter().copied().collect()).collect()
     }
 
@@ -568,7 +570,7 @@ mod tests {
         let mut tried = 0;
         for p in &products {
             let candidates = candidates(p);
-            assert!(candidates.len() > 1, "{}x{}x{}: {} candidates", p.m, p.k, p.n, candidates.len());
+            assert!(!candidates.is_empty(), "{}x{}x{}: no candidate kernel", p.m, p.k, p.n);
             for (mmm, ix) in candidates {
                 let name = mmm.name().to_string();
                 let mut rewired = model.clone();
@@ -592,23 +594,40 @@ mod tests {
             tune(&mut tuned, 1, kernels).unwrap();
             assert!(worst(&run(&tuned, &x), &expected) < 1e-5, "{kernels:?}");
         }
-        assert!(tried >= 4);
+        // On x86-64 tract offers several kernels per shape; on ARM (here, qemu's CPU) it offers
+        // one, which `replace` must still repack and retile correctly.
+        #[cfg(target_arch = "x86_64")]
+        assert!(tried > 2 * products.len(), "{tried} kernels tried on {} products: too few alternatives", products.len());
+        assert!(tried >= products.len());
+    }
+
+    /// Whether product `node` reads an input packed once for two uses (tract does so for `q kᵀ`
+    /// where both sides pack alike, as on ARM): the tuner leaves such a product to tract, since
+    /// repacking the shared node would change what its other reader gets.
+    fn shares_a_pack(model: &TypedModel, node: usize) -> bool {
+        model.node(node).inputs.iter().any(|i| model.node(i.node).op_is::<OptMatMulPack>() && model.outlet_successors(*i).len() > 1)
     }
 
     /// The plan tract makes of the committed golden model has the structure the kernel choice
     /// relies on: every matrix product is one the tuner recognises (one kernel, one product, a
-    /// constant or singly packed operand each), and on x86-64 the fixed rule gives every one of
-    /// them to the runtime's product. A tract whose plans look otherwise fails here, loudly,
-    /// rather than leaving products silently untuned.
+    /// constant or singly packed operand each), except, where tract packs one input for both
+    /// operands, products that read it (on ARM; none on x86-64); and on x86-64 the fixed rule
+    /// gives every product to the runtime's own. A tract whose plans look otherwise fails here,
+    /// loudly, rather than leaving products silently untuned.
     #[test]
     fn the_golden_plan_has_the_structure_the_kernel_choice_expects() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/golden/icub20/model.onnx");
         let model = tract_onnx::onnx().model_for_path(path).unwrap().with_input_fact(0, f32::fact([1, 6, 10, 75]).into()).unwrap();
         let model = model.into_optimized().unwrap();
         let products: Vec<usize> = model.nodes().iter().filter(|n| n.op_is::<OptMatMul>()).map(|n| n.id).collect();
-        let recognised = products.iter().filter(|n| product(&model, **n).unwrap().is_some()).count();
         assert!(products.len() >= 40, "{} matrix products in the golden plan", products.len());
-        assert_eq!(recognised, products.len(), "products the tuner recognises");
+        let declined: Vec<usize> = products.iter().copied().filter(|n| product(&model, *n).unwrap().is_none()).collect();
+        for n in &declined {
+            assert!(shares_a_pack(&model, *n), "{}: a product the tuner does not recognise", model.node(*n).name);
+        }
+        assert!(declined.len() <= products.len() / 4, "{} of {} products declined", declined.len(), products.len());
+        #[cfg(target_arch = "x86_64")]
+        assert!(declined.is_empty(), "x86-64 packs each operand apart");
         let mut fixed = model.clone();
         let changed = tune(&mut fixed, 1, Kernels::Fixed).unwrap();
         #[cfg(target_arch = "x86_64")]

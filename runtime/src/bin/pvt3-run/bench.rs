@@ -2,6 +2,7 @@
 //! model. Whole windows at batch 1 (median and p99) and batch 32 (windows per second), and a
 //! streamed touch: each kept frame's spatial encoding, each pruned frame's drop, and the
 //! end-of-touch temporal stage. Inputs are synthetic (latency does not depend on the values).
+//! Also the load (read, digest check, parse) and the digest check alone.
 //! The classifier chooses its kernels by the default fixed rule; batch 1 is also measured with
 //! tract's own choice ("untuned") and with kernels timed at load ("measured"), and the first call,
 //! which builds the plan, is timed with the fixed rule and with timing.
@@ -49,7 +50,13 @@ fn quantiles(mut times: Vec<f64>) -> (f64, f64) {
 }
 
 pub fn bench(path: &str, threads: usize, seconds: f64) -> Result<serde_json::Value> {
+    let started = Instant::now();
     let c = Classifier::load(path)?.with_threads(threads);
+    let load_ms = started.elapsed().as_secs_f64() * 1e3;
+    let bytes = std::fs::read(path).map_err(|source| pvt3_runtime::Error::Io { path: path.into(), source })?;
+    let started = Instant::now();
+    pvt3_format::verify(&bytes).map_err(|reason| pvt3_runtime::Error::Corrupted { path: path.into(), reason })?;
+    let digest_ms = started.elapsed().as_secs_f64() * 1e3;
     let budget = Duration::from_secs_f64(seconds);
     let len: usize = c.sample_shape().iter().product();
     let windows = synthetic(32 * len);
@@ -104,6 +111,8 @@ pub fn bench(path: &str, threads: usize, seconds: f64) -> Result<serde_json::Val
         "threads": threads,
         "frames": frames,
         "kept_frames": kept_frames.len(),
+        "load_ms": load_ms,
+        "digest_check_ms": digest_ms,
         "batch1_median_us": b1_median,
         "batch1_p99_us": b1_p99,
         "batch1_untuned_median_us": untuned_median,
