@@ -52,7 +52,7 @@ for line in open(sizes):
 out.append("")
 out.append("| model | kept frames | batch 1 median / p99 (µs) | batch 1, tract's kernels (µs) | batch 1, measured kernels (µs) | batch 32 (windows/s) | onnxruntime batch 1 median / p99 (µs) | onnxruntime batch 32 (windows/s) | pvt3 / onnxruntime (batch 1) |")
 out.append("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
-start = ["", "| model | load: read, digest check, parse (ms) | digest check alone (ms) | first call, fixed kernels (ms) | first call, measured kernels (ms) |", "|---|---:|---:|---:|---:|"]
+start = ["", "| model | load: read, digest check, parse (ms) | digest check alone (ms) | first call, fixed kernels (ms) | first call, measured kernels (ms) | `prepare` batch 1 and streaming (ms) | first call after `prepare` (ms) |", "|---|---:|---:|---:|---:|---:|---:|"]
 stream = ["", "| model | per kept frame median / p99 (µs) | per pruned frame (µs) | end of touch median / p99 (µs) | compute per touch (µs) |", "|---|---:|---:|---:|---:|"]
 for m in dict.fromkeys(r["model"] for r in rows):
     p = [r for r in rows if r["model"] == m and r["engine"] == "pvt3"]
@@ -60,7 +60,8 @@ for m in dict.fromkeys(r["model"] for r in rows):
     out.append(f"| `{m}` | {p[0]['kept_frames']} of {p[0]['frames']} | {med(p,'batch1_median_us'):.0f} / {med(p,'batch1_p99_us'):.0f} | "
                f"{med(p,'batch1_untuned_median_us'):.0f} | {med(p,'batch1_measured_median_us'):.0f} | {med(p,'batch32_windows_per_second'):.0f} | {med(o,'batch1_median_us'):.0f} / {med(o,'batch1_p99_us'):.0f} | "
                f"{med(o,'batch32_windows_per_second'):.0f} | {med(p,'batch1_median_us') / med(o,'batch1_median_us'):.2f} |")
-    start.append(f"| `{m}` | {med(p,'load_ms'):.1f} | {med(p,'digest_check_ms'):.2f} | {med(p,'batch1_first_call_ms'):.0f} | {med(p,'batch1_measured_first_call_ms'):.0f} |")
+    start.append(f"| `{m}` | {med(p,'load_ms'):.1f} | {med(p,'digest_check_ms'):.2f} | {med(p,'batch1_first_call_ms'):.0f} | {med(p,'batch1_measured_first_call_ms'):.0f} | "
+                 f"{med(p,'prepare_ms'):.0f} | {med(p,'batch1_first_call_after_prepare_ms'):.2f} |")
     stream.append(f"| `{m}` | {med(p,'stream_kept_frame_median_us'):.0f} / {med(p,'stream_kept_frame_p99_us'):.0f} | "
                   f"{med(p,'stream_pruned_frame_median_us'):.2f} | {med(p,'stream_end_of_touch_median_us'):.0f} / {med(p,'stream_end_of_touch_p99_us'):.0f} | "
                   f"{med(p,'stream_compute_per_touch_us'):.0f} |")

@@ -5,12 +5,11 @@ onnxruntime (one intra-op thread). Each file is one product with a bias,
 `[m, k] x [k, n]`; an Identity file shows what a call that does nothing costs each engine.
 Prints a markdown table (docs/benchmarks.md).
 
-With `--k-sweep`, it instead times one product shape over growing k in the runtime alone: the
+With `--k-sweep [M N]` (default 375 × 40), it instead times one product shape over growing k in the runtime alone: the
 default fixed kernel rule, tract's own kernels, and kernels measured at load (and which one that
-measurement kept), to show where the fixed rule's limit on k (`pvt3_runtime::FIXED_MAX_K`)
-stands against measurement.
+measurement kept), to check the fixed rule against measurement (docs/benchmarks.md, step 18).
 
-    target/onnx-venv/bin/python bench/products.py [RUNS] [--k-sweep]
+    target/onnx-venv/bin/python bench/products.py [RUNS] [--k-sweep [M N]]
 """
 import os
 import re
@@ -77,13 +76,12 @@ def ort_us(path, shape, runs):
     return float(np.median(times) * 1e6)
 
 
-def k_sweep(runs):
-    m, n = 375, 40
+def k_sweep(runs, m, n):
     print(f"tract as linked by pvt3-runtime; `{m} × k × {n}` plus a bias, {runs} runs each, one thread.\n")
     print("| k | fixed rule (µs) | tract's own kernels (µs) | measured at load (µs) | kernel the measurement kept |")
     print("|---:|---:|---:|---:|---|")
     with tempfile.TemporaryDirectory() as tmp:
-        for k in [20, 40, 64, 96, 128, 192, 256, 512, 1024]:
+        for k in [20, 40, 64, 128, 256, 512, 1024, 4800]:
             path = os.path.join(tmp, "product.onnx")
             write(path, m, k, n)
             (f, _), (t, _), (w, kept) = (tract_us(path, [m, k], runs, kernels) for kernels in ("fixed", "tract", "measured"))
@@ -91,9 +89,11 @@ def k_sweep(runs):
 
 
 def main():
-    runs = int(next((a for a in sys.argv[1:] if not a.startswith("-")), 3000))
+    numbers = [int(a) for a in sys.argv[1:] if not a.startswith("-")]
+    runs = numbers[0] if numbers else 3000
     if "--k-sweep" in sys.argv:
-        return k_sweep(runs)
+        m, n = numbers[1:3] if len(numbers) >= 3 else (375, 40)
+        return k_sweep(runs, m, n)
     print(f"onnxruntime {ort.__version__}; tract as linked by pvt3-runtime; {runs} runs each, one thread.\n")
     print("| product | m × k × n | pvt3 runtime (µs per call, median) | tract's own kernels (µs) | onnxruntime (µs) | pvt3 / onnxruntime, less the empty call |")
     print("|---|---|---:|---:|---:|---:|")

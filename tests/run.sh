@@ -14,9 +14,13 @@ cd "$(dirname "$0")/.."
 
 step() { printf '\n== %s\n' "$*"; }
 missing() { echo "tests/run.sh: missing $1" >&2; exit 1; }
+# Every test run's output goes here too, for the summary at the end.
+log=$(mktemp)
+trap 'rm -f "$log"' EXIT
+cargo_test() { cargo test "$@" 2>&1 | tee -a "$log"; }
 
 step "host: cargo test --release --workspace"
-cargo test --release --workspace
+cargo_test --release --workspace
 
 step "runtime lints: cargo clippy -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings"
 cargo clippy --version >/dev/null 2>&1 || rustup component add clippy || missing "clippy (rustup component add clippy)"
@@ -46,4 +50,8 @@ export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER="qemu-aarch64 -L $sysroot"
 # The tests run the C example and pvt3-run through the same emulator, built by the same compiler.
 export PVT3_TARGET_RUNNER="$CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER"
 export TARGET_CC=aarch64-linux-gnu-gcc
-cargo test --release --target "$target" -p pvt3-runtime -p pvt3-format
+cargo_test --release --target "$target" -p pvt3-runtime -p pvt3-format
+
+# One closing line for all harnesses, host and aarch64 (cargo's own runs end with doc-test
+# harnesses that hold no test).
+grep '^test result:' "$log" | awk '{ p += $4; f += $6 } END { printf "\ntests: %d passed, %d failed\n", p, f }'

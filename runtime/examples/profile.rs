@@ -15,6 +15,9 @@ use tract_onnx::prelude::*;
 use tract_onnx::tract_core::plan::{eval, SimplePlan, SimpleState};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
+    // SAFETY: first thing in main, before any other thread exists. As pvt3-run does, so that
+    // products time as they run there (glibc otherwise page-faults large outputs in anew).
+    unsafe { pvt3_runtime::keep_freed_memory() };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let path = args.first().ok_or("usage: profile MODEL.onnx [BATCH [RUNS]]")?;
     let batch: usize = args.get(1).map_or(Ok(1), |v| v.parse())?;

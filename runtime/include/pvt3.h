@@ -39,6 +39,10 @@ void pvt3_classifier_free(pvt3_classifier *c);
  * choice) or PVT3_KERNELS_MEASURED (timed at each plan's first call, 50-100 ms; outputs can differ
  * in the last bits between loads). Call it before sharing the classifier between threads. */
 int pvt3_classifier_set_kernels(pvt3_classifier *c, int kernels);
+/* Builds now the plan for `batch` windows and, unless streaming is 0, the stages a session runs:
+ * what the first such call would otherwise build (tract's optimisation, tens of milliseconds).
+ * Call it at start-up so that the first touch costs what every touch costs. */
+int pvt3_classifier_prepare(const pvt3_classifier *c, size_t batch, int streaming);
 /* Values in one window: height x width x (channels x) frames, raw sensor values. */
 int pvt3_classifier_sample_len(const pvt3_classifier *c, size_t *out);
 /* Frames in one window (its last axis); a frame has sample_len / frames values. */

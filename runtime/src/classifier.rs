@@ -199,6 +199,23 @@ impl Classifier {
         plan.map(Plan::new).map_err(|e| Error::NotOnnx { path: self.path.clone(), reason: format!("{e:#}") })
     }
 
+    /// Builds now what the first call at each batch size of `batches`, and with `streaming` the
+    /// first session, would otherwise build: tract's optimisation of each plan, tens of
+    /// milliseconds (docs/deploy.md). A robot calls this at start-up, so that its first touch
+    /// costs what every other touch costs.
+    pub fn prepare(&self, batches: &[usize], streaming: bool) -> Result<()> {
+        for &batch in batches {
+            if batch == 0 {
+                return Err(Error::EmptyBatch);
+            }
+            self.plan(batch)?;
+        }
+        if streaming {
+            self.stages()?;
+        }
+        Ok(())
+    }
+
     /// The optimised plan for `batch` windows, built on first use.
     fn plan(&self, batch: usize) -> Result<Arc<Plan>> {
         let mut plans = self.plans.lock().unwrap_or_else(|p| p.into_inner());

@@ -156,6 +156,20 @@ pub unsafe extern "C" fn pvt3_classifier_set_kernels(c: *mut Pvt3Classifier, ker
     })
 }
 
+/// Builds now the plan for `batch` windows and, unless `streaming` is 0, the stages a session
+/// runs: what the first such call would otherwise build (tens of milliseconds). Call it at
+/// start-up.
+///
+/// # Safety
+/// `c` is a live handle or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_classifier_prepare(c: *const Pvt3Classifier, batch: usize, streaming: c_int) -> c_int {
+    guard(|| {
+        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
+        c.classifier.prepare(&[batch], streaming != 0).map_err(fail)
+    })
+}
+
 /// Values in one window (`height × width × (channels ×) frames`).
 ///
 /// # Safety

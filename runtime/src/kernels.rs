@@ -28,11 +28,11 @@ use crate::small_products::{self, Combine, Epilogue, Isa, SmallProduct, Source};
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Kernels {
     /// By a fixed rule (the default): on one thread, on x86-64 with AVX-512 or with AVX2 and FMA,
-    /// the runtime's own product for short sums wherever it applies and k ≤ [`FIXED_MAX_K`], in
-    /// the widest instruction set (both sum in the same order, so they give the same bits);
-    /// tract's own choice for every other product. Nothing is timed: the same file on the same
-    /// machine gets the same plan, hence bit-identical outputs, and a plan costs only tract's
-    /// optimisation to build.
+    /// the runtime's own product for short sums wherever it applies, in the widest instruction
+    /// set (both sum in the same order, so they give the same bits); tract's own choice for every
+    /// other product. Timing kept the runtime's product on every shape tried, k from 20 to 4800
+    /// (docs/benchmarks.md, step 18). Nothing is timed: the same file on the same machine gets
+    /// the same plan, hence bit-identical outputs, and a plan costs only tract's optimisation.
     #[default]
     Fixed,
     /// tract's own choice for every product.
@@ -58,11 +58,6 @@ impl std::str::FromStr for Kernels {
         }
     }
 }
-
-/// The longest sum the fixed rule gives the runtime's product: it reads its operands where they
-/// lie, unpacked, which stays cheaper than tract's packing only while a register block's
-/// operands stay in the first-level cache (docs/benchmarks.md, kernel choice).
-pub const FIXED_MAX_K: usize = 128;
 
 /// Time spent measuring one kernel on one product, at most (and at least `MIN_RUNS` runs).
 const BUDGET: Duration = Duration::from_millis(1);
@@ -142,7 +137,7 @@ pub fn tune(model: &mut TypedModel, threads: usize, kernels: Kernels) -> TractRe
         let Some(product) = product(model, node)? else { continue };
         let small = if threads == 1 { small(model, &product)? } else { None };
         let choice = match kernels {
-            Kernels::Fixed => fixed(&product, small.as_ref()),
+            Kernels::Fixed => fixed(small.as_ref()),
             _ => {
                 let op = model.node(node).op_as::<OptMatMul>().unwrap();
                 let current = (op.mmm[0].name().to_string(), packing(op));
@@ -172,16 +167,13 @@ pub fn tune(model: &mut TypedModel, threads: usize, kernels: Kernels) -> TractRe
     Ok(changed)
 }
 
-/// The fixed rule's choice for `p`: the runtime's product in the widest instruction set, where
-/// it applies and the sum is short; otherwise tract's own pick (`None`).
-fn fixed(p: &Product, small: Option<&Small>) -> Option<Choice> {
+/// The fixed rule's choice: the runtime's product in the widest instruction set, where it
+/// applies (`small`); otherwise tract's own pick (`None`).
+fn fixed(small: Option<&Small>) -> Option<Choice> {
     #[cfg(target_arch = "x86_64")]
-    return small.filter(|_| p.k <= FIXED_MAX_K).and_then(|_| small_products::instruction_sets().first().map(|isa| Choice::Small(*isa)));
+    return small.and_then(|_| small_products::instruction_sets().first().map(|isa| Choice::Small(*isa)));
     #[cfg(not(target_arch = "x86_64"))]
-    {
-        let _ = p;
-        small.map(|s| match *s {})
-    }
+    small.map(|s| match *s {})
 }
 
 /// What beats `current` on `p` by more than the margin, if anything: one of tract's kernels

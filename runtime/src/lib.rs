@@ -18,6 +18,7 @@ mod classifier;
 mod cut;
 mod error;
 pub mod ffi;
+mod heap;
 mod kernels;
 mod npy;
 mod plan;
@@ -27,6 +28,7 @@ mod stream;
 
 pub use classifier::{Classifier, Prediction};
 pub use error::{Error, Result};
-pub use kernels::{tune as tune_kernels, Kernels, FIXED_MAX_K};
+pub use heap::keep_freed_memory;
+pub use kernels::{tune as tune_kernels, Kernels};
 pub use npy::read_npy;
 pub use stream::Session;

@@ -46,7 +46,7 @@ fn the_header_declares_exactly_what_the_code_exports() {
     header_fns.sort();
     code_fns.sort();
     assert_eq!(header_fns, code_fns, "functions and their parameter counts");
-    assert_eq!(code_fns.len(), 13);
+    assert_eq!(code_fns.len(), 14);
     let mut header_consts: Vec<(String, String)> = header
         .split("#define ")
         .skip(1)
@@ -135,6 +135,7 @@ fn every_entry_point_reports_instead_of_crashing() {
         pvt3_classifier_free(null_mut());
 
         assert_eq!(pvt3_classifier_set_kernels(null_mut(), PVT3_KERNELS_TRACT), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classifier_prepare(null(), 1, 1), PVT3_ERR_NULL);
 
         assert_eq!(pvt3_classifier_load(model.as_ptr(), &mut c), PVT3_OK);
         assert_eq!(pvt3_classifier_set_kernels(c, 7), PVT3_ERR_INPUT);
@@ -142,6 +143,8 @@ fn every_entry_point_reports_instead_of_crashing() {
         for kernels in [PVT3_KERNELS_TRACT, PVT3_KERNELS_MEASURED, PVT3_KERNELS_FIXED] {
             assert_eq!(pvt3_classifier_set_kernels(c, kernels), PVT3_OK);
         }
+        assert_eq!(pvt3_classifier_prepare(c, 0, 0), PVT3_ERR_INPUT);
+        assert_eq!(pvt3_classifier_prepare(c, 2, 1), PVT3_OK);
         assert_eq!(pvt3_classifier_sample_len(c, null_mut()), PVT3_ERR_NULL);
         assert_eq!(pvt3_classifier_num_classes(c, null_mut()), PVT3_ERR_NULL);
         assert_eq!(pvt3_classifier_class_name(c, 0, null_mut()), PVT3_ERR_NULL);

@@ -56,8 +56,12 @@ fn the_default_kernels_give_bit_identical_outputs_across_loads_and_runs() {
     assert_eq!(answers(&first, &x), expected, "a second run of one load");
     for load in 0..3 {
         let again = Classifier::load(golden("model.onnx")).unwrap();
+        if load == 0 {
+            again.prepare(&[8, 1], true).unwrap();
+        }
         assert_eq!(answers(&again, &x), expected, "load {load}");
     }
+    assert!(matches!(first.prepare(&[0], false), Err(pvt3_runtime::Error::EmptyBatch)));
 }
 
 #[test]

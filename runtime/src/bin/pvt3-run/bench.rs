@@ -2,7 +2,8 @@
 //! model. Whole windows at batch 1 (median and p99) and batch 32 (windows per second), and a
 //! streamed touch: each kept frame's spatial encoding, each pruned frame's drop, and the
 //! end-of-touch temporal stage. Inputs are synthetic (latency does not depend on the values).
-//! Also the load (read, digest check, parse) and the digest check alone.
+//! Also the load (read, digest check, parse), the digest check alone, `Classifier::prepare` for
+//! batch 1 and streaming, and the first call after it.
 //! The classifier chooses its kernels by the default fixed rule; batch 1 is also measured with
 //! tract's own choice ("untuned") and with kernels timed at load ("measured"), and the first call,
 //! which builds the plan, is timed with the fixed rule and with timing.
@@ -72,6 +73,13 @@ pub fn bench(path: &str, threads: usize, seconds: f64) -> Result<serde_json::Val
         let first_ms = started.elapsed().as_secs_f64() * 1e3;
         Ok((quantiles(sample(budget, 20, || c.classify(one).map(drop))?).0, first_ms))
     };
+    let prepared = Classifier::load(path)?.with_threads(threads);
+    let started = Instant::now();
+    prepared.prepare(&[1], true)?;
+    let prepare_ms = started.elapsed().as_secs_f64() * 1e3;
+    let started = Instant::now();
+    prepared.classify(one)?;
+    let prepared_first_ms = started.elapsed().as_secs_f64() * 1e3;
     let (untuned_median, _) = other(Kernels::Tract)?;
     let (measured_median, measured_first_ms) = other(Kernels::Measured)?;
     let b32 = sample(budget, 5, || c.classify_batch(&windows, 32).map(drop))?;
@@ -119,6 +127,8 @@ pub fn bench(path: &str, threads: usize, seconds: f64) -> Result<serde_json::Val
         "batch1_measured_median_us": measured_median,
         "batch1_first_call_ms": plan_ms,
         "batch1_measured_first_call_ms": measured_first_ms,
+        "prepare_ms": prepare_ms,
+        "batch1_first_call_after_prepare_ms": prepared_first_ms,
         "batch32_windows_per_second": b32_windows_per_second,
         "stream_kept_frame_median_us": kept_median,
         "stream_kept_frame_p99_us": kept_p99,

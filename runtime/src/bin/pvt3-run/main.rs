@@ -23,20 +23,9 @@ per measurement: batch 1 and 32, batch 1 with tract's own kernels and with kerne
 the first call, and a streamed touch (per kept frame, per pruned frame, end of touch). Prints one
 JSON line.";
 
-/// Keeps freed memory in the heap (glibc). tract allocates every intermediate tensor afresh on
-/// each run, and glibc hands large ones back to the kernel on free, so the next run page-faults
-/// them in again: at batch 32 that halved the throughput (docs/deploy.md).
-fn keep_freed_memory() {
-    #[cfg(all(target_os = "linux", target_env = "gnu"))]
-    // SAFETY: adjusts process-wide allocator settings before any other thread exists.
-    unsafe {
-        libc::mallopt(libc::M_MMAP_THRESHOLD, 32 << 20);
-        libc::mallopt(libc::M_TRIM_THRESHOLD, 1 << 30);
-    }
-}
-
 fn main() -> ExitCode {
-    keep_freed_memory();
+    // SAFETY: first thing in main, before any other thread exists.
+    unsafe { pvt3_runtime::keep_freed_memory() };
     let args: Vec<String> = std::env::args().skip(1).collect();
     let number = |i: usize, default: f64| args.get(i).map_or(Some(default), |v| v.parse::<f64>().ok().filter(|v| *v > 0.0));
     let outcome = match args.iter().map(String::as_str).collect::<Vec<_>>().as_slice() {
