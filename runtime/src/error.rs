@@ -1,5 +1,7 @@
 //! What the runtime reports instead of crashing.
 
+use std::panic::UnwindSafe;
+
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     #[error("{path}: {source}")]
@@ -30,3 +32,17 @@ pub enum Error {
 }
 
 pub type Result<T> = std::result::Result<T, Error>;
+
+pub(crate) fn tract_error(e: impl std::fmt::Display) -> Error {
+    Error::Tract(e.to_string())
+}
+
+/// Runs `f`, turning a panic into [`Error::Tract`] with its message. tract can panic on a graph
+/// it did not expect; a file that passed the integrity check was written by the exporter, but
+/// no panic may reach a caller of the library either way.
+pub(crate) fn catch_panic<T>(f: impl FnOnce() -> T + UnwindSafe) -> Result<T> {
+    std::panic::catch_unwind(f).map_err(|panic| {
+        let what = panic.downcast_ref::<&str>().map(|s| s.to_string()).or_else(|| panic.downcast_ref::<String>().cloned());
+        Error::Tract(format!("panicked: {}", what.unwrap_or_else(|| "(no message)".into())))
+    })
+}

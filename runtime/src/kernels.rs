@@ -142,7 +142,8 @@ pub fn tune(model: &mut TypedModel, threads: usize, kernels: Kernels) -> TractRe
                 let op = model.node(node).op_as::<OptMatMul>().unwrap();
                 let current = (op.mmm[0].name().to_string(), packing(op));
                 let c = (&op.c_fact.shape, op.c_m_axis, op.c_n_axis, op.micro_ops.len());
-                let key = format!("{}x{}x{} {} | {} | {current:?} {c:?}", product.m, product.k, product.n, product.a.key(), product.b.key());
+                let key =
+                    format!("{}x{}x{} {} | {} | {current:?} {c:?}", product.m, product.k, product.n, product.a.key(), product.b.key());
                 match measured.get(&key) {
                     Some(choice) => choice.clone(),
                     None => {

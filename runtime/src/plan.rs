@@ -6,8 +6,18 @@ use std::sync::Mutex;
 
 use tract_onnx::prelude::*;
 
-use crate::classifier::{catch_panic, tract_error};
-use crate::Result;
+use crate::error::{catch_panic, tract_error};
+use crate::{Error, Result};
+
+/// Output `i` of a plan's `outputs`, which must hold `len` f32 values.
+pub(crate) fn outputs_of(outputs: &[TValue], i: usize, len: usize) -> Result<Vec<f32>> {
+    let values = outputs.get(i).ok_or_else(|| Error::Tract(format!("the plan has no output {i}")))?;
+    let values: Vec<f32> = values.to_plain_array_view::<f32>().map_err(tract_error)?.iter().copied().collect();
+    if values.len() != len {
+        return Err(Error::Tract(format!("output {i} has {} values, not the {len} the metadata implies", values.len())));
+    }
+    Ok(values)
+}
 
 pub(crate) struct Plan {
     plan: Arc<TypedRunnableModel>,

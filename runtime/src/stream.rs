@@ -13,11 +13,11 @@ use pvt3_format::{PROBABILITIES, TOKEN_ENCODINGS, TOKEN_FRAMES, TOKEN_INDEX};
 use tract_onnx::pb::tensor_proto::DataType;
 use tract_onnx::prelude::*;
 
-use crate::classifier::{outputs_of, prediction, tract_error};
+use crate::classifier::prediction;
 use crate::cut::{cut, Seam};
-use crate::plan::Plan;
+use crate::error::tract_error;
+use crate::plan::{outputs_of, Plan};
 use crate::{Classifier, Error, Prediction, Result};
-
 
 /// The two stages of a classifier, each optimised for its streaming shape.
 pub(crate) struct Stages {

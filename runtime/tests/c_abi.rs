@@ -192,7 +192,8 @@ fn every_entry_point_reports_instead_of_crashing() {
         let bytes = std::fs::read(golden("model.onnx")).unwrap();
         let mut flipped = bytes.clone();
         flipped[bytes.len() / 2] ^= 4;
-        let damaged = [("truncated.onnx", bytes[..bytes.len() / 3].to_vec()), ("foreign.onnx", b"hello".to_vec()), ("flipped.onnx", flipped)];
+        let damaged =
+            [("truncated.onnx", bytes[..bytes.len() / 3].to_vec()), ("foreign.onnx", b"hello".to_vec()), ("flipped.onnx", flipped)];
         for (name, content) in damaged {
             let path = dir.join(name);
             std::fs::write(&path, content).unwrap();
