@@ -221,7 +221,7 @@ impl Classifier {
         if batch == 0 {
             return Err(Error::EmptyBatch);
         }
-        let expected = batch * self.sample_len();
+        let expected = batch.checked_mul(self.sample_len()).ok_or(Error::BatchTooLarge { batch })?;
         if frames.len() != expected {
             let sample = self.sample_shape.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(" × ");
             return Err(Error::InputLength { got: frames.len(), expected, batch, sample });
@@ -239,7 +239,8 @@ impl Classifier {
         shape.extend(&self.sample_shape);
         let input = Tensor::from_shape(&shape, frames).map_err(tract_error)?;
         let outputs = self.plan(batch)?.run(tvec!(input.into()))?;
-        Ok((outputs_of(&outputs, 0, batch * self.classes.len())?, outputs_of(&outputs, 1, batch * self.classes.len())?))
+        let len = batch.checked_mul(self.classes.len()).ok_or(Error::BatchTooLarge { batch })?;
+        Ok((outputs_of(&outputs, 0, len)?, outputs_of(&outputs, 1, len)?))
     }
 
     /// Classifies `batch` windows laid out back to back.

@@ -26,6 +26,8 @@ pub enum Error {
     Incomplete { got: usize, frames: usize },
     #[error("batch size must be at least 1")]
     EmptyBatch,
+    #[error("a batch of {batch} windows has more values than memory can address")]
+    BatchTooLarge { batch: usize },
     /// tract failed (or panicked, caught) on a file that passed every check.
     #[error("tract: {0}")]
     Tract(String),

@@ -46,6 +46,7 @@ fn status(e: &Error) -> c_int {
         Error::InputLength { .. }
         | Error::NonFinite { .. }
         | Error::EmptyBatch
+        | Error::BatchTooLarge { .. }
         | Error::Npy { .. }
         | Error::FrameLength { .. }
         | Error::TooManyFrames { .. }
@@ -236,7 +237,7 @@ pub unsafe extern "C" fn pvt3_classify(
         if probabilities.is_null() {
             return Err(null("probabilities"));
         }
-        let needed = batch * c.names.len();
+        let needed = batch.checked_mul(c.names.len()).ok_or_else(|| fail(Error::BatchTooLarge { batch }))?;
         if probabilities_len < needed {
             return Err((PVT3_ERR_INPUT, format!("probabilities has room for {probabilities_len} values; {needed} needed")));
         }

@@ -160,6 +160,14 @@ fn every_entry_point_reports_instead_of_crashing() {
         assert_eq!(pvt3_classify(c, frames.as_ptr(), 7600, 1, probs.as_mut_ptr(), 40, null_mut()), PVT3_ERR_INPUT);
         assert_eq!(pvt3_classify(c, frames.as_ptr(), 9000, 2, probs.as_mut_ptr(), 39, null_mut()), PVT3_ERR_INPUT);
         assert!(last_error().contains("room for 39 values; 40 needed"));
+        // batch × classes and batch × sample length overflow: an error, not a wrapped size.
+        assert_eq!(pvt3_classify(c, frames.as_ptr(), 9000, usize::MAX / 4, probs.as_mut_ptr(), 40, null_mut()), PVT3_ERR_INPUT);
+        assert!(last_error().contains("more values than memory can address"), "{}", last_error());
+        assert_eq!(
+            pvt3_classify(c, frames.as_ptr(), 9000, usize::MAX / 4500 + 1, probs.as_mut_ptr(), usize::MAX, null_mut()),
+            PVT3_ERR_INPUT
+        );
+        assert!(last_error().contains("more values than memory can address"), "{}", last_error());
         let mut nan = frames.clone();
         nan[5] = f32::NAN;
         assert_eq!(pvt3_classify(c, nan.as_ptr(), 4500, 1, probs.as_mut_ptr(), 40, null_mut()), PVT3_ERR_INPUT);

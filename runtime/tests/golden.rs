@@ -62,6 +62,7 @@ fn the_default_kernels_give_bit_identical_outputs_across_loads_and_runs() {
         assert_eq!(answers(&again, &x), expected, "load {load}");
     }
     assert!(matches!(first.prepare(&[0], false), Err(pvt3_runtime::Error::EmptyBatch)));
+    assert!(matches!(first.run(&x, usize::MAX / 1000), Err(pvt3_runtime::Error::BatchTooLarge { .. })), "batch × sample length overflows");
 }
 
 #[test]
