@@ -3,7 +3,14 @@
  * Link libpvt3_runtime.a (with -lm -lpthread -ldl) or libpvt3_runtime.so. Every function that
  * returns int returns PVT3_OK or an error code; pvt3_last_error() then says what went wrong.
  * No call panics or aborts on bad input: null pointers, wrong lengths, non-finite values,
- * truncated or foreign files are all reported. */
+ * truncated or foreign files are all reported; a file damaged or altered since export is refused
+ * at load (integrity digest).
+ *
+ * Threads: a classifier may be used from several threads at once (pvt3_classify,
+ * pvt3_classifier_prepare, pvt3_session_new and the getters; a test checks every answer against
+ * one thread's), but pvt3_classifier_set_kernels and pvt3_classifier_free must not run alongside
+ * any other call on it. A session belongs to one thread at a time. pvt3_last_error() is per
+ * thread. */
 #ifndef PVT3_H
 #define PVT3_H
 
