@@ -81,9 +81,9 @@ enum Choice {
 enum Operand {
     /// A constant, by its plain `[k, mn]` values.
     Const(Tensor),
-    /// Input `slot` of the product, packed by node `pack` (for this product alone); `zeros` has
-    /// its unpacked shape.
-    Packed { slot: usize, pack: usize, zeros: Tensor, k_axis: usize, mn_axis: usize },
+    /// An input of the product, packed by node `pack` (for this product alone); `zeros` has its
+    /// unpacked shape.
+    Packed { pack: usize, zeros: Tensor, k_axis: usize, mn_axis: usize },
 }
 
 impl Operand {
@@ -235,9 +235,11 @@ fn small(model: &TypedModel, p: &Product) -> TractResult<Option<Small>> {
     let mut inputs = node.inputs.clone();
     let mut source = |o: &Operand| match o {
         Operand::Const(t) => Source::Const(Arc::new(t.clone())),
-        Operand::Packed { slot, pack, k_axis, mn_axis, .. } => {
-            inputs[*slot] = model.node(*pack).inputs[0];
-            Source::Input { input: *slot, k_axis: *k_axis, mn_axis: *mn_axis }
+        Operand::Packed { pack, k_axis, mn_axis, .. } => {
+            // The input the pack feeds (`operand` found the product's operand there).
+            let input = node.inputs.iter().position(|o| o.node == *pack).expect("a packed operand reads its pack");
+            inputs[input] = model.node(*pack).inputs[0];
+            Source::Input { input, k_axis: *k_axis, mn_axis: *mn_axis }
         }
     };
     let (a, b) = (source(&p.a), source(&p.b));
@@ -312,9 +314,9 @@ fn product(model: &TypedModel, node: usize) -> TractResult<Option<Product>> {
 }
 
 fn operand(model: &TypedModel, node: &TypedNode, operand: &MatMulOperand) -> TractResult<Option<Operand>> {
-    let (i, input) = match operand {
+    let input = match operand {
         MatMulOperand::Const(v) => return Ok(unpack(&**v)?.map(Operand::Const)),
-        MatMulOperand::Input(i) => (i, node.inputs[*i]),
+        MatMulOperand::Input(i) => node.inputs[*i],
     };
     let pack = model.node(input.node);
     if pack.op_as::<OptMatMulPack>().is_none() || model.outlet_successors(input).len() != 1 {
@@ -329,7 +331,7 @@ fn operand(model: &TypedModel, node: &TypedNode, operand: &MatMulOperand) -> Tra
     if in_fact.datum_type != f32::datum_type() || !one_matrix {
         return Ok(None);
     }
-    Ok(Some(Operand::Packed { slot: *i, pack: pack.id, zeros: Tensor::zero::<f32>(shape)?, k_axis, mn_axis }))
+    Ok(Some(Operand::Packed { pack: pack.id, zeros: Tensor::zero::<f32>(shape)?, k_axis, mn_axis }))
 }
 
 /// The plain `[k, mn]` values of a constant operand packed in a plain f32 format.
