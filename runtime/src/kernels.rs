@@ -168,11 +168,11 @@ pub fn tune(model: &mut TypedModel, threads: usize, kernels: Kernels) -> TractRe
     Ok(changed)
 }
 
-/// The fixed rule's choice: the runtime's product in the widest instruction set, where it
-/// applies (`small`); otherwise tract's own pick (`None`).
+/// The fixed rule's choice: the runtime's product where it applies (`small`, built by [`small`]
+/// with the widest instruction set); otherwise tract's own pick (`None`).
 fn fixed(small: Option<&Small>) -> Option<Choice> {
     #[cfg(target_arch = "x86_64")]
-    return small.and_then(|_| small_products::instruction_sets().first().map(|isa| Choice::Small(*isa)));
+    return small.map(|(op, _)| Choice::Small(op.isa));
     #[cfg(not(target_arch = "x86_64"))]
     small.map(|s| match *s {})
 }

@@ -31,7 +31,7 @@ impl Isa {
     }
 
     /// Whether this machine has these instructions.
-    pub(crate) fn present(self) -> bool {
+    fn present(self) -> bool {
         match self {
             Isa::Avx512 => is_x86_feature_detected!("avx512f"),
             Isa::Avx2 => is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma"),
