@@ -15,7 +15,7 @@ use crate::embedding::embed;
 use crate::graph::{int, ints, Graph};
 use crate::layers::{absorb_norm, centre_rows, centred, gelu, layer_norm, linear, norm_affine, residual_linear, rms_norm};
 use crate::{Error, Result};
-use pvt3_format::{keys, INPUT, LOGITS, PROBABILITIES, TOKEN_ENCODINGS, TOKEN_FRAMES, TOKEN_INDEX};
+use pvt3_format::{keys, Dims, Header, INPUT, LOGITS, PROBABILITIES, TOKEN_ENCODINGS, TOKEN_FRAMES, TOKEN_INDEX};
 
 /// What the file says about itself, besides the graph.
 #[derive(Clone, Debug)]
@@ -208,7 +208,7 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
     let logits = linear(&mut g, &normed, &m.head, "head");
     g.node("Identity", &[&logits], vec![], Some(LOGITS));
     g.node("Softmax", &[&logits], vec![int("axis", -1)], Some(PROBABILITIES));
-    let kept_frames: Vec<i64> = m.kept_tokens.iter().flat_map(|k| (k * tt..(k + 1) * tt).map(|f| f as i64)).collect();
+    let kept_frames: Vec<usize> = m.kept_tokens.iter().flat_map(|k| k * tt..(k + 1) * tt).collect();
 
     let mut input_dims = vec![None];
     input_dims.extend(sample.iter().map(|v| Some(*v)));
@@ -220,21 +220,11 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
         output: vec![value_info(LOGITS, &[None, Some(c.classes)]), value_info(PROBABILITIES, &[None, Some(c.classes)])],
         ..Default::default()
     };
-    let layout = if c.channels == 1 { "[batch, height, width, frames]" } else { "[batch, height, width, channels, frames]" };
-    let props = [
-        (keys::CLASSES, serde_json::to_string(&meta.classes).expect("strings serialise")),
-        (
-            keys::INPUT_LAYOUT,
-            format!(
-                "{layout} = [batch, {}], raw sensor values as float32",
-                sample.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(", ")
-            ),
-        ),
-        (keys::INPUT_UNITS, "the data set's raw units (normalisation is inside the graph)".into()),
-        (keys::KEPT_FRAMES, serde_json::to_string(&kept_frames).expect("integers serialise")),
-        (keys::CONFIG, serde_json::to_string(c).expect("the configuration serialises")),
-        (keys::PROVENANCE, meta.provenance.to_string()),
-    ];
+    let dims = Dims { height: h, width: w, channels: ch, frames: c.frames, tubelet: tt, dim: d };
+    let header = Header { classes: meta.classes.clone(), kept_frames, dims };
+    let config = serde_json::to_value(c).expect("the configuration serialises");
+    let mut props = header.entries(&config);
+    props.push((keys::PROVENANCE, meta.provenance.to_string()));
     let mut model = ModelProto {
         ir_version: 8,
         opset_import: vec![OperatorSetIdProto { domain: String::new(), version: 17 }],

@@ -1,11 +1,14 @@
 //! The contract between `pvt3 export` and the robot runtime: what an exported `.onnx` file is
 //! called inside (tensor names, metadata keys) and how it proves it is the file that was written
-//! (the integrity digest). Both sides read these names from here and nowhere else; the runtime
-//! depends on this crate and tract alone.
+//! (the integrity digest), which format version it is and what its metadata says ([`Header`]).
+//! Both sides read these from here and nowhere else; the runtime depends on this crate and tract
+//! alone.
 
 mod digest;
+mod header;
 
 pub use digest::{digest, verify, Integrity};
+pub use header::{Dims, Header, HeaderError, FORMAT_VERSION};
 
 /// Input: raw sensor frames `[batch, height, width, (channels,) frames]`.
 pub const INPUT: &str = "frames";
@@ -22,6 +25,8 @@ pub const TOKEN_ENCODINGS: &str = "token_encodings";
 
 /// Metadata keys (`metadata_props` of the ONNX model).
 pub mod keys {
+    /// The file format's version, `major.minor` ([`crate::FORMAT_VERSION`]).
+    pub const FORMAT: &str = "pvt3.format";
     /// The class names, a JSON array of strings.
     pub const CLASSES: &str = "pvt3.classes";
     /// The input layout, in words.

@@ -18,8 +18,9 @@ static int fail(const char *what) {
 
 static void print(const char *way, const pvt3_classifier *model, size_t i, size_t class, const float *probs, size_t classes) {
     const char *name = "?";
-    pvt3_classifier_class_name(model, class, &name);
-    printf("%s\t%zu\t%zu\t%s\t%.6f", way, i, class, name, probs[class]);
+    size_t name_len = 1;
+    pvt3_classifier_class_name(model, class, &name, &name_len);
+    printf("%s\t%zu\t%zu\t%.*s\t%.6f", way, i, class, (int)name_len, name, probs[class]);
     for (size_t k = 0; k < classes; k++) printf("\t%.9g", probs[k]);
     printf("\n");
 }

@@ -56,8 +56,9 @@ int pvt3_classifier_sample_len(const pvt3_classifier *c, size_t *out);
 int pvt3_classifier_frames(const pvt3_classifier *c, size_t *out);
 /* Number of classes. */
 int pvt3_classifier_num_classes(const pvt3_classifier *c, size_t *out);
-/* Name of class `index`, valid as long as the handle. */
-int pvt3_classifier_class_name(const pvt3_classifier *c, size_t index, const char **out);
+/* Name of class `index`, NUL-terminated, valid as long as the handle; unless len is NULL, its
+ * length in bytes (without the NUL) is written to *len. */
+int pvt3_classifier_class_name(const pvt3_classifier *c, size_t index, const char **out, size_t *len);
 /* Classifies `batch` windows (frames_len = batch x sample_len values): batch x classes
  * probabilities, and the most probable class of each window unless classes_out is NULL. */
 int pvt3_classify(const pvt3_classifier *c, const float *frames, size_t frames_len, size_t batch,
@@ -72,6 +73,9 @@ void pvt3_session_free(pvt3_session *s);
 int pvt3_session_push_frame(pvt3_session *s, const float *frame, size_t frame_len);
 /* Writes the class probabilities, and the most probable class unless class_out is NULL. */
 int pvt3_session_finish(pvt3_session *s, float *probabilities, size_t probabilities_len, size_t *class_out);
+/* The library's version and the file format it reads, e.g. "0.1.0 (format 1.0)"; a static string.
+ * The runtime reads every file of its format's major version and refuses others (PVT3_ERR_MODEL). */
+const char *pvt3_version(void);
 /* Message of the last failed call on this thread ("" if none), valid until the next call. */
 const char *pvt3_last_error(void);
 

@@ -5,15 +5,15 @@ use std::panic::AssertUnwindSafe;
 use std::path::Path;
 use std::sync::{Arc, Mutex};
 
+use tract_core::prelude::*;
+use tract_core::runtime::RunOptions;
 use tract_linalg::multithread::Executor;
-use tract_onnx::pb::ModelProto;
-use tract_onnx::prelude::*;
-use tract_onnx::tract_core::runtime::RunOptions;
 
-use pvt3_format::keys;
+use pvt3_format::{Header, INPUT, LOGITS, PROBABILITIES};
 
 use crate::error::{catch_panic, tract_error};
 use crate::kernels::Kernels;
+use crate::onnx::{Graph, Model};
 use crate::plan::{outputs_of, Plan};
 use crate::stream::Stages;
 use crate::{Error, Result};
@@ -29,14 +29,9 @@ pub struct Prediction {
 }
 
 pub struct Classifier {
-    pub(crate) proto: ModelProto,
-    classes: Vec<String>,
+    graph: Graph,
+    header: Header,
     sample_shape: Vec<usize>,
-    kept_frames: Vec<usize>,
-    /// Frames per temporal token.
-    pub(crate) tubelet: usize,
-    /// Width of a token's encoding.
-    pub(crate) dim: usize,
     plans: Mutex<HashMap<usize, Arc<Plan>>>,
     stages: Mutex<Option<Arc<Stages>>>,
     threads: usize,
@@ -67,44 +62,15 @@ impl Classifier {
     pub fn from_bytes(bytes: &[u8], name: &str) -> Result<Self> {
         let name = name.to_string();
         pvt3_format::verify(bytes).map_err(|reason| Error::Corrupted { path: name.clone(), reason })?;
-        let proto = tract_onnx::onnx()
-            .proto_model_for_read(&mut &*bytes)
-            .map_err(|e| Error::NotOnnx { path: name.clone(), reason: e.to_string() })?;
-        let meta = |key: &'static str| -> Result<serde_json::Value> {
-            let entry = proto.metadata_props.iter().find(|p| p.key == key);
-            let entry = entry.ok_or_else(|| Error::NotPvt3 { path: name.clone(), key, problem: "is missing".into() })?;
-            serde_json::from_str(&entry.value).map_err(|e| Error::NotPvt3 {
-                path: name.clone(),
-                key,
-                problem: format!("is not JSON ({e})"),
-            })
-        };
-        let bad = |key: &'static str| Error::NotPvt3 { path: name.clone(), key, problem: "has an unexpected form".into() };
-        let classes: Vec<String> = serde_json::from_value(meta(keys::CLASSES)?).map_err(|_| bad(keys::CLASSES))?;
-        let kept_frames: Vec<usize> = serde_json::from_value(meta(keys::KEPT_FRAMES)?).map_err(|_| bad(keys::KEPT_FRAMES))?;
-        let config = meta(keys::CONFIG)?;
-        let dim = |k: &str| config.get(k).and_then(|v| v.as_u64()).map(|v| v as usize).ok_or_else(|| bad(keys::CONFIG));
-        let channels = dim("channels")?;
-        let mut sample_shape = vec![dim("height")?, dim("width")?];
-        if channels > 1 {
-            sample_shape.push(channels);
-        }
-        sample_shape.push(dim("frames")?);
-        let (tubelet, dim) = (dim("tubelet")?, dim("dim")?);
-        let frames = sample_shape[sample_shape.len() - 1];
-        let consistent = !classes.is_empty()
-            && tubelet > 0
-            && frames.is_multiple_of(tubelet)
-            && kept_frames.len().is_multiple_of(tubelet)
-            && kept_frames.windows(2).all(|w| w[0] < w[1])
-            && kept_frames.iter().all(|f| *f < frames);
-        if !consistent {
-            return Err(Error::NotPvt3 { path: name, key: keys::KEPT_FRAMES, problem: "does not fit the configuration".into() });
-        }
+        let model = Model::decode(bytes).map_err(|reason| Error::NotOnnx { path: name.clone(), reason })?;
+        let entries = model.metadata_props.iter().map(|e| (e.key.as_str(), e.value.as_str()));
+        let header = Header::parse(entries).map_err(|reason| Error::NotPvt3 { path: name.clone(), reason })?;
+        let graph = model.graph.unwrap_or_default();
+        let sample_shape = header.sample_shape();
         let plans = Mutex::new(HashMap::new());
         let stages = Mutex::new(None);
         let kernels = Kernels::default();
-        Ok(Self { proto, classes, sample_shape, kept_frames, tubelet, dim, plans, stages, threads: 1, kernels, path: name })
+        Ok(Self { graph, header, sample_shape, plans, stages, threads: 1, kernels, path: name })
     }
 
     /// Runs on `threads` threads from now on (default 1; small models rarely gain from more).
@@ -134,7 +100,7 @@ impl Classifier {
     }
 
     pub fn classes(&self) -> &[String] {
-        &self.classes
+        &self.header.classes
     }
 
     /// One window: `[height, width, (channels,) frames]`.
@@ -144,36 +110,39 @@ impl Classifier {
 
     /// Frames per temporal token (the spatial stage encodes them together).
     pub fn tubelet(&self) -> usize {
-        self.tubelet
+        self.header.dims.tubelet
+    }
+
+    /// Width of a token's encoding (what the spatial stage hands the temporal one).
+    pub(crate) fn dim(&self) -> usize {
+        self.header.dims.dim
     }
 
     /// The frames of a window the model reads; the others were pruned.
     pub fn kept_frames(&self) -> &[usize] {
-        &self.kept_frames
+        &self.header.kept_frames
     }
 
     fn sample_len(&self) -> usize {
         self.sample_shape.iter().product()
     }
 
-    /// `model` with fixed input facts, optimised, its kernels chosen, and made runnable on the
-    /// caller's threads.
-    pub(crate) fn optimise(&self, model: &ModelProto, inputs: Vec<InferenceFact>) -> Result<Plan> {
+    /// The part of the graph from `sources` (tensor names with fixed facts) to `outputs`,
+    /// optimised, its kernels chosen, and made runnable on the caller's threads.
+    pub(crate) fn optimise(&self, sources: &[(&str, TypedFact)], outputs: &[&str]) -> Result<Plan> {
         let executor = match self.threads {
             1 => Executor::SingleThread,
             n => Executor::multithread(n),
         };
+        let not_onnx = |reason: String| Error::NotOnnx { path: self.path.clone(), reason };
+        let model = crate::wire::typed_model(&self.graph, sources, outputs).map_err(not_onnx)?;
         let build = || {
-            let mut model = tract_onnx::onnx().model_for_proto_model(model)?;
-            for (i, fact) in inputs.into_iter().enumerate() {
-                model = model.with_input_fact(i, fact)?;
-            }
             let mut model = model.into_optimized()?;
             crate::kernels::tune(&mut model, self.threads, self.kernels)?;
             model.into_runnable_with_options(&RunOptions { executor: Some(executor), ..Default::default() })
         };
         let plan = catch_panic(AssertUnwindSafe(build))?;
-        plan.map(Plan::new).map_err(|e| Error::NotOnnx { path: self.path.clone(), reason: format!("{e:#}") })
+        plan.map(Plan::new).map_err(|e| not_onnx(format!("{e:#}")))
     }
 
     /// Builds now what the first call at each batch size of `batches`, and with `streaming` the
@@ -201,7 +170,7 @@ impl Classifier {
         }
         let mut shape = vec![batch];
         shape.extend(&self.sample_shape);
-        let plan = Arc::new(self.optimise(&self.proto, vec![f32::fact(&shape).into()])?);
+        let plan = Arc::new(self.optimise(&[(INPUT, f32::fact(&shape))], &[LOGITS, PROBABILITIES])?);
         plans.insert(batch, plan.clone());
         Ok(plan)
     }
@@ -239,14 +208,14 @@ impl Classifier {
         shape.extend(&self.sample_shape);
         let input = Tensor::from_shape(&shape, frames).map_err(tract_error)?;
         let outputs = self.plan(batch)?.run(tvec!(input.into()))?;
-        let len = batch.checked_mul(self.classes.len()).ok_or(Error::BatchTooLarge { batch })?;
+        let len = batch.checked_mul(self.classes().len()).ok_or(Error::BatchTooLarge { batch })?;
         Ok((outputs_of(&outputs, 0, len)?, outputs_of(&outputs, 1, len)?))
     }
 
     /// Classifies `batch` windows laid out back to back.
     pub fn classify_batch(&self, frames: &[f32], batch: usize) -> Result<Vec<Prediction>> {
         let (_, probabilities) = self.run(frames, batch)?;
-        Ok(probabilities.chunks(self.classes.len()).map(|p| prediction(&self.classes, p)).collect())
+        Ok(probabilities.chunks(self.classes().len()).map(|p| prediction(self.classes(), p)).collect())
     }
 
     /// Classifies one window.

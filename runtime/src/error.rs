@@ -10,8 +10,8 @@ pub enum Error {
     NotOnnx { path: String, reason: String },
     #[error("{path} is refused: {reason}")]
     Corrupted { path: String, reason: pvt3_format::Integrity },
-    #[error("{path} is not a pvt3 model: metadata `{key}` {problem}")]
-    NotPvt3 { path: String, key: &'static str, problem: String },
+    #[error("{path} is not a pvt3 model this runtime reads: {reason}")]
+    NotPvt3 { path: String, reason: pvt3_format::HeaderError },
     #[error("input has {got} values; expected {expected} ({batch} × {sample})")]
     InputLength { got: usize, expected: usize, batch: usize, sample: String },
     #[error("input value {index} is {value}: only finite values can be classified")]

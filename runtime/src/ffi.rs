@@ -5,6 +5,7 @@
 use std::cell::RefCell;
 use std::ffi::{c_char, c_int, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::sync::OnceLock;
 
 use crate::{Classifier, Error, Kernels, Session};
 
@@ -198,17 +199,26 @@ pub unsafe extern "C" fn pvt3_classifier_num_classes(c: *const Pvt3Classifier, o
     write_size(c, out, |c| c.names.len())
 }
 
-/// The name of class `index`; the string lives as long as the handle.
+/// The name of class `index`, NUL-terminated, valid as long as the handle; unless `len` is
+/// null, its length in bytes (without the NUL) goes to `*len`.
 ///
 /// # Safety
-/// `c` is a live handle or null; `out` is writable or null.
+/// `c` is a live handle or null; `out` is writable or null; `len` is writable or null.
 #[no_mangle]
-pub unsafe extern "C" fn pvt3_classifier_class_name(c: *const Pvt3Classifier, index: usize, out: *mut *const c_char) -> c_int {
+pub unsafe extern "C" fn pvt3_classifier_class_name(
+    c: *const Pvt3Classifier,
+    index: usize,
+    out: *mut *const c_char,
+    len: *mut usize,
+) -> c_int {
     guard(|| {
         let c = c.as_ref().ok_or_else(|| null("classifier"))?;
         let out = out.as_mut().ok_or_else(|| null("out"))?;
         let name = c.names.get(index).ok_or_else(|| (PVT3_ERR_INPUT, format!("class {index} of {}", c.names.len())))?;
         *out = name.as_ptr();
+        if let Some(len) = len.as_mut() {
+            *len = name.as_bytes().len();
+        }
         Ok(())
     })
 }
@@ -322,6 +332,14 @@ pub unsafe extern "C" fn pvt3_session_finish(
         }
         Ok(())
     })
+}
+
+/// The library's version and the file format it reads, e.g. `0.1.0 (format 1.0)`; a static string.
+#[no_mangle]
+pub extern "C" fn pvt3_version() -> *const c_char {
+    static VERSION: OnceLock<CString> = OnceLock::new();
+    let (major, minor) = pvt3_format::FORMAT_VERSION;
+    VERSION.get_or_init(|| CString::new(format!("{} (format {major}.{minor})", env!("CARGO_PKG_VERSION"))).expect("no NUL")).as_ptr()
 }
 
 /// The message of the last failed call on this thread ("" if none); valid until the next call.

@@ -10,16 +10,15 @@
 use std::collections::HashMap;
 use std::time::{Duration, Instant};
 
-use tract_onnx::prelude::*;
-use tract_onnx::tract_core::internal::*;
-use tract_onnx::tract_core::ops::matmul::optimized::{MatMulOperand, OptMatMul, ProtoFusedSpec};
-use tract_onnx::tract_core::ops::matmul::pack::{DynPackedExoticFact, OptMatMulPack};
-use tract_onnx::tract_core::ops::matmul::ModePicker;
-use tract_onnx::tract_core::tract_linalg::mmm::{
+use tract_core::internal::*;
+use tract_core::ops::matmul::optimized::{MatMulOperand, OptMatMul, ProtoFusedSpec};
+use tract_core::ops::matmul::pack::{DynPackedExoticFact, OptMatMulPack};
+use tract_core::ops::matmul::ModePicker;
+use tract_core::tract_linalg::mmm::{
     retain_best, AsInputValue, EagerPackedInput, FusedSpec, MMMInputFormat, MMMInputValue, MatMatMul, MmmDispatch, OutputStoreSpec,
     PackedMatrixStorage, Query,
 };
-use tract_onnx::tract_core::tract_linalg::pack::PackedFormat;
+use tract_core::tract_linalg::pack::PackedFormat;
 
 #[cfg(target_arch = "x86_64")]
 use crate::small_products::{self, Combine, Epilogue, Isa, SmallProduct, Source};
@@ -520,8 +519,8 @@ impl TypedOp for Pack {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use tract_onnx::tract_core::ops::einsum::EinSum;
-    use tract_onnx::tract_core::ops::math::add;
+    use tract_core::ops::einsum::EinSum;
+    use tract_core::ops::math::add;
 
     /// `h = x W + b` (a constant operand) and `h yᵀ` (two packed inputs), optimised by tract.
     fn two_products() -> TypedModel {
@@ -612,7 +611,10 @@ mod tests {
     #[test]
     fn the_golden_plan_has_the_structure_the_kernel_choice_expects() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/golden/icub20/model.onnx");
-        let model = tract_onnx::onnx().model_for_path(path).unwrap().with_input_fact(0, f32::fact([1, 6, 10, 75]).into()).unwrap();
+        let bytes = std::fs::read(path).unwrap();
+        let graph = crate::onnx::Model::decode(&bytes).unwrap().graph.unwrap();
+        let sources = [(pvt3_format::INPUT, f32::fact([1, 6, 10, 75]))];
+        let model = crate::wire::typed_model(&graph, &sources, &[pvt3_format::LOGITS, pvt3_format::PROBABILITIES]).unwrap();
         let model = model.into_optimized().unwrap();
         let products: Vec<usize> = model.nodes().iter().filter(|n| n.op_is::<OptMatMul>()).map(|n| n.id).collect();
         assert!(products.len() >= 40, "{} matrix products in the golden plan", products.len());

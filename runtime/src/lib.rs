@@ -15,16 +15,17 @@
 #![deny(clippy::undocumented_unsafe_blocks)]
 
 mod classifier;
-mod cut;
 mod error;
 pub mod ffi;
 mod heap;
 mod kernels;
 mod npy;
+mod onnx;
 mod plan;
 #[cfg(target_arch = "x86_64")]
 mod small_products;
 mod stream;
+mod wire;
 
 pub use classifier::{Classifier, Prediction};
 pub use error::{Error, Result};

@@ -4,7 +4,7 @@
 use std::panic::AssertUnwindSafe;
 use std::sync::Mutex;
 
-use tract_onnx::prelude::*;
+use tract_core::prelude::*;
 
 use crate::error::{catch_panic, tract_error};
 use crate::{Error, Result};
@@ -53,7 +53,7 @@ mod tests {
         let mut model = TypedModel::default();
         let x = model.add_source("x", f32::fact([3])).unwrap();
         let two = model.add_const("two", tensor1(&[2f32, 2.0, 2.0])).unwrap();
-        let y = model.wire_node("y", tract_onnx::tract_core::ops::math::mul(), &[x, two]).unwrap();
+        let y = model.wire_node("y", tract_core::ops::math::mul(), &[x, two]).unwrap();
         model.select_output_outlets(&y).unwrap();
         let plan = Plan::new(model.into_runnable().unwrap());
         for k in 0..3 {

@@ -6,9 +6,8 @@
 //! register blocks of outputs within one call (docs/benchmarks.md, step 17), with AVX-512 or with
 //! AVX2 and FMA. The module exists on x86-64 only (`lib.rs`); elsewhere tract's kernels run.
 
-use tract_onnx::prelude::*;
-use tract_onnx::tract_core::internal::*;
-use tract_onnx::tract_core::tract_linalg::BinOp;
+use tract_core::internal::*;
+use tract_core::tract_linalg::BinOp;
 
 mod kernel;
 mod lanes;

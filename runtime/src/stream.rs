@@ -10,11 +10,9 @@
 use std::sync::Arc;
 
 use pvt3_format::{PROBABILITIES, TOKEN_ENCODINGS, TOKEN_FRAMES, TOKEN_INDEX};
-use tract_onnx::pb::tensor_proto::DataType;
-use tract_onnx::prelude::*;
+use tract_core::prelude::*;
 
 use crate::classifier::prediction;
-use crate::cut::{cut, Seam};
 use crate::error::tract_error;
 use crate::plan::{outputs_of, Plan};
 use crate::{Classifier, Error, Prediction, Result};
@@ -36,33 +34,21 @@ pub(crate) struct Stages {
 impl Stages {
     pub(crate) fn new(c: &Classifier) -> Result<Self> {
         let frames = *c.sample_shape().last().expect("a sample has a frame axis");
-        let tokens = frames / c.tubelet;
-        let mut kept_index = vec![None; tokens];
-        for (kk, f) in c.kept_frames().iter().step_by(c.tubelet).enumerate() {
-            kept_index[f / c.tubelet] = Some(kk);
+        let tubelet = c.tubelet();
+        let mut kept_index = vec![None; frames / tubelet];
+        for (kk, f) in c.kept_frames().iter().step_by(tubelet).enumerate() {
+            kept_index[f / tubelet] = Some(kk);
         }
-        let kept = c.kept_frames().len() / c.tubelet;
+        let kept = c.kept_frames().len() / tubelet;
         let frame = &c.sample_shape()[..c.sample_shape().len() - 1];
-        let token_shape = vec![1, c.tubelet, frame[0], frame[1], frame.get(2).copied().unwrap_or(1)];
-        let no_seam = |reason: String| Error::NotOnnx { path: c.path.clone(), reason: format!("cannot stream: {reason}") };
-        let spatial = cut(
-            &c.proto,
-            &[
-                Seam { name: TOKEN_FRAMES, data_type: DataType::Float, shape: token_shape.clone() },
-                Seam { name: TOKEN_INDEX, data_type: DataType::Int64, shape: vec![1] },
-            ],
-            &[TOKEN_ENCODINGS],
-        )
-        .map_err(no_seam)?;
-        let temporal =
-            cut(&c.proto, &[Seam { name: TOKEN_ENCODINGS, data_type: DataType::Float, shape: vec![kept, c.dim] }], &[PROBABILITIES])
-                .map_err(no_seam)?;
+        let token_shape = vec![1, tubelet, frame[0], frame[1], frame.get(2).copied().unwrap_or(1)];
+        let spatial = [(TOKEN_FRAMES, f32::fact(&token_shape)), (TOKEN_INDEX, i64::fact([1]))];
         Ok(Self {
-            spatial: c.optimise(&spatial, vec![f32::fact(&token_shape).into(), i64::fact([1]).into()])?,
-            temporal: c.optimise(&temporal, vec![f32::fact([kept, c.dim]).into()])?,
+            spatial: c.optimise(&spatial, &[TOKEN_ENCODINGS])?,
+            temporal: c.optimise(&[(TOKEN_ENCODINGS, f32::fact([kept, c.dim()]))], &[PROBABILITIES])?,
             kept_index,
             token_shape,
-            dim: c.dim,
+            dim: c.dim(),
             classes: c.classes().to_vec(),
         })
     }

@@ -4,6 +4,7 @@
 
 mod support;
 
+use std::collections::BTreeMap;
 use std::ffi::{CStr, CString};
 use std::ptr::{null, null_mut};
 
@@ -23,30 +24,72 @@ fn strip_c_comments(text: &str) -> String {
     out.split_whitespace().collect::<Vec<_>>().join(" ")
 }
 
-/// `(name, parameter count)` of a declaration `… name(params)`.
-fn signature(decl: &str) -> Option<(String, usize)> {
+/// Tokens of a C type, `*` apart: `const char **` → `const char * *`.
+fn c_tokens(text: &str) -> String {
+    text.replace('*', " * ").split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// The C spelling of a Rust type of the ABI: `*mut *const c_char` → `const char * *`.
+fn c_type(rust: &str) -> String {
+    let rust = rust.trim();
+    if let Some(inner) = rust.strip_prefix("*const ") {
+        let inner = c_type(inner);
+        return if inner.ends_with('*') { format!("{inner} const *") } else { format!("const {inner} *") };
+    }
+    if let Some(inner) = rust.strip_prefix("*mut ") {
+        return format!("{} *", c_type(inner));
+    }
+    match rust {
+        "c_int" => "int",
+        "usize" => "size_t",
+        "f32" => "float",
+        "c_char" => "char",
+        "Pvt3Classifier" => "pvt3_classifier",
+        "Pvt3Session" => "pvt3_session",
+        "" | "()" => "void",
+        other => panic!("a Rust type the ABI test does not map to C: {other}"),
+    }
+    .to_string()
+}
+
+/// `name → (return type, parameter types)` of a C declaration `ret name(type name, …)`.
+fn c_signature(decl: &str) -> Option<(String, (String, Vec<String>))> {
     let (head, tail) = decl.split_once('(')?;
-    let name = head.split([' ', '*']).rfind(|w| !w.is_empty())?.to_string();
+    let head = c_tokens(head);
+    let (ret, name) = head.rsplit_once(' ')?;
     let params = tail.rsplit_once(')')?.0.trim();
-    let count = params.split(',').filter(|p| !p.trim().is_empty() && p.trim() != "void").count();
-    Some((name, count))
+    // Each parameter without its name (the last word).
+    let types = params
+        .split(',')
+        .map(c_tokens)
+        .filter(|p| !p.is_empty() && p != "void")
+        .map(|p| p.rsplit_once(' ').map_or(p.clone(), |(t, _)| t.to_string()))
+        .collect();
+    Some((name.to_string(), (ret.to_string(), types)))
+}
+
+/// The same, of a Rust definition `name(p: T, …) -> R` given from its name on.
+fn rust_signature(def: &str) -> Option<(String, (String, Vec<String>))> {
+    let (name, tail) = def.split_once('(')?;
+    let (params, after) = tail.split_once(')')?;
+    let ret = after.split('{').next()?.trim().strip_prefix("-> ").unwrap_or("");
+    let types = params.split(',').filter(|p| !p.trim().is_empty()).map(|p| c_tokens(&c_type(p.split_once(':').map_or("", |(_, t)| t))));
+    Some((name.trim().to_string(), (c_tokens(&c_type(ret)), types.collect())))
 }
 
 #[test]
 fn the_header_declares_exactly_what_the_code_exports() {
     let header = strip_c_comments(&std::fs::read_to_string(root().join("include/pvt3.h")).unwrap());
     let code = std::fs::read_to_string(root().join("src/ffi.rs")).unwrap();
-    let mut header_fns: Vec<(String, usize)> = header
+    let header_fns: BTreeMap<_, _> = header
         .split(';')
         .filter(|d| d.contains("pvt3_") && d.contains('('))
-        .filter_map(|d| signature(d.split("#define").last()?))
+        .filter_map(|d| c_signature(d.split("#define").last()?))
         .collect();
-    let mut code_fns: Vec<(String, usize)> =
-        code.split("extern \"C\" fn ").skip(1).filter_map(|rest| signature(rest.split(" -> ").next()?.split('{').next()?)).collect();
-    header_fns.sort();
-    code_fns.sort();
-    assert_eq!(header_fns, code_fns, "functions and their parameter counts");
-    assert_eq!(code_fns.len(), 14);
+    let code_fns: BTreeMap<_, _> = code.split("extern \"C\" fn ").skip(1).filter_map(rust_signature).collect();
+    assert_eq!(header_fns, code_fns, "functions, their return and parameter types");
+    assert_eq!(code_fns.len(), 15);
+    assert_eq!(code_fns["pvt3_classify"].1[6], "size_t *", "the types are read");
     let mut header_consts: Vec<(String, String)> = header
         .split("#define ")
         .skip(1)
@@ -123,7 +166,7 @@ fn every_entry_point_reports_instead_of_crashing() {
         assert_eq!(pvt3_classifier_sample_len(null(), &mut n), PVT3_ERR_NULL);
         assert_eq!(pvt3_classifier_num_classes(null(), &mut n), PVT3_ERR_NULL);
         let mut name = null();
-        assert_eq!(pvt3_classifier_class_name(null(), 0, &mut name), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classifier_class_name(null(), 0, &mut name, null_mut()), PVT3_ERR_NULL);
         let mut probs = vec![0f32; 40];
         assert_eq!(pvt3_classify(null(), probs.as_ptr(), 1, 1, probs.as_mut_ptr(), 40, null_mut()), PVT3_ERR_NULL);
         assert_eq!(pvt3_classifier_frames(null(), &mut n), PVT3_ERR_NULL);
@@ -147,10 +190,15 @@ fn every_entry_point_reports_instead_of_crashing() {
         assert_eq!(pvt3_classifier_prepare(c, 2, 1), PVT3_OK);
         assert_eq!(pvt3_classifier_sample_len(c, null_mut()), PVT3_ERR_NULL);
         assert_eq!(pvt3_classifier_num_classes(c, null_mut()), PVT3_ERR_NULL);
-        assert_eq!(pvt3_classifier_class_name(c, 0, null_mut()), PVT3_ERR_NULL);
-        assert_eq!(pvt3_classifier_class_name(c, 20, &mut name), PVT3_ERR_INPUT);
-        assert_eq!(pvt3_classifier_class_name(c, 3, &mut name), PVT3_OK);
+        assert_eq!(pvt3_classifier_class_name(c, 0, null_mut(), null_mut()), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classifier_class_name(c, 20, &mut name, null_mut()), PVT3_ERR_INPUT);
+        let mut len = 0usize;
+        assert_eq!(pvt3_classifier_class_name(c, 3, &mut name, null_mut()), PVT3_OK);
         assert_eq!(CStr::from_ptr(name).to_str().unwrap(), "material_4");
+        assert_eq!(pvt3_classifier_class_name(c, 11, &mut name, &mut len), PVT3_OK);
+        assert_eq!((CStr::from_ptr(name).to_str().unwrap(), len), ("material_12", 11));
+        let version = CStr::from_ptr(pvt3_version()).to_str().unwrap();
+        assert_eq!(version, format!("{} (format 1.0)", env!("CARGO_PKG_VERSION")));
         let frames = vec![0.5f32; 2 * 4500];
         assert_eq!(pvt3_classify(c, null(), 4500, 1, probs.as_mut_ptr(), 40, null_mut()), PVT3_ERR_NULL);
         assert_eq!(pvt3_classify(c, frames.as_ptr(), 4500, 1, null_mut(), 40, null_mut()), PVT3_ERR_NULL);

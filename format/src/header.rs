@@ -1,0 +1,190 @@
+//! [`Header`]: the metadata a runtime needs to read an exported file, typed. The exporter
+//! writes it with [`Header::entries`]; the runtime reads it with [`Header::parse`], which checks
+//! the format version first and refuses a file of another major version, then checks that the
+//! parts agree with each other. A file with more metadata (provenance, the full configuration)
+//! is fine: unknown keys and fields are ignored.
+
+use serde::{Deserialize, Serialize};
+
+use crate::keys;
+
+/// The file format this crate reads and writes, `major.minor`. A runtime reads every file of
+/// its major version; a new minor version only adds what older runtimes may ignore.
+pub const FORMAT_VERSION: (u32, u32) = (1, 0);
+
+/// Why a file's metadata is not one this crate reads.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum HeaderError {
+    #[error("metadata `{key}` {problem}")]
+    Invalid { key: &'static str, problem: String },
+    #[error("format {found}, which this runtime (format {}.{}) does not read: use a runtime of the same major version, or export the model again", FORMAT_VERSION.0, FORMAT_VERSION.1)]
+    Version { found: String },
+}
+
+/// The shape of the model's input and tokens: the part of `pvt3.config` a runtime reads.
+#[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Dims {
+    pub height: usize,
+    pub width: usize,
+    /// 1 for a sensor without a channel axis.
+    pub channels: usize,
+    /// Frames per window, pruned ones included.
+    pub frames: usize,
+    /// Frames per temporal token.
+    pub tubelet: usize,
+    /// Width of a token's encoding.
+    pub dim: usize,
+}
+
+/// What a runtime reads from a file's metadata.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Header {
+    pub classes: Vec<String>,
+    /// The frames of a window the model reads, ascending; whole tokens.
+    pub kept_frames: Vec<usize>,
+    pub dims: Dims,
+}
+
+impl Header {
+    /// One window: `[height, width, (channels,) frames]`, without a channel axis when there is
+    /// one channel.
+    pub fn sample_shape(&self) -> Vec<usize> {
+        let l = &self.dims;
+        let mut shape = vec![l.height, l.width];
+        if l.channels > 1 {
+            shape.push(l.channels);
+        }
+        shape.push(l.frames);
+        shape
+    }
+
+    /// The metadata entries the exporter writes, `config` being the model's whole configuration
+    /// (a JSON object holding at least the [`Dims`]'s fields).
+    pub fn entries(&self, config: &serde_json::Value) -> Vec<(&'static str, String)> {
+        let layout = if self.dims.channels == 1 { "[batch, height, width, frames]" } else { "[batch, height, width, channels, frames]" };
+        let dims = self.sample_shape().iter().map(|v| v.to_string()).collect::<Vec<_>>().join(", ");
+        vec![
+            (keys::FORMAT, format!("{}.{}", FORMAT_VERSION.0, FORMAT_VERSION.1)),
+            (keys::CLASSES, serde_json::to_string(&self.classes).expect("strings serialise")),
+            (keys::INPUT_LAYOUT, format!("{layout} = [batch, {dims}], raw sensor values as float32")),
+            (keys::INPUT_UNITS, "the data set's raw units (normalisation is inside the graph)".into()),
+            (keys::KEPT_FRAMES, serde_json::to_string(&self.kept_frames).expect("integers serialise")),
+            (keys::CONFIG, config.to_string()),
+        ]
+    }
+
+    /// The header of a file whose metadata entries are `entries` (key, value).
+    pub fn parse<'a>(entries: impl IntoIterator<Item = (&'a str, &'a str)> + Clone) -> Result<Self, HeaderError> {
+        let get = |key: &'static str| {
+            entries
+                .clone()
+                .into_iter()
+                .find(|(k, _)| *k == key)
+                .map(|(_, v)| v)
+                .ok_or(HeaderError::Invalid { key, problem: "is missing".into() })
+        };
+        let version = get(keys::FORMAT).map_err(|_| HeaderError::Invalid {
+            key: keys::FORMAT,
+            problem: "is missing: the file was exported by a pvt3 older than format 1.0; export it again".into(),
+        })?;
+        let major = version.split('.').next().and_then(|m| m.parse::<u32>().ok());
+        if major != Some(FORMAT_VERSION.0) || version.split('.').nth(1).and_then(|m| m.parse::<u32>().ok()).is_none() {
+            return Err(HeaderError::Version { found: version.to_string() });
+        }
+        fn json<T: serde::de::DeserializeOwned>(key: &'static str, value: &str) -> Result<T, HeaderError> {
+            serde_json::from_str(value).map_err(|e| HeaderError::Invalid { key, problem: format!("has an unexpected form ({e})") })
+        }
+        let header = Header {
+            classes: json(keys::CLASSES, get(keys::CLASSES)?)?,
+            kept_frames: json(keys::KEPT_FRAMES, get(keys::KEPT_FRAMES)?)?,
+            dims: json(keys::CONFIG, get(keys::CONFIG)?)?,
+        };
+        header.check()?;
+        Ok(header)
+    }
+
+    /// The parts agree: classes exist, whole tokens are kept, in order, within the window.
+    fn check(&self) -> Result<(), HeaderError> {
+        let l = &self.dims;
+        let bad = |key, problem: &str| Err(HeaderError::Invalid { key, problem: problem.into() });
+        if self.classes.is_empty() {
+            return bad(keys::CLASSES, "names no class");
+        }
+        if [l.height, l.width, l.channels, l.frames, l.tubelet, l.dim].contains(&0) || !l.frames.is_multiple_of(l.tubelet) {
+            return bad(keys::CONFIG, "has an empty axis, or frames that are not whole tokens");
+        }
+        let f = &self.kept_frames;
+        let whole_tokens = f.len().is_multiple_of(l.tubelet)
+            && f.chunks(l.tubelet).all(|t| t[0].is_multiple_of(l.tubelet) && t.iter().enumerate().all(|(i, v)| *v == t[0] + i));
+        if f.is_empty() || !whole_tokens || !f.windows(2).all(|w| w[0] < w[1]) || f.iter().any(|v| *v >= l.frames) {
+            return bad(keys::KEPT_FRAMES, "is not a rising list of whole tokens within the window");
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn header() -> Header {
+        let dims = Dims { height: 6, width: 10, channels: 1, frames: 75, tubelet: 5, dim: 40 };
+        Header { classes: vec!["felt".into(), "wood".into()], kept_frames: (10..20).chain(40..45).collect(), dims }
+    }
+
+    fn config(h: &Header) -> serde_json::Value {
+        let mut c = serde_json::to_value(&h.dims).unwrap();
+        c["heads"] = 4.into();
+        c
+    }
+
+    fn parse(entries: &[(&'static str, String)]) -> Result<Header, HeaderError> {
+        Header::parse(entries.iter().map(|(k, v)| (*k, v.as_str())))
+    }
+
+    #[test]
+    fn what_the_exporter_writes_the_runtime_reads() {
+        let h = header();
+        let entries = h.entries(&config(&h));
+        assert_eq!(parse(&entries).unwrap(), h);
+        assert_eq!(h.sample_shape(), vec![6, 10, 75]);
+    }
+
+    #[test]
+    fn another_major_version_is_refused_and_a_newer_minor_read() {
+        let h = header();
+        let mut entries = h.entries(&config(&h));
+        entries[0].1 = "1.7".into();
+        assert_eq!(parse(&entries).unwrap(), h);
+        for found in ["2.0", "0.9", "1", "one.zero"] {
+            entries[0].1 = found.into();
+            assert_eq!(parse(&entries), Err(HeaderError::Version { found: found.into() }), "{found}");
+        }
+        entries.remove(0);
+        assert!(matches!(parse(&entries), Err(HeaderError::Invalid { key: keys::FORMAT, .. })));
+    }
+
+    #[test]
+    fn inconsistent_metadata_is_refused() {
+        let h = header();
+        let broken: [fn(&mut Header); 8] = [
+            |h| h.classes.clear(),
+            |h| h.kept_frames.clear(),
+            |h| h.kept_frames.reverse(),
+            |h| h.kept_frames.truncate(7),
+            |h| h.kept_frames = (11..21).collect(),
+            |h| h.kept_frames = (70..80).collect(),
+            |h| h.dims.tubelet = 4,
+            |h| h.dims.dim = 0,
+        ];
+        for (i, damage) in broken.iter().enumerate() {
+            let mut bad = h.clone();
+            damage(&mut bad);
+            assert!(matches!(parse(&bad.entries(&config(&bad))), Err(HeaderError::Invalid { .. })), "case {i}");
+        }
+        let mut entries = h.entries(&config(&h));
+        entries.retain(|(k, _)| *k != keys::CONFIG);
+        entries.push((keys::CONFIG, r#"{"height": 6}"#.into()));
+        assert!(matches!(parse(&entries), Err(HeaderError::Invalid { key: keys::CONFIG, .. })));
+    }
+}
