@@ -6,6 +6,9 @@
 #      its tests run under qemu: golden logits, bit-identical loads, threads, damaged files,
 #      streaming, every C-ABI error path, and runtime/examples/classify.c built with
 #      aarch64-linux-gnu-gcc and run. What needs onnxruntime or candle stays on the host.
+#      It is built without default features, as the small robot build is (no `threads`, no
+#      rayon: docs/deploy.md), so both supported feature sets are tested: all of them on the
+#      host, the small one on aarch64.
 # It installs what it needs (rustup's aarch64 target and clippy; Debian's gcc-aarch64-linux-gnu,
 # libc6-dev-arm64-cross and qemu-user, with apt-get as root) or says exactly what is missing.
 # Times under qemu mean nothing; outputs do.
@@ -44,7 +47,7 @@ if [ ${#need[@]} -gt 0 ]; then
 fi
 rustup target list --installed | grep -qx "$target" || rustup target add "$target" || missing "the Rust target $target (rustup target add $target)"
 
-step "aarch64: cargo test --release --target $target -p pvt3-runtime -p pvt3-format (under qemu)"
+step "aarch64: cargo test --release --target $target -p pvt3-runtime -p pvt3-format --no-default-features (under qemu)"
 export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc
 export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER="qemu-aarch64 -L $sysroot"
 # The tests run the C example and pvt3-run through the same emulator, built by the same compiler.
@@ -52,7 +55,7 @@ export PVT3_TARGET_RUNNER="$CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER"
 export TARGET_CC=aarch64-linux-gnu-gcc
 # Code compiled only off x86-64 gets no clippy above: at least no warning may pass here.
 export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUSTFLAGS="-D warnings"
-cargo_test --release --target "$target" -p pvt3-runtime -p pvt3-format
+cargo_test --release --target "$target" -p pvt3-runtime -p pvt3-format --no-default-features
 
 # One closing line for all harnesses, host and aarch64 (cargo's own runs end with doc-test
 # harnesses that hold no test).

@@ -3,6 +3,9 @@
 
 use tract_onnx::pb::{attribute_proto::AttributeType, tensor_proto::DataType, AttributeProto, NodeProto, TensorProto};
 
+/// Constants up to this size are shared between the nodes that use the same value.
+const SHARED_BYTES: usize = 1024;
+
 #[derive(Default)]
 pub struct Graph {
     pub nodes: Vec<NodeProto>,
@@ -28,15 +31,18 @@ impl Graph {
         format!("{hint}_{}", self.count)
     }
 
+    /// A constant; a small one (a scalar, a shape, an index list) equal to one written before is
+    /// that one, so `eps`, `one`, `[-1]`… appear once in the file.
     fn initializer(&mut self, hint: &str, dims: &[usize], data_type: DataType, raw_data: Vec<u8>) -> String {
+        let dims: Vec<i64> = dims.iter().map(|d| *d as i64).collect();
+        if raw_data.len() <= SHARED_BYTES {
+            let same = |t: &&TensorProto| t.raw_data == raw_data && t.dims == dims && t.data_type == data_type as i32;
+            if let Some(t) = self.initializers.iter().find(same) {
+                return t.name.clone();
+            }
+        }
         let name = self.fresh(hint);
-        self.initializers.push(TensorProto {
-            name: name.clone(),
-            dims: dims.iter().map(|d| *d as i64).collect(),
-            data_type: data_type as i32,
-            raw_data,
-            ..Default::default()
-        });
+        self.initializers.push(TensorProto { name: name.clone(), dims, data_type: data_type as i32, raw_data, ..Default::default() });
         name
     }
 

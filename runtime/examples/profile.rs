@@ -1,7 +1,9 @@
 //! Where the runtime spends its time: `cargo run --release -p pvt3-runtime --example profile --
 //! MODEL.onnx [BATCH [RUNS]]` times every node of the optimised tract plan over RUNS runs on
 //! synthetic input and prints the time per operator kind, largest first (docs/benchmarks.md),
-//! then the plan's median time without the per-node timing.
+//! then the plan's median time without the per-node timing. It first says what building the plan
+//! cost (the runtime's first call does the same): the tract model, tract's decluttering and
+//! optimisation, the kernel choice.
 //! With `PVT3_PROFILE_NODES=N` it also lists the N slowest single nodes with their output shapes.
 //! With `PVT3_PROFILE_SHAPE=D0,D1,…` it runs any one-input ONNX file at that input shape
 //! (`bench/products.py` times single products this way). The plan's products get the kernels
@@ -22,18 +24,41 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = args.first().ok_or("usage: profile MODEL.onnx [BATCH [RUNS]]")?;
     let batch: usize = args.get(1).map_or(Ok(1), |v| v.parse())?;
     let runs: usize = args.get(2).map_or(Ok(200), |v| v.parse())?;
-    let shape = match std::env::var("PVT3_PROFILE_SHAPE") {
-        Ok(dims) => dims.split(',').map(str::parse).collect::<Result<Vec<usize>, _>>()?,
+    // A pvt3 model as the runtime builds it; any other one-input file through tract's ONNX loader.
+    let started = Instant::now();
+    let (shape, model) = match std::env::var("PVT3_PROFILE_SHAPE") {
+        Ok(dims) => {
+            let shape = dims.split(',').map(str::parse).collect::<Result<Vec<usize>, _>>()?;
+            let model = tract_onnx::onnx().model_for_path(path)?.with_input_fact(0, f32::fact(&shape).into())?.into_typed()?;
+            (shape, model)
+        }
         Err(_) => {
             let c = pvt3_runtime::Classifier::load(path)?;
-            let mut s = vec![batch];
-            s.extend(c.sample_shape());
-            s
+            let mut shape = vec![batch];
+            shape.extend(c.sample_shape());
+            (shape, c.tract_model(batch)?)
         }
     };
-    let mut model = tract_onnx::onnx().model_for_path(path)?.with_input_fact(0, f32::fact(&shape).into())?.into_optimized()?;
+    let built = started.elapsed();
+    let (nodes, started) = (model.nodes().len(), Instant::now());
+    let model = model.into_decluttered()?;
+    let decluttered = started.elapsed();
+    let started = Instant::now();
+    let mut model = model.into_optimized()?;
+    let optimised = started.elapsed();
+    let started = Instant::now();
     let kernels = std::env::var("PVT3_PROFILE_KERNELS").map_or(Ok(pvt3_runtime::Kernels::default()), |k| k.parse())?;
     pvt3_runtime::tune_kernels(&mut model, 1, kernels)?;
+    // What a plan costs to build, the first call's work (docs/deploy.md, start-up).
+    let ms = |d: std::time::Duration| d.as_secs_f64() * 1e3;
+    println!(
+        "plan: file read and wired {:.1} ms ({nodes} nodes), decluttered {:.1} ms, optimised {:.1} ms ({} nodes), kernels chosen {:.1} ms\n",
+        ms(built),
+        ms(decluttered),
+        ms(optimised),
+        model.nodes().len(),
+        ms(started.elapsed())
+    );
     let plan = SimplePlan::new(model)?;
     let n: usize = shape.iter().product();
     let input = Tensor::from_shape(&shape, &(0..n).map(|i| (i % 7) as f32 - 3.0).collect::<Vec<_>>())?;

@@ -74,6 +74,8 @@ impl Classifier {
     }
 
     /// Runs on `threads` threads from now on (default 1; small models rarely gain from more).
+    /// More than one needs the `threads` feature (on by default); without it, building a plan
+    /// fails with [`Error::NoThreads`].
     pub fn with_threads(mut self, threads: usize) -> Self {
         self.threads = threads.max(1);
         self.forget_plans();
@@ -132,7 +134,10 @@ impl Classifier {
     pub(crate) fn optimise(&self, sources: &[(&str, TypedFact)], outputs: &[&str]) -> Result<Plan> {
         let executor = match self.threads {
             1 => Executor::SingleThread,
+            #[cfg(feature = "threads")]
             n => Executor::multithread(n),
+            #[cfg(not(feature = "threads"))]
+            n => return Err(Error::NoThreads { asked: n }),
         };
         let not_onnx = |reason: String| Error::NotOnnx { path: self.path.clone(), reason };
         let model = crate::wire::typed_model(&self.graph, sources, outputs).map_err(not_onnx)?;
@@ -160,6 +165,16 @@ impl Classifier {
             self.stages()?;
         }
         Ok(())
+    }
+
+    /// The tract model that the plan for `batch` windows is built from, before tract optimises
+    /// it: for profiling (`examples/profile.rs`).
+    pub fn tract_model(&self, batch: usize) -> Result<TypedModel> {
+        let mut shape = vec![batch];
+        shape.extend(&self.sample_shape);
+        let sources = [(INPUT, f32::fact(&shape))];
+        crate::wire::typed_model(&self.graph, &sources, &[LOGITS, PROBABILITIES])
+            .map_err(|reason| Error::NotOnnx { path: self.path.clone(), reason })
     }
 
     /// The optimised plan for `batch` windows, built on first use.

@@ -28,6 +28,8 @@ pub enum Error {
     EmptyBatch,
     #[error("a batch of {batch} windows has more values than memory can address")]
     BatchTooLarge { batch: usize },
+    #[error("{asked} threads asked for, but this build runs one thread per plan (built without the `threads` feature)")]
+    NoThreads { asked: usize },
     /// tract failed (or panicked, caught) on a file that passed every check.
     #[error("tract: {0}")]
     Tract(String),

@@ -48,6 +48,7 @@ fn status(e: &Error) -> c_int {
         | Error::NonFinite { .. }
         | Error::EmptyBatch
         | Error::BatchTooLarge { .. }
+        | Error::NoThreads { .. }
         | Error::Npy { .. }
         | Error::FrameLength { .. }
         | Error::TooManyFrames { .. }

@@ -80,3 +80,20 @@ fn a_classifier_shared_by_threads_answers_each_as_it_answers_one() {
         }
     });
 }
+
+/// Plans on two threads give the golden logits in a build with the `threads` feature (the
+/// default), and a clear error in one without it (`--no-default-features`, the small build).
+#[test]
+fn two_threads_per_plan_need_the_threads_feature() {
+    let (x, expected) = golden_vectors();
+    let c = Classifier::load(golden("model.onnx")).unwrap().with_threads(2);
+    let result = c.run(&x[..8 * 4500], 8);
+    if cfg!(feature = "threads") {
+        let (logits, _) = result.unwrap();
+        let err = logits.iter().zip(&expected).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+        assert!(err <= 1e-5, "{err:e}");
+    } else {
+        let err = result.unwrap_err();
+        assert!(matches!(err, pvt3_runtime::Error::NoThreads { asked: 2 }), "{err}");
+    }
+}
