@@ -1,17 +1,19 @@
 //! Raw frames to patch embeddings: normalisation per channel, then the patch embedding.
 //!
-//! The normalisation works on a token's whole frame as one row. It once padded rows to 64 values
-//! (tract's broadcasts then took their fast path: a sixth of the iCub model's time); with the
-//! runtime's own loader and kernels padding no longer changed the time (docs/benchmarks.md,
-//! step 19), so rows stay as they are on every target. The embedding of small frames is one product with a block-diagonal matrix that maps a token's
+//! Both steps avoid work that tract runs element by element. The normalisation works on rows
+//! padded to whole vectors (on the raw iCub rows of 60 values it cost a sixth of the model). The
+//! embedding of small frames is one product with a block-diagonal matrix that maps a token's
 //! whole frame to all of its patch embeddings, which spares the rearrangement into patches; large
 //! frames (where that matrix would be large) are cut into patches first.
 
 use pvt3_models::bake::{BakedPvt3, Dense};
 use pvt3_models::normalization::Normalization;
 
-use crate::graph::{ints, Graph};
+use crate::graph::{int, ints, Graph};
 use crate::layers::{centred, linear};
+
+/// Values per vector that tract's broadcasts need to take their fast path (AVX-512: 64).
+const ALIGN: usize = 64;
 
 /// Largest block-diagonal embedding matrix, in values (4 MB): iCub needs 5,120, BioTac 3,840.
 const DENSE_LIMIT: usize = 1 << 20;
@@ -24,15 +26,31 @@ pub(crate) fn embed(g: &mut Graph, frames: &str, m: &BakedPvt3, norm: &Normaliza
     let features = tt * h * w * ch;
     let flat = g.i64s("frame_rows", &[2], vec![-1, features as i64]);
     let rows = g.op("Reshape", &[frames, &flat]);
-    let per_feature = |v: &[f32]| (0..tt).flat_map(|_| v.iter().copied()).collect::<Vec<f32>>();
-    let mean = g.f32s("norm_mean", &[features], per_feature(&norm.mean));
-    let std = g.f32s("norm_std", &[features], per_feature(&norm.std));
+    // Padded to whole vectors: tract runs a row broadcast fast only if the row is a multiple of
+    // 64 values, and element by element otherwise.
+    let padded = features.div_ceil(ALIGN) * ALIGN;
+    let rows = if padded > features {
+        let columns = g.i64s("pad_columns", &[padded], (0..padded).map(|i| (i % features) as i64).collect());
+        g.node("Gather", &[&rows, &columns], vec![int("axis", 1)], None)
+    } else {
+        rows
+    };
+    let per_feature = |v: &[f32], pad: f32| {
+        let mut row: Vec<f32> = (0..tt).flat_map(|_| v.iter().copied()).collect();
+        row.resize(padded, pad);
+        row
+    };
+    let mean = g.f32s("norm_mean", &[padded], per_feature(&norm.mean, 0.0));
+    let std = g.f32s("norm_std", &[padded], per_feature(&norm.std, 1.0));
     let shifted = g.op("Sub", &[&rows, &mean]);
     let rows = g.op("Div", &[&shifted, &std]);
     let embedding = centred(&m.patch_embed);
-    let x = if features * n * d <= DENSE_LIMIT {
-        linear(g, &rows, &block_diagonal(m, &embedding), "patch_embed")
+    let x = if padded * n * d <= DENSE_LIMIT {
+        linear(g, &rows, &block_diagonal(m, &embedding, padded), "patch_embed")
     } else {
+        let (start, end, axis) =
+            (g.i64s("start", &[1], vec![0]), g.i64s("end", &[1], vec![features as i64]), g.i64s("axis", &[1], vec![1]));
+        let rows = g.op("Slice", &[&rows, &start, &end, &axis]);
         // [N, tt, gh, ph, gw, pw, c] → [N, gh, gw, tt, ph, pw, c] → [N · n, patch_dim].
         let (ph, pw) = (c.patch_height, c.patch_width);
         let grid = g.i64s("grid", &[7], [0, tt, h / ph, ph, w / pw, pw, ch].map(|v| v as i64).to_vec());
@@ -48,12 +66,12 @@ pub(crate) fn embed(g: &mut Graph, frames: &str, m: &BakedPvt3, norm: &Normaliza
 
 /// The embedding `e` of each patch as one layer over a token's whole frame, `[tt·h·w·c]` →
 /// `[patches · dim]`: input `(f, y, x, ch)` feeds patch `(y / ph, x / pw)` at its place
-/// `(f, y mod ph, x mod pw, ch)` within the patch; every other weight is zero.
-fn block_diagonal(m: &BakedPvt3, e: &Dense) -> Dense {
+/// `(f, y mod ph, x mod pw, ch)` within the patch; every other weight is zero, as are the
+/// weights of the padding up to `inputs`.
+fn block_diagonal(m: &BakedPvt3, e: &Dense, inputs: usize) -> Dense {
     let c = &m.config;
     let (tt, h, w, ch, d, n) = (c.tubelet, c.height, c.width, c.channels, c.dim, c.num_patches());
     let (ph, pw, gw) = (c.patch_height, c.patch_width, c.width / c.patch_width);
-    let inputs = tt * h * w * ch;
     let mut weight = vec![0f32; n * d * inputs];
     for f in 0..tt {
         for y in 0..h {

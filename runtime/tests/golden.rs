@@ -97,3 +97,29 @@ fn two_threads_per_plan_need_the_threads_feature() {
         assert!(matches!(err, pvt3_runtime::Error::NoThreads { asked: 2 }), "{err}");
     }
 }
+
+/// `text` replaced by `with` (of the same length) in `bytes`, once.
+fn replaced(bytes: &[u8], text: &str, with: &str) -> Vec<u8> {
+    assert_eq!(text.len(), with.len());
+    let at = bytes.windows(text.len()).position(|w| w == text.as_bytes()).unwrap_or_else(|| panic!("`{text}` not in the file"));
+    let mut out = bytes.to_vec();
+    out[at..at + text.len()].copy_from_slice(with.as_bytes());
+    out
+}
+
+/// A well-signed file of another major format version is refused with a message that says so; a
+/// newer minor version is read.
+#[test]
+fn a_file_of_another_major_format_version_is_refused() {
+    let bytes = std::fs::read(golden("model.onnx")).unwrap();
+    let claimed = bytes.windows(7).position(|w| w == b"sha256:").map(|at| String::from_utf8(bytes[at..at + 71].to_vec()).unwrap()).unwrap();
+    let resigned = |version: &str| {
+        // The metadata entry: key, then the value's tag (field 2, length-delimited) and length.
+        let changed = replaced(&bytes, "pvt3.format\u{12}\u{3}1.0", &format!("pvt3.format\u{12}\u{3}{version}"));
+        let digest = pvt3_format::digest(&changed).unwrap();
+        replaced(&changed, &claimed, &digest)
+    };
+    let err = Classifier::from_bytes(&resigned("2.0"), "v2.onnx").err().expect("format 2.0 refused");
+    assert!(err.to_string().contains("format 2.0, which this runtime (format 1.0) does not read"), "{err}");
+    assert!(Classifier::from_bytes(&resigned("1.9"), "v1.9.onnx").is_ok());
+}
