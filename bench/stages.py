@@ -1,7 +1,8 @@
 """Exported models timed whole and stage by stage, in both engines: the spatial stage (raw frames
 to token encodings) and the temporal stage (token encodings to logits), each cut out of the file
-at its seam with `onnx.utils.extract_model`. tract is timed by `runtime/examples/profile` (the
-plan as the runtime builds it, kernels tuned, median of untimed runs), onnxruntime with one
+at its seam with `onnx.utils.extract_model`. tract is timed by `runtime/examples/profile` (a cut
+file has no pvt3 metadata, so it is read by tract's ONNX loader, where the runtime wires the same
+operators itself; kernels chosen as the runtime chooses them, median of untimed runs), onnxruntime with one
 intra-op thread (median), alternating in rounds (the median of the rounds is printed). Prints a
 markdown table (docs/benchmarks.md).
 

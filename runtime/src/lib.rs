@@ -3,7 +3,10 @@
 //! links only what it runs.
 //!
 //! The file says what it expects: class names, the input layout and the kept frames are read
-//! from its metadata. Inputs are validated before they reach tract: a wrong length or a NaN or
+//! from its metadata, whose format version must be this runtime's ([`pvt3_format::Header`]). The
+//! graph is read here too: the few ONNX messages the exporter writes are decoded with prost, and
+//! tract-core's operators are wired from its node types directly (`wire.rs`), without tract's
+//! ONNX loader and its registry of every operator, which was most of the library's size. Inputs are validated before they reach tract: a wrong length or a NaN or
 //! infinite value is a typed [`Error`], never a panic. Each batch size gets its own optimised plan
 //! with a fixed input shape (a fixed shape ran markedly faster than a symbolic batch in tract).
 //!
