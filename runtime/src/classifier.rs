@@ -129,9 +129,14 @@ impl Classifier {
         self.sample_shape.iter().product()
     }
 
-    /// The part of the graph from `sources` (tensor names with fixed facts) to `outputs`,
-    /// optimised, its kernels chosen, and made runnable on the caller's threads.
-    pub(crate) fn optimise(&self, sources: &[(&str, TypedFact)], outputs: &[&str]) -> Result<Plan> {
+    /// The part of the graph from `sources` (tensor names with fixed facts) to `outputs`, as a
+    /// tract model: the whole model, or one streaming stage of it.
+    pub(crate) fn wire(&self, sources: &[(&str, TypedFact)], outputs: &[&str]) -> Result<TypedModel> {
+        crate::wire::typed_model(&self.graph, sources, outputs).map_err(|reason| Error::NotOnnx { path: self.path.clone(), reason })
+    }
+
+    /// `model` optimised, its kernels chosen, and made runnable on the caller's threads.
+    pub(crate) fn optimise(&self, model: TypedModel) -> Result<Plan> {
         let executor = match self.threads {
             1 => Executor::SingleThread,
             #[cfg(feature = "threads")]
@@ -139,15 +144,13 @@ impl Classifier {
             #[cfg(not(feature = "threads"))]
             n => return Err(Error::NoThreads { asked: n }),
         };
-        let not_onnx = |reason: String| Error::NotOnnx { path: self.path.clone(), reason };
-        let model = crate::wire::typed_model(&self.graph, sources, outputs).map_err(not_onnx)?;
         let build = || {
             let mut model = model.into_optimized()?;
             crate::kernels::tune(&mut model, self.threads, self.kernels)?;
             model.into_runnable_with_options(&RunOptions { executor: Some(executor), ..Default::default() })
         };
         let plan = catch_panic(AssertUnwindSafe(build))?;
-        plan.map(Plan::new).map_err(|e| not_onnx(format!("{e:#}")))
+        plan.map(Plan::new).map_err(|e| Error::NotOnnx { path: self.path.clone(), reason: format!("{e:#}") })
     }
 
     /// Builds now what the first call at each batch size of `batches`, and with `streaming` the
@@ -170,11 +173,12 @@ impl Classifier {
     /// The tract model that the plan for `batch` windows is built from, before tract optimises
     /// it: for profiling (`examples/profile.rs`).
     pub fn tract_model(&self, batch: usize) -> Result<TypedModel> {
-        let mut shape = vec![batch];
-        shape.extend(&self.sample_shape);
-        let sources = [(INPUT, f32::fact(&shape))];
-        crate::wire::typed_model(&self.graph, &sources, &[LOGITS, PROBABILITIES])
-            .map_err(|reason| Error::NotOnnx { path: self.path.clone(), reason })
+        self.wire(&[(INPUT, f32::fact(self.batch_shape(batch)))], &[LOGITS, PROBABILITIES])
+    }
+
+    /// `[batch, height, width, (channels,) frames]`
+    fn batch_shape(&self, batch: usize) -> Vec<usize> {
+        std::iter::once(batch).chain(self.sample_shape.iter().copied()).collect()
     }
 
     /// The optimised plan for `batch` windows, built on first use.
@@ -183,9 +187,7 @@ impl Classifier {
         if let Some(p) = plans.get(&batch) {
             return Ok(p.clone());
         }
-        let mut shape = vec![batch];
-        shape.extend(&self.sample_shape);
-        let plan = Arc::new(self.optimise(&[(INPUT, f32::fact(&shape))], &[LOGITS, PROBABILITIES])?);
+        let plan = Arc::new(self.optimise(self.tract_model(batch)?)?);
         plans.insert(batch, plan.clone());
         Ok(plan)
     }
@@ -219,9 +221,7 @@ impl Classifier {
     /// Logits and probabilities `[batch × classes]` each, for `batch` windows back to back.
     pub fn run(&self, frames: &[f32], batch: usize) -> Result<(Vec<f32>, Vec<f32>)> {
         self.validate(frames, batch)?;
-        let mut shape = vec![batch];
-        shape.extend(&self.sample_shape);
-        let input = Tensor::from_shape(&shape, frames).map_err(tract_error)?;
+        let input = Tensor::from_shape(&self.batch_shape(batch), frames).map_err(tract_error)?;
         let outputs = self.plan(batch)?.run(tvec!(input.into()))?;
         let len = batch.checked_mul(self.classes().len()).ok_or(Error::BatchTooLarge { batch })?;
         Ok((outputs_of(&outputs, 0, len)?, outputs_of(&outputs, 1, len)?))

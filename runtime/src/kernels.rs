@@ -611,11 +611,7 @@ mod tests {
     #[test]
     fn the_golden_plan_has_the_structure_the_kernel_choice_expects() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/golden/icub20/model.onnx");
-        let bytes = std::fs::read(path).unwrap();
-        let graph = crate::onnx::Model::decode(&bytes).unwrap().graph.unwrap();
-        let sources = [(pvt3_format::INPUT, f32::fact([1, 6, 10, 75]))];
-        let model = crate::wire::typed_model(&graph, &sources, &[pvt3_format::LOGITS, pvt3_format::PROBABILITIES]).unwrap();
-        let model = model.into_optimized().unwrap();
+        let model = crate::Classifier::load(path).unwrap().tract_model(1).unwrap().into_optimized().unwrap();
         let products: Vec<usize> = model.nodes().iter().filter(|n| n.op_is::<OptMatMul>()).map(|n| n.id).collect();
         assert!(products.len() >= 40, "{} matrix products in the golden plan", products.len());
         let declined: Vec<usize> = products.iter().copied().filter(|n| product(&model, *n).unwrap().is_none()).collect();

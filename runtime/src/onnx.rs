@@ -92,6 +92,11 @@ impl Node {
         self.attribute.iter().find(|a| a.name == name)
     }
 
+    /// Whether the node has attribute `name`, of any type.
+    pub(crate) fn has(&self, name: &str) -> bool {
+        self.attribute(name).is_some()
+    }
+
     /// Integer attribute `name`, or `default` when absent.
     pub(crate) fn int(&self, name: &str, default: i64) -> i64 {
         self.attribute(name).map_or(default, |a| a.i)

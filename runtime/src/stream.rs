@@ -44,8 +44,8 @@ impl Stages {
         let token_shape = vec![1, tubelet, frame[0], frame[1], frame.get(2).copied().unwrap_or(1)];
         let spatial = [(TOKEN_FRAMES, f32::fact(&token_shape)), (TOKEN_INDEX, i64::fact([1]))];
         Ok(Self {
-            spatial: c.optimise(&spatial, &[TOKEN_ENCODINGS])?,
-            temporal: c.optimise(&[(TOKEN_ENCODINGS, f32::fact([kept, c.dim()]))], &[PROBABILITIES])?,
+            spatial: c.optimise(c.wire(&spatial, &[TOKEN_ENCODINGS])?)?,
+            temporal: c.optimise(c.wire(&[(TOKEN_ENCODINGS, f32::fact([kept, c.dim()]))], &[PROBABILITIES])?)?,
             kept_index,
             token_shape,
             dim: c.dim(),

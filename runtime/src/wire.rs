@@ -180,7 +180,7 @@ impl Builder<'_> {
             "Concat" => self.wire(name, TypedConcat::new(Self::axis(node.int("axis", 0), rank)?), &inputs),
             "Shape" => {
                 arity(1..=1)?;
-                ensure!(node.ints("start").is_none() && node.ints("end").is_none(), "start or end");
+                ensure!(!node.has("start") && !node.has("end"), "start or end");
                 let shape: Vec<i64> = self.shape(x)?.iter().map(|d| *d as i64).collect();
                 Ok(self.model.add_const(name, tensor1(&shape))?)
             }
@@ -216,13 +216,10 @@ impl Builder<'_> {
                 let mut axes = axes.iter().map(|a| Self::axis(*a, rank)).collect::<TractResult<Vec<_>>>()?;
                 axes.sort();
                 axes.dedup();
-                let mut wire = self.wire(format!("{name}.sum"), Reduce::new(axes.iter().copied().collect(), Reducer::Sum), &[x])?;
-                if op == "ReduceMean" {
-                    let shape = self.shape(x)?;
-                    let count = axes.iter().map(|a| shape[*a]).product::<usize>() as f32;
-                    let count = self.model.add_const(format!("{name}.count"), tensor0(count).broadcast_into_rank(rank)?)?;
-                    wire = self.wire(format!("{name}.mean"), math::div(), &[wire, count])?;
-                }
+                let mut wire = match op {
+                    "ReduceMean" => self.mean(&name, x, &axes)?,
+                    _ => self.wire(format!("{name}.sum"), Reduce::new(axes.iter().copied().collect(), Reducer::Sum), &[x])?,
+                };
                 if node.int("keepdims", 1) == 0 {
                     for a in axes.iter().rev() {
                         wire = self.wire(format!("{name}.rm{a}"), AxisOp::Rm(*a), &[wire])?;
@@ -243,21 +240,26 @@ impl Builder<'_> {
         }
     }
 
+    /// The mean of `x` over `axes` (kept, of length 1): their sum divided by their count, as
+    /// tract's ONNX loader expands `ReduceMean`.
+    fn mean(&mut self, name: &str, x: OutletId, axes: &[usize]) -> TractResult<OutletId> {
+        let shape = self.shape(x)?;
+        let count = tensor0(axes.iter().map(|a| shape[*a]).product::<usize>() as f32).broadcast_into_rank(shape.len())?;
+        let count = self.model.add_const(format!("{name}.count"), count)?;
+        let sum = self.wire(format!("{name}.sum"), Reduce::new(axes.iter().copied().collect(), Reducer::Sum), &[x])?;
+        self.wire(name.to_string(), math::div(), &[sum, count])
+    }
+
     /// `(x − mean) / √(var + ε) · scale (+ bias)` over the axes from `axis` on, as tract's ONNX
     /// loader expands it.
     fn layer_norm(&mut self, node: &Node, inputs: &[OutletId], rank: usize) -> TractResult<OutletId> {
         let name = &node.name;
         let x = inputs[0];
-        let shape = self.shape(x)?;
-        let axes: TVec<usize> = (Self::axis(node.int("axis", -1), rank)?..rank).collect();
-        let count = tensor0(axes.iter().map(|a| shape[*a]).product::<usize>() as f32).broadcast_into_rank(rank)?;
-        let count = self.model.add_const(format!("{name}.count"), count)?;
-        let sum = self.wire(format!("{name}.sum"), Reduce::new(axes.clone(), Reducer::Sum), &[x])?;
-        let mean = self.wire(format!("{name}.mean"), math::div(), &[sum, count])?;
+        let axes: Vec<usize> = (Self::axis(node.int("axis", -1), rank)?..rank).collect();
+        let mean = self.mean(&format!("{name}.mean"), x, &axes)?;
         let d = self.wire(format!("{name}.d"), math::sub(), &[x, mean])?;
         let dd = self.wire(format!("{name}.dd"), math::square(), &[d])?;
-        let sum_dd = self.wire(format!("{name}.sum_dd"), Reduce::new(axes, Reducer::Sum), &[dd])?;
-        let var = self.wire(format!("{name}.var"), math::div(), &[sum_dd, count])?;
+        let var = self.mean(&format!("{name}.var"), dd, &axes)?;
         let eps = self.model.add_const(format!("{name}.epsilon"), tensor0(node.float("epsilon", 1e-5)).broadcast_into_rank(rank)?)?;
         let var_eps = self.wire(format!("{name}.var_eps"), math::add(), &[var, eps])?;
         let inv = self.wire(format!("{name}.inv_std_dev"), math::rsqrt(), &[var_eps])?;
