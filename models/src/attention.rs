@@ -8,8 +8,7 @@
 use candle_core::{Result, Tensor, D};
 use candle_nn::{linear, Init, Linear, Module, VarBuilder};
 
-use crate::dropout::Dropout;
-use crate::{Config, Rng};
+use crate::Config;
 
 #[derive(Clone, Debug)]
 pub struct Attention {
@@ -20,7 +19,6 @@ pub struct Attention {
     heads: usize,
     dim_head: usize,
     scale: f64,
-    dropout: Dropout,
 }
 
 impl Attention {
@@ -33,12 +31,11 @@ impl Attention {
             heads: cfg.heads,
             dim_head: cfg.dim_head,
             scale: (cfg.dim_head as f64).powf(-0.5),
-            dropout: Dropout::new(cfg.dropout),
         })
     }
 
-    /// `x`: `[sequences, tokens, dim]` → the same shape.
-    pub fn forward(&self, x: &Tensor, rng: Option<&mut Rng>) -> Result<Tensor> {
+    /// `x`: `[sequences, tokens, dim]` → the same shape, times the dropout mask `drop` if given.
+    pub fn forward(&self, x: &Tensor, drop: Option<&Tensor>) -> Result<Tensor> {
         let (b, l, d) = x.dims3()?;
         let inner = self.heads * self.dim_head;
         let rows = x.reshape((b * l, d))?;
@@ -58,6 +55,6 @@ impl Attention {
         let heads = if self.heads == 1 { mixed } else { mixed.transpose(1, 2)? };
         let heads = heads.reshape((b * l, inner))?;
         let out = self.out.forward(&heads)?.reshape((b, l, d))?;
-        self.dropout.forward(&out, rng)
+        drop.map_or(Ok(out.clone()), |m| out * m)
     }
 }

@@ -16,13 +16,31 @@ impl Dropout {
         Self { p: p as f32 }
     }
 
-    pub fn forward(&self, x: &Tensor, rng: Option<&mut Rng>) -> Result<Tensor> {
-        let Some(rng) = rng.filter(|_| self.p > 0.0) else {
-            return Ok(x.clone());
-        };
+    pub fn p(&self) -> f32 {
+        self.p
+    }
+
+    /// This step's mask for `n` values (each 0 or `1 / (1 - p)`), or `None` when dropout is off.
+    /// Each draw of the generator gives two 24-bit uniform values.
+    pub fn mask(&self, n: usize, rng: Option<&mut Rng>) -> Option<Vec<f32>> {
+        let rng = rng.filter(|_| self.p > 0.0)?;
         let scale = 1.0 / (1.0 - self.p);
-        let p = self.p;
-        let mask: Vec<f32> = (0..x.elem_count()).map(|_| if rng.uniform() < p { 0.0 } else { scale }).collect();
-        x * Tensor::from_vec(mask, x.shape(), x.device())?
+        // u < p for u = k / 2^24 exactly when k < ⌈p · 2^24⌉.
+        let threshold = (self.p as f64 * (1u64 << 24) as f64).ceil() as u64;
+        let keep = |k: u64| if k < threshold { 0.0 } else { scale };
+        let mut mask = Vec::with_capacity(n + 1);
+        while mask.len() < n {
+            let bits = rng.next_u64();
+            mask.extend([keep(bits >> 40), keep((bits >> 16) & 0xFF_FFFF)]);
+        }
+        mask.truncate(n);
+        Some(mask)
+    }
+
+    pub fn forward(&self, x: &Tensor, rng: Option<&mut Rng>) -> Result<Tensor> {
+        match self.mask(x.elem_count(), rng) {
+            Some(mask) => x * Tensor::from_vec(mask, x.shape(), x.device())?,
+            None => Ok(x.clone()),
+        }
     }
 }

@@ -5,8 +5,7 @@
 use candle_core::{Result, Tensor};
 use candle_nn::{linear, Init, Linear, Module, VarBuilder};
 
-use crate::dropout::Dropout;
-use crate::{Config, Rng};
+use crate::Config;
 
 #[derive(Clone, Debug)]
 pub struct FeedForward {
@@ -14,7 +13,6 @@ pub struct FeedForward {
     fc2_weight: Tensor,
     fc2_bias: Tensor,
     channel_mask: Tensor,
-    dropout: Dropout,
 }
 
 impl FeedForward {
@@ -25,15 +23,15 @@ impl FeedForward {
             fc2_weight: fc2.weight().clone(),
             fc2_bias: fc2.bias().expect("linear has a bias").clone(),
             channel_mask: vb.get_with_hints(cfg.mlp_dim, "channel_mask", Init::Const(1.0))?,
-            dropout: Dropout::new(cfg.dropout),
         })
     }
 
-    /// `x`: `[rows, dim]` → `[rows, dim]`.
-    pub fn forward(&self, x: &Tensor, mut rng: Option<&mut Rng>) -> Result<Tensor> {
-        let hidden = self.dropout.forward(&self.fc1.forward(x)?.gelu_erf()?, rng.as_deref_mut())?;
+    /// `x`: `[rows, dim]` → `[rows, dim]`, with the dropout masks `(hidden, out)` if given.
+    pub fn forward(&self, x: &Tensor, drop: Option<(&Tensor, &Tensor)>) -> Result<Tensor> {
+        let hidden = self.fc1.forward(x)?.gelu_erf()?;
+        let hidden = drop.map_or(Ok(hidden.clone()), |(m, _)| hidden * m)?;
         let w2 = self.fc2_weight.broadcast_mul(&self.channel_mask.unsqueeze(0)?)?;
         let out = hidden.matmul(&w2.t()?)?.broadcast_add(&self.fc2_bias)?;
-        self.dropout.forward(&out, rng)
+        drop.map_or(Ok(out.clone()), |(_, m)| out * m)
     }
 }

@@ -1,14 +1,27 @@
 //! A pre-norm transformer encoder, `x = x + Attn(LN(x)); x = x + FFN(LN(x))` per layer, with a
 //! final layer norm. PVT³ only reads the CLS token out of it, so the final norm is applied to that
-//! token alone.
+//! token alone. Each block runs as one fused op with its own backward ([`crate::fused_block`]);
+//! the composed form stays as the oracle of its tests and for comparison.
+
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use candle_core::{Result, Tensor};
 use candle_nn::VarBuilder;
 
 use crate::attention::Attention;
+use crate::dropout::Dropout;
 use crate::feed_forward::FeedForward;
+use crate::fused_block::{BlockDims, BlockDropout, BlockOp};
 use crate::layer_norm::LayerNorm;
 use crate::{Config, Rng};
+
+static COMPOSED: AtomicBool = AtomicBool::new(false);
+
+/// Runs every block composed of candle ops instead of fused, process-wide: for measuring what
+/// the fusion gains (`pvt3 bench train --composed`). The two compute the same function.
+pub fn use_composed_blocks(on: bool) {
+    COMPOSED.store(on, Ordering::Relaxed);
+}
 
 #[derive(Clone, Debug)]
 pub struct Block {
@@ -16,24 +29,53 @@ pub struct Block {
     attn: Attention,
     ffn_norm: LayerNorm,
     ffn: FeedForward,
+    /// The same variables in the fused op's packing order.
+    packed: Vec<Tensor>,
+    dims: BlockDims,
+    dropout: Dropout,
 }
 
 impl Block {
     pub fn new(cfg: &Config, vb: VarBuilder) -> Result<Self> {
-        Ok(Self {
-            attn_norm: LayerNorm::new(cfg.dim, cfg.layer_norm_eps, vb.pp("attn_norm"))?,
-            attn: Attention::new(cfg, vb.pp("attn"))?,
-            ffn_norm: LayerNorm::new(cfg.dim, cfg.layer_norm_eps, vb.pp("ffn_norm"))?,
-            ffn: FeedForward::new(cfg, vb.pp("ffn"))?,
-        })
+        let (attn_norm, attn) = (LayerNorm::new(cfg.dim, cfg.layer_norm_eps, vb.pp("attn_norm"))?, Attention::new(cfg, vb.pp("attn"))?);
+        let (ffn_norm, ffn) = (LayerNorm::new(cfg.dim, cfg.layer_norm_eps, vb.pp("ffn_norm"))?, FeedForward::new(cfg, vb.pp("ffn"))?);
+        let dims = BlockDims::new(cfg);
+        // The modules above created the variables; these are the same ones, by name.
+        let packed = dims.parameters().into_iter().map(|(name, shape)| vb.get(shape, name)).collect::<Result<_>>()?;
+        Ok(Self { attn_norm, attn, ffn_norm, ffn, packed, dims, dropout: Dropout::new(cfg.dropout) })
     }
 
-    /// `x`: `[sequences, tokens, dim]` → the same shape.
-    pub fn forward(&self, x: &Tensor, mut rng: Option<&mut Rng>) -> Result<Tensor> {
-        let x = (x + self.attn.forward(&self.attn_norm.forward(x)?, rng.as_deref_mut())?)?;
+    /// `x`: `[sequences, tokens, dim]` → the same shape, as one fused op (see [`BlockOp`]).
+    pub fn forward(&self, x: &Tensor, rng: Option<&mut Rng>) -> Result<Tensor> {
+        let keep = rng.is_some();
+        let dropout = self.draw_dropout(rng);
+        if COMPOSED.load(Ordering::Relaxed) {
+            return self.forward_composed(x, dropout.as_ref());
+        }
+        let flat = self.packed.iter().map(|t| t.flatten_all()).collect::<Result<Vec<_>>>()?;
+        BlockOp::new(self.dims, dropout, keep).apply(x, &Tensor::cat(&flat, 0)?)
+    }
+
+    /// This step's dropout (one draw from `rng`), or `None` when evaluating or `p` is 0.
+    pub fn draw_dropout(&self, rng: Option<&mut Rng>) -> Option<BlockDropout> {
+        rng.filter(|_| self.dropout.p() > 0.0).map(|rng| BlockDropout { dropout: self.dropout.clone(), seed: rng.next_u64() })
+    }
+
+    /// The same block composed of candle ops, with the same dropout masks: the oracle the fused
+    /// op is tested against, and what `pvt3 bench train --composed` times.
+    pub fn forward_composed(&self, x: &Tensor, dropout: Option<&BlockDropout>) -> Result<Tensor> {
         let (b, l, d) = x.dims3()?;
+        let masks = match dropout {
+            Some(dropout) => {
+                let m = dropout.masks(&self.dims, l, 0..b);
+                let dev = x.device();
+                Some((Tensor::from_vec(m.attn, (b, l, d), dev)?, Tensor::from_vec(m.hidden, (b * l, self.dims.mlp), dev)?, Tensor::from_vec(m.out, (b * l, d), dev)?))
+            }
+            None => None,
+        };
+        let x = (x + self.attn.forward(&self.attn_norm.forward(x)?, masks.as_ref().map(|m| &m.0))?)?;
         let rows = self.ffn_norm.forward(&x.reshape((b * l, d))?)?;
-        x + self.ffn.forward(&rows, rng)?.reshape((b, l, d))?
+        x + self.ffn.forward(&rows, masks.as_ref().map(|m| (&m.1, &m.2)))?.reshape((b, l, d))?
     }
 }
 

@@ -1,0 +1,571 @@
+//! A whole pre-norm transformer block, `x + Drop(Attn(LN(x)))` then `+ Drop(FFN(LN(·)))`, as one
+//! candle op with a hand-written backward: candle's `CustomOp2` over the block's input and its
+//! thirteen parameters packed into one vector (a `cat` whose backward hands each parameter its
+//! share). Built from candle ops, a block is ~40 graph nodes whose backward allocates and
+//! zero-fills a gradient buffer per node and reduces every broadcast; fused, it is one node.
+//!
+//! The op keeps the activations its backward needs when training (else the backward recomputes
+//! them). The rows are cut into fixed chunks of whole sequences that run on rayon's threads; the
+//! chunks do not depend on the thread count and their weight gradients are summed in chunk order,
+//! so a run gives the same bits on one thread or many.
+
+use std::ops::Range;
+use std::sync::OnceLock;
+
+use candle_core::backend::BackendStorage;
+use candle_core::{CpuStorage, CustomOp2, Layout, Result, Shape, Tensor};
+use rayon::prelude::*;
+
+use crate::dense::{add_column_sums, axpy, dot, matmul, matmul_strided, View};
+use crate::dropout::Dropout;
+use crate::{Config, Rng};
+
+/// Rows per chunk of work at most: large enough for efficient matrix products, small enough that
+/// a batch splits into several chunks for the threads.
+const CHUNK_ROWS: usize = 512;
+/// Chunks at least, where there are enough sequences: so that a few long sequences (the temporal
+/// transformer's) still spread evenly over the threads.
+const MIN_CHUNKS: usize = 8;
+
+// The packed parameters, in this order (names under the block's variable prefix).
+const LN1_W: usize = 0;
+const LN1_B: usize = 1;
+const QKV: usize = 2;
+const ATTN_MASK: usize = 3;
+const OUT_W: usize = 4;
+const OUT_B: usize = 5;
+const LN2_W: usize = 6;
+const LN2_B: usize = 7;
+const FC1_W: usize = 8;
+const FC1_B: usize = 9;
+const FC2_W: usize = 10;
+const FC2_B: usize = 11;
+const FFN_MASK: usize = 12;
+const NAMES: [&str; 13] = [
+    "attn_norm.weight",
+    "attn_norm.bias",
+    "attn.qkv.weight",
+    "attn.channel_mask",
+    "attn.out.weight",
+    "attn.out.bias",
+    "ffn_norm.weight",
+    "ffn_norm.bias",
+    "ffn.fc1.weight",
+    "ffn.fc1.bias",
+    "ffn.fc2.weight",
+    "ffn.fc2.bias",
+    "ffn.channel_mask",
+];
+
+/// The sizes of a block, from the model's configuration.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BlockDims {
+    pub dim: usize,
+    pub heads: usize,
+    pub dim_head: usize,
+    pub mlp: usize,
+    pub eps: f32,
+    /// The attention scale, `dim_head^-0.5`, folded into the q weights.
+    pub scale: f32,
+}
+
+impl BlockDims {
+    pub fn new(cfg: &Config) -> Self {
+        Self {
+            dim: cfg.dim,
+            heads: cfg.heads,
+            dim_head: cfg.dim_head,
+            mlp: cfg.mlp_dim,
+            eps: cfg.layer_norm_eps as f32,
+            scale: (cfg.dim_head as f64).powf(-0.5) as f32,
+        }
+    }
+
+    fn inner(&self) -> usize {
+        self.heads * self.dim_head
+    }
+
+    /// Each packed parameter's name and shape, in packing order.
+    pub fn parameters(&self) -> [(&'static str, Vec<usize>); 13] {
+        let (d, i, h) = (self.dim, self.inner(), self.mlp);
+        let shapes = [vec![d], vec![d], vec![3 * i, d], vec![i], vec![d, i], vec![d], vec![d], vec![d], vec![h, d], vec![h], vec![d, h], vec![d], vec![h]];
+        let mut out = shapes.map(|s| ("", s));
+        for (o, name) in out.iter_mut().zip(NAMES) {
+            o.0 = name;
+        }
+        out
+    }
+
+    /// Where each parameter lies in the packed vector.
+    fn ranges(&self) -> [Range<usize>; 13] {
+        let mut start = 0;
+        self.parameters().map(|(_, shape)| {
+            let len: usize = shape.iter().product();
+            start += len;
+            start - len..start
+        })
+    }
+}
+
+/// One block's dropout in one training step. Its masks are drawn per sequence from `seed`, so
+/// that the chunks draw them in parallel and any split of the rows gives the same masks.
+#[derive(Clone, Debug)]
+pub struct BlockDropout {
+    pub dropout: Dropout,
+    pub seed: u64,
+}
+
+/// The dropout masks of a run of sequences, each value 0 or `1 / (1 - p)`: the attention output
+/// `[rows, dim]`, the feed-forward hidden units `[rows, mlp]` and its output `[rows, dim]`.
+pub struct Masks {
+    pub attn: Vec<f32>,
+    pub hidden: Vec<f32>,
+    pub out: Vec<f32>,
+}
+
+impl BlockDropout {
+    pub fn masks(&self, dims: &BlockDims, tokens: usize, sequences: Range<usize>) -> Masks {
+        let (d, h) = (tokens * dims.dim, tokens * dims.mlp);
+        let n = sequences.len();
+        let mut m = Masks { attn: Vec::with_capacity(n * d), hidden: Vec::with_capacity(n * h), out: Vec::with_capacity(n * d) };
+        for s in sequences {
+            let mut rng = Rng::new(self.seed ^ (s as u64).wrapping_mul(0x9E37_79B9_7F4A_7C15));
+            for (values, len) in [(&mut m.attn, d), (&mut m.hidden, h), (&mut m.out, d)] {
+                values.extend(self.dropout.mask(len, Some(&mut rng)).unwrap_or_else(|| vec![1.0; len]));
+            }
+        }
+        m
+    }
+}
+
+/// One block applied to `[sequences, tokens, dim]`, with its backward.
+pub struct BlockOp {
+    dims: BlockDims,
+    dropout: Option<BlockDropout>,
+    /// Keep the activations for the backward (training) instead of recomputing them there.
+    keep: bool,
+    saved: OnceLock<Saved>,
+}
+
+struct Saved {
+    tokens: usize,
+    chunks: Vec<Activations>,
+}
+
+/// What the backward needs of one chunk.
+struct Activations {
+    xhat1: Vec<f32>,
+    rstd1: Vec<f32>,
+    a: Vec<f32>,
+    qkv: Vec<f32>,
+    probs: Vec<f32>,
+    heads: Vec<f32>,
+    xhat2: Vec<f32>,
+    rstd2: Vec<f32>,
+    c: Vec<f32>,
+    h: Vec<f32>,
+    /// `Φ(h)`, the normal distribution function of the hidden units: GELU is `h · Φ(h)`.
+    cdf: Vec<f32>,
+    gd: Vec<f32>,
+    masks: Option<Masks>,
+}
+
+/// The weights as the products use them: the channel masks and the attention scale folded in.
+struct Effective {
+    qkv: Vec<f32>,
+    fc2: Vec<f32>,
+}
+
+impl BlockOp {
+    pub fn new(dims: BlockDims, dropout: Option<BlockDropout>, keep: bool) -> Self {
+        Self { dims, dropout, keep, saved: OnceLock::new() }
+    }
+
+    /// Applies the block: `x` `[sequences, tokens, dim]`, `packed` the parameters of
+    /// [`BlockDims::parameters`] flattened and concatenated.
+    pub fn apply(self, x: &Tensor, packed: &Tensor) -> Result<Tensor> {
+        x.contiguous()?.apply_op2(&packed.contiguous()?, self)
+    }
+
+    fn chunks(&self, sequences: usize, tokens: usize) -> Vec<Range<usize>> {
+        let count = (sequences * tokens).div_ceil(CHUNK_ROWS).max(MIN_CHUNKS).min(sequences.max(1));
+        let per = sequences.div_ceil(count).max(1);
+        (0..sequences).step_by(per).map(|s| s..(s + per).min(sequences)).collect()
+    }
+
+    fn effective(&self, p: &[f32]) -> Effective {
+        let (d, inner, r) = (self.dims.dim, self.dims.inner(), self.dims.ranges());
+        let (w, mask) = (&p[r[QKV].clone()], &p[r[ATTN_MASK].clone()]);
+        let mut qkv = vec![0f32; 3 * inner * d];
+        for (row, (dst, src)) in qkv.chunks_exact_mut(d).zip(w.chunks_exact(d)).enumerate() {
+            let scale = if row < inner { self.dims.scale } else { 1.0 };
+            let m = mask[row % inner];
+            for (o, v) in dst.iter_mut().zip(src) {
+                *o = v * m * scale;
+            }
+        }
+        let (w2, fmask) = (&p[r[FC2_W].clone()], &p[r[FFN_MASK].clone()]);
+        let fc2 = w2.chunks_exact(self.dims.mlp).flat_map(|row| row.iter().zip(fmask).map(|(v, m)| v * m)).collect();
+        Effective { qkv, fc2 }
+    }
+
+    /// The forward pass of every chunk, in parallel: outputs and (if kept) activations.
+    fn run_forward(&self, x: &[f32], p: &[f32], sequences: usize, tokens: usize, keep: bool) -> Vec<(Vec<f32>, Activations)> {
+        let w = self.effective(p);
+        let row_len = tokens * self.dims.dim;
+        self.chunks(sequences, tokens)
+            .into_par_iter()
+            .map(|s| self.forward_chunk(p, &w, &x[s.start * row_len..s.end * row_len], s, tokens, keep))
+            .collect()
+    }
+
+    fn forward_chunk(&self, p: &[f32], w: &Effective, x: &[f32], sequences: Range<usize>, tokens: usize, keep: bool) -> (Vec<f32>, Activations) {
+        let d = &self.dims;
+        let r = d.ranges();
+        let (dim, inner, mlp) = (d.dim, d.inner(), d.mlp);
+        let rows = x.len() / dim;
+        let masks = self.dropout.as_ref().map(|m| m.masks(d, tokens, sequences));
+        let drop = masks.as_ref();
+
+        let (mut xhat1, mut a, mut rstd1) = (vec![0f32; rows * dim], vec![0f32; rows * dim], vec![0f32; rows]);
+        norm_rows(x, &p[r[LN1_W].clone()], &p[r[LN1_B].clone()], d.eps, &mut xhat1, &mut a, &mut rstd1);
+        let mut qkv = vec![0f32; rows * 3 * inner];
+        matmul(&mut qkv, View::rows(&a, rows, dim), View::rows(&w.qkv, 3 * inner, dim).t(), false);
+        let mut probs = vec![0f32; rows * d.heads * tokens];
+        let mut heads = vec![0f32; rows * inner];
+        attend(d, tokens, &qkv, &mut probs, &mut heads);
+        let mut out = vec![0f32; rows * dim];
+        matmul(&mut out, View::rows(&heads, rows, inner), View::rows(&p[r[OUT_W].clone()], dim, inner).t(), false);
+        add_bias_dropout_residual(&mut out, &p[r[OUT_B].clone()], drop.map(|m| &m.attn[..]), x);
+
+        let (mut xhat2, mut c, mut rstd2) = (vec![0f32; rows * dim], vec![0f32; rows * dim], vec![0f32; rows]);
+        norm_rows(&out, &p[r[LN2_W].clone()], &p[r[LN2_B].clone()], d.eps, &mut xhat2, &mut c, &mut rstd2);
+        let mut h = vec![0f32; rows * mlp];
+        matmul(&mut h, View::rows(&c, rows, dim), View::rows(&p[r[FC1_W].clone()], mlp, dim).t(), false);
+        for row in h.chunks_exact_mut(mlp) {
+            for (v, b) in row.iter_mut().zip(&p[r[FC1_B].clone()]) {
+                *v += b;
+            }
+        }
+        let cdf: Vec<f32> = h.iter().map(|&v| normal_cdf(v)).collect();
+        let mut gd: Vec<f32> = h.iter().zip(&cdf).map(|(v, c)| v * c).collect();
+        if let Some(m) = drop {
+            gd.iter_mut().zip(&m.hidden).for_each(|(v, m)| *v *= m);
+        }
+        let mut f = vec![0f32; rows * dim];
+        matmul(&mut f, View::rows(&gd, rows, mlp), View::rows(&w.fc2, dim, mlp).t(), false);
+        add_bias_dropout_residual(&mut f, &p[r[FC2_B].clone()], drop.map(|m| &m.out[..]), &out);
+
+        let acts = if keep {
+            Activations { xhat1, rstd1, a, qkv, probs, heads, xhat2, rstd2, c, h, cdf, gd, masks }
+        } else {
+            Activations::empty()
+        };
+        (f, acts)
+    }
+
+    /// The backward pass of one chunk: the input's gradient, and into `g` (laid out as the packed
+    /// parameters) the gradients of the effective q/k/v and second-layer weights, the others as they are.
+    fn backward_chunk(&self, p: &[f32], w: &Effective, acts: &Activations, dy: &[f32], tokens: usize, g: &mut [f32]) -> Vec<f32> {
+        let d = &self.dims;
+        let r = d.ranges();
+        let (dim, inner, mlp) = (d.dim, d.inner(), d.mlp);
+        let rows = dy.len() / dim;
+        let drop = acts.masks.as_ref();
+
+        // Feed-forward.
+        let mut df = dy.to_vec();
+        if let Some(m) = drop {
+            df.iter_mut().zip(&m.out).for_each(|(v, m)| *v *= m);
+        }
+        add_column_sums(&mut g[r[FC2_B].clone()], &df);
+        matmul(&mut g[r[FC2_W].clone()], View::rows(&df, rows, dim).t(), View::rows(&acts.gd, rows, mlp), true);
+        let mut dh = vec![0f32; rows * mlp];
+        matmul(&mut dh, View::rows(&df, rows, dim), View::rows(&w.fc2, dim, mlp), false);
+        for (i, (v, (&h, &cdf))) in dh.iter_mut().zip(acts.h.iter().zip(&acts.cdf)).enumerate() {
+            *v *= gelu_derivative(h, cdf) * drop.map_or(1.0, |m| m.hidden[i]);
+        }
+        add_column_sums(&mut g[r[FC1_B].clone()], &dh);
+        matmul(&mut g[r[FC1_W].clone()], View::rows(&dh, rows, mlp).t(), View::rows(&acts.c, rows, dim), true);
+        let mut dc = vec![0f32; rows * dim];
+        matmul(&mut dc, View::rows(&dh, rows, mlp), View::rows(&p[r[FC1_W].clone()], mlp, dim), false);
+        let mut dx = dy.to_vec();
+        norm_rows_backward(&dc, &acts.xhat2, &acts.rstd2, &p[r[LN2_W].clone()], &mut g[r[LN2_W].start..r[LN2_B].end], &mut dx);
+
+        // Attention.
+        let mut dout = dx.clone();
+        if let Some(m) = drop {
+            dout.iter_mut().zip(&m.attn).for_each(|(v, m)| *v *= m);
+        }
+        add_column_sums(&mut g[r[OUT_B].clone()], &dout);
+        matmul(&mut g[r[OUT_W].clone()], View::rows(&dout, rows, dim).t(), View::rows(&acts.heads, rows, inner), true);
+        let mut dheads = vec![0f32; rows * inner];
+        matmul(&mut dheads, View::rows(&dout, rows, dim), View::rows(&p[r[OUT_W].clone()], dim, inner), false);
+        let mut dqkv = vec![0f32; rows * 3 * inner];
+        attend_backward(d, tokens, &acts.qkv, &acts.probs, &dheads, &mut dqkv);
+        matmul(&mut g[r[QKV].clone()], View::rows(&dqkv, rows, 3 * inner).t(), View::rows(&acts.a, rows, dim), true);
+        let mut da = vec![0f32; rows * dim];
+        matmul(&mut da, View::rows(&dqkv, rows, 3 * inner), View::rows(&w.qkv, 3 * inner, dim), false);
+        norm_rows_backward(&da, &acts.xhat1, &acts.rstd1, &p[r[LN1_W].clone()], &mut g[r[LN1_W].start..r[LN1_B].end], &mut dx);
+        dx
+    }
+
+    /// Turns the gradients of the effective weights in `g` into those of the weights and masks.
+    fn unfold_effective(&self, p: &[f32], g: &mut [f32]) {
+        let (d, inner, r) = (self.dims.dim, self.dims.inner(), self.dims.ranges());
+        let (w, mask) = (&p[r[QKV].clone()], &p[r[ATTN_MASK].clone()]);
+        let mut dmask = vec![0f32; inner];
+        for (row, (ge, wr)) in g[r[QKV].clone()].chunks_exact_mut(d).zip(w.chunks_exact(d)).enumerate() {
+            let scale = if row < inner { self.dims.scale } else { 1.0 };
+            let m = mask[row % inner];
+            for (ge, w) in ge.iter_mut().zip(wr) {
+                dmask[row % inner] += *ge * w * scale;
+                *ge *= m * scale;
+            }
+        }
+        g[r[ATTN_MASK].clone()].copy_from_slice(&dmask);
+        let (w2, fmask, mlp) = (&p[r[FC2_W].clone()], &p[r[FFN_MASK].clone()], self.dims.mlp);
+        let mut dfmask = vec![0f32; mlp];
+        for (ge, wr) in g[r[FC2_W].clone()].chunks_exact_mut(mlp).zip(w2.chunks_exact(mlp)) {
+            for j in 0..mlp {
+                dfmask[j] += ge[j] * wr[j];
+                ge[j] *= fmask[j];
+            }
+        }
+        g[r[FFN_MASK].clone()].copy_from_slice(&dfmask);
+    }
+
+    fn check(&self, lx: &Layout, lp: &Layout) -> Result<(usize, usize)> {
+        let (sequences, tokens, dim) = lx.shape().dims3()?;
+        let want: usize = self.dims.ranges()[FFN_MASK].end;
+        if dim != self.dims.dim || lp.shape().elem_count() != want {
+            candle_core::bail!("fused block: input {:?} and {} packed parameters for dim {} ({want} parameters)", lx.shape(), lp.shape().elem_count(), self.dims.dim);
+        }
+        Ok((sequences, tokens))
+    }
+}
+
+impl Activations {
+    fn empty() -> Self {
+        Self {
+            xhat1: Vec::new(),
+            rstd1: Vec::new(),
+            a: Vec::new(),
+            qkv: Vec::new(),
+            probs: Vec::new(),
+            heads: Vec::new(),
+            xhat2: Vec::new(),
+            rstd2: Vec::new(),
+            c: Vec::new(),
+            h: Vec::new(),
+            cdf: Vec::new(),
+            gd: Vec::new(),
+            masks: None,
+        }
+    }
+}
+
+/// The contiguous f32 values of a storage.
+fn values<'a>(s: &'a CpuStorage, l: &Layout) -> Result<&'a [f32]> {
+    match (s, l.contiguous_offsets()) {
+        (CpuStorage::F32(v), Some((start, end))) => Ok(&v[start..end]),
+        (CpuStorage::F32(_), None) => candle_core::bail!("fused block: a non-contiguous input"),
+        _ => candle_core::bail!("fused block: f32 only, got {:?}", s.dtype()),
+    }
+}
+
+impl CustomOp2 for BlockOp {
+    fn name(&self) -> &'static str {
+        "pvt3-fused-block"
+    }
+
+    fn cpu_fwd(&self, sx: &CpuStorage, lx: &Layout, sp: &CpuStorage, lp: &Layout) -> Result<(CpuStorage, Shape)> {
+        let (sequences, tokens) = self.check(lx, lp)?;
+        let (x, p) = (values(sx, lx)?, values(sp, lp)?);
+        let (outputs, chunks): (Vec<Vec<f32>>, Vec<Activations>) = self.run_forward(x, p, sequences, tokens, self.keep).into_iter().unzip();
+        if self.keep {
+            // Set once: each application of the block is a fresh op.
+            let _ = self.saved.set(Saved { tokens, chunks });
+        }
+        Ok((CpuStorage::F32(outputs.concat()), lx.shape().clone()))
+    }
+
+    fn bwd(&self, x: &Tensor, packed: &Tensor, _res: &Tensor, grad: &Tensor) -> Result<(Option<Tensor>, Option<Tensor>)> {
+        let (sequences, tokens, _) = x.dims3()?;
+        let p = packed.flatten_all()?.to_vec1::<f32>()?;
+        let dy = grad.flatten_all()?.to_vec1::<f32>()?;
+        let recomputed;
+        let chunks = match self.saved.get() {
+            Some(saved) if saved.tokens == tokens => &saved.chunks,
+            _ => {
+                let xs = x.flatten_all()?.to_vec1::<f32>()?;
+                recomputed = self.run_forward(&xs, &p, sequences, tokens, true).into_iter().map(|(_, a)| a).collect::<Vec<_>>();
+                &recomputed
+            }
+        };
+        let w = self.effective(&p);
+        let row_len = tokens * self.dims.dim;
+        let parts: Vec<(Vec<f32>, Vec<f32>)> = self
+            .chunks(sequences, tokens)
+            .into_par_iter()
+            .zip(chunks.par_iter())
+            .map(|(s, acts)| {
+                let mut g = vec![0f32; p.len()];
+                let dx = self.backward_chunk(&p, &w, acts, &dy[s.start * row_len..s.end * row_len], tokens, &mut g);
+                (dx, g)
+            })
+            .collect();
+        let mut g = vec![0f32; p.len()];
+        for (_, part) in &parts {
+            axpy(&mut g, 1.0, part);
+        }
+        self.unfold_effective(&p, &mut g);
+        let dx: Vec<f32> = parts.into_iter().flat_map(|(dx, _)| dx).collect();
+        Ok((Some(Tensor::from_vec(dx, x.shape(), x.device())?), Some(Tensor::from_vec(g, packed.shape(), packed.device())?)))
+    }
+}
+
+/// Layer normalisation of each `w.len()`-long row of `x`: `y = x̂ · w + b`, keeping `x̂` and `1/σ`.
+fn norm_rows(x: &[f32], w: &[f32], b: &[f32], eps: f32, xhat: &mut [f32], y: &mut [f32], rstd: &mut [f32]) {
+    let d = w.len();
+    for (((xr, hr), yr), r) in x.chunks_exact(d).zip(xhat.chunks_exact_mut(d)).zip(y.chunks_exact_mut(d)).zip(rstd.iter_mut()) {
+        let mean = xr.iter().sum::<f32>() / d as f32;
+        let var = xr.iter().map(|v| (v - mean) * (v - mean)).sum::<f32>() / d as f32;
+        *r = 1.0 / (var + eps).sqrt();
+        for i in 0..d {
+            hr[i] = (xr[i] - mean) * *r;
+            yr[i] = hr[i] * w[i] + b[i];
+        }
+    }
+}
+
+/// The backward of [`norm_rows`]: adds the input's gradient into `dx`, and the weight's and
+/// bias's into `dwb` (weight, then bias).
+fn norm_rows_backward(dy: &[f32], xhat: &[f32], rstd: &[f32], w: &[f32], dwb: &mut [f32], dx: &mut [f32]) {
+    let d = w.len();
+    let (dw, db) = dwb.split_at_mut(d);
+    let mut dxhat = vec![0f32; d];
+    for (((gr, hr), &r), xr) in dy.chunks_exact(d).zip(xhat.chunks_exact(d)).zip(rstd).zip(dx.chunks_exact_mut(d)) {
+        let (mut m1, mut m2) = (0f32, 0f32);
+        for i in 0..d {
+            dw[i] += gr[i] * hr[i];
+            db[i] += gr[i];
+            dxhat[i] = gr[i] * w[i];
+            m1 += dxhat[i];
+            m2 += dxhat[i] * hr[i];
+        }
+        let (m1, m2) = (m1 / d as f32, m2 / d as f32);
+        for i in 0..d {
+            xr[i] += r * (dxhat[i] - m1 - hr[i] * m2);
+        }
+    }
+}
+
+/// `y = x + (y + b) · mask`, row by row: a linear layer's bias, dropout and the residual.
+fn add_bias_dropout_residual(y: &mut [f32], b: &[f32], mask: Option<&[f32]>, x: &[f32]) {
+    let d = b.len();
+    for (i, (yr, xr)) in y.chunks_exact_mut(d).zip(x.chunks_exact(d)).enumerate() {
+        for j in 0..d {
+            let m = mask.map_or(1.0, |m| m[i * d + j]);
+            yr[j] = xr[j] + (yr[j] + b[j]) * m;
+        }
+    }
+}
+
+/// `Φ(x)`, so that GELU (erf form) is `x · Φ(x)`.
+fn normal_cdf(x: f32) -> f32 {
+    (libm::erff(x * std::f32::consts::FRAC_1_SQRT_2) + 1.0) * 0.5
+}
+
+/// GELU's derivative at `x`, `Φ(x) + x · φ(x)`, from `Φ(x)` kept by the forward pass.
+fn gelu_derivative(x: f32, cdf: f32) -> f32 {
+    const INV_SQRT_2PI: f32 = 0.398_942_3;
+    cdf + x * INV_SQRT_2PI * (-0.5 * x * x).exp()
+}
+
+/// From this many tokens on, attention's products go through gemm; below, short loops are faster.
+const GEMM_TOKENS: usize = 16;
+
+/// Softmax attention of every sequence and head in `qkv` (`[rows, 3 · inner]`, q then k then v,
+/// the scale already in q): the probabilities `[sequences, heads, tokens, tokens]` and the mixed
+/// values `[rows, inner]`.
+fn attend(d: &BlockDims, tokens: usize, qkv: &[f32], probs: &mut [f32], heads: &mut [f32]) {
+    let (inner, dh, l) = (d.inner(), d.dim_head, tokens);
+    let at = |row: usize, part: usize, h: usize| row * 3 * inner + part * inner + h * dh;
+    for (sh, p) in probs.chunks_exact_mut(l * l).enumerate() {
+        let (s, h) = (sh / d.heads, sh % d.heads);
+        let (q, k, v) = (at(s * l, 0, h), at(s * l, 1, h), at(s * l, 2, h));
+        let out = (s * l) * inner + h * dh;
+        if l >= GEMM_TOKENS {
+            let view = |start: usize| View::strided(&qkv[start..], l, dh, 3 * inner);
+            matmul(p, view(q), view(k).t(), false);
+            p.chunks_exact_mut(l).for_each(softmax);
+            matmul_strided(&mut heads[out..], inner, View::rows(p, l, l), view(v), false);
+            continue;
+        }
+        for (i, row) in p.chunks_exact_mut(l).enumerate() {
+            let qi = &qkv[q + i * 3 * inner..][..dh];
+            for (j, v) in row.iter_mut().enumerate() {
+                *v = dot(qi, &qkv[k + j * 3 * inner..][..dh]);
+            }
+            softmax(row);
+            let oi = &mut heads[out + i * inner..][..dh];
+            oi.fill(0.0);
+            for (j, &pj) in row.iter().enumerate() {
+                axpy(oi, pj, &qkv[v + j * 3 * inner..][..dh]);
+            }
+        }
+    }
+}
+
+fn softmax(row: &mut [f32]) {
+    let max = row.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    row.iter_mut().for_each(|v| *v = (*v - max).exp());
+    let sum: f32 = row.iter().sum();
+    row.iter_mut().for_each(|v| *v /= sum);
+}
+
+/// The backward of [`attend`]: from the mixed values' gradient `dheads`, writes q's, k's and v's
+/// into `dqkv` (which starts at zero).
+fn attend_backward(d: &BlockDims, tokens: usize, qkv: &[f32], probs: &[f32], dheads: &[f32], dqkv: &mut [f32]) {
+    let (inner, dh, l) = (d.inner(), d.dim_head, tokens);
+    let at = |row: usize, part: usize, h: usize| row * 3 * inner + part * inner + h * dh;
+    let mut ds = vec![0f32; if l >= GEMM_TOKENS { l * l } else { l }];
+    for (sh, p) in probs.chunks_exact(l * l).enumerate() {
+        let (s, h) = (sh / d.heads, sh % d.heads);
+        let (q, k, v) = (at(s * l, 0, h), at(s * l, 1, h), at(s * l, 2, h));
+        let dout = (s * l) * inner + h * dh;
+        if l >= GEMM_TOKENS {
+            let view = |start: usize| View::strided(&qkv[start..], l, dh, 3 * inner);
+            let dov = View::strided(&dheads[dout..], l, dh, inner);
+            matmul(&mut ds, dov, view(v).t(), false);
+            for (drow, prow) in ds.chunks_exact_mut(l).zip(p.chunks_exact(l)) {
+                let mean = dot(prow, drow);
+                drow.iter_mut().zip(prow).for_each(|(g, p)| *g = p * (*g - mean));
+            }
+            let (pv, dsv) = (View::rows(p, l, l), View::rows(&ds, l, l));
+            matmul_strided(&mut dqkv[v..], 3 * inner, pv.t(), dov, false);
+            matmul_strided(&mut dqkv[q..], 3 * inner, dsv, view(k), false);
+            matmul_strided(&mut dqkv[k..], 3 * inner, dsv.t(), view(q), false);
+            continue;
+        }
+        for (i, prow) in p.chunks_exact(l).enumerate() {
+            let doi = &dheads[dout + i * inner..][..dh];
+            for (j, g) in ds.iter_mut().enumerate() {
+                *g = dot(doi, &qkv[v + j * 3 * inner..][..dh]);
+            }
+            let mean = dot(prow, &ds);
+            let qi = q + i * 3 * inner;
+            for j in 0..l {
+                let g = prow[j] * (ds[j] - mean);
+                let (kj, vj) = (k + j * 3 * inner, v + j * 3 * inner);
+                axpy(&mut dqkv[qi..][..dh], g, &qkv[kj..][..dh]);
+                axpy(&mut dqkv[kj..][..dh], g, &qkv[qi..][..dh]);
+                axpy(&mut dqkv[vj..][..dh], prow[j], doi);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;

@@ -1,0 +1,138 @@
+//! The fused block against the same block composed of candle ops (forward ≤ 1e-6, every gradient
+//! ≤ 1e-5 relative), against finite differences, and for the same bits on any thread count.
+
+use candle_core::{DType, Device, Tensor, Var};
+use candle_nn::{VarBuilder, VarMap};
+
+use crate::transformer::Block;
+use crate::{Config, Rng};
+
+/// A block with every parameter random (masks and norms too, so that their gradients are tested
+/// away from their initial values), and its variables by name.
+fn block(cfg: &Config, seed: u64) -> (Block, Vec<(String, Var)>) {
+    let varmap = VarMap::new();
+    let block = Block::new(cfg, VarBuilder::from_varmap(&varmap, DType::F32, &Device::Cpu)).unwrap();
+    let mut rng = Rng::new(seed);
+    let mut vars: Vec<(String, Var)> = varmap.data().lock().unwrap().iter().map(|(n, v)| (n.clone(), v.clone())).collect();
+    vars.sort_by(|a, b| a.0.cmp(&b.0));
+    for (name, var) in &vars {
+        let centre = if name.ends_with("mask") || name.ends_with("norm.weight") { 1.0 } else { 0.0 };
+        let values: Vec<f32> = (0..var.elem_count()).map(|_| centre + 0.3 * rng.normal()).collect();
+        var.set(&Tensor::from_vec(values, var.shape(), &Device::Cpu).unwrap()).unwrap();
+    }
+    (block, vars)
+}
+
+fn random(shape: &[usize], seed: u64) -> Tensor {
+    let mut rng = Rng::new(seed);
+    let n = shape.iter().product();
+    Tensor::from_vec((0..n).map(|_| rng.normal()).collect::<Vec<f32>>(), shape, &Device::Cpu).unwrap()
+}
+
+fn max_abs(t: &Tensor) -> f32 {
+    t.abs().unwrap().flatten_all().unwrap().max(0).unwrap().to_scalar::<f32>().unwrap()
+}
+
+/// `max |a − b| / max |b|`.
+fn relative(a: &Tensor, b: &Tensor) -> f32 {
+    max_abs(&(a - b).unwrap()) / max_abs(b).max(1e-30)
+}
+
+/// The configurations tested: the iCub block (one head; 5 and 76 tokens, the short loops and the
+/// gemm path of attention) and a two-head one on both paths.
+fn configs() -> Vec<(Config, usize)> {
+    let icub = Config { dropout: 0.1, ..Config::icub20() };
+    let two_heads = Config { heads: 2, dim_head: 8, dim: 12, mlp_dim: 24, ..icub.clone() };
+    vec![(icub.clone(), 5), (icub, 76), (two_heads.clone(), 9), (two_heads, 20)]
+}
+
+#[test]
+fn fused_matches_composed_in_value_and_every_gradient() {
+    for (cfg, tokens) in configs() {
+        let (block, vars) = block(&cfg, 1);
+        let x = Var::from_tensor(&random(&[3, tokens, cfg.dim], 2)).unwrap();
+        let weights = random(&[3, tokens, cfg.dim], 3);
+        for train in [false, true] {
+            let run = |fused: bool| {
+                let mut rng = Rng::new(4);
+                let rng = train.then_some(&mut rng);
+                let y = if fused { block.forward(&x, rng) } else { block.forward_composed(&x, block.draw_dropout(rng).as_ref()) }.unwrap();
+                let grads = (&y * &weights).unwrap().sum_all().unwrap().backward().unwrap();
+                (y, grads)
+            };
+            let ((yf, gf), (yc, gc)) = (run(true), run(false));
+            let forward = max_abs(&(&yf - &yc).unwrap());
+            assert!(forward <= 1e-6 * max_abs(&yc).max(1.0), "{tokens} tokens, train {train}: forward differs by {forward:e}");
+            let named = vars.iter().map(|(n, v)| (n.as_str(), v.as_tensor())).chain([("input", x.as_tensor())]);
+            for (name, var) in named {
+                let (f, c) = (gf.get(var).unwrap(), gc.get(var).unwrap());
+                let err = relative(f, c);
+                assert!(err <= 1e-5, "{tokens} tokens, train {train}: gradient of {name} differs by {err:e} (relative)");
+                assert!(max_abs(c) > 0.0, "{name} has a zero gradient: the test would prove nothing");
+            }
+        }
+    }
+}
+
+#[test]
+fn gradients_match_finite_differences() {
+    // For each parameter and the input: the directional derivative along a random direction, by
+    // central differences of a smooth scalar in f32, against the backward's gradient.
+    for (cfg, tokens) in configs() {
+        let cfg = Config { dropout: 0.0, ..cfg };
+        let (block, vars) = block(&cfg, 5);
+        let x = Var::from_tensor(&random(&[2, tokens, cfg.dim], 6)).unwrap();
+        let weights = random(&[2, tokens, cfg.dim], 7);
+        let loss = || -> f64 {
+            let y: Vec<f32> = block.forward(&x, None).unwrap().flatten_all().unwrap().to_vec1().unwrap();
+            let w: Vec<f32> = weights.flatten_all().unwrap().to_vec1().unwrap();
+            y.iter().zip(&w).map(|(a, b)| (*a as f64 * *b as f64).tanh()).sum()
+        };
+        // Evaluation mode: the backward recomputes the activations instead of reading kept ones.
+        let y = block.forward(&x, None).unwrap();
+        let grads = (&y * &weights).unwrap().tanh().unwrap().sum_all().unwrap().backward().unwrap();
+        let named = vars.iter().map(|(n, v)| (n.as_str(), v)).chain([("input", &x)]);
+        for (i, (name, var)) in named.enumerate() {
+            // A unit direction, so that a step moves the parameter alike whatever its size.
+            let direction = random(var.dims(), 100 + i as u64);
+            let direction = (&direction / direction.sqr().unwrap().sum_all().unwrap().sqrt().unwrap().to_scalar::<f32>().unwrap() as f64).unwrap();
+            let analytic = (grads.get(var.as_tensor()).unwrap() * &direction).unwrap().sum_all().unwrap().to_scalar::<f32>().unwrap() as f64;
+            let original = var.as_tensor().copy().unwrap();
+            let central = |h: f64| {
+                let at = |t: f64| {
+                    var.set(&(&original + (&direction * t).unwrap()).unwrap()).unwrap();
+                    loss()
+                };
+                (at(h) - at(-h)) / (2.0 * h)
+            };
+            // Richardson's extrapolation cancels the h² error, so the step can stay large
+            // against f32 rounding.
+            let numeric = (4.0 * central(5e-3) - central(1e-2)) / 3.0;
+            var.set(&original).unwrap();
+            // f32 rounding leaves ~1e-3 (measured: at most 6e-3 here); a wrong formula is off by O(1).
+            let err = (numeric - analytic).abs() / analytic.abs().max(1e-2);
+            assert!(err < 1e-2, "{tokens} tokens, {name}: finite difference {numeric} against the backward's {analytic} ({err:e} relative)");
+        }
+    }
+}
+
+#[test]
+fn threads_change_no_bit() {
+    let (cfg, tokens) = (Config { dropout: 0.1, ..Config::icub20() }, 5);
+    let (block, vars) = block(&cfg, 8);
+    // 300 sequences of 5 tokens: three chunks of work.
+    let x = Var::from_tensor(&random(&[300, tokens, cfg.dim], 9)).unwrap();
+    let run = |threads: usize| {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        pool.install(|| {
+            let y = block.forward(&x, Some(&mut Rng::new(10))).unwrap();
+            let grads = y.sqr().unwrap().sum_all().unwrap().backward().unwrap();
+            let mut bits: Vec<u32> = y.flatten_all().unwrap().to_vec1::<f32>().unwrap().iter().map(|v| v.to_bits()).collect();
+            for (_, v) in &vars {
+                bits.extend(grads.get(v.as_tensor()).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap().iter().map(|v| v.to_bits()));
+            }
+            bits
+        })
+    };
+    assert_eq!(run(1), run(3));
+}
