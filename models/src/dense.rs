@@ -47,30 +47,66 @@ pub fn matmul(dst: &mut [f32], a: View, b: View, accumulate: bool) {
 /// [`matmul`] into the `a.rows × b.cols` block at the start of `dst` whose rows are
 /// `dst_row_stride` apart.
 pub fn matmul_strided(dst: &mut [f32], dst_row_stride: usize, a: View, b: View, accumulate: bool) {
-    let (m, k, n) = (a.rows, a.cols, b.cols);
-    assert!(b.rows == k && n <= dst_row_stride, "matmul of {m}×{k} by {}×{n} into rows of {dst_row_stride}", b.rows);
-    assert!(a.in_bounds() && b.in_bounds(), "matmul view outside its slice");
+    let (m, n) = (a.rows, b.cols);
+    assert!(n <= dst_row_stride, "matmul into rows of {dst_row_stride} values, {n} wide");
     if m == 0 || n == 0 {
         return;
     }
     assert!((m - 1) * dst_row_stride + n <= dst.len(), "matmul destination outside its slice");
+    // SAFETY: the destination block (m rows of n values, `dst_row_stride` apart) was checked to
+    // lie inside `dst`, which is borrowed mutably, so it aliases neither view.
+    unsafe { gemm_into(dst.as_mut_ptr(), dst_row_stride, a, b, accumulate) }
+}
+
+/// `a · b` as a new row-major `a.rows × b.cols` matrix, written without first zeroing it.
+pub fn product(a: View, b: View) -> Vec<f32> {
+    let len = a.rows * b.cols;
+    let mut out = Vec::with_capacity(len);
+    // SAFETY: `out` has room for the `a.rows × b.cols` block with rows `b.cols` apart and aliases
+    // nothing. gemm_into writes every element of that block when not accumulating, so all
+    // `len` values are initialised before the length is set.
+    unsafe {
+        gemm_into(out.as_mut_ptr(), b.cols, a, b, false);
+        out.set_len(len);
+    }
+    out
+}
+
+/// `dst ← a · b`, or `dst ← dst + a · b` with `accumulate`, for a destination block of
+/// `a.rows × b.cols` values whose rows are `dst_row_stride` apart.
+///
+/// # Safety
+/// `dst` must be valid for writes (and, with `accumulate`, reads of initialised values) over that
+/// block, and must not overlap either view. Without `accumulate` every element of the block is written.
+///
+/// # Panics
+/// If the shapes disagree or a view reaches outside its slice: a caller's bug, never data.
+unsafe fn gemm_into(dst: *mut f32, dst_row_stride: usize, a: View, b: View, accumulate: bool) {
+    let (m, k, n) = (a.rows, a.cols, b.cols);
+    assert!(b.rows == k, "matmul of {m}×{k} by {}×{n}", b.rows);
+    assert!(a.in_bounds() && b.in_bounds(), "matmul view outside its slice");
+    if m == 0 || n == 0 {
+        return;
+    }
     if k == 0 {
         if !accumulate {
-            dst.chunks_mut(dst_row_stride).take(m).for_each(|row| row[..n].fill(0.0));
+            for i in 0..m {
+                // SAFETY: row i of the block lies inside `dst` (the caller's contract).
+                unsafe { std::ptr::write_bytes(dst.add(i * dst_row_stride), 0, n) };
+            }
         }
         return;
     }
-    // SAFETY: the destination block (m rows of n values, `dst_row_stride` apart) and both views
-    // were checked above to address only elements inside their own slices, and the strides fit
-    // in isize because they index existing slices. `dst` is borrowed mutably, so it does not
-    // alias the views. gemm reads `dst` only when `read_dst` is set, and runs on this thread
-    // (Parallelism::None), so no pointer outlives the call.
+    // SAFETY: both views were checked above to address only elements inside their own slices,
+    // and the strides fit in isize because they index existing slices; the destination block is
+    // the caller's contract. gemm reads `dst` only when `read_dst` is set, writes every element
+    // of the block, and runs on this thread (Parallelism::None), so no pointer outlives the call.
     unsafe {
         gemm::gemm(
             m,
             n,
             k,
-            dst.as_mut_ptr(),
+            dst,
             1,
             dst_row_stride as isize,
             accumulate,
@@ -149,9 +185,18 @@ mod tests {
             matmul(&mut c, va, vb, false);
             let want = triple_loop(va, vb);
             assert!(c.iter().zip(&want).all(|(x, y)| (*x as f64 - y).abs() <= 1e-4 * (1.0 + y.abs())), "{m}×{k}×{n}");
+            assert_eq!(product(va, vb), c, "{m}×{k}×{n} as a new matrix");
             matmul(&mut c, va, vb, true);
             assert!(c.iter().zip(&want).all(|(x, y)| (*x as f64 - 2.0 * y).abs() <= 2e-4 * (1.0 + y.abs())), "{m}×{k}×{n} accumulated");
         }
+    }
+
+    #[test]
+    fn a_block_of_a_wider_matrix_is_written_and_nothing_beside_it() {
+        let a = [1f32, 2.0, 3.0, 4.0];
+        let mut dst = vec![9f32; 2 * 5];
+        matmul_strided(&mut dst[1..], 5, View::rows(&a, 2, 2), View::rows(&a, 2, 2), false);
+        assert_eq!(dst, [9.0, 7.0, 10.0, 9.0, 9.0, 9.0, 15.0, 22.0, 9.0, 9.0]);
     }
 
     #[test]

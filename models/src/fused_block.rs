@@ -16,7 +16,7 @@ use candle_core::backend::BackendStorage;
 use candle_core::{CpuStorage, CustomOp2, Layout, Result, Shape, Tensor};
 use rayon::prelude::*;
 
-use crate::dense::{add_column_sums, axpy, dot, matmul, matmul_strided, View};
+use crate::dense::{add_column_sums, axpy, dot, matmul, matmul_strided, product, View};
 use crate::dropout::Dropout;
 use crate::{Config, Rng};
 
@@ -229,19 +229,16 @@ impl BlockOp {
 
         let (mut xhat1, mut a, mut rstd1) = (vec![0f32; rows * dim], vec![0f32; rows * dim], vec![0f32; rows]);
         norm_rows(x, &p[r[LN1_W].clone()], &p[r[LN1_B].clone()], d.eps, &mut xhat1, &mut a, &mut rstd1);
-        let mut qkv = vec![0f32; rows * 3 * inner];
-        matmul(&mut qkv, View::rows(&a, rows, dim), View::rows(&w.qkv, 3 * inner, dim).t(), false);
+        let qkv = product(View::rows(&a, rows, dim), View::rows(&w.qkv, 3 * inner, dim).t());
         let mut probs = vec![0f32; rows * d.heads * tokens];
         let mut heads = vec![0f32; rows * inner];
         attend(d, tokens, &qkv, &mut probs, &mut heads);
-        let mut out = vec![0f32; rows * dim];
-        matmul(&mut out, View::rows(&heads, rows, inner), View::rows(&p[r[OUT_W].clone()], dim, inner).t(), false);
+        let mut out = product(View::rows(&heads, rows, inner), View::rows(&p[r[OUT_W].clone()], dim, inner).t());
         add_bias_dropout_residual(&mut out, &p[r[OUT_B].clone()], drop.map(|m| &m.attn[..]), x);
 
         let (mut xhat2, mut c, mut rstd2) = (vec![0f32; rows * dim], vec![0f32; rows * dim], vec![0f32; rows]);
         norm_rows(&out, &p[r[LN2_W].clone()], &p[r[LN2_B].clone()], d.eps, &mut xhat2, &mut c, &mut rstd2);
-        let mut h = vec![0f32; rows * mlp];
-        matmul(&mut h, View::rows(&c, rows, dim), View::rows(&p[r[FC1_W].clone()], mlp, dim).t(), false);
+        let mut h = product(View::rows(&c, rows, dim), View::rows(&p[r[FC1_W].clone()], mlp, dim).t());
         for row in h.chunks_exact_mut(mlp) {
             for (v, b) in row.iter_mut().zip(&p[r[FC1_B].clone()]) {
                 *v += b;
@@ -252,8 +249,7 @@ impl BlockOp {
         if let Some(m) = drop {
             gd.iter_mut().zip(&m.hidden).for_each(|(v, m)| *v *= m);
         }
-        let mut f = vec![0f32; rows * dim];
-        matmul(&mut f, View::rows(&gd, rows, mlp), View::rows(&w.fc2, dim, mlp).t(), false);
+        let mut f = product(View::rows(&gd, rows, mlp), View::rows(&w.fc2, dim, mlp).t());
         add_bias_dropout_residual(&mut f, &p[r[FC2_B].clone()], drop.map(|m| &m.out[..]), &out);
 
         let acts = if keep {
@@ -280,15 +276,13 @@ impl BlockOp {
         }
         add_column_sums(&mut g[r[FC2_B].clone()], &df);
         matmul(&mut g[r[FC2_W].clone()], View::rows(&df, rows, dim).t(), View::rows(&acts.gd, rows, mlp), true);
-        let mut dh = vec![0f32; rows * mlp];
-        matmul(&mut dh, View::rows(&df, rows, dim), View::rows(&w.fc2, dim, mlp), false);
+        let mut dh = product(View::rows(&df, rows, dim), View::rows(&w.fc2, dim, mlp));
         for (i, (v, (&h, &cdf))) in dh.iter_mut().zip(acts.h.iter().zip(&acts.cdf)).enumerate() {
             *v *= gelu_derivative(h, cdf) * drop.map_or(1.0, |m| m.hidden[i]);
         }
         add_column_sums(&mut g[r[FC1_B].clone()], &dh);
         matmul(&mut g[r[FC1_W].clone()], View::rows(&dh, rows, mlp).t(), View::rows(&acts.c, rows, dim), true);
-        let mut dc = vec![0f32; rows * dim];
-        matmul(&mut dc, View::rows(&dh, rows, mlp), View::rows(&p[r[FC1_W].clone()], mlp, dim), false);
+        let dc = product(View::rows(&dh, rows, mlp), View::rows(&p[r[FC1_W].clone()], mlp, dim));
         let mut dx = dy.to_vec();
         norm_rows_backward(&dc, &acts.xhat2, &acts.rstd2, &p[r[LN2_W].clone()], &mut g[r[LN2_W].start..r[LN2_B].end], &mut dx);
 
@@ -299,13 +293,11 @@ impl BlockOp {
         }
         add_column_sums(&mut g[r[OUT_B].clone()], &dout);
         matmul(&mut g[r[OUT_W].clone()], View::rows(&dout, rows, dim).t(), View::rows(&acts.heads, rows, inner), true);
-        let mut dheads = vec![0f32; rows * inner];
-        matmul(&mut dheads, View::rows(&dout, rows, dim), View::rows(&p[r[OUT_W].clone()], dim, inner), false);
+        let dheads = product(View::rows(&dout, rows, dim), View::rows(&p[r[OUT_W].clone()], dim, inner));
         let mut dqkv = vec![0f32; rows * 3 * inner];
         attend_backward(d, tokens, &acts.qkv, &acts.probs, &dheads, &mut dqkv);
         matmul(&mut g[r[QKV].clone()], View::rows(&dqkv, rows, 3 * inner).t(), View::rows(&acts.a, rows, dim), true);
-        let mut da = vec![0f32; rows * dim];
-        matmul(&mut da, View::rows(&dqkv, rows, 3 * inner), View::rows(&w.qkv, 3 * inner, dim), false);
+        let da = product(View::rows(&dqkv, rows, 3 * inner), View::rows(&w.qkv, 3 * inner, dim));
         norm_rows_backward(&da, &acts.xhat1, &acts.rstd1, &p[r[LN1_W].clone()], &mut g[r[LN1_W].start..r[LN1_B].end], &mut dx);
         dx
     }
