@@ -1,4 +1,4 @@
-"""PVT³ (the icub20 preset of DESIGN.md) in PyTorch, for the training-speed comparison with candle.
+"""PVT³ (the icub20 and biotac20 presets of DESIGN.md) in PyTorch, for the training-speed comparison with candle.
 
 Before timing, the model loads the golden weights and must reproduce the golden logits, which
 proves it is the same function as the candle model. It then times optimiser steps exactly as
@@ -79,9 +79,9 @@ class Pvt3(nn.Module):
     def __init__(self, cfg):
         super().__init__()
         self.cfg = cfg
-        d, t = cfg["dim"], cfg["frames"]
+        d, t = cfg["dim"], cfg["frames"] // cfg["tubelet"]
         self.n = (cfg["height"] // cfg["patch_height"]) * (cfg["width"] // cfg["patch_width"])
-        self.patch_embed = nn.Linear(cfg["patch_height"] * cfg["patch_width"], d)
+        self.patch_embed = nn.Linear(cfg["tubelet"] * cfg["patch_height"] * cfg["patch_width"], d)
         self.frame_mask = nn.Parameter(torch.ones(t))
         self.pos_embed = nn.Parameter(0.02 * torch.randn(1, t, self.n + 1, d))
         self.space_cls = nn.Parameter(0.02 * torch.randn(1, 1, d))
@@ -94,10 +94,11 @@ class Pvt3(nn.Module):
 
     def forward(self, x):  # [b, h, w, t]
         c = self.cfg
-        b, t = x.shape[0], x.shape[-1]
-        ph, pw = c["patch_height"], c["patch_width"]
+        ph, pw, tub = c["patch_height"], c["patch_width"], c["tubelet"]
+        b, t = x.shape[0], x.shape[-1] // tub
         gh, gw = c["height"] // ph, c["width"] // pw
-        x = x.reshape(b, gh, ph, gw, pw, t).permute(0, 5, 1, 3, 2, 4).reshape(b, t, gh * gw, ph * pw)
+        # [b, gh, ph, gw, pw, t, tubelet] -> [b, t, gh, gw, tubelet, ph, pw], as pvt3's patchify.
+        x = x.reshape(b, gh, ph, gw, pw, t, tub).permute(0, 5, 1, 3, 6, 2, 4).reshape(b, t, gh * gw, tub * ph * pw)
         e = self.patch_embed(x) * self.frame_mask[None, :, None, None]
         e = torch.cat([self.space_cls[:, None].expand(b, t, 1, -1), e], dim=2) + self.pos_embed
         e = self.drop(e)
@@ -107,8 +108,15 @@ class Pvt3(nn.Module):
 
 
 def icub20(dropout):
-    return dict(height=6, width=10, frames=75, patch_height=3, patch_width=5, dim=20, space_depth=4,
+    return dict(height=6, width=10, frames=75, patch_height=3, patch_width=5, tubelet=1, dim=20, space_depth=4,
                 time_depth=4, heads=1, dim_head=64, mlp_dim=40, classes=20, dropout=dropout)
+
+
+def biotac20(dropout):
+    return dict(icub20(dropout), height=19, width=1, frames=400, patch_height=19, patch_width=1, tubelet=10)
+
+
+PRESETS = dict(icub20=(icub20, 64272), biotac20=(biotac20, 61872))
 
 
 def golden_check():
@@ -128,16 +136,19 @@ def main():
     ap.add_argument("--steps", type=int, default=20)
     ap.add_argument("--batch-size", type=int, default=32)
     ap.add_argument("--threads", type=int, default=1)
+    ap.add_argument("--preset", choices=sorted(PRESETS), default="icub20")
     args = ap.parse_args()
     torch.set_num_threads(args.threads)
     torch.manual_seed(0)
     err = golden_check()
-    model = Pvt3(icub20(0.1)).train()
-    assert sum(p.numel() for n, p in model.named_parameters() if n != "frame_mask") == 64272
+    preset, parameters = PRESETS[args.preset]
+    cfg = preset(0.1)
+    model = Pvt3(cfg).train()
+    assert sum(p.numel() for n, p in model.named_parameters() if n != "frame_mask") == parameters
     decay = [p for n, p in model.named_parameters() if n.endswith(".weight") and p.dim() == 2]
     rest = [p for n, p in model.named_parameters() if not (n.endswith(".weight") and p.dim() == 2)]
     opt = torch.optim.AdamW([{"params": decay, "weight_decay": 0.05}, {"params": rest, "weight_decay": 0.0}], lr=2e-3)
-    x = torch.randn(args.batch_size, 6, 10, 75)
+    x = torch.randn(args.batch_size, cfg["height"], cfg["width"], cfg["frames"])
     y = torch.arange(args.batch_size) % 20
 
     def step():
@@ -153,7 +164,7 @@ def main():
     for _ in range(args.steps):
         step()
     per_step = (time.perf_counter() - started) / args.steps
-    print(json.dumps(dict(framework=f"pytorch {torch.__version__}", batch_size=args.batch_size, steps=args.steps,
+    print(json.dumps(dict(framework=f"pytorch {torch.__version__}", preset=args.preset, batch_size=args.batch_size, steps=args.steps,
                           seconds_per_step=per_step, samples_per_second=args.batch_size / per_step,
                           golden_max_abs_error=err)))
 

@@ -127,6 +127,7 @@ unsafe fn gemm_into(dst: *mut f32, dst_row_stride: usize, a: View, b: View, accu
 }
 
 /// `Σ a[i]·b[i]`, eight partial sums at a time so that the compiler can keep them in vector lanes.
+#[inline(always)]
 pub fn dot(a: &[f32], b: &[f32]) -> f32 {
     debug_assert_eq!(a.len(), b.len());
     let mut lanes = [0f32; 8];
@@ -141,6 +142,7 @@ pub fn dot(a: &[f32], b: &[f32]) -> f32 {
 }
 
 /// `y += alpha · x`.
+#[inline(always)]
 pub fn axpy(y: &mut [f32], alpha: f32, x: &[f32]) {
     debug_assert_eq!(x.len(), y.len());
     for (y, x) in y.iter_mut().zip(x) {
@@ -149,6 +151,7 @@ pub fn axpy(y: &mut [f32], alpha: f32, x: &[f32]) {
 }
 
 /// Adds each row of the row-major `rows × sums.len()` matrix `m` into `sums` (a bias's gradient).
+#[inline(always)]
 pub fn add_column_sums(sums: &mut [f32], m: &[f32]) {
     for row in m.chunks_exact(sums.len()) {
         for (s, v) in sums.iter_mut().zip(row) {

@@ -220,6 +220,23 @@ impl BlockOp {
     }
 
     fn forward_chunk(&self, p: &[f32], w: &Effective, x: &[f32], sequences: Range<usize>, tokens: usize, keep: bool) -> (Vec<f32>, Activations) {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            return unsafe { self.forward_chunk_avx2(p, w, x, sequences, tokens, keep) };
+        }
+        self.forward_chunk_body(p, w, x, sequences, tokens, keep)
+    }
+
+    /// [`Self::forward_chunk_body`] compiled for AVX2 (see [`Self::backward_chunk_avx2`]).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn forward_chunk_avx2(&self, p: &[f32], w: &Effective, x: &[f32], sequences: Range<usize>, tokens: usize, keep: bool) -> (Vec<f32>, Activations) {
+        self.forward_chunk_body(p, w, x, sequences, tokens, keep)
+    }
+
+    #[inline(always)]
+    fn forward_chunk_body(&self, p: &[f32], w: &Effective, x: &[f32], sequences: Range<usize>, tokens: usize, keep: bool) -> (Vec<f32>, Activations) {
         let d = &self.dims;
         let r = d.ranges();
         let (dim, inner, mlp) = (d.dim, d.inner(), d.mlp);
@@ -263,6 +280,25 @@ impl BlockOp {
     /// The backward pass of one chunk: the input's gradient, and into `g` (laid out as the packed
     /// parameters) the gradients of the effective q/k/v and second-layer weights, the others as they are.
     fn backward_chunk(&self, p: &[f32], w: &Effective, acts: &Activations, dy: &[f32], tokens: usize, g: &mut [f32]) -> Vec<f32> {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            // SAFETY: the CPU has AVX2, checked just above.
+            return unsafe { self.backward_chunk_avx2(p, w, acts, dy, tokens, g) };
+        }
+        self.backward_chunk_body(p, w, acts, dy, tokens, g)
+    }
+
+    /// [`Self::backward_chunk_body`] compiled for AVX2: the short loops of attention, the norms and
+    /// the elementwise work (all inlined into it) then run on 8-lane vectors instead of SSE's 4.
+    /// The same operations in the same order (no fused multiply-add), so the same bits.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2")]
+    unsafe fn backward_chunk_avx2(&self, p: &[f32], w: &Effective, acts: &Activations, dy: &[f32], tokens: usize, g: &mut [f32]) -> Vec<f32> {
+        self.backward_chunk_body(p, w, acts, dy, tokens, g)
+    }
+
+    #[inline(always)]
+    fn backward_chunk_body(&self, p: &[f32], w: &Effective, acts: &Activations, dy: &[f32], tokens: usize, g: &mut [f32]) -> Vec<f32> {
         let d = &self.dims;
         let r = d.ranges();
         let (dim, inner, mlp) = (d.dim, d.inner(), d.mlp);
@@ -277,8 +313,10 @@ impl BlockOp {
         add_column_sums(&mut g[r[FC2_B].clone()], &df);
         matmul(&mut g[r[FC2_W].clone()], View::rows(&df, rows, dim).t(), View::rows(&acts.gd, rows, mlp), true);
         let mut dh = product(View::rows(&df, rows, dim), View::rows(&w.fc2, dim, mlp));
-        for (i, (v, (&h, &cdf))) in dh.iter_mut().zip(acts.h.iter().zip(&acts.cdf)).enumerate() {
-            *v *= gelu_derivative(h, cdf) * drop.map_or(1.0, |m| m.hidden[i]);
+        let slopes = acts.h.iter().zip(&acts.cdf).map(|(&h, &cdf)| gelu_derivative(h, cdf));
+        match drop {
+            Some(m) => dh.iter_mut().zip(slopes.zip(&m.hidden)).for_each(|(v, (s, m))| *v *= s * m),
+            None => dh.iter_mut().zip(slopes).for_each(|(v, s)| *v *= s),
         }
         add_column_sums(&mut g[r[FC1_B].clone()], &dh);
         matmul(&mut g[r[FC1_W].clone()], View::rows(&dh, rows, mlp).t(), View::rows(&acts.c, rows, dim), true);
@@ -412,12 +450,13 @@ impl CustomOp2 for BlockOp {
             axpy(&mut g, 1.0, part);
         }
         self.unfold_effective(&p, &mut g);
-        let dx: Vec<f32> = parts.into_iter().flat_map(|(dx, _)| dx).collect();
+        let dx = parts.into_iter().map(|(dx, _)| dx).collect::<Vec<_>>().concat();
         Ok((Some(Tensor::from_vec(dx, x.shape(), x.device())?), Some(Tensor::from_vec(g, packed.shape(), packed.device())?)))
     }
 }
 
 /// Layer normalisation of each `w.len()`-long row of `x`: `y = x̂ · w + b`, keeping `x̂` and `1/σ`.
+#[inline(always)]
 fn norm_rows(x: &[f32], w: &[f32], b: &[f32], eps: f32, xhat: &mut [f32], y: &mut [f32], rstd: &mut [f32]) {
     let d = w.len();
     for (((xr, hr), yr), r) in x.chunks_exact(d).zip(xhat.chunks_exact_mut(d)).zip(y.chunks_exact_mut(d)).zip(rstd.iter_mut()) {
@@ -433,6 +472,7 @@ fn norm_rows(x: &[f32], w: &[f32], b: &[f32], eps: f32, xhat: &mut [f32], y: &mu
 
 /// The backward of [`norm_rows`]: adds the input's gradient into `dx`, and the weight's and
 /// bias's into `dwb` (weight, then bias).
+#[inline(always)]
 fn norm_rows_backward(dy: &[f32], xhat: &[f32], rstd: &[f32], w: &[f32], dwb: &mut [f32], dx: &mut [f32]) {
     let d = w.len();
     let (dw, db) = dwb.split_at_mut(d);
@@ -454,22 +494,36 @@ fn norm_rows_backward(dy: &[f32], xhat: &[f32], rstd: &[f32], w: &[f32], dwb: &m
 }
 
 /// `y = x + (y + b) · mask`, row by row: a linear layer's bias, dropout and the residual.
+#[inline(always)]
 fn add_bias_dropout_residual(y: &mut [f32], b: &[f32], mask: Option<&[f32]>, x: &[f32]) {
     let d = b.len();
-    for (i, (yr, xr)) in y.chunks_exact_mut(d).zip(x.chunks_exact(d)).enumerate() {
-        for j in 0..d {
-            let m = mask.map_or(1.0, |m| m[i * d + j]);
-            yr[j] = xr[j] + (yr[j] + b[j]) * m;
+    let rows = y.chunks_exact_mut(d).zip(x.chunks_exact(d));
+    match mask {
+        Some(mask) => {
+            for ((yr, xr), mr) in rows.zip(mask.chunks_exact(d)) {
+                for j in 0..d {
+                    yr[j] = xr[j] + (yr[j] + b[j]) * mr[j];
+                }
+            }
+        }
+        None => {
+            for (yr, xr) in rows {
+                for j in 0..d {
+                    yr[j] = xr[j] + (yr[j] + b[j]);
+                }
+            }
         }
     }
 }
 
 /// `Φ(x)`, so that GELU (erf form) is `x · Φ(x)`.
+#[inline(always)]
 fn normal_cdf(x: f32) -> f32 {
     (libm::erff(x * std::f32::consts::FRAC_1_SQRT_2) + 1.0) * 0.5
 }
 
 /// GELU's derivative at `x`, `Φ(x) + x · φ(x)`, from `Φ(x)` kept by the forward pass.
+#[inline(always)]
 fn gelu_derivative(x: f32, cdf: f32) -> f32 {
     const INV_SQRT_2PI: f32 = 0.398_942_3;
     cdf + x * INV_SQRT_2PI * (-0.5 * x * x).exp()
@@ -481,6 +535,7 @@ const GEMM_TOKENS: usize = 16;
 /// Softmax attention of every sequence and head in `qkv` (`[rows, 3 · inner]`, q then k then v,
 /// the scale already in q): the probabilities `[sequences, heads, tokens, tokens]` and the mixed
 /// values `[rows, inner]`.
+#[inline(always)]
 fn attend(d: &BlockDims, tokens: usize, qkv: &[f32], probs: &mut [f32], heads: &mut [f32]) {
     let (inner, dh, l) = (d.inner(), d.dim_head, tokens);
     let at = |row: usize, part: usize, h: usize| row * 3 * inner + part * inner + h * dh;
@@ -510,6 +565,7 @@ fn attend(d: &BlockDims, tokens: usize, qkv: &[f32], probs: &mut [f32], heads: &
     }
 }
 
+#[inline(always)]
 fn softmax(row: &mut [f32]) {
     let max = row.iter().copied().fold(f32::NEG_INFINITY, f32::max);
     row.iter_mut().for_each(|v| *v = (*v - max).exp());
@@ -519,6 +575,7 @@ fn softmax(row: &mut [f32]) {
 
 /// The backward of [`attend`]: from the mixed values' gradient `dheads`, writes q's, k's and v's
 /// into `dqkv` (which starts at zero).
+#[inline(always)]
 fn attend_backward(d: &BlockDims, tokens: usize, qkv: &[f32], probs: &[f32], dheads: &[f32], dqkv: &mut [f32]) {
     let (inner, dh, l) = (d.inner(), d.dim_head, tokens);
     let at = |row: usize, part: usize, h: usize| row * 3 * inner + part * inner + h * dh;
