@@ -396,11 +396,11 @@ impl Activations {
 }
 
 /// The contiguous f32 values of a storage.
-fn values<'a>(s: &'a CpuStorage, l: &Layout) -> Result<&'a [f32]> {
+pub(crate) fn values<'a>(s: &'a CpuStorage, l: &Layout) -> Result<&'a [f32]> {
     match (s, l.contiguous_offsets()) {
         (CpuStorage::F32(v), Some((start, end))) => Ok(&v[start..end]),
-        (CpuStorage::F32(_), None) => candle_core::bail!("fused block: a non-contiguous input"),
-        _ => candle_core::bail!("fused block: f32 only, got {:?}", s.dtype()),
+        (CpuStorage::F32(_), None) => candle_core::bail!("fused op: a non-contiguous input"),
+        _ => candle_core::bail!("fused op: f32 only, got {:?}", s.dtype()),
     }
 }
 

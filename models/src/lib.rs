@@ -16,6 +16,9 @@ pub mod dropout;
 pub mod error;
 pub mod feed_forward;
 pub mod fused_block;
+pub mod fused_embed;
+#[cfg(test)]
+mod gradcheck;
 pub mod head;
 pub mod init;
 pub mod layer_norm;

@@ -10,8 +10,9 @@ use candle_core::{Tensor, D};
 use candle_nn::{linear, Init, Linear, Module, VarBuilder, VarMap};
 
 use crate::dropout::Dropout;
+use crate::fused_embed::{EmbedDims, EmbedOp};
 use crate::head::Head;
-use crate::transformer::Transformer;
+use crate::transformer::{composed_ops, Transformer};
 use crate::{Config, Result, Rng};
 
 #[cfg(test)]
@@ -74,18 +75,36 @@ impl Pvt3 {
     /// Logits `[b, classes]`. Pass an `rng` to train (dropout on), `None` to evaluate.
     pub fn forward(&self, x: &Tensor, mut rng: Option<&mut Rng>) -> Result<Tensor> {
         let patches = self.patchify(x)?;
-        let (b, t, n, p) = patches.dims4()?;
+        let (b, t, n, _) = patches.dims4()?;
         let d = self.cfg.dim;
-        let embedded = self.patch_embed.forward(&patches.reshape((b * t * n, p))?)?.reshape((b, t, n, d))?;
-        let embedded = embedded.broadcast_mul(&self.frame_mask.reshape((1, t, 1, 1))?)?;
-        let cls = self.space_cls.reshape((1, 1, 1, d))?.broadcast_as((b, t, 1, d))?;
-        let tokens = Tensor::cat(&[&cls, &embedded], 2)?.broadcast_add(&self.pos_embed)?;
+        let tokens = if composed_ops() { self.embed_composed(&patches)? } else { self.embed(&patches)? };
         let tokens = self.dropout.forward(&tokens, rng.as_deref_mut())?;
         let frames = self.space.forward_cls(&tokens.reshape((b * t, n + 1, d))?, rng.as_deref_mut())?;
         let cls = self.temporal_cls.broadcast_as((b, 1, d))?;
         let sequence = Tensor::cat(&[&cls, &frames.reshape((b, t, d))?], 1)?;
         let pooled = self.temporal.forward_cls(&sequence, rng)?;
         Ok(self.head.forward(&pooled)?)
+    }
+
+    /// The tokens of the spatial transformer, `[b, t, n + 1, dim]`, from patches `[b, t, n, patch_dim]`:
+    /// patch embedding, × frame mask, the CLS token in front, + position embedding, as one fused op.
+    pub fn embed(&self, patches: &Tensor) -> Result<Tensor> {
+        let (_, t, n, patch_dim) = patches.dims4()?;
+        let bias = self.patch_embed.bias().expect("linear has a bias");
+        let parts = [self.patch_embed.weight(), bias, &self.frame_mask, &self.space_cls, &self.pos_embed];
+        let flat = parts.iter().map(|t| t.flatten_all()).collect::<candle_core::Result<Vec<_>>>()?;
+        let dims = EmbedDims { tokens: t, patches: n, patch_dim, dim: self.cfg.dim };
+        Ok(EmbedOp::new(dims).apply(patches, &Tensor::cat(&flat, 0)?)?)
+    }
+
+    /// [`Self::embed`] composed of candle ops: the oracle of its tests.
+    pub fn embed_composed(&self, patches: &Tensor) -> Result<Tensor> {
+        let (b, t, n, p) = patches.dims4()?;
+        let d = self.cfg.dim;
+        let embedded = self.patch_embed.forward(&patches.reshape((b * t * n, p))?)?.reshape((b, t, n, d))?;
+        let embedded = embedded.broadcast_mul(&self.frame_mask.reshape((1, t, 1, 1))?)?;
+        let cls = self.space_cls.reshape((1, 1, 1, d))?.broadcast_as((b, t, 1, d))?;
+        Ok(Tensor::cat(&[&cls, &embedded], 2)?.broadcast_add(&self.pos_embed)?)
     }
 
     /// Class probabilities `[b, classes]` (evaluation mode).

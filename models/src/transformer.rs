@@ -17,10 +17,15 @@ use crate::{Config, Rng};
 
 static COMPOSED: AtomicBool = AtomicBool::new(false);
 
-/// Runs every block composed of candle ops instead of fused, process-wide: for measuring what
-/// the fusion gains (`pvt3 bench train --composed`). The two compute the same function.
-pub fn use_composed_blocks(on: bool) {
+/// Runs the model composed of candle ops instead of the fused ops (every block and PVT³'s
+/// embedding), process-wide: for measuring what the fusion gains (`pvt3 bench train --composed`).
+/// The two compute the same function.
+pub fn use_composed_ops(on: bool) {
     COMPOSED.store(on, Ordering::Relaxed);
+}
+
+pub(crate) fn composed_ops() -> bool {
+    COMPOSED.load(Ordering::Relaxed)
 }
 
 #[derive(Clone, Debug)]
@@ -49,7 +54,7 @@ impl Block {
     pub fn forward(&self, x: &Tensor, rng: Option<&mut Rng>) -> Result<Tensor> {
         let keep = rng.is_some();
         let dropout = self.draw_dropout(rng);
-        if COMPOSED.load(Ordering::Relaxed) {
+        if composed_ops() {
             return self.forward_composed(x, dropout.as_ref());
         }
         let flat = self.packed.iter().map(|t| t.flatten_all()).collect::<Result<Vec<_>>>()?;

@@ -213,8 +213,8 @@ enum Bench {
         /// Timed optimiser steps (after two untimed warm-up steps).
         #[arg(long, default_value_t = 20)]
         steps: usize,
-        /// Run each transformer block composed of candle ops instead of as one fused op, to
-        /// measure what the fusion gains (the same function).
+        /// Run the model composed of candle ops instead of its fused ops (each transformer block,
+        /// the embedding), to measure what the fusion gains (the same function).
         #[arg(long)]
         composed: bool,
         #[command(flatten)]
@@ -344,10 +344,10 @@ fn main() -> Result<()> {
         Command::Eval { checkpoint, data, fold } => eval(&checkpoint, &data, &fold)?,
         Command::Export { model, out } => export_onnx(&model, &out)?,
         Command::Bench(Bench::Train { preset, steps, composed, options }) => {
-            pvt3_models::transformer::use_composed_blocks(composed);
+            pvt3_models::transformer::use_composed_ops(composed);
             let mut speed = train_speed(&Config::preset(&preset)?, &options, 2, steps)?;
             if composed {
-                speed.framework = "candle, composed blocks";
+                speed.framework = "candle, composed ops";
             }
             println!("{}", serde_json::to_string(&speed)?);
         }

@@ -1,41 +1,18 @@
 //! The fused block against the same block composed of candle ops (forward ≤ 1e-6, every gradient
 //! ≤ 1e-5 relative), against finite differences, and for the same bits on any thread count.
 
-use candle_core::{DType, Device, Tensor, Var};
+use candle_core::{DType, Device, Var};
 use candle_nn::{VarBuilder, VarMap};
 
+use crate::gradcheck::{directional, max_abs, random, randomise, relative, smooth_loss};
 use crate::transformer::Block;
 use crate::{Config, Rng};
 
-/// A block with every parameter random (masks and norms too, so that their gradients are tested
-/// away from their initial values), and its variables by name.
+/// A block with every parameter random, and its variables by name.
 fn block(cfg: &Config, seed: u64) -> (Block, Vec<(String, Var)>) {
     let varmap = VarMap::new();
     let block = Block::new(cfg, VarBuilder::from_varmap(&varmap, DType::F32, &Device::Cpu)).unwrap();
-    let mut rng = Rng::new(seed);
-    let mut vars: Vec<(String, Var)> = varmap.data().lock().unwrap().iter().map(|(n, v)| (n.clone(), v.clone())).collect();
-    vars.sort_by(|a, b| a.0.cmp(&b.0));
-    for (name, var) in &vars {
-        let centre = if name.ends_with("mask") || name.ends_with("norm.weight") { 1.0 } else { 0.0 };
-        let values: Vec<f32> = (0..var.elem_count()).map(|_| centre + 0.3 * rng.normal()).collect();
-        var.set(&Tensor::from_vec(values, var.shape(), &Device::Cpu).unwrap()).unwrap();
-    }
-    (block, vars)
-}
-
-fn random(shape: &[usize], seed: u64) -> Tensor {
-    let mut rng = Rng::new(seed);
-    let n = shape.iter().product();
-    Tensor::from_vec((0..n).map(|_| rng.normal()).collect::<Vec<f32>>(), shape, &Device::Cpu).unwrap()
-}
-
-fn max_abs(t: &Tensor) -> f32 {
-    t.abs().unwrap().flatten_all().unwrap().max(0).unwrap().to_scalar::<f32>().unwrap()
-}
-
-/// `max |a − b| / max |b|`.
-fn relative(a: &Tensor, b: &Tensor) -> f32 {
-    max_abs(&(a - b).unwrap()) / max_abs(b).max(1e-30)
+    (block, randomise(&varmap, seed))
 }
 
 /// The configurations tested: the iCub block (one head; 5 and 76 tokens, the short loops and the
@@ -83,32 +60,13 @@ fn gradients_match_finite_differences() {
         let (block, vars) = block(&cfg, 5);
         let x = Var::from_tensor(&random(&[2, tokens, cfg.dim], 6)).unwrap();
         let weights = random(&[2, tokens, cfg.dim], 7);
-        let loss = || -> f64 {
-            let y: Vec<f32> = block.forward(&x, None).unwrap().flatten_all().unwrap().to_vec1().unwrap();
-            let w: Vec<f32> = weights.flatten_all().unwrap().to_vec1().unwrap();
-            y.iter().zip(&w).map(|(a, b)| (*a as f64 * *b as f64).tanh()).sum()
-        };
+        let loss = || smooth_loss(&block.forward(&x, None).unwrap(), &weights);
         // Evaluation mode: the backward recomputes the activations instead of reading kept ones.
         let y = block.forward(&x, None).unwrap();
         let grads = (&y * &weights).unwrap().tanh().unwrap().sum_all().unwrap().backward().unwrap();
         let named = vars.iter().map(|(n, v)| (n.as_str(), v)).chain([("input", &x)]);
         for (i, (name, var)) in named.enumerate() {
-            // A unit direction, so that a step moves the parameter alike whatever its size.
-            let direction = random(var.dims(), 100 + i as u64);
-            let direction = (&direction / direction.sqr().unwrap().sum_all().unwrap().sqrt().unwrap().to_scalar::<f32>().unwrap() as f64).unwrap();
-            let analytic = (grads.get(var.as_tensor()).unwrap() * &direction).unwrap().sum_all().unwrap().to_scalar::<f32>().unwrap() as f64;
-            let original = var.as_tensor().copy().unwrap();
-            let central = |h: f64| {
-                let at = |t: f64| {
-                    var.set(&(&original + (&direction * t).unwrap()).unwrap()).unwrap();
-                    loss()
-                };
-                (at(h) - at(-h)) / (2.0 * h)
-            };
-            // Richardson's extrapolation cancels the h² error, so the step can stay large
-            // against f32 rounding.
-            let numeric = (4.0 * central(5e-3) - central(1e-2)) / 3.0;
-            var.set(&original).unwrap();
+            let (numeric, analytic) = directional(var, grads.get(var.as_tensor()).unwrap(), 100 + i as u64, loss);
             // f32 rounding leaves ~1e-3 (measured: at most 6e-3 here); a wrong formula is off by O(1).
             let err = (numeric - analytic).abs() / analytic.abs().max(1e-2);
             assert!(err < 1e-2, "{tokens} tokens, {name}: finite difference {numeric} against the backward's {analytic} ({err:e} relative)");
@@ -120,7 +78,7 @@ fn gradients_match_finite_differences() {
 fn threads_change_no_bit() {
     let (cfg, tokens) = (Config { dropout: 0.1, ..Config::icub20() }, 5);
     let (block, vars) = block(&cfg, 8);
-    // 300 sequences of 5 tokens: three chunks of work.
+    // 300 sequences of 5 tokens: eight chunks of work.
     let x = Var::from_tensor(&random(&[300, tokens, cfg.dim], 9)).unwrap();
     let run = |threads: usize| {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();

@@ -1,0 +1,37 @@
+//! The fused embedding against the same embedding composed of candle ops (forward ≤ 1e-6, every
+//! gradient ≤ 1e-5 relative) and against finite differences, on both sensor presets.
+
+use candle_core::{Tensor, Var};
+
+use crate::gradcheck::{directional, max_abs, random, randomise, relative, smooth_loss};
+use crate::{Config, Pvt3};
+
+#[test]
+fn fused_embedding_matches_composed_and_finite_differences() {
+    for cfg in [Config::icub20(), Config::biotac20()] {
+        let (model, varmap) = Pvt3::init(&cfg, 0).unwrap();
+        let vars = randomise(&varmap, 1);
+        let (t, n, p) = (cfg.time_tokens(), cfg.num_patches(), cfg.patch_dim());
+        let patches = Var::from_tensor(&random(&[3, t, n, p], 2)).unwrap();
+        let weights = random(&[3, t, n + 1, cfg.dim], 3);
+        let fused = model.embed(&patches).unwrap();
+        let composed = model.embed_composed(&patches).unwrap();
+        let forward = max_abs(&(&fused - &composed).unwrap());
+        assert!(forward <= 1e-6 * max_abs(&composed).max(1.0), "{}: forward differs by {forward:e}", cfg.height);
+        let backward = |y: &Tensor| (y * &weights).unwrap().tanh().unwrap().sum_all().unwrap().backward().unwrap();
+        let (gf, gc) = (backward(&fused), backward(&composed));
+        let embedding = ["patch_embed.weight", "patch_embed.bias", "frame_mask", "space_cls", "pos_embed"];
+        let named = vars.iter().filter(|(name, _)| embedding.contains(&name.as_str())).map(|(n, v)| (n.as_str(), v));
+        let named: Vec<(&str, &Var)> = named.chain([("patches", &patches)]).collect();
+        assert_eq!(named.len(), 6);
+        let loss = || smooth_loss(&model.embed(&patches).unwrap(), &weights);
+        for (i, (name, var)) in named.into_iter().enumerate() {
+            let (f, c) = (gf.get(var.as_tensor()).unwrap(), gc.get(var.as_tensor()).unwrap());
+            let err = relative(f, c);
+            assert!(err <= 1e-5 && max_abs(c) > 0.0, "{}: gradient of {name} differs by {err:e} (relative)", cfg.height);
+            let (numeric, analytic) = directional(var, f, 10 + i as u64, loss);
+            let err = (numeric - analytic).abs() / analytic.abs().max(1e-2);
+            assert!(err < 1e-2, "{}: {name}: finite difference {numeric} against the backward's {analytic}", cfg.height);
+        }
+    }
+}
