@@ -138,6 +138,30 @@ impl BlockDropout {
     }
 }
 
+/// Defines the method `$name`, which runs `$body` compiled a second time for AVX2 (as `$avx2`)
+/// where the CPU has it: the short loops of attention, the norms and the elementwise work, all
+/// inlined into `$body`, then run on 8-lane vectors instead of SSE's 4. The same operations in the
+/// same order (no fused multiply-add), so the same bits either way.
+macro_rules! with_avx2 {
+    ($(#[$doc:meta])* fn $name:ident / $avx2:ident => $body:ident($($arg:ident: $ty:ty),*) -> $ret:ty) => {
+        $(#[$doc])*
+        fn $name(&self, $($arg: $ty),*) -> $ret {
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU has AVX2, checked just above.
+                return unsafe { self.$avx2($($arg),*) };
+            }
+            self.$body($($arg),*)
+        }
+
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2")]
+        unsafe fn $avx2(&self, $($arg: $ty),*) -> $ret {
+            self.$body($($arg),*)
+        }
+    };
+}
+
 /// One block applied to `[sequences, tokens, dim]`, with its backward.
 pub struct BlockOp {
     dims: BlockDims,
@@ -219,20 +243,9 @@ impl BlockOp {
             .collect()
     }
 
-    fn forward_chunk(&self, p: &[f32], w: &Effective, x: &[f32], sequences: Range<usize>, tokens: usize, keep: bool) -> (Vec<f32>, Activations) {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above.
-            return unsafe { self.forward_chunk_avx2(p, w, x, sequences, tokens, keep) };
-        }
-        self.forward_chunk_body(p, w, x, sequences, tokens, keep)
-    }
-
-    /// [`Self::forward_chunk_body`] compiled for AVX2 (see [`Self::backward_chunk_avx2`]).
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn forward_chunk_avx2(&self, p: &[f32], w: &Effective, x: &[f32], sequences: Range<usize>, tokens: usize, keep: bool) -> (Vec<f32>, Activations) {
-        self.forward_chunk_body(p, w, x, sequences, tokens, keep)
+    with_avx2! {
+        /// The forward pass of one chunk of sequences: its output and (if kept) activations.
+        fn forward_chunk / forward_chunk_avx2 => forward_chunk_body(p: &[f32], w: &Effective, x: &[f32], sequences: Range<usize>, tokens: usize, keep: bool) -> (Vec<f32>, Activations)
     }
 
     #[inline(always)]
@@ -277,24 +290,11 @@ impl BlockOp {
         (f, acts)
     }
 
-    /// The backward pass of one chunk: the input's gradient, and into `g` (laid out as the packed
-    /// parameters) the gradients of the effective q/k/v and second-layer weights, the others as they are.
-    fn backward_chunk(&self, p: &[f32], w: &Effective, acts: &Activations, dy: &[f32], tokens: usize, g: &mut [f32]) -> Vec<f32> {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above.
-            return unsafe { self.backward_chunk_avx2(p, w, acts, dy, tokens, g) };
-        }
-        self.backward_chunk_body(p, w, acts, dy, tokens, g)
-    }
-
-    /// [`Self::backward_chunk_body`] compiled for AVX2: the short loops of attention, the norms and
-    /// the elementwise work (all inlined into it) then run on 8-lane vectors instead of SSE's 4.
-    /// The same operations in the same order (no fused multiply-add), so the same bits.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn backward_chunk_avx2(&self, p: &[f32], w: &Effective, acts: &Activations, dy: &[f32], tokens: usize, g: &mut [f32]) -> Vec<f32> {
-        self.backward_chunk_body(p, w, acts, dy, tokens, g)
+    with_avx2! {
+        /// The backward pass of one chunk: the input's gradient, and into `g` (laid out as the
+        /// packed parameters) the gradients of the effective q/k/v and second-layer weights, the
+        /// others as they are.
+        fn backward_chunk / backward_chunk_avx2 => backward_chunk_body(p: &[f32], w: &Effective, acts: &Activations, dy: &[f32], tokens: usize, g: &mut [f32]) -> Vec<f32>
     }
 
     #[inline(always)]
@@ -529,6 +529,15 @@ fn gelu_derivative(x: f32, cdf: f32) -> f32 {
     cdf + x * INV_SQRT_2PI * (-0.5 * x * x).exp()
 }
 
+/// Where head `sh % heads` of sequence `sh / heads` starts: its q, k and v in `qkv`
+/// (`[rows, 3 · inner]`) and its output in the mixed values (`[rows, inner]`).
+#[inline(always)]
+fn head_offsets(d: &BlockDims, tokens: usize, sh: usize) -> (usize, usize, usize, usize) {
+    let (inner, row, h) = (d.inner(), (sh / d.heads) * tokens, (sh % d.heads) * d.dim_head);
+    let qkv = row * 3 * inner + h;
+    (qkv, qkv + inner, qkv + 2 * inner, row * inner + h)
+}
+
 /// From this many tokens on, attention's products go through gemm; below, short loops are faster.
 const GEMM_TOKENS: usize = 16;
 
@@ -538,11 +547,8 @@ const GEMM_TOKENS: usize = 16;
 #[inline(always)]
 fn attend(d: &BlockDims, tokens: usize, qkv: &[f32], probs: &mut [f32], heads: &mut [f32]) {
     let (inner, dh, l) = (d.inner(), d.dim_head, tokens);
-    let at = |row: usize, part: usize, h: usize| row * 3 * inner + part * inner + h * dh;
     for (sh, p) in probs.chunks_exact_mut(l * l).enumerate() {
-        let (s, h) = (sh / d.heads, sh % d.heads);
-        let (q, k, v) = (at(s * l, 0, h), at(s * l, 1, h), at(s * l, 2, h));
-        let out = (s * l) * inner + h * dh;
+        let (q, k, v, out) = head_offsets(d, tokens, sh);
         if l >= GEMM_TOKENS {
             let view = |start: usize| View::strided(&qkv[start..], l, dh, 3 * inner);
             matmul(p, view(q), view(k).t(), false);
@@ -578,12 +584,9 @@ fn softmax(row: &mut [f32]) {
 #[inline(always)]
 fn attend_backward(d: &BlockDims, tokens: usize, qkv: &[f32], probs: &[f32], dheads: &[f32], dqkv: &mut [f32]) {
     let (inner, dh, l) = (d.inner(), d.dim_head, tokens);
-    let at = |row: usize, part: usize, h: usize| row * 3 * inner + part * inner + h * dh;
     let mut ds = vec![0f32; if l >= GEMM_TOKENS { l * l } else { l }];
     for (sh, p) in probs.chunks_exact(l * l).enumerate() {
-        let (s, h) = (sh / d.heads, sh % d.heads);
-        let (q, k, v) = (at(s * l, 0, h), at(s * l, 1, h), at(s * l, 2, h));
-        let dout = (s * l) * inner + h * dh;
+        let (q, k, v, dout) = head_offsets(d, tokens, sh);
         if l >= GEMM_TOKENS {
             let view = |start: usize| View::strided(&qkv[start..], l, dh, 3 * inner);
             let dov = View::strided(&dheads[dout..], l, dh, inner);

@@ -143,6 +143,20 @@ fn a_seed_fixes_the_run_and_a_paused_run_resumes_exactly() {
 }
 
 #[test]
+fn a_run_gives_the_same_bits_on_one_thread_or_three() {
+    let data = tiny_data();
+    let run = |threads: usize| {
+        let dir = out_dir(&format!("threads{threads}"));
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+        let result = pool.install(|| train(&spec(&data, 3, None), &dir, false, &ProgressBar::hidden())).unwrap().unwrap();
+        let weights = std::fs::read(dir.join("model/weights.safetensors")).unwrap();
+        std::fs::remove_dir_all(dir).unwrap();
+        ((result.best_epoch, result.val_accuracy, result.test_accuracy), weights)
+    };
+    assert_eq!(run(1), run(3));
+}
+
+#[test]
 fn random_pruning_regularises_without_leaving_zeros_behind() {
     let data = tiny_data();
     let dir = out_dir("random-prune");
