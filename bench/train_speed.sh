@@ -45,8 +45,9 @@ out = [
     "clipping and AdamW, on random inputs, batch " + batch + ". PyTorch runs the identical model",
     "(`bench/pvt3_torch.py`, which first reproduces the golden logits to "
     f"{max(r.get('golden_max_abs_error', 0) for r in rows):.1e}). *fused*: pvt3 as it trains (each",
-    "transformer block one candle op with its own backward); *composed*: the same blocks as plain",
-    "candle ops (`pvt3 bench train --composed`), what pvt3 trained with before.",
+    "transformer block and the embedding one candle op with its own backward); *composed*: the same",
+    "model as plain candle ops (`pvt3 bench train --composed`), as pvt3 trained before the fused ops",
+    "(its optimiser loop and dropout draws are today's).",
     "",
     f"Reproduce: `bash bench/train_speed.sh` (here STEPS={steps} BATCH={batch} ROUNDS={rounds}, commit {commit}).",
     "The three alternate within every round; a cell is the median samples/s, the rounds in brackets.",
