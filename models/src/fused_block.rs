@@ -9,6 +9,7 @@
 //! chunks do not depend on the thread count and their weight gradients are summed in chunk order,
 //! so a run gives the same bits on one thread or many.
 
+use std::borrow::Cow;
 use std::ops::Range;
 use std::sync::OnceLock;
 
@@ -88,7 +89,21 @@ impl BlockDims {
     /// Each packed parameter's name and shape, in packing order.
     pub fn parameters(&self) -> [(&'static str, Vec<usize>); 13] {
         let (d, i, h) = (self.dim, self.inner(), self.mlp);
-        let shapes = [vec![d], vec![d], vec![3 * i, d], vec![i], vec![d, i], vec![d], vec![d], vec![d], vec![h, d], vec![h], vec![d, h], vec![d], vec![h]];
+        let shapes = [
+            vec![d],
+            vec![d],
+            vec![3 * i, d],
+            vec![i],
+            vec![d, i],
+            vec![d],
+            vec![d],
+            vec![d],
+            vec![h, d],
+            vec![h],
+            vec![d, h],
+            vec![d],
+            vec![h],
+        ];
         let mut out = shapes.map(|s| ("", s));
         for (o, name) in out.iter_mut().zip(NAMES) {
             o.0 = name;
@@ -121,6 +136,39 @@ pub struct Masks {
     pub attn: Vec<f32>,
     pub hidden: Vec<f32>,
     pub out: Vec<f32>,
+}
+
+impl Masks {
+    /// The masks of the first `queries` tokens of each sequence (all of them when `queries == tokens`).
+    fn first_rows(self, dims: &BlockDims, tokens: usize, queries: usize) -> Masks {
+        if queries == tokens {
+            return self;
+        }
+        let (d, h) = (dims.dim, dims.mlp);
+        Masks {
+            attn: first_rows(&self.attn, tokens * d, queries * d).into_owned(),
+            hidden: first_rows(&self.hidden, tokens * h, queries * h).into_owned(),
+            out: first_rows(&self.out, tokens * d, queries * d).into_owned(),
+        }
+    }
+}
+
+/// The first `keep` values of each `every`-long run of `values` (all of them, borrowed, when equal).
+fn first_rows(values: &[f32], every: usize, keep: usize) -> Cow<'_, [f32]> {
+    if keep == every {
+        return Cow::Borrowed(values);
+    }
+    Cow::Owned(values.chunks_exact(every).flat_map(|run| &run[..keep]).copied().collect())
+}
+
+/// The inverse of [`first_rows`]: each `keep`-long run of `values` at the start of an
+/// `every`-long run of zeros.
+fn spread_first_rows(values: &[f32], every: usize, keep: usize) -> Vec<f32> {
+    let mut out = vec![0f32; values.len() / keep * every];
+    for (dst, src) in out.chunks_exact_mut(every).zip(values.chunks_exact(keep)) {
+        dst[..keep].copy_from_slice(src);
+    }
+    out
 }
 
 impl BlockDropout {
@@ -162,12 +210,16 @@ macro_rules! with_avx2 {
     };
 }
 
-/// One block applied to `[sequences, tokens, dim]`, with its backward.
+/// One block applied to `[sequences, tokens, dim]`, with its backward; the output is the same
+/// shape, or with `first_only` `[sequences, 1, dim]`: the first (CLS) token alone, which is all
+/// that PVT³ reads of a transformer's last block. Every token's keys and values still feed it, but
+/// the other tokens' attention, projection and feed-forward are skipped.
 pub struct BlockOp {
     dims: BlockDims,
     dropout: Option<BlockDropout>,
     /// Keep the activations for the backward (training) instead of recomputing them there.
     keep: bool,
+    first_only: bool,
     saved: OnceLock<Saved>,
 }
 
@@ -201,8 +253,17 @@ struct Effective {
 }
 
 impl BlockOp {
-    pub fn new(dims: BlockDims, dropout: Option<BlockDropout>, keep: bool) -> Self {
-        Self { dims, dropout, keep, saved: OnceLock::new() }
+    pub fn new(dims: BlockDims, dropout: Option<BlockDropout>, keep: bool, first_only: bool) -> Self {
+        Self { dims, dropout, keep, first_only, saved: OnceLock::new() }
+    }
+
+    /// The tokens of each sequence whose output is computed: all, or the first.
+    fn queries(&self, tokens: usize) -> usize {
+        if self.first_only {
+            1
+        } else {
+            tokens
+        }
     }
 
     /// Applies the block: `x` `[sequences, tokens, dim]`, `packed` the parameters of
@@ -249,22 +310,34 @@ impl BlockOp {
     }
 
     #[inline(always)]
-    fn forward_chunk_body(&self, p: &[f32], w: &Effective, x: &[f32], sequences: Range<usize>, tokens: usize, keep: bool) -> (Vec<f32>, Activations) {
+    fn forward_chunk_body(
+        &self,
+        p: &[f32],
+        w: &Effective,
+        x: &[f32],
+        sequences: Range<usize>,
+        tokens: usize,
+        keep: bool,
+    ) -> (Vec<f32>, Activations) {
         let d = &self.dims;
         let r = d.ranges();
         let (dim, inner, mlp) = (d.dim, d.inner(), d.mlp);
-        let rows = x.len() / dim;
-        let masks = self.dropout.as_ref().map(|m| m.masks(d, tokens, sequences));
+        let (rows, queries) = (x.len() / dim, self.queries(tokens));
+        // The rows whose output is computed (all, or each sequence's first) and their masks.
+        let out_rows = rows / tokens * queries;
+        let masks = self.dropout.as_ref().map(|m| m.masks(d, tokens, sequences).first_rows(d, tokens, queries));
         let drop = masks.as_ref();
+        let residual = first_rows(x, tokens * dim, queries * dim);
 
         let (mut xhat1, mut a, mut rstd1) = (vec![0f32; rows * dim], vec![0f32; rows * dim], vec![0f32; rows]);
         norm_rows(x, &p[r[LN1_W].clone()], &p[r[LN1_B].clone()], d.eps, &mut xhat1, &mut a, &mut rstd1);
         let qkv = product(View::rows(&a, rows, dim), View::rows(&w.qkv, 3 * inner, dim).t());
-        let mut probs = vec![0f32; rows * d.heads * tokens];
-        let mut heads = vec![0f32; rows * inner];
-        attend(d, tokens, &qkv, &mut probs, &mut heads);
+        let mut probs = vec![0f32; out_rows * d.heads * tokens];
+        let mut heads = vec![0f32; out_rows * inner];
+        attend(d, tokens, queries, &qkv, &mut probs, &mut heads);
+        let rows = out_rows;
         let mut out = product(View::rows(&heads, rows, inner), View::rows(&p[r[OUT_W].clone()], dim, inner).t());
-        add_bias_dropout_residual(&mut out, &p[r[OUT_B].clone()], drop.map(|m| &m.attn[..]), x);
+        add_bias_dropout_residual(&mut out, &p[r[OUT_B].clone()], drop.map(|m| &m.attn[..]), &residual);
 
         let (mut xhat2, mut c, mut rstd2) = (vec![0f32; rows * dim], vec![0f32; rows * dim], vec![0f32; rows]);
         norm_rows(&out, &p[r[LN2_W].clone()], &p[r[LN2_B].clone()], d.eps, &mut xhat2, &mut c, &mut rstd2);
@@ -302,7 +375,9 @@ impl BlockOp {
         let d = &self.dims;
         let r = d.ranges();
         let (dim, inner, mlp) = (d.dim, d.inner(), d.mlp);
-        let rows = dy.len() / dim;
+        // `rows`: those whose output was computed; `all`: every token's.
+        let (rows, queries) = (dy.len() / dim, self.queries(tokens));
+        let all = rows / queries * tokens;
         let drop = acts.masks.as_ref();
 
         // Feed-forward.
@@ -332,12 +407,14 @@ impl BlockOp {
         add_column_sums(&mut g[r[OUT_B].clone()], &dout);
         matmul(&mut g[r[OUT_W].clone()], View::rows(&dout, rows, dim).t(), View::rows(&acts.heads, rows, inner), true);
         let dheads = product(View::rows(&dout, rows, dim), View::rows(&p[r[OUT_W].clone()], dim, inner));
-        let mut dqkv = vec![0f32; rows * 3 * inner];
-        attend_backward(d, tokens, &acts.qkv, &acts.probs, &dheads, &mut dqkv);
-        matmul(&mut g[r[QKV].clone()], View::rows(&dqkv, rows, 3 * inner).t(), View::rows(&acts.a, rows, dim), true);
-        let da = product(View::rows(&dqkv, rows, 3 * inner), View::rows(&w.qkv, 3 * inner, dim));
-        norm_rows_backward(&da, &acts.xhat1, &acts.rstd1, &p[r[LN1_W].clone()], &mut g[r[LN1_W].start..r[LN1_B].end], &mut dx);
-        dx
+        let mut dqkv = vec![0f32; all * 3 * inner];
+        attend_backward(d, tokens, queries, &acts.qkv, &acts.probs, &dheads, &mut dqkv);
+        matmul(&mut g[r[QKV].clone()], View::rows(&dqkv, all, 3 * inner).t(), View::rows(&acts.a, all, dim), true);
+        let da = product(View::rows(&dqkv, all, 3 * inner), View::rows(&w.qkv, 3 * inner, dim));
+        // The residual's gradient reaches the computed rows; layer norm's, every row.
+        let mut dx_all = if queries == tokens { dx } else { spread_first_rows(&dx, tokens * dim, queries * dim) };
+        norm_rows_backward(&da, &acts.xhat1, &acts.rstd1, &p[r[LN1_W].clone()], &mut g[r[LN1_W].start..r[LN1_B].end], &mut dx_all);
+        dx_all
     }
 
     /// Turns the gradients of the effective weights in `g` into those of the weights and masks.
@@ -369,7 +446,12 @@ impl BlockOp {
         let (sequences, tokens, dim) = lx.shape().dims3()?;
         let want: usize = self.dims.ranges()[FFN_MASK].end;
         if dim != self.dims.dim || lp.shape().elem_count() != want {
-            candle_core::bail!("fused block: input {:?} and {} packed parameters for dim {} ({want} parameters)", lx.shape(), lp.shape().elem_count(), self.dims.dim);
+            candle_core::bail!(
+                "fused block: input {:?} and {} packed parameters for dim {} ({want} parameters)",
+                lx.shape(),
+                lp.shape().elem_count(),
+                self.dims.dim
+            );
         }
         Ok((sequences, tokens))
     }
@@ -417,7 +499,7 @@ impl CustomOp2 for BlockOp {
             // Set once: each application of the block is a fresh op.
             let _ = self.saved.set(Saved { tokens, chunks });
         }
-        Ok((CpuStorage::F32(outputs.concat()), lx.shape().clone()))
+        Ok((CpuStorage::F32(outputs.concat()), Shape::from((sequences, self.queries(tokens), self.dims.dim))))
     }
 
     fn bwd(&self, x: &Tensor, packed: &Tensor, _res: &Tensor, grad: &Tensor) -> Result<(Option<Tensor>, Option<Tensor>)> {
@@ -434,7 +516,7 @@ impl CustomOp2 for BlockOp {
             }
         };
         let w = self.effective(&p);
-        let row_len = tokens * self.dims.dim;
+        let row_len = self.queries(tokens) * self.dims.dim;
         let parts: Vec<(Vec<f32>, Vec<f32>)> = self
             .chunks(sequences, tokens)
             .into_par_iter()
@@ -530,30 +612,32 @@ fn gelu_derivative(x: f32, cdf: f32) -> f32 {
 }
 
 /// Where head `sh % heads` of sequence `sh / heads` starts: its q, k and v in `qkv`
-/// (`[rows, 3 · inner]`) and its output in the mixed values (`[rows, inner]`).
+/// (`[rows, 3 · inner]`), and its output among the mixed values of the `queries` tokens of each
+/// sequence whose output is computed (`[sequences · queries, inner]`).
 #[inline(always)]
-fn head_offsets(d: &BlockDims, tokens: usize, sh: usize) -> (usize, usize, usize, usize) {
-    let (inner, row, h) = (d.inner(), (sh / d.heads) * tokens, (sh % d.heads) * d.dim_head);
-    let qkv = row * 3 * inner + h;
-    (qkv, qkv + inner, qkv + 2 * inner, row * inner + h)
+fn head_offsets(d: &BlockDims, tokens: usize, queries: usize, sh: usize) -> (usize, usize, usize, usize) {
+    let (inner, s, h) = (d.inner(), sh / d.heads, (sh % d.heads) * d.dim_head);
+    let qkv = s * tokens * 3 * inner + h;
+    (qkv, qkv + inner, qkv + 2 * inner, s * queries * inner + h)
 }
 
 /// From this many tokens on, attention's products go through gemm; below, short loops are faster.
 const GEMM_TOKENS: usize = 16;
 
-/// Softmax attention of every sequence and head in `qkv` (`[rows, 3 · inner]`, q then k then v,
-/// the scale already in q): the probabilities `[sequences, heads, tokens, tokens]` and the mixed
-/// values `[rows, inner]`.
+/// Softmax attention of the first `queries` tokens of every sequence (all `tokens`, or the CLS
+/// token) over all its tokens, for every head, from `qkv` (`[rows, 3 · inner]`, q then k then v,
+/// the scale already in q): the probabilities `[sequences, heads, queries, tokens]` and the mixed
+/// values `[sequences · queries, inner]`.
 #[inline(always)]
-fn attend(d: &BlockDims, tokens: usize, qkv: &[f32], probs: &mut [f32], heads: &mut [f32]) {
+fn attend(d: &BlockDims, tokens: usize, queries: usize, qkv: &[f32], probs: &mut [f32], heads: &mut [f32]) {
     let (inner, dh, l) = (d.inner(), d.dim_head, tokens);
-    for (sh, p) in probs.chunks_exact_mut(l * l).enumerate() {
-        let (q, k, v, out) = head_offsets(d, tokens, sh);
+    for (sh, p) in probs.chunks_exact_mut(queries * l).enumerate() {
+        let (q, k, v, out) = head_offsets(d, tokens, queries, sh);
         if l >= GEMM_TOKENS {
-            let view = |start: usize| View::strided(&qkv[start..], l, dh, 3 * inner);
-            matmul(p, view(q), view(k).t(), false);
+            let view = |start: usize, rows: usize| View::strided(&qkv[start..], rows, dh, 3 * inner);
+            matmul(p, view(q, queries), view(k, l).t(), false);
             p.chunks_exact_mut(l).for_each(softmax);
-            matmul_strided(&mut heads[out..], inner, View::rows(p, l, l), view(v), false);
+            matmul_strided(&mut heads[out..], inner, View::rows(p, queries, l), view(v, l), false);
             continue;
         }
         for (i, row) in p.chunks_exact_mut(l).enumerate() {
@@ -582,23 +666,23 @@ fn softmax(row: &mut [f32]) {
 /// The backward of [`attend`]: from the mixed values' gradient `dheads`, writes q's, k's and v's
 /// into `dqkv` (which starts at zero).
 #[inline(always)]
-fn attend_backward(d: &BlockDims, tokens: usize, qkv: &[f32], probs: &[f32], dheads: &[f32], dqkv: &mut [f32]) {
+fn attend_backward(d: &BlockDims, tokens: usize, queries: usize, qkv: &[f32], probs: &[f32], dheads: &[f32], dqkv: &mut [f32]) {
     let (inner, dh, l) = (d.inner(), d.dim_head, tokens);
-    let mut ds = vec![0f32; if l >= GEMM_TOKENS { l * l } else { l }];
-    for (sh, p) in probs.chunks_exact(l * l).enumerate() {
-        let (q, k, v, dout) = head_offsets(d, tokens, sh);
+    let mut ds = vec![0f32; if l >= GEMM_TOKENS { queries * l } else { l }];
+    for (sh, p) in probs.chunks_exact(queries * l).enumerate() {
+        let (q, k, v, dout) = head_offsets(d, tokens, queries, sh);
         if l >= GEMM_TOKENS {
-            let view = |start: usize| View::strided(&qkv[start..], l, dh, 3 * inner);
-            let dov = View::strided(&dheads[dout..], l, dh, inner);
-            matmul(&mut ds, dov, view(v).t(), false);
+            let view = |start: usize, rows: usize| View::strided(&qkv[start..], rows, dh, 3 * inner);
+            let dov = View::strided(&dheads[dout..], queries, dh, inner);
+            matmul(&mut ds, dov, view(v, l).t(), false);
             for (drow, prow) in ds.chunks_exact_mut(l).zip(p.chunks_exact(l)) {
                 let mean = dot(prow, drow);
                 drow.iter_mut().zip(prow).for_each(|(g, p)| *g = p * (*g - mean));
             }
-            let (pv, dsv) = (View::rows(p, l, l), View::rows(&ds, l, l));
+            let (pv, dsv) = (View::rows(p, queries, l), View::rows(&ds, queries, l));
             matmul_strided(&mut dqkv[v..], 3 * inner, pv.t(), dov, false);
-            matmul_strided(&mut dqkv[q..], 3 * inner, dsv, view(k), false);
-            matmul_strided(&mut dqkv[k..], 3 * inner, dsv.t(), view(q), false);
+            matmul_strided(&mut dqkv[q..], 3 * inner, dsv, view(k, l), false);
+            matmul_strided(&mut dqkv[k..], 3 * inner, dsv.t(), view(q, queries), false);
             continue;
         }
         for (i, prow) in p.chunks_exact(l).enumerate() {

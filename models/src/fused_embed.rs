@@ -123,7 +123,11 @@ impl CustomOp2 for EmbedOp {
         add_column_sums(&mut dp[s[1]..][..d], &de);
         matmul(&mut dp[s[0]..][..d * pd], View::rows(&de, rows, d).t(), View::rows(&x, rows, pd), true);
         let dx = if patches.track_op() {
-            Some(Tensor::from_vec(product(View::rows(&de, rows, d), View::rows(&p[s[0]..][..d * pd], d, pd)), patches.shape(), patches.device())?)
+            Some(Tensor::from_vec(
+                product(View::rows(&de, rows, d), View::rows(&p[s[0]..][..d * pd], d, pd)),
+                patches.shape(),
+                patches.device(),
+            )?)
         } else {
             None
         };

@@ -1,6 +1,6 @@
 //! A pre-norm transformer encoder, `x = x + Attn(LN(x)); x = x + FFN(LN(x))` per layer, with a
-//! final layer norm. PVT³ only reads the CLS token out of it, so the final norm is applied to that
-//! token alone. Each block runs as one fused op with its own backward ([`crate::fused_block`]);
+//! final layer norm. PVT³ only reads the CLS token out of it, so the last block computes that
+//! token alone and the final norm is applied to it. Each block runs as one fused op with its own backward ([`crate::fused_block`]);
 //! the composed form stays as the oracle of its tests and for comparison.
 
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -52,13 +52,24 @@ impl Block {
 
     /// `x`: `[sequences, tokens, dim]` → the same shape, as one fused op (see [`BlockOp`]).
     pub fn forward(&self, x: &Tensor, rng: Option<&mut Rng>) -> Result<Tensor> {
+        self.apply(x, rng, false)
+    }
+
+    /// The first (CLS) token's output alone, `[sequences, 1, dim]`: what a transformer's last
+    /// block has to compute when only that token is read.
+    pub fn forward_first(&self, x: &Tensor, rng: Option<&mut Rng>) -> Result<Tensor> {
+        self.apply(x, rng, true)
+    }
+
+    fn apply(&self, x: &Tensor, rng: Option<&mut Rng>, first_only: bool) -> Result<Tensor> {
         let keep = rng.is_some();
         let dropout = self.draw_dropout(rng);
         if composed_ops() {
-            return self.forward_composed(x, dropout.as_ref());
+            let y = self.forward_composed(x, dropout.as_ref())?;
+            return if first_only { y.narrow(1, 0, 1) } else { Ok(y) };
         }
         let flat = self.packed.iter().map(|t| t.flatten_all()).collect::<Result<Vec<_>>>()?;
-        BlockOp::new(self.dims, dropout, keep).apply(x, &Tensor::cat(&flat, 0)?)
+        BlockOp::new(self.dims, dropout, keep, first_only).apply(x, &Tensor::cat(&flat, 0)?)
     }
 
     /// This step's dropout (one draw from `rng`), or `None` when evaluating or `p` is 0.
@@ -74,7 +85,11 @@ impl Block {
             Some(dropout) => {
                 let m = dropout.masks(&self.dims, l, 0..b);
                 let dev = x.device();
-                Some((Tensor::from_vec(m.attn, (b, l, d), dev)?, Tensor::from_vec(m.hidden, (b * l, self.dims.mlp), dev)?, Tensor::from_vec(m.out, (b * l, d), dev)?))
+                Some((
+                    Tensor::from_vec(m.attn, (b, l, d), dev)?,
+                    Tensor::from_vec(m.hidden, (b * l, self.dims.mlp), dev)?,
+                    Tensor::from_vec(m.out, (b * l, d), dev)?,
+                ))
             }
             None => None,
         };
@@ -100,8 +115,13 @@ impl Transformer {
     /// `x`: `[sequences, tokens, dim]` → the normalised first (CLS) token, `[sequences, dim]`.
     pub fn forward_cls(&self, x: &Tensor, mut rng: Option<&mut Rng>) -> Result<Tensor> {
         let mut x = x.clone();
-        for layer in &self.layers {
-            x = layer.forward(&x, rng.as_deref_mut())?;
+        for (i, layer) in self.layers.iter().enumerate() {
+            // The last block computes the CLS token alone: nothing reads the others.
+            x = if i + 1 == self.layers.len() {
+                layer.forward_first(&x, rng.as_deref_mut())?
+            } else {
+                layer.forward(&x, rng.as_deref_mut())?
+            };
         }
         self.norm.forward(&x.narrow(1, 0, 1)?.squeeze(1)?)
     }

@@ -29,22 +29,37 @@ fn fused_matches_composed_in_value_and_every_gradient() {
         let (block, vars) = block(&cfg, 1);
         let x = Var::from_tensor(&random(&[3, tokens, cfg.dim], 2)).unwrap();
         let weights = random(&[3, tokens, cfg.dim], 3);
-        for train in [false, true] {
+        for (train, first) in [(false, false), (true, false), (false, true), (true, true)] {
+            // `first`: the CLS token's output alone, against the composed block's first token.
+            let weights = if first { weights.narrow(1, 0, 1).unwrap() } else { weights.clone() };
             let run = |fused: bool| {
                 let mut rng = Rng::new(4);
                 let rng = train.then_some(&mut rng);
-                let y = if fused { block.forward(&x, rng) } else { block.forward_composed(&x, block.draw_dropout(rng).as_ref()) }.unwrap();
+                let y = match (fused, first) {
+                    (true, false) => block.forward(&x, rng),
+                    (true, true) => block.forward_first(&x, rng),
+                    (false, _) => {
+                        block
+                            .forward_composed(&x, block.draw_dropout(rng).as_ref())
+                            .map(|y| if first { y.narrow(1, 0, 1).unwrap() } else { y })
+                    }
+                }
+                .unwrap();
                 let grads = (&y * &weights).unwrap().sum_all().unwrap().backward().unwrap();
                 (y, grads)
             };
             let ((yf, gf), (yc, gc)) = (run(true), run(false));
+            assert_eq!(yf.dims(), yc.dims());
             let forward = max_abs(&(&yf - &yc).unwrap());
-            assert!(forward <= 1e-6 * max_abs(&yc).max(1.0), "{tokens} tokens, train {train}: forward differs by {forward:e}");
+            assert!(
+                forward <= 1e-6 * max_abs(&yc).max(1.0),
+                "{tokens} tokens, train {train}, first {first}: forward differs by {forward:e}"
+            );
             let named = vars.iter().map(|(n, v)| (n.as_str(), v.as_tensor())).chain([("input", x.as_tensor())]);
             for (name, var) in named {
                 let (f, c) = (gf.get(var).unwrap(), gc.get(var).unwrap());
                 let err = relative(f, c);
-                assert!(err <= 1e-5, "{tokens} tokens, train {train}: gradient of {name} differs by {err:e} (relative)");
+                assert!(err <= 1e-5, "{tokens} tokens, train {train}, first {first}: gradient of {name} differs by {err:e} (relative)");
                 assert!(max_abs(c) > 0.0, "{name} has a zero gradient: the test would prove nothing");
             }
         }
@@ -60,16 +75,20 @@ fn gradients_match_finite_differences() {
         let (block, vars) = block(&cfg, 5);
         let x = Var::from_tensor(&random(&[2, tokens, cfg.dim], 6)).unwrap();
         let weights = random(&[2, tokens, cfg.dim], 7);
-        let loss = || smooth_loss(&block.forward(&x, None).unwrap(), &weights);
-        // Evaluation mode: the backward recomputes the activations instead of reading kept ones.
-        let y = block.forward(&x, None).unwrap();
-        let grads = (&y * &weights).unwrap().tanh().unwrap().sum_all().unwrap().backward().unwrap();
-        let named = vars.iter().map(|(n, v)| (n.as_str(), v)).chain([("input", &x)]);
-        for (i, (name, var)) in named.enumerate() {
-            let (numeric, analytic) = directional(var, grads.get(var.as_tensor()).unwrap(), 100 + i as u64, loss);
-            // f32 rounding leaves ~1e-3 (measured: at most 6e-3 here); a wrong formula is off by O(1).
-            let err = (numeric - analytic).abs() / analytic.abs().max(1e-2);
-            assert!(err < 1e-2, "{tokens} tokens, {name}: finite difference {numeric} against the backward's {analytic} ({err:e} relative)");
+        for first in [false, true] {
+            let forward = |x: &Var| if first { block.forward_first(x, None) } else { block.forward(x, None) }.unwrap();
+            let weights = if first { weights.narrow(1, 0, 1).unwrap() } else { weights.clone() };
+            let loss = || smooth_loss(&forward(&x), &weights);
+            // Evaluation mode: the backward recomputes the activations instead of reading kept ones.
+            let y = forward(&x);
+            let grads = (&y * &weights).unwrap().tanh().unwrap().sum_all().unwrap().backward().unwrap();
+            let named = vars.iter().map(|(n, v)| (n.as_str(), v)).chain([("input", &x)]);
+            for (i, (name, var)) in named.enumerate() {
+                let (numeric, analytic) = directional(var, grads.get(var.as_tensor()).unwrap(), 100 + i as u64, loss);
+                // f32 rounding leaves ~1e-3 (measured: at most 6e-3 here); a wrong formula is off by O(1).
+                let err = (numeric - analytic).abs() / analytic.abs().max(1e-2);
+                assert!(err < 1e-2, "{tokens} tokens, first {first}, {name}: finite difference {numeric} against the backward's {analytic} ({err:e} relative)");
+            }
         }
     }
 }
