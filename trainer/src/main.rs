@@ -21,7 +21,7 @@ use pvt3_trainer::train::{train, RunSpec, TrainOptions};
 #[command(name = "pvt3", version, about = "PVT³ tactile texture classification: train, cross-validate, evaluate, inspect")]
 struct Cli {
     /// CPU threads for training and evaluation (default: all cores). One run splits each batch's
-    /// sequences over them (two threads: about 1.5x one); `cv --jobs N` uses the cores best, one
+    /// sequences over them (two threads: 1.5-1.7x one); `cv --jobs N` uses the cores best, one
     /// fold per thread. The result is the same bits on any count.
     #[arg(long, global = true)]
     threads: Option<usize>,
