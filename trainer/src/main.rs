@@ -342,6 +342,10 @@ fn main() -> Result<()> {
                 started.elapsed().as_secs_f64(),
                 out.join("cv.json").display()
             );
+            if let Some([lo, hi]) = s.ci95_test_accuracy {
+                let means: Vec<String> = s.seed_means.iter().map(|m| format!("{m:.4}")).collect();
+                println!("95 % confidence interval of the mean [{lo:.4}, {hi:.4}] (Student's t over the seeds' means {})", means.join(", "));
+            }
         }
         Command::Eval { checkpoint, data, fold } => eval(&checkpoint, &data, &fold)?,
         Command::Export { model, out } => export_onnx(&model, &out)?,
