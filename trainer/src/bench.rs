@@ -8,7 +8,8 @@ use candle_core::{Device, Tensor};
 use pvt3_models::{Config, Rng};
 use serde::Serialize;
 
-use crate::train::{Learner, TrainOptions};
+use crate::options::TrainOptions;
+use crate::train::Learner;
 use crate::Result;
 
 #[derive(Debug, Serialize)]
@@ -53,7 +54,7 @@ mod tests {
     #[test]
     fn reports_a_positive_rate() {
         let cfg = pvt3_models::Config { space_depth: 1, time_depth: 1, ..pvt3_models::Config::icub20() };
-        let opts = crate::train::TrainOptions { batch_size: 4, ..crate::train::TrainOptions::default() };
+        let opts = crate::options::TrainOptions { batch_size: 4, ..crate::options::TrainOptions::default() };
         let s = super::train_speed(&cfg, &opts, 1, 2).unwrap();
         assert!(s.samples_per_second > 0.0 && s.seconds_per_step > 0.0);
     }

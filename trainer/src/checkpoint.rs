@@ -12,7 +12,7 @@ use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 use crate::normalization::Normalization;
-use crate::train::TrainOptions;
+use crate::options::TrainOptions;
 use crate::{Error, Result};
 
 /// Where a trained model came from.

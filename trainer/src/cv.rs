@@ -127,7 +127,7 @@ pub fn cross_validate(
                 let bar = progress.add(ProgressBar::new(0).with_style(style.clone()));
                 bar.set_prefix(format!("seed {seed} fold {fold}"));
                 let run_spec =
-                    RunSpec { val_fold: fold, options: crate::train::TrainOptions { seed, ..spec.options.clone() }, ..spec.clone() };
+                    RunSpec { val_fold: fold, options: crate::options::TrainOptions { seed, ..spec.options.clone() }, ..spec.clone() };
                 let dir = out.join(format!("seed{seed}")).join(format!("fold{fold}"));
                 let result = run_fold(&run_spec, stage, &dir, resume, &bar);
                 bar.finish();

@@ -10,6 +10,7 @@ pub mod evaluate;
 pub mod info;
 pub mod normalization;
 pub mod optim;
+pub mod options;
 pub mod prune;
 pub mod schedule;
 pub mod stress;

@@ -15,7 +15,8 @@ use pvt3_trainer::data::{Dataset, TEST_FOLD};
 use pvt3_trainer::evaluate::{evaluate, Samples};
 use pvt3_trainer::info::report;
 use pvt3_trainer::prune::{prune_and_fine_tune, PruneStage};
-use pvt3_trainer::train::{train, RunSpec, TrainOptions};
+use pvt3_trainer::options::TrainOptions;
+use pvt3_trainer::train::{train, RunSpec};
 
 #[derive(Parser)]
 #[command(name = "pvt3", version, about = "PVT³ tactile texture classification: train, cross-validate, evaluate, inspect")]

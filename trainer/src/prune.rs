@@ -10,7 +10,8 @@ use pvt3_models::weights::varmap_tensors;
 
 use crate::checkpoint;
 use crate::data::Dataset;
-use crate::train::{train, RunResult, RunSpec, TrainOptions};
+use crate::options::TrainOptions;
+use crate::train::{train, RunResult, RunSpec};
 use crate::Result;
 
 /// What to prune and how long to fine-tune.

@@ -22,83 +22,9 @@ use crate::checkpoint::{self, read_json, write_json, Meta, Provenance};
 use crate::data::{Dataset, Split};
 use crate::evaluate::{evaluate, Samples};
 use crate::optim::{is_weight_matrix, AdamW};
+use crate::options::TrainOptions;
 use crate::schedule::Schedule;
 use crate::{Error, Result};
-
-/// Training hyper-parameters.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, clap::Args)]
-pub struct TrainOptions {
-    /// Passes over the training split.
-    #[arg(long, default_value_t = 100)]
-    pub epochs: usize,
-    #[arg(long, default_value_t = 32)]
-    pub batch_size: usize,
-    /// Peak learning rate (reached after the warm-up, then cosine decay to 1 % of it).
-    #[arg(long, default_value_t = 2e-3)]
-    pub lr: f64,
-    #[arg(long, default_value_t = 5)]
-    pub warmup_epochs: usize,
-    /// Decoupled weight decay on weight matrices.
-    #[arg(long, default_value_t = 0.05)]
-    pub weight_decay: f64,
-    /// Dropout on embeddings, attention outputs and feed-forward layers.
-    #[arg(long, default_value_t = 0.1)]
-    pub dropout: f64,
-    #[arg(long, default_value_t = 0.1)]
-    pub label_smoothing: f64,
-    /// Clip the global gradient norm to this (0: no clipping).
-    #[arg(long, default_value_t = 1.0)]
-    pub clip_grad: f64,
-    /// Augmentation: each training sample is scaled by a random gain in [1 - g, 1 + g].
-    #[arg(long, default_value_t = 0.1)]
-    pub aug_gain: f64,
-    /// Augmentation: Gaussian noise of this standard deviation (in normalised units).
-    #[arg(long, default_value_t = 0.05)]
-    pub aug_noise: f64,
-    /// Augmentation: shift each training sample in time by a random offset in [-N, N] frames
-    /// (edge frames repeated).
-    #[arg(long, default_value_t = 0)]
-    #[serde(default)]
-    pub aug_shift: usize,
-    /// Seed of initialisation, shuffling, dropout and augmentation: a fixed seed gives the same run.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
-    /// L1 penalty on the selection masks (this times the mean |mask| over all entries): drives
-    /// unimportant channels and frames towards zero, so that pruning by score is meaningful.
-    #[arg(long, default_value_t = 0.0)]
-    #[serde(default)]
-    pub l1: f64,
-    /// Learning rate of the selection masks as a multiple of the weights' (AdamW moves every
-    /// value at about the learning rate, so masks need a larger one to separate within a run).
-    #[arg(long, default_value_t = 1.0)]
-    #[serde(default = "one")]
-    pub mask_lr: f64,
-    /// Random unstructured pruning as a regulariser: every step, this share of the entries of
-    /// each weight matrix is zeroed for the forward and backward pass; the update applies to all.
-    #[arg(long, default_value_t = 0.0)]
-    #[serde(default)]
-    pub random_prune: f64,
-    /// Hold mask entries that are zero at the start at zero (fine-tuning after pruning).
-    #[arg(skip)]
-    #[serde(default)]
-    pub hold_pruned: bool,
-}
-
-fn one() -> f64 {
-    1.0
-}
-
-impl Default for TrainOptions {
-    /// The command line's defaults.
-    fn default() -> Self {
-        #[derive(clap::Parser)]
-        struct Defaults {
-            #[command(flatten)]
-            options: TrainOptions,
-        }
-        <Defaults as clap::Parser>::parse_from(["pvt3"]).options
-    }
-}
 
 /// The outcome of a finished run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

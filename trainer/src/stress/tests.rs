@@ -26,7 +26,7 @@ fn the_runtime_stays_finite_and_close_to_the_f64_reference_on_extreme_inputs() {
             epoch: 0,
             val_accuracy: 0.0,
             test_accuracy: None,
-            options: crate::train::TrainOptions::default(),
+            options: crate::options::TrainOptions::default(),
             pruning: None,
         },
     };
