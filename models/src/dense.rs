@@ -150,6 +150,16 @@ pub fn axpy(y: &mut [f32], alpha: f32, x: &[f32]) {
     }
 }
 
+/// Adds `row` to each `row.len()`-long row of the row-major matrix `m` (a bias).
+#[inline(always)]
+pub fn add_to_rows(m: &mut [f32], row: &[f32]) {
+    for r in m.chunks_exact_mut(row.len()) {
+        for (v, b) in r.iter_mut().zip(row) {
+            *v += b;
+        }
+    }
+}
+
 /// Adds each row of the row-major `rows × sums.len()` matrix `m` into `sums` (a bias's gradient).
 #[inline(always)]
 pub fn add_column_sums(sums: &mut [f32], m: &[f32]) {

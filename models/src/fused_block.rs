@@ -17,7 +17,7 @@ use candle_core::backend::BackendStorage;
 use candle_core::{CpuStorage, CustomOp2, Layout, Result, Shape, Tensor};
 use rayon::prelude::*;
 
-use crate::dense::{add_column_sums, axpy, dot, matmul, matmul_strided, product, View};
+use crate::dense::{add_column_sums, add_to_rows, axpy, dot, matmul, matmul_strided, product, View};
 use crate::dropout::Dropout;
 use crate::{Config, Rng};
 
@@ -104,11 +104,7 @@ impl BlockDims {
             vec![d],
             vec![h],
         ];
-        let mut out = shapes.map(|s| ("", s));
-        for (o, name) in out.iter_mut().zip(NAMES) {
-            o.0 = name;
-        }
-        out
+        std::array::from_fn(|i| (NAMES[i], shapes[i].clone()))
     }
 
     /// Where each parameter lies in the packed vector.
@@ -225,10 +221,12 @@ pub struct BlockOp {
 
 struct Saved {
     tokens: usize,
+    weights: Effective,
     chunks: Vec<Activations>,
 }
 
 /// What the backward needs of one chunk.
+#[derive(Default)]
 struct Activations {
     xhat1: Vec<f32>,
     rstd1: Vec<f32>,
@@ -295,12 +293,19 @@ impl BlockOp {
     }
 
     /// The forward pass of every chunk, in parallel: outputs and (if kept) activations.
-    fn run_forward(&self, x: &[f32], p: &[f32], sequences: usize, tokens: usize, keep: bool) -> Vec<(Vec<f32>, Activations)> {
-        let w = self.effective(p);
+    fn run_forward(
+        &self,
+        x: &[f32],
+        p: &[f32],
+        w: &Effective,
+        sequences: usize,
+        tokens: usize,
+        keep: bool,
+    ) -> Vec<(Vec<f32>, Activations)> {
         let row_len = tokens * self.dims.dim;
         self.chunks(sequences, tokens)
             .into_par_iter()
-            .map(|s| self.forward_chunk(p, &w, &x[s.start * row_len..s.end * row_len], s, tokens, keep))
+            .map(|s| self.forward_chunk(p, w, &x[s.start * row_len..s.end * row_len], s, tokens, keep))
             .collect()
     }
 
@@ -342,11 +347,7 @@ impl BlockOp {
         let (mut xhat2, mut c, mut rstd2) = (vec![0f32; rows * dim], vec![0f32; rows * dim], vec![0f32; rows]);
         norm_rows(&out, &p[r[LN2_W].clone()], &p[r[LN2_B].clone()], d.eps, &mut xhat2, &mut c, &mut rstd2);
         let mut h = product(View::rows(&c, rows, dim), View::rows(&p[r[FC1_W].clone()], mlp, dim).t());
-        for row in h.chunks_exact_mut(mlp) {
-            for (v, b) in row.iter_mut().zip(&p[r[FC1_B].clone()]) {
-                *v += b;
-            }
-        }
+        add_to_rows(&mut h, &p[r[FC1_B].clone()]);
         let cdf: Vec<f32> = h.iter().map(|&v| normal_cdf(v)).collect();
         let mut gd: Vec<f32> = h.iter().zip(&cdf).map(|(v, c)| v * c).collect();
         if let Some(m) = drop {
@@ -358,7 +359,7 @@ impl BlockOp {
         let acts = if keep {
             Activations { xhat1, rstd1, a, qkv, probs, heads, xhat2, rstd2, c, h, cdf, gd, masks }
         } else {
-            Activations::empty()
+            Activations::default()
         };
         (f, acts)
     }
@@ -457,24 +458,11 @@ impl BlockOp {
     }
 }
 
-impl Activations {
-    fn empty() -> Self {
-        Self {
-            xhat1: Vec::new(),
-            rstd1: Vec::new(),
-            a: Vec::new(),
-            qkv: Vec::new(),
-            probs: Vec::new(),
-            heads: Vec::new(),
-            xhat2: Vec::new(),
-            rstd2: Vec::new(),
-            c: Vec::new(),
-            h: Vec::new(),
-            cdf: Vec::new(),
-            gd: Vec::new(),
-            masks: None,
-        }
-    }
+/// Parameters flattened and concatenated into the one vector a fused op takes (a `cat`, whose
+/// backward hands each parameter its share of the gradient).
+pub fn pack<'a>(parts: impl IntoIterator<Item = &'a Tensor>) -> Result<Tensor> {
+    let flat = parts.into_iter().map(|t| t.flatten_all()).collect::<Result<Vec<_>>>()?;
+    Tensor::cat(&flat, 0)
 }
 
 /// The contiguous f32 values of a storage.
@@ -494,10 +482,12 @@ impl CustomOp2 for BlockOp {
     fn cpu_fwd(&self, sx: &CpuStorage, lx: &Layout, sp: &CpuStorage, lp: &Layout) -> Result<(CpuStorage, Shape)> {
         let (sequences, tokens) = self.check(lx, lp)?;
         let (x, p) = (values(sx, lx)?, values(sp, lp)?);
-        let (outputs, chunks): (Vec<Vec<f32>>, Vec<Activations>) = self.run_forward(x, p, sequences, tokens, self.keep).into_iter().unzip();
+        let weights = self.effective(p);
+        let (outputs, chunks): (Vec<Vec<f32>>, Vec<Activations>) =
+            self.run_forward(x, p, &weights, sequences, tokens, self.keep).into_iter().unzip();
         if self.keep {
             // Set once: each application of the block is a fresh op.
-            let _ = self.saved.set(Saved { tokens, chunks });
+            let _ = self.saved.set(Saved { tokens, weights, chunks });
         }
         Ok((CpuStorage::F32(outputs.concat()), Shape::from((sequences, self.queries(tokens), self.dims.dim))))
     }
@@ -507,15 +497,16 @@ impl CustomOp2 for BlockOp {
         let p = packed.flatten_all()?.to_vec1::<f32>()?;
         let dy = grad.flatten_all()?.to_vec1::<f32>()?;
         let recomputed;
-        let chunks = match self.saved.get() {
-            Some(saved) if saved.tokens == tokens => &saved.chunks,
+        let (w, chunks) = match self.saved.get() {
+            Some(saved) if saved.tokens == tokens => (&saved.weights, &saved.chunks),
             _ => {
                 let xs = x.flatten_all()?.to_vec1::<f32>()?;
-                recomputed = self.run_forward(&xs, &p, sequences, tokens, true).into_iter().map(|(_, a)| a).collect::<Vec<_>>();
-                &recomputed
+                let w = self.effective(&p);
+                let chunks = self.run_forward(&xs, &p, &w, sequences, tokens, true).into_iter().map(|(_, a)| a).collect();
+                recomputed = (w, chunks);
+                (&recomputed.0, &recomputed.1)
             }
         };
-        let w = self.effective(&p);
         let row_len = self.queries(tokens) * self.dims.dim;
         let parts: Vec<(Vec<f32>, Vec<f32>)> = self
             .chunks(sequences, tokens)
@@ -523,7 +514,7 @@ impl CustomOp2 for BlockOp {
             .zip(chunks.par_iter())
             .map(|(s, acts)| {
                 let mut g = vec![0f32; p.len()];
-                let dx = self.backward_chunk(&p, &w, acts, &dy[s.start * row_len..s.end * row_len], tokens, &mut g);
+                let dx = self.backward_chunk(&p, w, acts, &dy[s.start * row_len..s.end * row_len], tokens, &mut g);
                 (dx, g)
             })
             .collect();

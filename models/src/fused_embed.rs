@@ -7,7 +7,7 @@ use std::sync::OnceLock;
 
 use candle_core::{CpuStorage, CustomOp2, Layout, Result, Shape, Tensor};
 
-use crate::dense::{add_column_sums, matmul, product, View};
+use crate::dense::{add_column_sums, add_to_rows, matmul, product, View};
 use crate::fused_block::values;
 
 /// The embedding's sizes: `tokens` temporal tokens of `patches` patches of `patch_dim` values,
@@ -60,9 +60,7 @@ impl EmbedOp {
     fn embed(&self, x: &[f32], p: &[f32]) -> Vec<f32> {
         let (d, pd, s) = (self.dims.dim, self.dims.patch_dim, self.dims.starts());
         let mut e = product(View::rows(x, x.len() / pd, pd), View::rows(&p[s[0]..][..d * pd], d, pd).t());
-        for row in e.chunks_exact_mut(d) {
-            row.iter_mut().zip(&p[s[1]..][..d]).for_each(|(v, b)| *v += b);
-        }
+        add_to_rows(&mut e, &p[s[1]..][..d]);
         e
     }
 }

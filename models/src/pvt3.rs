@@ -10,6 +10,7 @@ use candle_core::{Tensor, D};
 use candle_nn::{linear, Init, Linear, Module, VarBuilder, VarMap};
 
 use crate::dropout::Dropout;
+use crate::fused_block::pack;
 use crate::fused_embed::{EmbedDims, EmbedOp};
 use crate::head::Head;
 use crate::transformer::{composed_ops, Transformer};
@@ -91,10 +92,9 @@ impl Pvt3 {
     pub fn embed(&self, patches: &Tensor) -> Result<Tensor> {
         let (_, t, n, patch_dim) = patches.dims4()?;
         let bias = self.patch_embed.bias().expect("linear has a bias");
-        let parts = [self.patch_embed.weight(), bias, &self.frame_mask, &self.space_cls, &self.pos_embed];
-        let flat = parts.iter().map(|t| t.flatten_all()).collect::<candle_core::Result<Vec<_>>>()?;
+        let packed = pack([self.patch_embed.weight(), bias, &self.frame_mask, &self.space_cls, &self.pos_embed])?;
         let dims = EmbedDims { tokens: t, patches: n, patch_dim, dim: self.cfg.dim };
-        Ok(EmbedOp::new(dims).apply(patches, &Tensor::cat(&flat, 0)?)?)
+        Ok(EmbedOp::new(dims).apply(patches, &packed)?)
     }
 
     /// [`Self::embed`] composed of candle ops: the oracle of its tests.

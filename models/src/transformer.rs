@@ -1,7 +1,8 @@
 //! A pre-norm transformer encoder, `x = x + Attn(LN(x)); x = x + FFN(LN(x))` per layer, with a
 //! final layer norm. PVT³ only reads the CLS token out of it, so the last block computes that
-//! token alone and the final norm is applied to it. Each block runs as one fused op with its own backward ([`crate::fused_block`]);
-//! the composed form stays as the oracle of its tests and for comparison.
+//! token alone and the final norm is applied to it. Each block runs as one fused op with its own
+//! backward ([`crate::fused_block`]); the composed form stays as the oracle of its tests and for
+//! comparison.
 
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -11,7 +12,7 @@ use candle_nn::VarBuilder;
 use crate::attention::Attention;
 use crate::dropout::Dropout;
 use crate::feed_forward::FeedForward;
-use crate::fused_block::{BlockDims, BlockDropout, BlockOp};
+use crate::fused_block::{pack, BlockDims, BlockDropout, BlockOp};
 use crate::layer_norm::LayerNorm;
 use crate::{Config, Rng};
 
@@ -68,8 +69,7 @@ impl Block {
             let y = self.forward_composed(x, dropout.as_ref())?;
             return if first_only { y.narrow(1, 0, 1) } else { Ok(y) };
         }
-        let flat = self.packed.iter().map(|t| t.flatten_all()).collect::<Result<Vec<_>>>()?;
-        BlockOp::new(self.dims, dropout, keep, first_only).apply(x, &Tensor::cat(&flat, 0)?)
+        BlockOp::new(self.dims, dropout, keep, first_only).apply(x, &pack(&self.packed)?)
     }
 
     /// This step's dropout (one draw from `rng`), or `None` when evaluating or `p` is 0.
