@@ -75,7 +75,15 @@ fn streaming_equals_the_whole_window_with_heads_tubelets_and_pruned_tokens() {
         std: (0..60).map(|i| 0.5 + i as f32 / 30.0).collect(),
         frames: 75,
     };
-    let meta = pvt3_export::Metadata { classes: (0..20).map(|k| format!("c{k}")).collect(), provenance: serde_json::json!({}) };
+    let meta = pvt3_export::Metadata {
+        classes: (0..20).map(|k| format!("c{k}")).collect(),
+        provenance: serde_json::json!({}),
+        stop_threshold: Some(0.095),
+    };
+    for bad in [0.0, 1.5, f32::NAN] {
+        let err = pvt3_export::export(&baked, &norm, &pvt3_export::Metadata { stop_threshold: Some(bad), ..meta.clone() }).unwrap_err();
+        assert!(err.to_string().contains("is not a probability in (0, 1]"), "{err}");
+    }
     let dir = scratch("stream");
     let path = dir.join("tubelets.onnx");
     pvt3_export::write(&pvt3_export::export(&baked, &norm, &meta).unwrap(), &path).unwrap();
@@ -94,16 +102,43 @@ fn streaming_equals_the_whole_window_with_heads_tubelets_and_pruned_tokens() {
     let reference = reference::forward(&baked, &normalised, 8).unwrap();
     let worst = logits.iter().zip(reference.iter().flatten()).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
     assert!(worst <= 1e-5, "tract against the f64 reference: {worst:e}");
+    assert_eq!(c.stop_threshold(), Some(0.095));
     let mut session = c.session().unwrap();
-    for (sample, expected) in x.chunks(4500).zip(&whole) {
+    let (mut stops, mut peeks) = (0, 0);
+    for ((sample, expected), normalised) in x.chunks(4500).zip(&whole).zip(normalised.chunks(4500)) {
         for t in 0..75 {
             session.push_frame(&(0..60).map(|i| sample[i * 75 + t]).collect::<Vec<_>>()).unwrap();
+            // A provisional answer after every whole token of 3 frames, pruned ones included, is
+            // the f64 reference on the touch so far; between tokens it reads the whole ones.
+            let tokens = (t + 1) / 3;
+            match session.peek() {
+                Err(Error::NoTokenYet { tubelet: 3 }) => assert_eq!(tokens, 0),
+                Ok(peek) if t % 3 == 2 => {
+                    let logits = &reference::forward_prefix(&baked, normalised, 1, tokens).unwrap()[0];
+                    let worst =
+                        peek.prediction.probabilities.iter().zip(softmax(logits)).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
+                    assert!(worst <= 1e-5, "{tokens} tokens: {worst:e}");
+                    assert_eq!(peek.frames, 3 * tokens);
+                    assert_eq!(peek.stop, peek.prediction.probabilities[peek.prediction.class] >= 0.095);
+                    (stops, peeks) = (stops + usize::from(peek.stop), peeks + 1);
+                }
+                Ok(peek) => assert_eq!(peek.frames, 3 * tokens),
+                Err(e) => panic!("{e}"),
+            }
         }
         let streamed = session.finish().unwrap();
         let worst = streamed.probabilities.iter().zip(&expected.probabilities).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
         assert!(worst <= 1e-5 && streamed.class == expected.class, "streamed against whole window: {worst:e}");
     }
+    assert!(stops > 0 && stops < peeks, "the stopping rule is met by some provisional answers ({stops} of {peeks}), not all");
     std::fs::remove_dir_all(dir).unwrap();
+}
+
+fn softmax(logits: &[f64]) -> Vec<f64> {
+    let max = logits.iter().copied().fold(f64::MIN, f64::max);
+    let e: Vec<f64> = logits.iter().map(|l| (l - max).exp()).collect();
+    let sum: f64 = e.iter().sum();
+    e.into_iter().map(|v| v / sum).collect()
 }
 
 #[test]

@@ -30,6 +30,8 @@ pub(crate) enum Layout {
 pub(crate) struct Rows {
     pub layout: Layout,
     pub tokens: usize,
+    /// A tensor `[1, 1, 1, tokens]` every score adds by its key (sequence-major rows only).
+    pub key_bias: Option<&'static str>,
 }
 
 impl Rows {
@@ -146,7 +148,10 @@ impl Heads {
 /// `[rows, dim]`; with `cls_only`, the first token of each sequence alone, `[sequences, dim]`.
 pub(crate) fn attention(g: &mut Graph, x: &str, xhat: &str, rows: Rows, cls_only: bool, h: &Heads, hint: &str) -> String {
     let mixed = match rows.layout {
-        Layout::TokenMajor => rolled(g, xhat, rows, cls_only, h, hint),
+        Layout::TokenMajor => {
+            debug_assert!(rows.key_bias.is_none(), "token-major attention takes no key bias");
+            rolled(g, xhat, rows, cls_only, h, hint)
+        }
         Layout::SequenceMajor => batched(g, xhat, rows, cls_only, h, hint),
     };
     let x = if cls_only { rows.first(g, x, h.out.rows) } else { x.to_string() };
@@ -253,6 +258,10 @@ fn batched(g: &mut Graph, xhat: &str, rows: Rows, cls_only: bool, h: &Heads, hin
         }
     };
     let scores = g.op("MatMul", &[&q, &keys_t]);
+    let scores = match rows.key_bias {
+        Some(bias) => g.op("Add", &[&scores, bias]),
+        None => scores,
+    };
     let (weights, total) = softmax_terms(g, &scores, t, h.bounded());
     let mixed = g.op("MatMul", &[&weights, &values]);
     // Normalised after mixing: a division of `[queries, width]` rather than `[queries, keys]`.

@@ -15,7 +15,7 @@ use crate::embedding::embed;
 use crate::graph::{int, ints, Graph};
 use crate::layers::{absorb_norm, centre_rows, centred, gelu, layer_norm, linear, norm_affine, residual_linear, rms_norm};
 use crate::{Error, Result};
-use pvt3_format::{keys, Dims, Header, INPUT, LOGITS, PROBABILITIES, TOKEN_ENCODINGS, TOKEN_FRAMES, TOKEN_INDEX};
+use pvt3_format::{keys, Dims, Header, INPUT, LOGITS, PROBABILITIES, TOKEN_BIAS, TOKEN_ENCODINGS, TOKEN_FRAMES, TOKEN_INDEX};
 
 /// What the file says about itself, besides the graph.
 #[derive(Clone, Debug)]
@@ -23,6 +23,8 @@ pub struct Metadata {
     pub classes: Vec<String>,
     /// Where the model came from (data set, fold, accuracy, pruning), as JSON.
     pub provenance: serde_json::Value,
+    /// The stopping rule of provisional answers, a top probability in (0, 1] (`pvt3.stop_threshold`).
+    pub stop_threshold: Option<f32>,
 }
 
 /// One pre-norm block on the (centred) stream `x`: `[rows, dim]` out, or with `cls_only` the
@@ -76,6 +78,9 @@ fn check(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<()> {
     if meta.classes.len() != c.classes {
         return Err(Error::Inconsistent(format!("{} class names for {} classes", meta.classes.len(), c.classes)));
     }
+    if let Some(t) = meta.stop_threshold.filter(|t| !pvt3_format::valid_threshold(*t)) {
+        return Err(Error::Inconsistent(format!("stopping threshold {t} is not a probability in (0, 1]")));
+    }
     if m.kept_tokens.is_empty() {
         return Err(Error::Unsupported("every frame is pruned; the model would ignore its input".into()));
     }
@@ -121,7 +126,9 @@ fn value_info(name: &str, dims: &[Option<usize>]) -> ValueInfoProto {
 /// `TOKEN_FRAMES` (the raw frames of each kept temporal token) and `TOKEN_INDEX` (its place
 /// among the kept tokens) to `TOKEN_ENCODINGS`; the temporal stage maps those to the outputs.
 /// Both stages are written for any number of tokens, so the same nodes serve a whole batch and a
-/// single token as it arrives.
+/// single token as it arrives. A third seam, `TOKEN_BIAS` (zeros), is added to every temporal
+/// attention score by its key: a runtime that feeds −∞ for the tokens a touch has not reached
+/// gets the temporal stage over the tokens so far, a provisional answer.
 pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<ModelProto> {
     check(m, norm, meta)?;
     let c = &m.config;
@@ -173,7 +180,7 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
     let tokens = g.node("Transpose", &[&tokens], vec![ints("perm", &[1, 0, 2])], None);
     let flat = g.i64s("rows", &[2], vec![-1, d as i64]);
     let tokens = g.op("Reshape", &[&tokens, &flat]);
-    let space = Rows { layout: Layout::TokenMajor, tokens: n + 1 };
+    let space = Rows { layout: Layout::TokenMajor, tokens: n + 1, key_bias: None };
     let cls = transformer_cls(&mut g, &tokens, space, &m.space, eps, "space");
     let cls = rms_norm(&mut g, &cls, eps);
     let encoded = linear(&mut g, &cls, &centred(&norm_affine(&m.space.norm)), "space_norm");
@@ -201,7 +208,10 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
         sequence = g.node("Gather", &[&sequence, &order], vec![int("axis", 1)], None);
     }
     let sequence = g.op("Reshape", &[&sequence, &flat]);
-    let temporal = Rows { layout: Layout::SequenceMajor, tokens: t + 1 };
+    // The key bias, zeros here, is a seam: a runtime feeds −∞ for the tokens not yet received.
+    let zeros = g.f32s("no_key_bias", &[1, 1, 1, t + 1], vec![0.0; t + 1]);
+    g.node("Identity", &[&zeros], vec![], Some(TOKEN_BIAS));
+    let temporal = Rows { layout: Layout::SequenceMajor, tokens: t + 1, key_bias: Some(TOKEN_BIAS) };
     let pooled = transformer_cls(&mut g, &sequence, temporal, &m.temporal, eps, "temporal");
     let pooled = layer_norm(&mut g, &pooled, &m.temporal.norm, eps, "temporal_norm");
     let normed = layer_norm(&mut g, &pooled, &m.head_norm, eps, "head_norm");
@@ -221,7 +231,7 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
         ..Default::default()
     };
     let dims = Dims { height: h, width: w, channels: ch, frames: c.frames, tubelet: tt, dim: d };
-    let header = Header { classes: meta.classes.clone(), kept_frames, dims };
+    let header = Header { classes: meta.classes.clone(), kept_frames, dims, stop_threshold: meta.stop_threshold };
     let config = serde_json::to_value(c).expect("the configuration serialises");
     let mut props = header.entries(&config);
     props.push((keys::PROVENANCE, meta.provenance.to_string()));

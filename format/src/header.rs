@@ -10,7 +10,8 @@ use crate::keys;
 
 /// The file format this crate reads and writes, `major.minor`. A runtime reads every file of
 /// its major version; a new minor version only adds what older runtimes may ignore.
-pub const FORMAT_VERSION: (u32, u32) = (1, 0);
+/// 1.1 added the temporal stage's key bias ([`crate::TOKEN_BIAS`]).
+pub const FORMAT_VERSION: (u32, u32) = (1, 1);
 
 /// Why a file's metadata is not one this crate reads.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -37,12 +38,20 @@ pub struct Dims {
 }
 
 /// What a runtime reads from a file's metadata.
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Header {
     pub classes: Vec<String>,
     /// The frames of a window the model reads, ascending; whole tokens.
     pub kept_frames: Vec<usize>,
     pub dims: Dims,
+    /// The stopping rule: a provisional answer whose top probability reaches this is final
+    /// ([`keys::STOP_THRESHOLD`]); `None` when the file has none.
+    pub stop_threshold: Option<f32>,
+}
+
+/// Whether `t` is a stopping threshold a file may carry: a probability in (0, 1].
+pub fn valid_threshold(t: f32) -> bool {
+    t > 0.0 && t <= 1.0
 }
 
 impl Header {
@@ -63,14 +72,18 @@ impl Header {
     pub fn entries(&self, config: &serde_json::Value) -> Vec<(&'static str, String)> {
         let layout = if self.dims.channels == 1 { "[batch, height, width, frames]" } else { "[batch, height, width, channels, frames]" };
         let dims = self.sample_shape().iter().map(|v| v.to_string()).collect::<Vec<_>>().join(", ");
-        vec![
+        let mut entries = vec![
             (keys::FORMAT, format!("{}.{}", FORMAT_VERSION.0, FORMAT_VERSION.1)),
             (keys::CLASSES, serde_json::to_string(&self.classes).expect("strings serialise")),
             (keys::INPUT_LAYOUT, format!("{layout} = [batch, {dims}], raw sensor values as float32")),
             (keys::INPUT_UNITS, "the data set's raw units (normalisation is inside the graph)".into()),
             (keys::KEPT_FRAMES, serde_json::to_string(&self.kept_frames).expect("integers serialise")),
             (keys::CONFIG, config.to_string()),
-        ]
+        ];
+        if let Some(t) = self.stop_threshold {
+            entries.push((keys::STOP_THRESHOLD, t.to_string()));
+        }
+        entries
     }
 
     /// The header of a file whose metadata entries are `entries` (key, value).
@@ -98,6 +111,7 @@ impl Header {
             classes: json(keys::CLASSES, get(keys::CLASSES)?)?,
             kept_frames: json(keys::KEPT_FRAMES, get(keys::KEPT_FRAMES)?)?,
             dims: json(keys::CONFIG, get(keys::CONFIG)?)?,
+            stop_threshold: get(keys::STOP_THRESHOLD).ok().map(|t| json(keys::STOP_THRESHOLD, t)).transpose()?,
         };
         header.check()?;
         Ok(header)
@@ -119,6 +133,9 @@ impl Header {
         if f.is_empty() || !whole_tokens || !f.windows(2).all(|w| w[0] < w[1]) || f.iter().any(|v| *v >= l.frames) {
             return bad(keys::KEPT_FRAMES, "is not a rising list of whole tokens within the window");
         }
+        if self.stop_threshold.is_some_and(|t| !valid_threshold(t)) {
+            return bad(keys::STOP_THRESHOLD, "is not a probability in (0, 1]");
+        }
         Ok(())
     }
 }
@@ -129,7 +146,12 @@ mod tests {
 
     fn header() -> Header {
         let dims = Dims { height: 6, width: 10, channels: 1, frames: 75, tubelet: 5, dim: 40 };
-        Header { classes: vec!["felt".into(), "wood".into()], kept_frames: (10..20).chain(40..45).collect(), dims }
+        Header {
+            classes: vec!["felt".into(), "wood".into()],
+            kept_frames: (10..20).chain(40..45).collect(),
+            dims,
+            stop_threshold: Some(0.875),
+        }
     }
 
     fn config(h: &Header) -> serde_json::Value {
@@ -148,6 +170,11 @@ mod tests {
         let entries = h.entries(&config(&h));
         assert_eq!(parse(&entries).unwrap(), h);
         assert_eq!(h.sample_shape(), vec![6, 10, 75]);
+        // The stopping threshold is optional.
+        let h = Header { stop_threshold: None, ..h };
+        let entries = h.entries(&config(&h));
+        assert!(entries.iter().all(|(k, _)| *k != keys::STOP_THRESHOLD));
+        assert_eq!(parse(&entries).unwrap(), h);
     }
 
     #[test]
@@ -167,7 +194,10 @@ mod tests {
     #[test]
     fn inconsistent_metadata_is_refused() {
         let h = header();
-        let broken: [fn(&mut Header); 8] = [
+        let broken: [fn(&mut Header); 11] = [
+            |h| h.stop_threshold = Some(0.0),
+            |h| h.stop_threshold = Some(1.5),
+            |h| h.stop_threshold = Some(f32::NAN),
             |h| h.classes.clear(),
             |h| h.kept_frames.clear(),
             |h| h.kept_frames.reverse(),

@@ -8,7 +8,7 @@ mod digest;
 mod header;
 
 pub use digest::{digest, verify, Integrity};
-pub use header::{Dims, Header, HeaderError, FORMAT_VERSION};
+pub use header::{valid_threshold, Dims, Header, HeaderError, FORMAT_VERSION};
 
 /// Input: raw sensor frames `[batch, height, width, (channels,) frames]`.
 pub const INPUT: &str = "frames";
@@ -22,6 +22,10 @@ pub const TOKEN_FRAMES: &str = "token_frames";
 pub const TOKEN_INDEX: &str = "token_index";
 /// Seam between the stages: the spatial encoding of each kept token, `[tokens, dim]`.
 pub const TOKEN_ENCODINGS: &str = "token_encodings";
+/// Seam of the temporal stage (format 1.1): what every temporal attention score adds by its key,
+/// `[1, 1, 1, time tokens + 1]` (the CLS token first). Zeros in the file; a runtime that puts −∞
+/// on the tokens a touch has not reached yet classifies the touch so far (a provisional answer).
+pub const TOKEN_BIAS: &str = "token_bias";
 
 /// Metadata keys (`metadata_props` of the ONNX model).
 pub mod keys {
@@ -39,6 +43,10 @@ pub mod keys {
     pub const CONFIG: &str = "pvt3.config";
     /// Where the model came from, a JSON object.
     pub const PROVENANCE: &str = "pvt3.provenance";
+    /// The stopping rule of provisional answers (format 1.1, optional): a touch may end once
+    /// its provisional answer's top class probability reaches this number, in (0, 1]; the
+    /// trainer calibrates it on the validation fold.
+    pub const STOP_THRESHOLD: &str = "pvt3.stop_threshold";
     /// The integrity digest: `sha256:` and the hex SHA-256 of everything else in the file
     /// ([`crate::digest`]).
     pub const DIGEST: &str = "pvt3.digest";

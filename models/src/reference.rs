@@ -98,17 +98,27 @@ fn patches(m: &BakedPvt3, sample: &[f32], k: usize) -> Vec<Vec<f64>> {
 
 /// Logits `[batch][classes]` for `batch` raw samples laid out back to back.
 pub fn forward(m: &BakedPvt3, x: &[f32], batch: usize) -> Result<Vec<Vec<f64>>> {
+    forward_prefix(m, x, batch, m.config.time_tokens())
+}
+
+/// Logits `[batch][classes]` from the first `tokens` temporal tokens of each sample alone (a
+/// touch so far, pruned tokens included as their constants): the temporal transformer runs over
+/// the CLS token and those.
+pub fn forward_prefix(m: &BakedPvt3, x: &[f32], batch: usize, tokens: usize) -> Result<Vec<Vec<f64>>> {
     let c = &m.config;
     let sample_len: usize = c.sample_shape().iter().product();
     if x.len() != batch * sample_len {
         return Err(Error::InputShape { got: vec![x.len()], expected: format!("{batch} × {sample_len} values") });
+    }
+    if tokens == 0 || tokens > c.time_tokens() {
+        return Err(Error::InputShape { got: vec![tokens], expected: format!("1 to {} temporal tokens", c.time_tokens()) });
     }
     let (n, d, eps) = (c.num_patches(), c.dim, c.layer_norm_eps);
     x.chunks(sample_len)
         .map(|sample| {
             let mut sequence = m.temporal_cls.iter().map(|v| *v as f64).collect::<Vec<_>>();
             let mut encodings: Vec<f64> = m.pruned_encodings.iter().map(|v| *v as f64).collect();
-            for (kk, &k) in m.kept_tokens.iter().enumerate() {
+            for (kk, &k) in m.kept_tokens.iter().enumerate().filter(|(_, k)| **k < tokens) {
                 let pos = &m.pos_embed[kk * (n + 1) * d..(kk + 1) * (n + 1) * d];
                 let mut tokens: Vec<f64> = m.space_cls.iter().map(|v| *v as f64).collect();
                 for p in patches(m, sample, k) {
@@ -118,8 +128,8 @@ pub fn forward(m: &BakedPvt3, x: &[f32], batch: usize) -> Result<Vec<Vec<f64>>> 
                 let enc = transformer_cls(&m.space, &tokens, n + 1, d, eps);
                 encodings[k * d..(k + 1) * d].copy_from_slice(&enc);
             }
-            sequence.extend(encodings);
-            let pooled = transformer_cls(&m.temporal, &sequence, c.time_tokens() + 1, d, eps);
+            sequence.extend(&encodings[..tokens * d]);
+            let pooled = transformer_cls(&m.temporal, &sequence, tokens + 1, d, eps);
             Ok(dense(&m.head, &layer_norm(&m.head_norm, &pooled, eps)))
         })
         .collect()

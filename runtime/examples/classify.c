@@ -4,8 +4,9 @@
  *
  * FRAMES.f32 holds BATCH windows of raw float32 values (little-endian, the model's input layout).
  * Classifies them as one batch, then streams each window frame by frame through a session, as a
- * robot would during a touch. Prints, per window and way ("batch" or "stream"), the window, the
- * class index, its name and probability, then all probabilities. */
+ * robot would during a touch, with a provisional answer halfway. Prints, per window and way
+ * ("batch", "peek" or "stream"), the window, the class index, its name and probability, then all
+ * probabilities. */
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -65,6 +66,14 @@ int main(int argc, char **argv) {
         for (size_t t = 0; t < frames_per_window; t++) {
             for (size_t j = 0; j < frame_len; j++) frame[j] = window[j * frames_per_window + t];
             if (pvt3_session_push_frame(session, frame, frame_len) != PVT3_OK) return fail("push_frame");
+            /* Halfway through the touch, a provisional answer from the frames so far. A robot would
+             * end the touch here when `stop` says the file's stopping rule is met. */
+            if (t + 1 == frames_per_window / 2) {
+                size_t class = 0, used = 0;
+                int stop = 0;
+                if (pvt3_session_peek(session, probs, classes, &class, &used, &stop) != PVT3_OK) return fail("peek");
+                print("peek", model, i, class, probs, classes);
+            }
         }
         size_t class = 0;
         if (pvt3_session_finish(session, probs, classes, &class) != PVT3_OK) return fail("finish");

@@ -40,10 +40,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     };
     let built = started.elapsed();
-    // What `into_optimized` does, in its two steps.
+    // What the runtime's plans do: its decluttering, then tract's optimisation.
     let nodes = model.nodes().len();
     let (mut model, started) = (model, Instant::now());
-    model.declutter()?;
+    pvt3_runtime::declutter(&mut model)?;
     let decluttered = started.elapsed();
     let started = Instant::now();
     model.optimize()?;

@@ -120,6 +120,12 @@ impl Classifier {
         self.header.dims.dim
     }
 
+    /// The stopping rule of provisional answers ([`crate::Peek::stop`]): a top probability in
+    /// (0, 1], calibrated by the trainer; `None` when the file has none.
+    pub fn stop_threshold(&self) -> Option<f32> {
+        self.header.stop_threshold
+    }
+
     /// The frames of a window the model reads; the others were pruned.
     pub fn kept_frames(&self) -> &[usize] {
         &self.header.kept_frames
@@ -127,6 +133,11 @@ impl Classifier {
 
     fn sample_len(&self) -> usize {
         self.sample_shape.iter().product()
+    }
+
+    /// Whether the file's graph computes a tensor of this name (a seam).
+    pub(crate) fn has_tensor(&self, name: &str) -> bool {
+        self.graph.node.iter().any(|n| n.output.iter().any(|o| o == name))
     }
 
     /// The part of the graph from `sources` (tensor names with fixed facts) to `outputs`, as a
@@ -145,7 +156,7 @@ impl Classifier {
             n => return Err(Error::NoThreads { asked: n }),
         };
         let build = || {
-            let mut model = model.into_optimized()?;
+            let mut model = crate::plan::optimised(model)?;
             crate::kernels::tune(&mut model, self.threads, self.kernels)?;
             model.into_runnable_with_options(&RunOptions { executor: Some(executor), ..Default::default() })
         };

@@ -24,6 +24,10 @@ pub enum Error {
     TooManyFrames { frames: usize },
     #[error("the touch has {got} of its {frames} frames: push the rest before finishing")]
     Incomplete { got: usize, frames: usize },
+    #[error("no provisional answer yet: the touch has no whole temporal token ({tubelet} frames) so far")]
+    NoTokenYet { tubelet: usize },
+    #[error("this file gives no provisional answers: it was exported before format 1.1; export it again")]
+    NoPrefixes,
     #[error("batch size must be at least 1")]
     EmptyBatch,
     #[error("a batch of {batch} windows has more values than memory can address")]

@@ -52,7 +52,9 @@ fn status(e: &Error) -> c_int {
         | Error::Npy { .. }
         | Error::FrameLength { .. }
         | Error::TooManyFrames { .. }
-        | Error::Incomplete { .. } => PVT3_ERR_INPUT,
+        | Error::Incomplete { .. }
+        | Error::NoTokenYet { .. } => PVT3_ERR_INPUT,
+        Error::NoPrefixes => PVT3_ERR_MODEL,
         Error::Tract(_) => PVT3_ERR_INTERNAL,
     }
 }
@@ -330,6 +332,44 @@ pub unsafe extern "C" fn pvt3_session_finish(
         std::slice::from_raw_parts_mut(probabilities, s.names).copy_from_slice(&p.probabilities);
         if let Some(class) = class_out.as_mut() {
             *class = p.class;
+        }
+        Ok(())
+    })
+}
+
+/// A provisional answer from the touch so far, which goes on: writes the class probabilities
+/// (room for `probabilities_len` values) and, unless null, the most probable class, the frames
+/// the answer read and whether it meets the file's stopping rule (1, else 0).
+///
+/// # Safety
+/// `s` is a live session or null; the other pointers are null or valid for the lengths given.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_session_peek(
+    s: *const Pvt3Session,
+    probabilities: *mut f32,
+    probabilities_len: usize,
+    class_out: *mut usize,
+    frames_out: *mut usize,
+    stop_out: *mut c_int,
+) -> c_int {
+    guard(|| {
+        let s = s.as_ref().ok_or_else(|| null("session"))?;
+        if probabilities.is_null() {
+            return Err(null("probabilities"));
+        }
+        if probabilities_len < s.names {
+            return Err((PVT3_ERR_INPUT, format!("probabilities has room for {probabilities_len} values; {} needed", s.names)));
+        }
+        let p = s.session.peek().map_err(fail)?;
+        std::slice::from_raw_parts_mut(probabilities, s.names).copy_from_slice(&p.prediction.probabilities);
+        if let Some(class) = class_out.as_mut() {
+            *class = p.prediction.class;
+        }
+        if let Some(frames) = frames_out.as_mut() {
+            *frames = p.frames;
+        }
+        if let Some(stop) = stop_out.as_mut() {
+            *stop = c_int::from(p.stop);
         }
         Ok(())
     })

@@ -35,4 +35,5 @@ pub use error::{Error, Result};
 pub use heap::keep_freed_memory;
 pub use kernels::{tune as tune_kernels, Kernels};
 pub use npy::read_npy;
-pub use stream::Session;
+pub use plan::declutter;
+pub use stream::{Peek, Session};

@@ -85,11 +85,17 @@ pub(crate) struct Epilogue {
     pub per_row: bool,
 }
 
-/// How an epilogue combines a product with its vector.
+/// How an epilogue combines a product's value c with its vector's (or scalar's) value v.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub(crate) enum Combine {
+    /// c + v
     Add,
+    /// c · v
     Mul,
+    /// v − c: tract's `BinOp::Sub` in a fused product
+    SubtractedFrom,
+    /// c − v: tract's `BinOp::SubF`
+    Subtract,
 }
 
 impl Combine {
@@ -97,13 +103,25 @@ impl Combine {
         match op {
             BinOp::Add => Some(Combine::Add),
             BinOp::Mul => Some(Combine::Mul),
-            _ => None,
+            BinOp::Sub => Some(Combine::SubtractedFrom),
+            BinOp::SubF => Some(Combine::Subtract),
+            BinOp::Min | BinOp::Max => None,
+        }
+    }
+
+    /// `c` combined with `v`, one value.
+    pub(crate) fn apply(self, c: f32, v: f32) -> f32 {
+        match self {
+            Combine::Add => c + v,
+            Combine::Mul => c * v,
+            Combine::SubtractedFrom => v - c,
+            Combine::Subtract => c - v,
         }
     }
 }
 
-/// `C = A B`, then the epilogues in order, stored into C of shape `c_shape` with its m and n
-/// axes at `c_m_axis` and `c_n_axis` (the others unit axes).
+/// `C = A B`, then the epilogues in order and the scalar, stored into C of shape `c_shape` with
+/// its m and n axes at `c_m_axis` and `c_n_axis` (the others unit axes; no n axis when n is 1).
 #[derive(Clone, Debug, PartialEq, Eq, Hash)]
 pub(crate) struct SmallProduct {
     pub m: usize,
@@ -112,9 +130,12 @@ pub(crate) struct SmallProduct {
     pub a: Source,
     pub b: Source,
     pub epilogues: Vec<Epilogue>,
+    /// Node input holding one value that every value of C is combined with, after the
+    /// epilogues (tract's `BinScalar`, as the last thing tract fused).
+    pub scalar: Option<(usize, Combine)>,
     pub c_shape: TVec<usize>,
     pub c_m_axis: usize,
-    pub c_n_axis: usize,
+    pub c_n_axis: Option<usize>,
     pub isa: Isa,
 }
 
@@ -132,14 +153,16 @@ impl SmallProduct {
     /// kernel's rows. `None` when neither is contiguous or C has other axes than unit ones.
     fn layout(&self) -> Option<(bool, isize)> {
         let strides = Tensor::natural_strides(&self.c_shape);
-        let others_unit = self.c_shape.iter().enumerate().all(|(ax, d)| ax == self.c_m_axis || ax == self.c_n_axis || *d == 1);
-        let (m_unit, n_unit) = (strides[self.c_m_axis] == 1, strides[self.c_n_axis] == 1);
+        let others_unit = self.c_shape.iter().enumerate().all(|(ax, d)| ax == self.c_m_axis || Some(ax) == self.c_n_axis || *d == 1);
+        // Without an n axis C is one column: the kernel writes it as one row of m values.
+        let n_stride = match self.c_n_axis {
+            Some(ax) => strides[ax],
+            None if self.n == 1 => 0,
+            None => return None,
+        };
+        let (m_unit, n_unit) = (strides[self.c_m_axis] == 1, n_stride == 1);
         let along_n = n_unit && !(self.n == 1 && m_unit);
-        (others_unit && (m_unit || n_unit)).then_some(if along_n {
-            (true, strides[self.c_m_axis])
-        } else {
-            (false, strides[self.c_n_axis])
-        })
+        (others_unit && (m_unit || n_unit)).then_some(if along_n { (true, strides[self.c_m_axis]) } else { (false, n_stride) })
     }
 
     /// Whether the kernel can write C (see [`Self::layout`]).
@@ -180,6 +203,13 @@ impl SmallProduct {
         // `c_shape` holds m × n values (other axes are unit axes, `layout`) with rows `c_row`
         // apart, and every epilogue vector was checked to hold m or n values.
         unsafe { kernel::multiply(self.isa, p, q, self.k, l, r, out, c_row, &ops) };
+        if let Some((input, op)) = self.scalar {
+            let t = &inputs[input];
+            ensure!(t.len() == 1 && t.datum_type() == f32::datum_type(), "SmallProduct scalar input {input} has shape {:?}", t.shape());
+            let s = t.to_plain_array_view::<f32>()?.iter().copied().next().unwrap_or_default();
+            let mut c = c.to_plain_array_view_mut::<f32>()?;
+            c.iter_mut().for_each(|v| *v = op.apply(*v, s));
+        }
         Ok(c)
     }
 
@@ -221,7 +251,10 @@ impl Op for SmallProduct {
     }
 
     fn info(&self) -> TractResult<Vec<String>> {
-        Ok(vec![format!("m:{} k:{} n:{}, {:?}, epilogues {:?}, c {:?}", self.m, self.k, self.n, self.isa, self.epilogues, self.c_shape)])
+        Ok(vec![format!(
+            "m:{} k:{} n:{}, {:?}, epilogues {:?}, scalar {:?}, c {:?}",
+            self.m, self.k, self.n, self.isa, self.epilogues, self.scalar, self.c_shape
+        )])
     }
 
     op_as_typed_op!();

@@ -6,10 +6,15 @@
 //! soon as its last frame arrives, and at the end of the touch runs only the temporal stage. Both
 //! stages are cut from the one file, so streaming and whole-window classification are the same
 //! function.
+//!
+//! A session also answers before the touch ends ([`Session::peek`]): the temporal stage run over
+//! the tokens received so far. The file's key bias (`token_bias`, format 1.1) takes −∞ for every
+//! token not yet received, so no temporal attention reads one: the CLS token sees the touch so
+//! far, exactly as if the window ended there (the f64 reference's `forward_prefix`).
 
 use std::sync::Arc;
 
-use pvt3_format::{PROBABILITIES, TOKEN_ENCODINGS, TOKEN_FRAMES, TOKEN_INDEX};
+use pvt3_format::{PROBABILITIES, TOKEN_BIAS, TOKEN_ENCODINGS, TOKEN_FRAMES, TOKEN_INDEX};
 use tract_core::prelude::*;
 
 use crate::classifier::prediction;
@@ -21,8 +26,13 @@ use crate::{Classifier, Error, Prediction, Result};
 pub(crate) struct Stages {
     /// One kept token's frames `[1, tubelet, height, width, channels]` and its index → `[1, dim]`.
     spatial: Plan,
-    /// All kept tokens' encodings `[kept, dim]` → probabilities `[1, classes]`.
+    /// All kept tokens' encodings `[kept, dim]` (and, where the file has the seam, the key bias
+    /// `[1, 1, 1, tokens + 1]`) → probabilities `[1, classes]`.
     temporal: Plan,
+    /// Whether the temporal stage reads a key bias, so that it can answer for a prefix.
+    prefixes: bool,
+    /// The file's stopping rule (`Header::stop_threshold`).
+    stop_threshold: Option<f32>,
     /// For each temporal token, its index among the kept tokens.
     kept_index: Vec<Option<usize>>,
     /// `[1, tubelet, height, width, channels]`
@@ -43,15 +53,34 @@ impl Stages {
         let frame = &c.sample_shape()[..c.sample_shape().len() - 1];
         let token_shape = vec![1, tubelet, frame[0], frame[1], frame.get(2).copied().unwrap_or(1)];
         let spatial = [(TOKEN_FRAMES, f32::fact(&token_shape)), (TOKEN_INDEX, i64::fact([1]))];
+        let prefixes = c.has_tensor(TOKEN_BIAS);
+        let mut temporal = vec![(TOKEN_ENCODINGS, f32::fact([kept, c.dim()]))];
+        if prefixes {
+            temporal.push((TOKEN_BIAS, f32::fact([1, 1, 1, kept_index.len() + 1])));
+        }
         Ok(Self {
             spatial: c.optimise(c.wire(&spatial, &[TOKEN_ENCODINGS])?)?,
-            temporal: c.optimise(c.wire(&[(TOKEN_ENCODINGS, f32::fact([kept, c.dim()]))], &[PROBABILITIES])?)?,
+            temporal: c.optimise(c.wire(&temporal, &[PROBABILITIES])?)?,
+            prefixes,
+            stop_threshold: c.stop_threshold(),
             kept_index,
             token_shape,
             dim: c.dim(),
             classes: c.classes().to_vec(),
         })
     }
+}
+
+/// A provisional answer ([`Session::peek`]).
+#[derive(Clone, Debug)]
+pub struct Peek {
+    pub prediction: Prediction,
+    /// The frames it read: those of the whole temporal tokens received, pruned ones included.
+    pub frames: usize,
+    /// Whether it meets the file's stopping rule: its top probability reached the threshold the
+    /// trainer calibrated (`pvt3.stop_threshold`), so the touch may end here. Always false for a
+    /// file without a rule.
+    pub stop: bool,
 }
 
 /// One touch in progress. Push its frames in order with [`Session::push_frame`], then
@@ -134,12 +163,43 @@ impl Session {
         if self.received < frames {
             return Err(Error::Incomplete { got: self.received, frames });
         }
-        let dim = self.stages.dim;
-        let encodings = Tensor::from_shape(&[self.encodings.len() / dim, dim], &self.encodings).map_err(tract_error)?;
-        let out = self.stages.temporal.run(tvec!(encodings.into()))?;
-        let probabilities = outputs_of(&out, 0, self.stages.classes.len())?;
+        let prediction = self.temporal(self.stages.kept_index.len())?;
         self.reset();
-        Ok(prediction(&self.stages.classes, &probabilities))
+        Ok(prediction)
+    }
+
+    /// A provisional answer from the touch so far, which goes on: the temporal stage over the
+    /// temporal tokens whose frames have all arrived (a pruned token as its constant), as if the
+    /// touch ended there. With every frame in, it is what [`Session::finish`] answers.
+    /// [`Error::NoTokenYet`] before the first token is complete; [`Error::NoPrefixes`] for a file
+    /// exported before format 1.1.
+    pub fn peek(&self) -> Result<Peek> {
+        if !self.stages.prefixes {
+            return Err(Error::NoPrefixes);
+        }
+        let tokens = self.received / self.stages.tubelet();
+        if tokens == 0 {
+            return Err(Error::NoTokenYet { tubelet: self.stages.tubelet() });
+        }
+        let prediction = self.temporal(tokens)?;
+        let stop = self.stages.stop_threshold.is_some_and(|t| prediction.probabilities[prediction.class] >= t);
+        Ok(Peek { prediction, frames: tokens * self.stages.tubelet(), stop })
+    }
+
+    /// The temporal stage over the first `tokens` temporal tokens, all of them received: the kept
+    /// ones' encodings so far, zeros for the rest, whose keys the bias hides.
+    fn temporal(&self, tokens: usize) -> Result<Prediction> {
+        let (dim, total) = (self.stages.dim, self.stages.kept_index.len());
+        let kept = self.stages.kept_index.iter().flatten().count();
+        let mut encodings = self.encodings.clone();
+        encodings.resize(kept * dim, 0.0);
+        let mut inputs = tvec!(Tensor::from_shape(&[kept, dim], &encodings).map_err(tract_error)?.into());
+        if self.stages.prefixes {
+            let bias: Vec<f32> = (0..=total).map(|k| if k <= tokens { 0.0 } else { f32::NEG_INFINITY }).collect();
+            inputs.push(Tensor::from_shape(&[1, 1, 1, total + 1], &bias).map_err(tract_error)?.into());
+        }
+        let out = self.stages.temporal.run(inputs)?;
+        Ok(prediction(&self.stages.classes, &outputs_of(&out, 0, self.stages.classes.len())?))
     }
 
     /// Forgets the touch in progress.

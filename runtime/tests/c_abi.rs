@@ -88,7 +88,7 @@ fn the_header_declares_exactly_what_the_code_exports() {
         .collect();
     let code_fns: BTreeMap<_, _> = code.split("extern \"C\" fn ").skip(1).filter_map(rust_signature).collect();
     assert_eq!(header_fns, code_fns, "functions, their return and parameter types");
-    assert_eq!(code_fns.len(), 15);
+    assert_eq!(code_fns.len(), 16);
     assert_eq!(code_fns["pvt3_classify"].1[6], "size_t *", "the types are read");
     let mut header_consts: Vec<(String, String)> = header
         .split("#define ")
@@ -133,11 +133,24 @@ fn the_c_example_gives_the_rust_result() {
     std::fs::write(&raw, x.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>()).unwrap();
     let out = target_command(&exe).arg(golden("model.onnx")).arg(&raw).arg("8").output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let rust = Classifier::load(golden("model.onnx")).unwrap().classify_batch(&x, 8).unwrap();
+    let c = Classifier::load(golden("model.onnx")).unwrap();
+    let rust = c.classify_batch(&x, 8).unwrap();
+    // What a session answers halfway through each touch (37 of 75 frames).
+    let mut session = c.session().unwrap();
+    let halfway: Vec<_> = (0..8)
+        .map(|w| {
+            for t in 0..37 {
+                session.push_frame(&(0..60).map(|i| x[w * 4500 + i * 75 + t]).collect::<Vec<_>>()).unwrap();
+            }
+            let peek = session.peek().unwrap().prediction;
+            session.reset();
+            peek
+        })
+        .collect();
     let stdout = String::from_utf8(out.stdout).unwrap();
-    assert_eq!(stdout.lines().count(), 16);
-    for way in ["batch", "stream"] {
-        for (line, p) in stdout.lines().filter(|l| l.starts_with(way)).zip(&rust) {
+    assert_eq!(stdout.lines().count(), 24);
+    for (way, expected) in [("batch", &rust), ("stream", &rust), ("peek", &halfway)] {
+        for (line, p) in stdout.lines().filter(|l| l.starts_with(way)).zip(expected) {
             let fields: Vec<&str> = line.split('\t').collect();
             assert_eq!(fields[2].parse::<usize>().unwrap(), p.class);
             assert_eq!(fields[3], p.label);
@@ -174,6 +187,7 @@ fn every_entry_point_reports_instead_of_crashing() {
         assert_eq!(pvt3_session_new(null(), &mut s), PVT3_ERR_NULL);
         assert_eq!(pvt3_session_push_frame(null_mut(), probs.as_ptr(), 60), PVT3_ERR_NULL);
         assert_eq!(pvt3_session_finish(null_mut(), probs.as_mut_ptr(), 40, null_mut()), PVT3_ERR_NULL);
+        assert_eq!(pvt3_session_peek(null(), probs.as_mut_ptr(), 40, null_mut(), null_mut(), null_mut()), PVT3_ERR_NULL);
         pvt3_session_free(null_mut());
         pvt3_classifier_free(null_mut());
 
@@ -198,7 +212,8 @@ fn every_entry_point_reports_instead_of_crashing() {
         assert_eq!(pvt3_classifier_class_name(c, 11, &mut name, &mut len), PVT3_OK);
         assert_eq!((CStr::from_ptr(name).to_str().unwrap(), len), ("material_12", 11));
         let version = CStr::from_ptr(pvt3_version()).to_str().unwrap();
-        assert_eq!(version, format!("{} (format 1.0)", env!("CARGO_PKG_VERSION")));
+        let (major, minor) = pvt3_format::FORMAT_VERSION;
+        assert_eq!(version, format!("{} (format {major}.{minor})", env!("CARGO_PKG_VERSION")));
         let frames = vec![0.5f32; 2 * 4500];
         assert_eq!(pvt3_classify(c, null(), 4500, 1, probs.as_mut_ptr(), 40, null_mut()), PVT3_ERR_NULL);
         assert_eq!(pvt3_classify(c, frames.as_ptr(), 4500, 1, null_mut(), 40, null_mut()), PVT3_ERR_NULL);
@@ -233,9 +248,24 @@ fn every_entry_point_reports_instead_of_crashing() {
         assert!(last_error().contains("a frame has 59 values; expected 60"), "{}", last_error());
         assert_eq!(pvt3_session_finish(s, probs.as_mut_ptr(), 40, null_mut()), PVT3_ERR_INPUT);
         assert!(last_error().contains("has 0 of its 75 frames"), "{}", last_error());
-        for _ in 0..75 {
+        let (mut used, mut stop) = (0usize, 7);
+        assert_eq!(pvt3_session_peek(s, probs.as_mut_ptr(), 40, null_mut(), &mut used, &mut stop), PVT3_ERR_INPUT);
+        assert!(last_error().contains("no whole temporal token"), "{}", last_error());
+        for t in 0..75 {
             assert_eq!(pvt3_session_push_frame(s, frames.as_ptr(), 60), PVT3_OK);
+            if t == 29 {
+                assert_eq!(pvt3_session_peek(s, null_mut(), 40, null_mut(), null_mut(), null_mut()), PVT3_ERR_NULL);
+                assert_eq!(pvt3_session_peek(s, probs.as_mut_ptr(), 19, null_mut(), null_mut(), null_mut()), PVT3_ERR_INPUT);
+                let mut class = 99usize;
+                assert_eq!(pvt3_session_peek(s, probs.as_mut_ptr(), 20, &mut class, &mut used, &mut stop), PVT3_OK);
+                assert!(class < 20 && (probs[..20].iter().sum::<f32>() - 1.0).abs() < 1e-5);
+                assert_eq!((used, stop), (30, 0), "30 frames read; the golden file has no stopping rule");
+                assert_eq!(pvt3_session_peek(s, probs.as_mut_ptr(), 20, null_mut(), null_mut(), null_mut()), PVT3_OK);
+            }
         }
+        let mut peeked = 99usize;
+        assert_eq!(pvt3_session_peek(s, probs.as_mut_ptr(), 20, &mut peeked, &mut used, null_mut()), PVT3_OK);
+        assert_eq!((peeked, used), (best[0], 75), "with every frame in, a peek is the whole window's answer");
         assert_eq!(pvt3_session_push_frame(s, frames.as_ptr(), 60), PVT3_ERR_INPUT);
         assert_eq!(pvt3_session_finish(s, null_mut(), 40, null_mut()), PVT3_ERR_NULL);
         assert_eq!(pvt3_session_finish(s, probs.as_mut_ptr(), 19, null_mut()), PVT3_ERR_INPUT);

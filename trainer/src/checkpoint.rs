@@ -64,6 +64,7 @@ impl BakedFile {
         pvt3_export::Metadata {
             classes: self.classes.clone(),
             provenance: serde_json::to_value(&self.provenance).expect("plain data serialises"),
+            stop_threshold: None,
         }
     }
 }

@@ -78,8 +78,8 @@ pub fn mean_std(values: &[f64]) -> (f64, f64) {
 /// the Cornish–Fisher expansion to its second term (within 0.001 beyond).
 pub fn t_975(df: usize) -> f64 {
     const TABLE: [f64; 30] = [
-        12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160, 2.145, 2.131, 2.120, 2.110, 2.101, 2.093,
-        2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048, 2.045, 2.042,
+        12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160, 2.145, 2.131, 2.120, 2.110, 2.101,
+        2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048, 2.045, 2.042,
     ];
     let z: f64 = 1.959_964;
     match df {
@@ -154,10 +154,8 @@ pub fn cross_validate(
     let tests: Vec<f64> = runs.iter().map(|r| r.test_accuracy).collect();
     let vals: Vec<f64> = runs.iter().map(|r| r.val_accuracy).collect();
     let (mean_test_accuracy, std_test_accuracy) = mean_std(&tests);
-    let seed_means: Vec<f64> = seeds
-        .iter()
-        .map(|&s| mean_std(&runs.iter().filter(|r| r.seed == s).map(|r| r.test_accuracy).collect::<Vec<_>>()).0)
-        .collect();
+    let seed_means: Vec<f64> =
+        seeds.iter().map(|&s| mean_std(&runs.iter().filter(|r| r.seed == s).map(|r| r.test_accuracy).collect::<Vec<_>>()).0).collect();
     let summary = CvSummary {
         ci95_test_accuracy: ci95(&seed_means),
         seed_means,

@@ -14,8 +14,8 @@ use pvt3_trainer::cv::cross_validate;
 use pvt3_trainer::data::{Dataset, TEST_FOLD};
 use pvt3_trainer::evaluate::{evaluate, Samples};
 use pvt3_trainer::info::report;
-use pvt3_trainer::prune::{prune_and_fine_tune, PruneStage};
 use pvt3_trainer::options::TrainOptions;
+use pvt3_trainer::prune::{prune_and_fine_tune, PruneStage};
 use pvt3_trainer::train::{train, RunSpec};
 
 #[derive(Parser)]
@@ -345,7 +345,10 @@ fn main() -> Result<()> {
             );
             if let Some([lo, hi]) = s.ci95_test_accuracy {
                 let means: Vec<String> = s.seed_means.iter().map(|m| format!("{m:.4}")).collect();
-                println!("95 % confidence interval of the mean [{lo:.4}, {hi:.4}] (Student's t over the seeds' means {})", means.join(", "));
+                println!(
+                    "95 % confidence interval of the mean [{lo:.4}, {hi:.4}] (Student's t over the seeds' means {})",
+                    means.join(", ")
+                );
             }
         }
         Command::Eval { checkpoint, data, fold } => eval(&checkpoint, &data, &fold)?,

@@ -115,7 +115,10 @@ impl AdamW {
             for (moment, key) in [(&mut p.m, &mk), (&mut p.v, &vk)] {
                 let t = tensors.remove(key).ok_or_else(|| missing(key))?;
                 if t.elem_count() != moment.len() {
-                    return Err(crate::Error::Checkpoint { path: path.to_path_buf(), reason: format!("`{key}` has {} values, not {}", t.elem_count(), moment.len()) });
+                    return Err(crate::Error::Checkpoint {
+                        path: path.to_path_buf(),
+                        reason: format!("`{key}` has {} values, not {}", t.elem_count(), moment.len()),
+                    });
                 }
                 *moment = t.flatten_all()?.to_vec1::<f32>()?;
             }

@@ -77,4 +77,3 @@ impl Default for TrainOptions {
         <Defaults as clap::Parser>::parse_from(["pvt3"]).options
     }
 }
-

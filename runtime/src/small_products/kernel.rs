@@ -112,6 +112,8 @@ impl Block<'_> {
                     *acc = match op {
                         Combine::Add => I::add(*acc, y),
                         Combine::Mul => I::mul(*acc, y),
+                        Combine::SubtractedFrom => I::sub(y, *acc),
+                        Combine::Subtract => I::sub(*acc, y),
                     };
                 }
             }
@@ -162,10 +164,7 @@ mod tests {
                 let mut want: f32 = (0..k).map(|s| lv[i * l_mn + s * l_k] * rv[s * r_row + j]).sum();
                 for &(op, per_row) in ops {
                     let v = if per_row { rows[i] } else { cols[j] };
-                    want = match op {
-                        Combine::Add => want + v,
-                        Combine::Mul => want * v,
-                    };
+                    want = op.apply(want, v);
                 }
                 let got = c[i * c_row + j];
                 let scale = (0..k).map(|s| (lv[i * l_mn + s * l_k] * rv[s * r_row + j]).abs()).sum::<f32>().max(1.0);
@@ -176,10 +175,16 @@ mod tests {
     }
 
     /// Every block shape (all row counts, one to four vectors, masked tails), strided operands
-    /// and both epilogue kinds, on every instruction set the tests cover.
+    /// and every epilogue, along rows and along columns, on every instruction set the tests cover.
     #[test]
     fn the_kernel_computes_plain_products() {
-        let ops = [(Combine::Add, false), (Combine::Mul, true), (Combine::Add, true)];
+        let ops = [
+            (Combine::Add, false),
+            (Combine::Mul, true),
+            (Combine::SubtractedFrom, true),
+            (Combine::Subtract, false),
+            (Combine::Add, true),
+        ];
         for isa in covered() {
             for (p, q, k) in [(1, 1, 1), (7, 20, 20), (13, 40, 3), (76, 76, 20), (375, 20, 40), (6, 64, 5), (5, 65, 2), (12, 130, 7)] {
                 // L strided: row i, column j at 2·(i + j·p).
@@ -205,7 +210,8 @@ mod tests {
             for _ in 0..300 {
                 let (p, q, k) = (1 + next(20), 1 + next(200), 1 + next(70));
                 let (l_mn, l_k) = if next(2) == 0 { (k + next(3), 1) } else { (1, p + next(3)) };
-                let ops: Vec<_> = (0..next(4)).map(|_| (if next(2) == 0 { Combine::Add } else { Combine::Mul }, next(2) == 0)).collect();
+                let combine = [Combine::Add, Combine::Mul, Combine::SubtractedFrom, Combine::Subtract];
+                let ops: Vec<_> = (0..next(4)).map(|_| (combine[next(4)], next(2) == 0)).collect();
                 check(isa, p, q, k, l_mn, l_k, next(5), next(5), &ops);
                 checked += 1;
             }

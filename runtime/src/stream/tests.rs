@@ -61,3 +61,54 @@ fn pruned_frames_are_dropped_unread_and_misuse_is_an_error() {
     s.reset();
     assert_eq!(s.received(), 0);
 }
+
+/// A provisional answer leaves the touch going; with every frame in it is the touch's answer;
+/// before the first whole token it is a typed error.
+#[test]
+fn a_peek_reads_the_touch_so_far_and_leaves_it_going() {
+    let c = Classifier::load(golden("model.onnx")).unwrap();
+    let (_, x) = read_npy(&golden("input.npy")).unwrap();
+    let mut s = c.session().unwrap();
+    assert!(matches!(s.peek(), Err(Error::NoTokenYet { tubelet: 1 })));
+    let mut changed = false;
+    let mut last: Option<Prediction> = None;
+    for t in 0..75 {
+        s.push_frame(&frame(&x, 2, t)).unwrap();
+        let peek = s.peek().unwrap();
+        assert_eq!((peek.frames, s.received(), peek.stop), (t + 1, t + 1, false), "the golden file has no stopping rule");
+        assert_eq!(s.peek().unwrap().prediction.probabilities, peek.prediction.probabilities, "peeking changes nothing");
+        changed |= last.is_some_and(|l| l.probabilities != peek.prediction.probabilities);
+        last = Some(peek.prediction);
+    }
+    assert!(changed, "each token moves the provisional answer");
+    let finished = s.finish().unwrap();
+    assert_eq!(last.unwrap().probabilities, finished.probabilities, "with every frame in, a peek is the answer");
+}
+
+/// A file exported before format 1.1 has no key bias: it classifies and streams as before, and
+/// a peek says why it cannot answer.
+#[test]
+fn a_file_without_the_key_bias_gives_no_provisional_answer() {
+    use prost::Message;
+    let bytes = std::fs::read(golden("model.onnx")).unwrap();
+    let mut model = crate::onnx::Model::decode(&bytes[..]).unwrap();
+    for node in &mut model.graph.as_mut().unwrap().node {
+        for name in node.input.iter_mut().chain(node.output.iter_mut()) {
+            if name == TOKEN_BIAS {
+                *name = "no_seam".into();
+            }
+        }
+    }
+    model.metadata_props.retain(|e| e.key != pvt3_format::keys::DIGEST);
+    let digest = pvt3_format::digest(&model.encode_to_vec()).unwrap();
+    model.metadata_props.push(crate::onnx::Entry { key: pvt3_format::keys::DIGEST.into(), value: digest });
+    let old = Classifier::from_bytes(&model.encode_to_vec(), "old.onnx").unwrap();
+    let (_, x) = read_npy(&golden("input.npy")).unwrap();
+    let mut s = old.session().unwrap();
+    for t in 0..75 {
+        s.push_frame(&frame(&x, 0, t)).unwrap();
+    }
+    assert!(matches!(s.peek(), Err(Error::NoPrefixes)));
+    let expected = Classifier::load(golden("model.onnx")).unwrap().classify(&x[..4500]).unwrap();
+    assert_eq!(s.finish().unwrap().probabilities, expected.probabilities);
+}
