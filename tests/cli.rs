@@ -95,6 +95,45 @@ fn train_then_eval_agree_on_the_test_accuracy() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
+/// Training for provisional answers: the run calibrates its stopping rule on the validation
+/// fold, `eval --anytime` reports the touch share against accuracy on the run's own data, and
+/// the exported file carries the rule for the runtime.
+#[test]
+fn prefix_training_calibrates_a_stopping_rule_that_the_file_carries() {
+    let dir = scratch("anytime");
+    let data = icub_slice(&dir, 12);
+    let run = dir.join("run");
+    let onnx = dir.join("run.onnx");
+    let (d, r) = (data.to_str().unwrap(), run.to_str().unwrap());
+    let mut args = vec!["train", "--data", d, "--out", r, "--epochs", "2", "--prefix-training", "0.5", "--export", onnx.to_str().unwrap()];
+    args.extend(SMALL);
+    ok(&args);
+    let provenance: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(run.join("model/provenance.json")).unwrap()).unwrap();
+    let stopping = &provenance["stopping"];
+    let threshold = stopping["threshold"].as_f64().unwrap() as f32;
+    assert!(threshold > 0.0 && threshold <= 1.0, "{stopping}");
+    assert!(stopping["accuracy"].as_f64().unwrap() >= stopping["full_accuracy"].as_f64().unwrap() - 0.005 - 1e-12, "{stopping}");
+    // The run's own data by default (no --data).
+    let table = ok(&["eval", r, "--anytime"]);
+    assert!(
+        table.contains("provisional answers on") && table.contains("100%") && table.contains("stopping rule: top probability"),
+        "{table}"
+    );
+    let report: serde_json::Value = serde_json::from_str(&ok(&["eval", r, "--anytime", "--json"])).unwrap();
+    let curve = report["curve"].as_array().unwrap();
+    assert_eq!(curve.len(), 10);
+    assert_eq!(curve[9]["tokens"], 75);
+    let eval = ok(&["eval", r]);
+    assert!(eval.contains(&format!("accuracy {:.4}", curve[9]["accuracy"].as_f64().unwrap())), "the whole touch is plain eval: {eval}");
+    assert_eq!(pvt3_runtime::Classifier::load(&onnx).unwrap().stop_threshold(), Some(threshold));
+    let err = fails(&["train", "--data", d, "--out", dir.join("v").to_str().unwrap(), "--model", "vit", "--prefix-training", "0.5"]);
+    assert!(err.contains("--prefix-training: PVT³ models only"), "{err}");
+    let err = fails(&["train", "--data", d, "--out", dir.join("v").to_str().unwrap(), "--prefix-training", "1.5"]);
+    assert!(err.contains("a probability, from 0 to 1"), "{err}");
+    assert!(!dir.join("v").exists(), "refused before training");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
 #[test]
 fn cv_runs_folds_side_by_side_and_resumes_without_retraining() {
     let dir = scratch("cv");

@@ -44,6 +44,15 @@ impl Classifier {
     pub fn forward(&self, x: &Tensor, rng: Option<&mut Rng>) -> Result<Tensor> {
         Ok(self.forward_with_loss(x, rng)?.0)
     }
+
+    /// The PVT³ network, for what only it does (provisional answers from a prefix of the touch).
+    pub fn pvt3(&self, what: &str) -> Result<&Pvt3> {
+        match self {
+            Self::Pvt3(m) => Ok(m),
+            Self::Vit(_) => Err(crate::Error::Config(format!("{what}: PVT³ models only, and this is a ViT"))),
+            Self::Raec(_) => Err(crate::Error::Config(format!("{what}: PVT³ models only, and this is a RAEC"))),
+        }
+    }
 }
 
 #[cfg(test)]

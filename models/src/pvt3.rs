@@ -75,15 +75,43 @@ impl Pvt3 {
 
     /// Logits `[b, classes]`. Pass an `rng` to train (dropout on), `None` to evaluate.
     pub fn forward(&self, x: &Tensor, mut rng: Option<&mut Rng>) -> Result<Tensor> {
+        let sequence = self.sequence(x, rng.as_deref_mut())?;
+        self.classify_sequence(&sequence, rng)
+    }
+
+    /// Logits `[b, classes]` from the first `tokens` temporal tokens of each window alone: the
+    /// touch so far, as the runtime's `Session::peek` answers it (the f64 reference's
+    /// `forward_prefix`). The temporal transformer runs over the CLS token and those.
+    pub fn forward_prefix(&self, x: &Tensor, tokens: usize, mut rng: Option<&mut Rng>) -> Result<Tensor> {
+        let sequence = self.sequence(x, rng.as_deref_mut())?;
+        self.classify_sequence(&self.prefix(&sequence, tokens)?, rng)
+    }
+
+    /// The first `tokens` temporal tokens of a sequence from [`Self::sequence`], with its CLS token.
+    pub fn prefix(&self, sequence: &Tensor, tokens: usize) -> Result<Tensor> {
+        let t = self.cfg.time_tokens();
+        if tokens == 0 || tokens > t {
+            return Err(crate::Error::InputShape { got: vec![tokens], expected: format!("1 to {t} temporal tokens") });
+        }
+        Ok(sequence.narrow(1, 0, tokens + 1)?)
+    }
+
+    /// The temporal transformer's input `[b, 1 + time_tokens, dim]`: the CLS token, then each
+    /// temporal token's spatial encoding.
+    pub fn sequence(&self, x: &Tensor, mut rng: Option<&mut Rng>) -> Result<Tensor> {
         let patches = self.patchify(x)?;
         let (b, t, n, _) = patches.dims4()?;
         let d = self.cfg.dim;
         let tokens = if composed_ops() { self.embed_composed(&patches)? } else { self.embed(&patches)? };
         let tokens = self.dropout.forward(&tokens, rng.as_deref_mut())?;
-        let frames = self.space.forward_cls(&tokens.reshape((b * t, n + 1, d))?, rng.as_deref_mut())?;
+        let frames = self.space.forward_cls(&tokens.reshape((b * t, n + 1, d))?, rng)?;
         let cls = self.temporal_cls.broadcast_as((b, 1, d))?;
-        let sequence = Tensor::cat(&[&cls, &frames.reshape((b, t, d))?], 1)?;
-        let pooled = self.temporal.forward_cls(&sequence, rng)?;
+        Ok(Tensor::cat(&[&cls, &frames.reshape((b, t, d))?], 1)?)
+    }
+
+    /// Logits `[b, classes]` from a temporal sequence (or a prefix of one).
+    pub fn classify_sequence(&self, sequence: &Tensor, rng: Option<&mut Rng>) -> Result<Tensor> {
+        let pooled = self.temporal.forward_cls(sequence, rng)?;
         Ok(self.head.forward(&pooled)?)
     }
 

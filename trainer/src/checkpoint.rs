@@ -30,6 +30,10 @@ pub struct Provenance {
     /// The pruning applied before fine-tuning, if any.
     #[serde(default)]
     pub pruning: Option<pvt3_models::prune::PruneSpec>,
+    /// The stopping rule of provisional answers, calibrated on the validation fold when the
+    /// run finished (PVT³ only).
+    #[serde(default)]
+    pub stopping: Option<crate::anytime::Stopping>,
 }
 
 /// A baked model with everything the exporter needs: what `pvt3 bake` writes.
@@ -64,7 +68,7 @@ impl BakedFile {
         pvt3_export::Metadata {
             classes: self.classes.clone(),
             provenance: serde_json::to_value(&self.provenance).expect("plain data serialises"),
-            stop_threshold: None,
+            stop_threshold: self.provenance.stopping.as_ref().map(|s| s.threshold),
         }
     }
 }

@@ -1,6 +1,7 @@
 //! The pvt3 trainer: data sets, normalisation, training, cross-validation, checkpoints and
 //! evaluation for PVT³. The `pvt3` binary is a thin command line over this library.
 
+pub mod anytime;
 pub mod bench;
 pub mod checkpoint;
 pub mod cv;

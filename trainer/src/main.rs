@@ -7,7 +7,8 @@ use anyhow::{bail, Context, Result};
 use clap::{Parser, Subcommand};
 use indicatif::{MultiProgress, ProgressBar, ProgressStyle};
 use pvt3_models::prune::{PruneSpec, Scope};
-use pvt3_models::{Architecture, Config};
+use pvt3_models::{Architecture, Classifier, Config};
+use pvt3_trainer::anytime;
 use pvt3_trainer::bench::train_speed;
 use pvt3_trainer::checkpoint::{self, BakedFile};
 use pvt3_trainer::cv::cross_validate;
@@ -172,11 +173,19 @@ enum Command {
     Eval {
         /// Checkpoint directory (or a run directory holding model/).
         checkpoint: PathBuf,
-        #[arg(long, default_value = "data/icub20.npz")]
-        data: PathBuf,
+        /// The data set; by default the one the checkpoint was trained on.
+        #[arg(long)]
+        data: Option<PathBuf>,
         /// Which samples: a fold number, or `all`.
         #[arg(long, default_value = "4")]
         fold: String,
+        /// Provisional answers (PVT³): accuracy from the first 10 %, 20 % … of each touch, and
+        /// what the checkpoint's stopping rule (calibrated on its validation fold) does here.
+        #[arg(long)]
+        anytime: bool,
+        /// With --anytime: print one JSON object instead of the table.
+        #[arg(long, requires = "anytime")]
+        json: bool,
     },
     /// Benchmarks (see docs/training-speed.md).
     #[command(subcommand)]
@@ -351,7 +360,7 @@ fn main() -> Result<()> {
                 );
             }
         }
-        Command::Eval { checkpoint, data, fold } => eval(&checkpoint, &data, &fold)?,
+        Command::Eval { checkpoint, data, fold, anytime, json } => eval(&checkpoint, data.as_deref(), &fold, anytime, json)?,
         Command::Export { model, out } => export_onnx(&model, &out)?,
         Command::Bench(Bench::Train { preset, steps, composed, options }) => {
             pvt3_models::transformer::use_composed_ops(composed);
@@ -477,6 +486,13 @@ fn prepare(args: &ModelArgs) -> Result<Prepared> {
     cfg.classes = data.classes();
     cfg = apply_overrides(cfg, &args.overrides)?;
     cfg.validate()?;
+    let prefix = args.options.prefix_training;
+    if !(0.0..=1.0).contains(&prefix) {
+        bail!("--prefix-training {prefix}: a probability, from 0 to 1");
+    }
+    if prefix > 0.0 {
+        cfg.require_pvt3("--prefix-training")?;
+    }
     let classes = match &args.class_names {
         Some(path) => {
             let text = std::fs::read_to_string(path).with_context(|| format!("reading class names from {}", path.display()))?;
@@ -509,9 +525,11 @@ fn apply_overrides(cfg: Config, overrides: &[String]) -> Result<Config> {
     serde_json::from_value(value).context("the overridden configuration does not parse")
 }
 
-fn eval(checkpoint_path: &Path, data_path: &Path, fold: &str) -> Result<()> {
+fn eval(checkpoint_path: &Path, data_path: Option<&Path>, fold: &str, anytime: bool, json: bool) -> Result<()> {
     let (meta, model, _) = checkpoint::load(checkpoint_path)?;
-    let data = Dataset::load(data_path, meta.provenance.seed)?;
+    let own = PathBuf::from(&meta.provenance.data);
+    let data_path = data_path.unwrap_or(&own);
+    let data = Dataset::load(data_path, meta.provenance.seed).with_context(|| format!("loading {}", data_path.display()))?;
     data.check_fits(&meta.config)?;
     let indices: Vec<usize> = if fold == "all" {
         (0..data.len()).collect()
@@ -523,10 +541,13 @@ fn eval(checkpoint_path: &Path, data_path: &Path, fold: &str) -> Result<()> {
         bail!("fold {fold} of {} holds no samples", data_path.display());
     }
     let samples = Samples::new(&data, &indices, &meta.normalization);
+    if anytime {
+        return eval_anytime(&meta, &model, &samples, fold, json);
+    }
     let e = evaluate(&model, &samples)?;
     println!("{} samples (fold {fold}): accuracy {:.4}, loss {:.4}", samples.len(), e.accuracy, e.loss);
-    if fold != "all" && fold.parse::<usize>().ok() == Some(TEST_FOLD) {
-        println!("(the checkpoint's own record: test accuracy {:?})", meta.provenance.test_accuracy);
+    if let (true, Some(test)) = (fold.parse::<usize>().ok() == Some(TEST_FOLD), meta.provenance.test_accuracy) {
+        println!("(the checkpoint's own record: test accuracy {test:.4})");
     }
     println!("{:<24} {:>8} {:>8}", "class", "samples", "accuracy");
     for (c, name) in meta.classes.iter().enumerate() {
@@ -536,6 +557,53 @@ fn eval(checkpoint_path: &Path, data_path: &Path, fold: &str) -> Result<()> {
         }
         let ok = rows.iter().filter(|&&r| e.predictions[r] as usize == c).count();
         println!("{:<24} {:>8} {:>8.3}", name, rows.len(), ok as f64 / rows.len() as f64);
+    }
+    Ok(())
+}
+
+/// `pvt3 eval --anytime`: accuracy against the share of the touch, and the stopping rule.
+fn eval_anytime(meta: &checkpoint::Meta, model: &Classifier, samples: &Samples, fold: &str, json: bool) -> Result<()> {
+    let prefixes = anytime::prefixes(model.pvt3("pvt3 eval --anytime")?, samples)?;
+    let t = prefixes.tokens;
+    let curve: Vec<(f64, usize, f64)> = (1..=10)
+        .map(|tenth| {
+            let k = (tenth * t).div_ceil(10).max(1);
+            (tenth as f64 / 10.0, k, prefixes.accuracy_at(k))
+        })
+        .collect();
+    let here = meta.provenance.stopping.as_ref().map(|s| prefixes.stop_at(s.threshold));
+    if json {
+        let curve: Vec<_> = curve.iter().map(|(share, k, acc)| serde_json::json!({"share": share, "tokens": k, "accuracy": acc})).collect();
+        let out = serde_json::json!({
+            "samples": samples.len(), "fold": fold, "tokens": t, "curve": curve,
+            "calibrated": meta.provenance.stopping, "stopping": here,
+        });
+        println!("{out}");
+        return Ok(());
+    }
+    println!("provisional answers on {} samples (fold {fold}), {t} temporal tokens per touch", samples.len());
+    println!("{:>8} {:>7} {:>9}", "touch", "tokens", "accuracy");
+    for (share, k, acc) in &curve {
+        println!("{:>7.0}% {k:>7} {acc:>9.4}", share * 100.0);
+    }
+    match (&meta.provenance.stopping, here) {
+        (Some(cal), Some(s)) => {
+            println!(
+                "stopping rule: top probability ≥ {:.4} (validation fold {}: accuracy {:.4} against {:.4} for the whole touch, {:.0} % of the touch used)",
+                cal.threshold,
+                meta.provenance.val_fold,
+                cal.accuracy,
+                cal.full_accuracy,
+                cal.mean_share * 100.0
+            );
+            println!(
+                "here: accuracy {:.4} against {:.4} for the whole touch, {:.1} % of the touch used on average",
+                s.accuracy,
+                s.full_accuracy,
+                s.mean_share * 100.0
+            );
+        }
+        _ => println!("no stopping rule: the checkpoint was trained before provisional answers existed"),
     }
     Ok(())
 }

@@ -56,6 +56,12 @@ pub struct TrainOptions {
     #[arg(long, default_value_t = 0.0)]
     #[serde(default)]
     pub random_prune: f64,
+    /// Training for provisional answers (PVT³ only): with this probability a batch sees only its
+    /// first k temporal tokens, k uniform from 1 to all, so that the touch so far classifies
+    /// well (`Session::peek`, `pvt3 eval --anytime`). 0 trains on whole windows only.
+    #[arg(long, default_value_t = 0.0)]
+    #[serde(default)]
+    pub prefix_training: f64,
     /// Hold mask entries that are zero at the start at zero (fine-tuning after pruning).
     #[arg(skip)]
     #[serde(default)]

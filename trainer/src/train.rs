@@ -18,7 +18,7 @@ use pvt3_models::prune::PruneSpec;
 use pvt3_models::{Classifier, Config, Rng};
 use serde::{Deserialize, Serialize};
 
-use crate::checkpoint::{self, read_json, write_json, Meta, Provenance};
+use crate::checkpoint::{self, read_json, write_json, write_json_atomically, Meta, Provenance};
 use crate::data::{Dataset, Split};
 use crate::evaluate::{evaluate, Samples};
 use crate::optim::{is_weight_matrix, AdamW};
@@ -143,7 +143,13 @@ impl Learner {
                 saved.push(full);
             }
         }
-        let (logits, extra) = self.model.forward_with_loss(x, Some(rng))?;
+        let (logits, extra) = if opts.prefix_training > 0.0 && rng.uniform() < opts.prefix_training as f32 {
+            let pvt3 = self.model.pvt3("--prefix-training")?;
+            let tokens = 1 + rng.below(pvt3.config().time_tokens());
+            (pvt3.forward_prefix(x, tokens, Some(rng))?, None)
+        } else {
+            self.model.forward_with_loss(x, Some(rng))?
+        };
         let mut loss = smoothed_cross_entropy(&logits, y, opts.label_smoothing)?;
         if let Some(extra) = extra {
             loss = (loss + extra)?;
@@ -266,6 +272,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
             test_accuracy,
             options: opts.clone(),
             pruning: spec.pruning.clone(),
+            stopping: None,
         },
     };
 
@@ -333,6 +340,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
         ));
     }
     let best = run.best.clone().ok_or_else(|| Error::Usage("no epoch was trained (epochs = 0)".into()))?;
+    calibrate_stopping(&out.join("model"), &val_set)?;
     let result = RunResult {
         val_fold: spec.val_fold,
         seed: opts.seed,
@@ -344,6 +352,16 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
     };
     write_json(&result_path, &result)?;
     Ok(Some(result))
+}
+
+/// Calibrates the stopping rule of provisional answers ([`crate::anytime`]) for the PVT³
+/// checkpoint in `dir` on the validation samples, into its provenance (which the exporter
+/// writes into the file). Other networks give no provisional answers.
+fn calibrate_stopping(dir: &Path, val_set: &Samples) -> Result<()> {
+    let (mut meta, model, _) = checkpoint::load(dir)?;
+    let Ok(pvt3) = model.pvt3("provisional answers") else { return Ok(()) };
+    meta.provenance.stopping = Some(crate::anytime::prefixes(pvt3, val_set)?.calibrate());
+    write_json_atomically(&dir.join("provenance.json"), &meta.provenance)
 }
 
 /// Keeps the first `epochs` lines of a metrics log (a crash may have left one more).

@@ -85,6 +85,15 @@ fn check_against_parent(cfg: Config, prune_channels: bool, prune_frames: bool) {
     let got = reference::forward(&baked, &x, b).unwrap();
     let err = worst(&got, expected.iter().map(|v| *v as f64));
     assert!(err <= 1e-5, "{cfg:?} channels {prune_channels} frames {prune_frames}: worst {err:e}");
+    // The touch so far (pruned tokens as their constants) agrees too.
+    let t = cfg.time_tokens();
+    for tokens in [1, 2, t / 3, t - 1] {
+        let expected = parent.forward_prefix(&input, tokens, None).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap();
+        let got = reference::forward_prefix(&baked, &x, b, tokens).unwrap();
+        let err = worst(&got, expected.iter().map(|v| *v as f64));
+        assert!(err <= 1e-5, "{tokens} of {t} tokens, channels {prune_channels} frames {prune_frames}: worst {err:e}");
+    }
+    assert!(parent.forward_prefix(&input, 0, None).is_err() && reference::forward_prefix(&baked, &x, b, t + 1).is_err());
 }
 
 #[test]

@@ -28,6 +28,7 @@ fn the_runtime_stays_finite_and_close_to_the_f64_reference_on_extreme_inputs() {
             test_accuracy: None,
             options: crate::options::TrainOptions::default(),
             pruning: None,
+            stopping: None,
         },
     };
     let scratch = std::env::temp_dir().join(format!("pvt3-stress-test-{}", std::process::id()));

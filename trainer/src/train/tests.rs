@@ -71,6 +71,7 @@ fn options(epochs: usize) -> TrainOptions {
         l1: 0.0,
         mask_lr: 1.0,
         random_prune: 0.0,
+        prefix_training: 0.0,
         hold_pruned: false,
     }
 }
@@ -140,6 +141,31 @@ fn a_seed_fixes_the_run_and_a_paused_run_resumes_exactly() {
     assert_eq!(done, rb, "resuming a finished run returns its result");
     std::fs::remove_dir_all(a).unwrap();
     std::fs::remove_dir_all(b).unwrap();
+}
+
+/// Training on prefixes draws from the run's own generator: a paused run still resumes bit for
+/// bit, the run differs from one on whole windows, and the finished run carries a calibrated
+/// stopping rule.
+#[test]
+fn prefix_training_resumes_exactly_and_calibrates_a_stopping_rule() {
+    let data = tiny_data();
+    let prefixed = |pause| RunSpec { options: TrainOptions { prefix_training: 0.5, ..options(4) }, ..spec(&data, 4, pause) };
+    let (a, b, whole) = (out_dir("prefix-a"), out_dir("prefix-b"), out_dir("prefix-whole"));
+    train(&prefixed(None), &a, false, &ProgressBar::hidden()).unwrap().unwrap();
+    assert!(train(&prefixed(Some(2)), &b, false, &ProgressBar::hidden()).unwrap().is_none());
+    train(&prefixed(None), &b, true, &ProgressBar::hidden()).unwrap().unwrap();
+    train(&spec(&data, 4, None), &whole, false, &ProgressBar::hidden()).unwrap().unwrap();
+    let weights = |d: &PathBuf| std::fs::read(d.join("model/weights.safetensors")).unwrap();
+    assert_eq!(metrics(&a), metrics(&b));
+    assert_eq!(weights(&a), weights(&b), "identical weights, bit for bit");
+    assert_ne!(metrics(&a), metrics(&whole), "prefixes change the training");
+    let (_, meta) = crate::checkpoint::load_meta(&a).unwrap();
+    let stopping = meta.provenance.stopping.expect("a calibrated stopping rule");
+    assert!(stopping.threshold > 0.0 && stopping.threshold <= 1.0 && stopping.mean_share <= 1.0, "{stopping:?}");
+    assert!(stopping.accuracy >= stopping.full_accuracy - crate::anytime::MAX_LOSS - 1e-12, "{stopping:?}");
+    for d in [a, b, whole] {
+        std::fs::remove_dir_all(d).unwrap();
+    }
 }
 
 #[test]

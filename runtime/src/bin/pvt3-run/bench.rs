@@ -109,6 +109,21 @@ pub fn bench(path: &str, threads: usize, seconds: f64) -> Result<serde_json::Val
         session.finish()?;
         finish.push(s.elapsed().as_secs_f64());
     }
+    // Provisional answers at 10 %, 50 % and 100 % of a touch's temporal tokens (`Session::peek`).
+    let tokens = frames / c.tubelet();
+    let mut peek_us = serde_json::Map::new();
+    for percent in [10, 50, 100] {
+        let k = (percent * tokens).div_ceil(100).max(1);
+        for frame in &touch[..k * c.tubelet()] {
+            session.push_frame(frame)?;
+        }
+        if let Err(pvt3_runtime::Error::NoPrefixes) = session.peek() {
+            break; // a file exported before provisional answers existed
+        }
+        let (median, _) = quantiles(sample(budget, 20, || session.peek().map(drop))?);
+        peek_us.insert(format!("stream_peek_{percent}pct_median_us"), json!(median));
+        session.reset();
+    }
     let touches = finish.len() as f64;
     let per_touch = (kept.iter().sum::<f64>() + dropped.iter().sum::<f64>() + finish.iter().sum::<f64>()) / touches * 1e6;
     let (kept_median, kept_p99) = quantiles(kept);
@@ -136,5 +151,6 @@ pub fn bench(path: &str, threads: usize, seconds: f64) -> Result<serde_json::Val
         "stream_end_of_touch_median_us": finish_median,
         "stream_end_of_touch_p99_us": finish_p99,
         "stream_compute_per_touch_us": per_touch,
+        "stream_peek_us": peek_us,
     }))
 }
