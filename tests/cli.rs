@@ -152,6 +152,39 @@ fn cv_runs_folds_side_by_side_and_resumes_without_retraining() {
     let tail = |s: &str| s.lines().last().unwrap().split(" (wall").next().unwrap().to_string();
     assert_eq!(tail(&first), tail(&second));
     assert_eq!(weights, std::fs::read(out.join("seed0/fold3/model/weights.safetensors")).unwrap(), "not retrained");
+
+    // One run of another seed as its own job into the same directory, then a report of all.
+    let mut one = vec!["cv", "--data", d, "--out", o, "--epochs", "1", "--only", "seed=1,fold=2"];
+    one.extend(SMALL);
+    let joined = ok(&one);
+    assert!(joined.contains("over 5 runs"), "{joined}");
+    std::fs::create_dir_all(out.join("seed1/fold0")).unwrap(); // a job still training
+    let report = ok(&["cv", "--report", o]);
+    assert!(
+        report.contains("over 5 runs") && report.contains("not finished, not counted") && report.contains("95 % confidence"),
+        "{report}"
+    );
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("cv.json")).unwrap()).unwrap();
+    assert_eq!(summary["seeds"], serde_json::json!([0, 1]));
+    assert_eq!(summary["runs"].as_array().unwrap().len(), 5);
+    let err = fails(&["cv", "--data", d, "--out", o, "--only", "seed=1,fold=4"]);
+    assert!(err.contains("expected seed=S,fold=K with a validation fold from 0 to 3"), "{err}");
+
+    // Bad directories: nothing finished, runs trained differently, a damaged run. Nothing is deleted.
+    let empty = dir.join("empty");
+    std::fs::create_dir_all(&empty).unwrap();
+    let err = fails(&["cv", "--report", empty.to_str().unwrap()]);
+    assert!(err.contains("no finished run under it"), "{err}");
+    let mut other = vec!["cv", "--data", d, "--out", o, "--epochs", "1", "--lr", "0.01", "--only", "seed=2,fold=0"];
+    other.extend(SMALL);
+    let err = fails(&other);
+    assert!(err.contains("were trained differently"), "{err}");
+    std::fs::remove_dir_all(out.join("seed2")).unwrap();
+    let result = out.join("seed0/fold1/result.json");
+    std::fs::write(&result, "{ half").unwrap();
+    let err = fails(&["cv", "--report", o]);
+    assert!(err.contains("seed0/fold1 is damaged or half written"), "{err}");
+    assert!(out.join("seed0/fold1/model/weights.safetensors").exists() && out.join("seed1/fold2/result.json").exists(), "nothing deleted");
     std::fs::remove_dir_all(dir).unwrap();
 }
 

@@ -91,9 +91,11 @@ pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
     std::fs::write(path, text + "\n").map_err(Error::io(path))
 }
 
-/// Writes JSON to a temporary file and renames it over `path`.
+/// Writes JSON to a temporary file and renames it over `path`. The temporary file is this
+/// process's own, so that jobs writing the same file at once (`cv --only` in a job array) each
+/// rename a whole one.
 pub fn write_json_atomically<T: Serialize>(path: &Path, value: &T) -> Result<()> {
-    let tmp = sibling(path, ".tmp");
+    let tmp = sibling(path, &format!(".{}.tmp", std::process::id()));
     write_json(&tmp, value)?;
     std::fs::rename(&tmp, path).map_err(Error::io(path))
 }

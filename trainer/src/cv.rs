@@ -11,11 +11,11 @@ use std::sync::Mutex;
 use indicatif::{MultiProgress, ProgressBar};
 use serde::{Deserialize, Serialize};
 
-use crate::checkpoint::write_json;
+use crate::checkpoint::{read_json, write_json_atomically};
 use crate::data::TEST_FOLD;
 use crate::prune::{prune_and_fine_tune, PruneStage};
 use crate::train::{train, RunResult, RunSpec};
-use crate::Result;
+use crate::{Error, Result};
 
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct CvSummary {
@@ -44,6 +44,9 @@ pub struct CvSummary {
     pub pruning: Option<PruneStage>,
     /// Training time summed over runs (they may have run side by side).
     pub train_seconds: f64,
+    /// Run directories found still training by `report` (not counted).
+    #[serde(default)]
+    pub unfinished: Vec<String>,
 }
 
 /// One fold's results: the trained run and, with pruning, its pruned and fine-tuned successor.
@@ -115,6 +118,22 @@ pub fn cross_validate(
     style: &indicatif::ProgressStyle,
 ) -> Result<Option<CvSummary>> {
     let work: Vec<(u64, usize)> = seeds.iter().flat_map(|&s| (0..TEST_FOLD).map(move |k| (s, k))).collect();
+    run_all(spec, stage, &work, out, resume, jobs, progress, style)
+}
+
+/// Trains the (seed, validation fold) pairs of `work` under `out`, `jobs` at a time, and
+/// summarises them. `None`: the runs paused.
+#[allow(clippy::too_many_arguments)]
+pub fn run_all(
+    spec: &RunSpec,
+    stage: Option<&PruneStage>,
+    work: &[(u64, usize)],
+    out: &Path,
+    resume: bool,
+    jobs: usize,
+    progress: &MultiProgress,
+    style: &indicatif::ProgressStyle,
+) -> Result<Option<CvSummary>> {
     let next = AtomicUsize::new(0);
     let results: Mutex<Vec<Option<Result<Option<FoldResult>>>>> = Mutex::new(work.iter().map(|_| None).collect());
     std::thread::scope(|scope| {
@@ -149,6 +168,14 @@ pub fn cross_validate(
             None => return Ok(None),
         }
     }
+    let seeds: Vec<u64> = work.iter().map(|w| w.0).collect::<std::collections::BTreeSet<_>>().into_iter().collect();
+    let summary = summarize(spec.data.path.display().to_string(), &seeds, runs, pruned_runs, stage.cloned());
+    write_json_atomically(&out.join("cv.json"), &summary)?;
+    Ok(Some(summary))
+}
+
+/// The summary of finished runs (each seed's folds, and with pruning their pruned successors).
+fn summarize(data: String, seeds: &[u64], runs: Vec<RunResult>, pruned_runs: Vec<RunResult>, stage: Option<PruneStage>) -> CvSummary {
     let pruned_tests: Vec<f64> = pruned_runs.iter().map(|r| r.test_accuracy).collect();
     let pruned_stats = (!pruned_tests.is_empty()).then(|| mean_std(&pruned_tests));
     let tests: Vec<f64> = runs.iter().map(|r| r.test_accuracy).collect();
@@ -156,10 +183,10 @@ pub fn cross_validate(
     let (mean_test_accuracy, std_test_accuracy) = mean_std(&tests);
     let seed_means: Vec<f64> =
         seeds.iter().map(|&s| mean_std(&runs.iter().filter(|r| r.seed == s).map(|r| r.test_accuracy).collect::<Vec<_>>()).0).collect();
-    let summary = CvSummary {
+    CvSummary {
         ci95_test_accuracy: ci95(&seed_means),
         seed_means,
-        data: spec.data.path.display().to_string(),
+        data,
         seeds: seeds.to_vec(),
         mean_test_accuracy,
         std_test_accuracy,
@@ -169,10 +196,91 @@ pub fn cross_validate(
         pruned_mean_test_accuracy: pruned_stats.map(|s| s.0),
         pruned_std_test_accuracy: pruned_stats.map(|s| s.1),
         pruned_runs,
-        pruning: stage.cloned(),
+        pruning: stage,
+        unfinished: Vec::new(),
+    }
+}
+
+/// What a run was trained with, besides its seed: runs reported together must agree on it.
+#[derive(PartialEq)]
+struct Setup {
+    config: pvt3_models::Config,
+    data: String,
+    options: crate::options::TrainOptions,
+    pruning: Option<PruneStage>,
+}
+
+/// Reports every finished run under `out` (`seed{S}/fold{K}/`, as `cross_validate` and separate
+/// `--only` jobs write them) into `out/cv.json`, trains nothing and deletes nothing. Runs still
+/// training are listed as unfinished. Refused: no finished run, runs trained differently (data,
+/// configuration, options or pruning), a run whose files are damaged or half written.
+pub fn report(out: &Path) -> Result<CvSummary> {
+    let refuse = |reason: String| Error::Usage(format!("cannot report {}: {reason}", out.display()));
+    let entries = |dir: &Path, prefix: &str| -> Result<Vec<(u64, std::path::PathBuf)>> {
+        let mut found = Vec::new();
+        for entry in std::fs::read_dir(dir).map_err(Error::io(dir))? {
+            let path = entry.map_err(Error::io(dir))?.path();
+            let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+            if let Some(n) = name.strip_prefix(prefix).and_then(|n| n.parse::<u64>().ok()) {
+                found.push((n, path));
+            }
+        }
+        found.sort();
+        Ok(found)
     };
-    write_json(&out.join("cv.json"), &summary)?;
-    Ok(Some(summary))
+    let (mut runs, mut pruned_runs, mut unfinished) = (Vec::new(), Vec::new(), Vec::new());
+    let mut setup: Option<(Setup, std::path::PathBuf)> = None;
+    for (seed, seed_dir) in entries(out, "seed")? {
+        for (fold, dir) in entries(&seed_dir, "fold")? {
+            let damaged = |e: Error| refuse(format!("{} is damaged or half written ({e})", dir.display()));
+            if !dir.join("result.json").exists() {
+                unfinished.push(dir.display().to_string());
+                continue;
+            }
+            let run: RunResult = read_json(&dir.join("result.json")).map_err(damaged)?;
+            if (run.seed, run.val_fold as u64) != (seed, fold) {
+                return Err(refuse(format!("{} holds the run of seed {} fold {}", dir.display(), run.seed, run.val_fold)));
+            }
+            let (_, meta) = crate::checkpoint::load_meta(&dir.join("model")).map_err(damaged)?;
+            let pruned = dir.join("pruned");
+            let (pruned_run, pruning) = match pruned.join("result.json").exists() {
+                true => {
+                    let (_, pmeta) = crate::checkpoint::load_meta(&pruned).map_err(damaged)?;
+                    let o = &pmeta.provenance.options;
+                    let stage = pmeta.provenance.pruning.map(|spec| PruneStage { spec, epochs: o.epochs, lr: o.lr });
+                    (Some(read_json::<RunResult>(&pruned.join("result.json")).map_err(damaged)?), stage)
+                }
+                false if pruned.exists() => {
+                    unfinished.push(pruned.display().to_string());
+                    continue;
+                }
+                false => (None, None),
+            };
+            let options = crate::options::TrainOptions { seed: 0, ..meta.provenance.options };
+            let this = Setup { config: meta.config, data: meta.provenance.data, options, pruning };
+            match &setup {
+                None => setup = Some((this, dir.clone())),
+                Some((first, first_dir)) if *first != this => {
+                    return Err(refuse(format!(
+                        "{} and {} were trained differently (data, configuration, options or pruning)",
+                        first_dir.display(),
+                        dir.display()
+                    )))
+                }
+                Some(_) => {}
+            }
+            runs.push(run);
+            pruned_runs.extend(pruned_run);
+        }
+    }
+    let Some((setup, _)) = setup else {
+        return Err(refuse(format!("no finished run under it (seed*/fold*/result.json; {} unfinished)", unfinished.len())));
+    };
+    let seeds: Vec<u64> = runs.iter().map(|r| r.seed).collect::<std::collections::BTreeSet<_>>().into_iter().collect();
+    let mut summary = summarize(setup.data, &seeds, runs, pruned_runs, setup.pruning);
+    summary.unfinished = unfinished;
+    write_json_atomically(&out.join("cv.json"), &summary)?;
+    Ok(summary)
 }
 
 #[cfg(test)]

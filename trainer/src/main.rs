@@ -11,7 +11,7 @@ use pvt3_models::{Architecture, Classifier, Config};
 use pvt3_trainer::anytime;
 use pvt3_trainer::bench::train_speed;
 use pvt3_trainer::checkpoint::{self, BakedFile};
-use pvt3_trainer::cv::cross_validate;
+use pvt3_trainer::cv::{self, cross_validate};
 use pvt3_trainer::data::{Dataset, TEST_FOLD};
 use pvt3_trainer::evaluate::{evaluate, Samples};
 use pvt3_trainer::info::report;
@@ -138,6 +138,15 @@ enum Command {
         /// (OUT/seed*/fold*/pruned), and both results are reported.
         #[command(flatten)]
         prune: PruneArgs,
+        /// Train this one run alone, `seed=S,fold=K` (one job of a job array, e.g.
+        /// bench/slurm/cv.sbatch, writing into the shared OUT), then report every finished run
+        /// there. Instead of --seeds.
+        #[arg(long, value_parser = parse_only, conflicts_with = "seeds")]
+        only: Option<(u64, usize)>,
+        /// Train nothing: report the finished runs under this directory (cv.json and the table),
+        /// whoever trained them. Runs still training are listed, not counted.
+        #[arg(long, value_name = "OUT", conflicts_with_all = ["only", "resume"])]
+        report: Option<PathBuf>,
     },
     /// Prune a trained run by its mask scores, then fine-tune it with the pruned entries held at zero.
     Prune {
@@ -321,18 +330,35 @@ fn main() -> Result<()> {
                 file.baked.config.time_tokens()
             );
         }
-        Command::Cv { model, seeds, out, resume, jobs, prune } => {
-            let prepared = prepare(&model)?;
-            if prune.stage().is_some() {
-                prepared.config.require_pvt3("pruning")?;
-            }
+        Command::Cv { model, seeds, out, resume, jobs, prune, only, report } => {
             let started = Instant::now();
-            let multi = MultiProgress::new();
-            let s = cross_validate(&prepared.spec(&model, 0), prune.stage().as_ref(), &seeds, &out, resume, jobs, &multi, &bar_style())?;
-            let Some(s) = s else {
-                println!("paused; continue with the same command and --resume");
-                return Ok(());
+            let (s, out) = match report {
+                Some(dir) => (cv::report(&dir)?, dir),
+                None => {
+                    let prepared = prepare(&model)?;
+                    if prune.stage().is_some() {
+                        prepared.config.require_pvt3("pruning")?;
+                    }
+                    let multi = MultiProgress::new();
+                    let spec = prepared.spec(&model, 0);
+                    let stage = prune.stage();
+                    let s = match only {
+                        Some(one) => match cv::run_all(&spec, stage.as_ref(), &[one], &out, resume, 1, &multi, &bar_style())? {
+                            Some(_) => Some(cv::report(&out)?),
+                            None => None,
+                        },
+                        None => cross_validate(&spec, stage.as_ref(), &seeds, &out, resume, jobs, &multi, &bar_style())?,
+                    };
+                    let Some(s) = s else {
+                        println!("paused; continue with the same command and --resume");
+                        return Ok(());
+                    };
+                    (s, out)
+                }
             };
+            for dir in &s.unfinished {
+                println!("not finished, not counted: {dir}");
+            }
             println!("{:>6} {:>5} {:>6} {:>8} {:>8} {:>8} {:>12}", "seed", "fold", "epoch", "val", "test", "seconds", "pruned test");
             for (i, r) in s.runs.iter().enumerate() {
                 let pruned = s.pruned_runs.get(i).map_or(String::new(), |p| format!("{:.4}", p.test_accuracy));
@@ -606,4 +632,20 @@ fn eval_anytime(meta: &checkpoint::Meta, model: &Classifier, samples: &Samples, 
         _ => println!("no stopping rule: the checkpoint was trained before provisional answers existed"),
     }
     Ok(())
+}
+
+/// `--only seed=S,fold=K`.
+fn parse_only(text: &str) -> std::result::Result<(u64, usize), String> {
+    let mut seed_fold = (None, None);
+    for part in text.split(',') {
+        match part.trim().split_once('=') {
+            Some(("seed", v)) => seed_fold.0 = v.parse::<u64>().ok(),
+            Some(("fold", v)) => seed_fold.1 = v.parse::<usize>().ok().filter(|k| *k < TEST_FOLD),
+            _ => return Err(format!("`{part}`: expected seed=S,fold=K")),
+        }
+    }
+    match seed_fold {
+        (Some(s), Some(k)) => Ok((s, k)),
+        _ => Err(format!("`{text}`: expected seed=S,fold=K with a validation fold from 0 to {}", TEST_FOLD - 1)),
+    }
 }
