@@ -213,6 +213,30 @@ fn baselines_train_and_evaluate_but_do_not_export() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
+/// A sensor no preset fits (24 electrodes, 250 frames, 7 classes, like a public BioTac SP slip
+/// set): `train` derives the BioTac layout and says so, and `eval` reads the run's own data.
+#[test]
+fn a_new_sensor_shape_trains_with_a_derived_layout() {
+    let dir = scratch("sensor");
+    let (n, frames) = (70, 250);
+    let labels: Vec<i64> = (0..n).map(|i| i as i64 % 7).collect();
+    let x: Vec<f32> = (0..n * 24 * frames).map(|i| ((i / (24 * frames)) % 7) as f32 + ((i * 7919) % 13) as f32 / 13.0).collect();
+    let path = dir.join("slip.npz");
+    let mut w = NpzWriter::new_compressed(std::fs::File::create(&path).unwrap());
+    w.add_array("x", &ArrayD::from_shape_vec(IxDyn(&[n, 24, 1, frames]), x).unwrap()).unwrap();
+    w.add_array("y", &Array1::from_vec(labels)).unwrap();
+    w.finish().unwrap();
+    let run = dir.join("run");
+    let (d, r) = (path.to_str().unwrap(), run.to_str().unwrap());
+    let out = pvt3(&["train", "--data", d, "--out", r, "--epochs", "1", "--set", "space_depth=1", "--set", "time_depth=1"]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    assert!(stderr.contains("no preset takes samples of 24 × 1 × 250: derived the BioTac layout, one token per 5 frames"), "{stderr}");
+    let eval = ok(&["eval", r, "--fold", "all"]);
+    assert!(eval.contains("70 samples (fold all)") && !eval.contains("Some("), "{eval}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
 #[test]
 fn bad_input_gets_a_clear_error() {
     let dir = scratch("errors");

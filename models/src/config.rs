@@ -169,6 +169,26 @@ impl Config {
         Self { height: 19, width: 1, frames: 400, patch_height: 19, patch_width: 1, tubelet: 10, ..Self::icub20() }
     }
 
+    /// A sensor no preset fits, samples `[height, width, (channels,) frames]`: the BioTac layout,
+    /// which assumes no grid. All channels of a tubelet form one token (one patch covering the
+    /// frame), and the tubelet is the divisor of `frames` nearest (in ratio) to `frames / 40`, so
+    /// that about 40 temporal tokens remain, as in the BioTac preset. The rest is the BioTac
+    /// preset's. `None` for a shape that is not 3 or 4 axes of positive lengths.
+    pub fn for_sensor(sample_shape: &[usize]) -> Option<Self> {
+        let (height, width, channels, frames) = match *sample_shape {
+            [h, w, f] => (h, w, 1, f),
+            [h, w, c, f] => (h, w, c, f),
+            _ => return None,
+        };
+        if [height, width, channels, frames].contains(&0) {
+            return None;
+        }
+        let ideal = frames as f64 / 40.0;
+        let distance = |d: usize| (d as f64 / ideal).ln().abs();
+        let tubelet = (1..=frames).filter(|d| frames.is_multiple_of(*d)).min_by(|a, b| distance(*a).total_cmp(&distance(*b)))?;
+        Some(Self { height, width, channels, frames, patch_height: height, patch_width: width, tubelet, ..Self::biotac20() })
+    }
+
     /// GelSight-style optical tactile video: 25 RGB frames of 240 × 320, patches 40 × 40.
     pub fn gelsight() -> Self {
         Self {
@@ -460,6 +480,19 @@ mod tests {
             assert_eq!(back, cfg);
         }
         assert!(matches!(Config::preset("nope"), Err(Error::UnknownPreset(_))));
+    }
+
+    /// A sensor without a preset gets the BioTac layout with about 40 temporal tokens, and the
+    /// configuration validates and fits its samples.
+    #[test]
+    fn a_new_sensor_gets_the_biotac_layout() {
+        for (shape, tubelet) in [(vec![24, 1, 250], 5), (vec![19, 1, 400], 10), (vec![4, 4, 3, 64], 2), (vec![8, 8, 37], 1)] {
+            let cfg = Config::for_sensor(&shape).unwrap();
+            cfg.validate().unwrap();
+            assert_eq!((cfg.sample_shape(), cfg.tubelet, cfg.num_patches()), (shape.clone(), tubelet, 1), "{shape:?}");
+        }
+        assert_eq!(Config::for_sensor(&[19, 1, 400]).unwrap(), Config::biotac20());
+        assert!(Config::for_sensor(&[10, 75]).is_none() && Config::for_sensor(&[0, 1, 4]).is_none());
     }
 
     #[test]

@@ -498,16 +498,26 @@ fn prepare(args: &ModelArgs) -> Result<Prepared> {
     let mut cfg = match (&args.preset, &args.config) {
         (Some(p), _) => preset(p)?,
         (None, Some(path)) => resolve_config(&path.display().to_string())?,
-        (None, None) => pvt3_models::config::PRESETS
+        (None, None) => match pvt3_models::config::PRESETS
             .iter()
             .map(|p| preset(p).expect("known preset"))
             .find(|c| c.sample_shape() == data.sample_shape)
-            .with_context(|| {
-                format!(
-                    "no preset takes samples of shape {:?}; pass --config FILE (start from `pvt3 info icub20 --json`)",
-                    data.sample_shape
-                )
-            })?,
+        {
+            Some(cfg) => cfg,
+            None => {
+                let shape = data.sample_shape.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(" × ");
+                let derived = Config::for_sensor(&data.sample_shape)
+                    .with_context(|| format!("samples of shape {shape}: expected [height, width, (channels,) frames]"))?;
+                let architecture = args.architecture.as_deref().map_or(Ok(Architecture::Pvt3), |a| a.parse())?;
+                eprintln!(
+                    "no preset takes samples of {shape}: derived the BioTac layout, one token per {} frames of all {} values of a frame ({} temporal tokens); `pvt3 info --json` and --config FILE to choose otherwise",
+                    derived.tubelet,
+                    derived.height * derived.width * derived.channels,
+                    derived.time_tokens()
+                );
+                derived.for_model(architecture)
+            }
+        },
     };
     cfg.classes = data.classes();
     cfg = apply_overrides(cfg, &args.overrides)?;
