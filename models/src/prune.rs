@@ -29,6 +29,34 @@ pub struct PruneSpec {
     /// Percentage of temporal tokens to remove.
     pub frames: f64,
     pub scope: Scope,
+    /// Percentage of the entries of every weight matrix set to zero at random and kept there
+    /// (persistent random unstructured pruning, [`random_weights`]). It regularises; it makes the
+    /// model no smaller, since the matrices stay dense.
+    #[serde(default)]
+    pub weights: f64,
+}
+
+/// Zeroes `percent` % of the entries of every weight matrix in `tensors` (2-D `….weight`), chosen
+/// at random by `seed`: the exact count in each matrix, as PyTorch's `random_unstructured` does.
+/// Returns the entries zeroed.
+pub fn random_weights(tensors: &mut Tensors, percent: f64, seed: u64) -> Result<usize> {
+    if !(0.0..=100.0).contains(&percent) {
+        return Err(Error::Config(format!("cannot prune {percent} % of the weights: give a percentage from 0 to 100")));
+    }
+    let mut rng = crate::Rng::new(seed);
+    let mut zeroed = 0;
+    for (name, (shape, values)) in tensors.iter_mut() {
+        if !(name.ends_with(".weight") && shape.len() == 2) {
+            continue;
+        }
+        let mut order: Vec<usize> = (0..values.len()).collect();
+        rng.shuffle(&mut order);
+        for &i in order.iter().take(share(values.len(), percent)) {
+            values[i] = 0.0;
+            zeroed += 1;
+        }
+    }
+    Ok(zeroed)
 }
 
 /// For each mask name, which entries are kept.
@@ -131,7 +159,7 @@ mod tests {
         let cfg = Config { heads: 2, dim_head: 4, mlp_dim: 8, ..Config::icub20() };
         // Scores alternate in sign; magnitudes rise with the index inside each head.
         let t = tensors(&cfg, |_, i| if i % 2 == 0 { (i % 4) as f32 } else { -((i % 4) as f32) });
-        let p = plan(&cfg, &t, &PruneSpec { channels: 50.0, frames: 40.0, scope: Scope::Local }).unwrap();
+        let p = plan(&cfg, &t, &PruneSpec { channels: 50.0, frames: 40.0, scope: Scope::Local, weights: 0.0 }).unwrap();
         assert_eq!(p["space.layers.0.attn.channel_mask"], vec![false, false, true, true, false, false, true, true]);
         assert_eq!(p["space.layers.0.ffn.channel_mask"].iter().filter(|k| !**k).count(), 4);
         assert_eq!(p["frame_mask"].iter().filter(|k| !**k).count(), 30);
@@ -142,14 +170,14 @@ mod tests {
         let cfg = Config::icub20();
         // Temporal masks score high, spatial ones low: global pruning takes the spatial ones first.
         let t = tensors(&cfg, |name, i| if name.starts_with("space") { 0.1 + i as f32 * 1e-3 } else { 1.0 });
-        let p = plan(&cfg, &t, &PruneSpec { channels: 50.0, frames: 0.0, scope: Scope::Global }).unwrap();
+        let p = plan(&cfg, &t, &PruneSpec { channels: 50.0, frames: 0.0, scope: Scope::Global, weights: 0.0 }).unwrap();
         assert!(p["space.layers.2.attn.channel_mask"].iter().all(|k| !k));
         assert!(p["temporal.layers.2.ffn.channel_mask"].iter().all(|k| *k));
         assert!(p["frame_mask"].iter().all(|k| *k));
         let mut pruned = t.clone();
         apply(&p, &mut pruned);
         assert!(pruned["space.layers.0.ffn.channel_mask"].1.iter().all(|v| *v == 0.0));
-        let err = plan(&cfg, &t, &PruneSpec { channels: 120.0, frames: 0.0, scope: Scope::Local }).unwrap_err();
+        let err = plan(&cfg, &t, &PruneSpec { channels: 120.0, frames: 0.0, scope: Scope::Local, weights: 0.0 }).unwrap_err();
         assert!(err.to_string().contains("give a percentage from 0 to 100"));
     }
 }

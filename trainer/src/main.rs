@@ -72,6 +72,11 @@ struct PruneArgs {
     /// Prune this percentage of frames (temporal tokens) by mask score.
     #[arg(long)]
     prune_frames: Option<f64>,
+    /// Persistent random pruning (the PVT³ report's "random pruning"): this percentage of every
+    /// weight matrix's entries set to zero at random after training, then fine-tuned with them
+    /// held at zero. A regulariser: the matrices stay dense, the model no smaller.
+    #[arg(long)]
+    prune_weights: Option<f64>,
     /// `local`: the same share of every mask (every head); `global`: one threshold over all masks.
     #[arg(long, default_value = "local", value_parser = ["local", "global"])]
     prune_scope: String,
@@ -85,12 +90,17 @@ struct PruneArgs {
 
 impl PruneArgs {
     fn stage(&self) -> Option<PruneStage> {
-        if self.prune_channels.is_none() && self.prune_frames.is_none() {
+        if self.prune_channels.is_none() && self.prune_frames.is_none() && self.prune_weights.is_none() {
             return None;
         }
         let scope = if self.prune_scope == "global" { Scope::Global } else { Scope::Local };
         Some(PruneStage {
-            spec: PruneSpec { channels: self.prune_channels.unwrap_or(0.0), frames: self.prune_frames.unwrap_or(0.0), scope },
+            spec: PruneSpec {
+                channels: self.prune_channels.unwrap_or(0.0),
+                frames: self.prune_frames.unwrap_or(0.0),
+                scope,
+                weights: self.prune_weights.unwrap_or(0.0),
+            },
             epochs: self.fine_tune_epochs,
             lr: self.fine_tune_lr,
         })
@@ -305,7 +315,7 @@ fn main() -> Result<()> {
             }
         }
         Command::Prune { run, data, out, resume, prune } => {
-            let stage = prune.stage().context("give --prune-channels and/or --prune-frames")?;
+            let stage = prune.stage().context("give --prune-channels, --prune-frames and/or --prune-weights")?;
             let (_, meta) = checkpoint::load_meta(&run)?;
             let data_path = data.unwrap_or_else(|| PathBuf::from(&meta.provenance.data));
             let dataset = Dataset::load(&data_path, meta.provenance.seed)?;

@@ -66,6 +66,11 @@ pub struct TrainOptions {
     #[arg(skip)]
     #[serde(default)]
     pub hold_pruned: bool,
+    /// Hold weight-matrix entries that are zero at the start at zero (fine-tuning after random
+    /// weight pruning, `--prune-weights`).
+    #[arg(skip)]
+    #[serde(default)]
+    pub hold_zero_weights: bool,
 }
 
 fn one() -> f64 {

@@ -22,6 +22,9 @@ pub struct PruneStage {
     pub lr: f64,
 }
 
+/// Mixed into the run's seed to draw the weights that random pruning zeroes.
+const RANDOM_WEIGHTS_SEED: u64 = 0x7a11_0f_5eed;
+
 /// Prunes the checkpoint of `parent` and fine-tunes it into `out` on the parent's split of `data`.
 pub fn prune_and_fine_tune(
     parent: &Path,
@@ -36,11 +39,15 @@ pub fn prune_and_fine_tune(
     let plan = prune::plan(&meta.config, &tensors, &stage.spec)?;
     prune::apply(&plan, &mut tensors);
     let parent_options = meta.provenance.options;
+    if stage.spec.weights > 0.0 {
+        prune::random_weights(&mut tensors, stage.spec.weights, parent_options.seed ^ RANDOM_WEIGHTS_SEED)?;
+    }
     let options = TrainOptions {
         epochs: stage.epochs,
         lr: stage.lr,
         warmup_epochs: parent_options.warmup_epochs.min(1),
         hold_pruned: true,
+        hold_zero_weights: stage.spec.weights > 0.0,
         ..parent_options
     };
     let spec = RunSpec {

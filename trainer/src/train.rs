@@ -121,12 +121,13 @@ impl Learner {
         Ok(Self { model, varmap, optimizer, masks, held: Vec::new(), matrices })
     }
 
-    /// From now on, mask entries that are zero stay zero.
-    pub fn hold_zero_masks(&mut self) -> Result<()> {
-        self.held = vars_where(&self.varmap, is_mask)
-            .into_iter()
-            .map(|v| Ok((v.clone(), v.as_tensor().ne(0.0)?.to_dtype(DType::F32)?)))
-            .collect::<Result<_>>()?;
+    /// From now on, entries of the variables `which` selects that are zero stay zero (masks after
+    /// pruning; weight matrices after random weight pruning).
+    pub fn hold_zeros(&mut self, which: fn(&str, &Var) -> bool) -> Result<()> {
+        for v in vars_where(&self.varmap, which) {
+            let keep = v.as_tensor().ne(0.0)?.to_dtype(DType::F32)?;
+            self.held.push((v, keep));
+        }
         Ok(())
     }
 
@@ -277,7 +278,10 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
     };
 
     if opts.hold_pruned {
-        learner.hold_zero_masks()?;
+        learner.hold_zeros(is_mask)?;
+    }
+    if opts.hold_zero_weights {
+        learner.hold_zeros(is_weight_matrix)?;
     }
     bar.set_length((opts.epochs * steps_per_epoch) as u64);
     bar.set_position((run.epochs_done * steps_per_epoch) as u64);

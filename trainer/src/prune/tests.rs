@@ -18,7 +18,7 @@ fn pruned_entries_stay_zero_and_the_baked_model_matches() {
     let mut s = spec(&data, 8, None);
     s.options.l1 = 0.05;
     train(&s, &dense, false, &ProgressBar::hidden()).unwrap().unwrap();
-    let stage = PruneStage { spec: PruneSpec { channels: 50.0, frames: 50.0, scope: Scope::Local }, epochs: 4, lr: 1e-3 };
+    let stage = PruneStage { spec: PruneSpec { channels: 50.0, frames: 50.0, scope: Scope::Local, weights: 0.0 }, epochs: 4, lr: 1e-3 };
     let r = prune_and_fine_tune(&dense, &data, &stage, &pruned, false, &ProgressBar::hidden()).unwrap().unwrap();
     assert!(r.test_accuracy > 0.0);
 
@@ -40,6 +40,36 @@ fn pruned_entries_stay_zero_and_the_baked_model_matches() {
     let got = reference::forward(&baked, &normalised.x, rows.len()).unwrap();
     let worst = got.iter().flatten().zip(&expected).map(|(a, b)| (a - *b as f64).abs()).fold(0.0, f64::max);
     assert!(worst < 1e-5, "worst {worst:e}");
+    std::fs::remove_dir_all(dense).unwrap();
+    std::fs::remove_dir_all(pruned).unwrap();
+}
+
+/// Persistent random pruning: the share of every weight matrix drawn after training is zero in
+/// the fine-tuned model and nowhere else zero, and the masks are untouched.
+#[test]
+fn randomly_pruned_weights_stay_zero_through_fine_tuning() {
+    let data = tiny_data();
+    let (dense, pruned) = (out_dir("rp-dense"), out_dir("rp-ft"));
+    train(&spec(&data, 3, None), &dense, false, &ProgressBar::hidden()).unwrap().unwrap();
+    let stage = PruneStage { spec: PruneSpec { channels: 0.0, frames: 0.0, scope: Scope::Local, weights: 25.0 }, epochs: 3, lr: 1e-3 };
+    prune_and_fine_tune(&dense, &data, &stage, &pruned, false, &ProgressBar::hidden()).unwrap().unwrap();
+    let (_, _, parent) = checkpoint::load(&dense).unwrap();
+    let (meta, _, varmap) = checkpoint::load(&pruned).unwrap();
+    assert_eq!(meta.provenance.pruning, Some(stage.spec.clone()));
+    let (before, after) = (varmap_tensors(&parent).unwrap(), varmap_tensors(&varmap).unwrap());
+    let mut matrices = 0;
+    for (name, (shape, values)) in &after {
+        let zeros = values.iter().filter(|v| **v == 0.0).count();
+        if name.ends_with(".weight") && shape.len() == 2 {
+            matrices += 1;
+            assert_eq!(zeros, (values.len() as f64 * 0.25).round() as usize, "{name}");
+            let moved = values.iter().zip(&before[name].1).filter(|(a, b)| **a != 0.0 && a != b).count();
+            assert!(moved > 0, "{name}: the kept entries are fine-tuned");
+        } else if name.ends_with("mask") {
+            assert_eq!(zeros, 0, "{name}: masks untouched");
+        }
+    }
+    assert!(matrices >= 10, "{matrices} weight matrices");
     std::fs::remove_dir_all(dense).unwrap();
     std::fs::remove_dir_all(pruned).unwrap();
 }

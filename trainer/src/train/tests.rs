@@ -73,6 +73,7 @@ fn options(epochs: usize) -> TrainOptions {
         random_prune: 0.0,
         prefix_training: 0.0,
         hold_pruned: false,
+        hold_zero_weights: false,
     }
 }
 
