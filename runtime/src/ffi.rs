@@ -7,7 +7,7 @@ use std::ffi::{c_char, c_int, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::OnceLock;
 
-use crate::{Classifier, Error, Kernels, Session};
+use crate::{Classifier, Error, Kernels, Prediction, Session};
 
 pub const PVT3_OK: c_int = 0;
 pub const PVT3_ERR_NULL: c_int = 1;
@@ -322,19 +322,33 @@ pub unsafe extern "C" fn pvt3_session_finish(
 ) -> c_int {
     guard(|| {
         let s = s.as_mut().ok_or_else(|| null("session"))?;
-        if probabilities.is_null() {
-            return Err(null("probabilities"));
-        }
-        if probabilities_len < s.names {
-            return Err((PVT3_ERR_INPUT, format!("probabilities has room for {probabilities_len} values; {} needed", s.names)));
-        }
-        let p = s.session.finish().map_err(fail)?;
-        std::slice::from_raw_parts_mut(probabilities, s.names).copy_from_slice(&p.probabilities);
-        if let Some(class) = class_out.as_mut() {
-            *class = p.class;
-        }
+        room(probabilities, probabilities_len, s.names)?;
+        write_prediction(&s.session.finish().map_err(fail)?, probabilities, class_out);
         Ok(())
     })
+}
+
+/// Whether `probabilities` can take `names` class probabilities, checked before a call that
+/// changes the session.
+fn room(probabilities: *mut f32, probabilities_len: usize, names: usize) -> std::result::Result<(), (c_int, String)> {
+    if probabilities.is_null() {
+        return Err(null("probabilities"));
+    }
+    if probabilities_len < names {
+        return Err((PVT3_ERR_INPUT, format!("probabilities has room for {probabilities_len} values; {names} needed")));
+    }
+    Ok(())
+}
+
+/// Writes `p`'s class probabilities and, unless `class_out` is null, its class.
+///
+/// # Safety
+/// `probabilities` passed [`room`] for `p`'s classes; `class_out` is null or writable.
+unsafe fn write_prediction(p: &Prediction, probabilities: *mut f32, class_out: *mut usize) {
+    std::slice::from_raw_parts_mut(probabilities, p.probabilities.len()).copy_from_slice(&p.probabilities);
+    if let Some(class) = class_out.as_mut() {
+        *class = p.class;
+    }
 }
 
 /// A provisional answer from the touch so far, which goes on: writes the class probabilities
@@ -354,17 +368,9 @@ pub unsafe extern "C" fn pvt3_session_peek(
 ) -> c_int {
     guard(|| {
         let s = s.as_ref().ok_or_else(|| null("session"))?;
-        if probabilities.is_null() {
-            return Err(null("probabilities"));
-        }
-        if probabilities_len < s.names {
-            return Err((PVT3_ERR_INPUT, format!("probabilities has room for {probabilities_len} values; {} needed", s.names)));
-        }
+        room(probabilities, probabilities_len, s.names)?;
         let p = s.session.peek().map_err(fail)?;
-        std::slice::from_raw_parts_mut(probabilities, s.names).copy_from_slice(&p.prediction.probabilities);
-        if let Some(class) = class_out.as_mut() {
-            *class = p.prediction.class;
-        }
+        write_prediction(&p.prediction, probabilities, class_out);
         if let Some(frames) = frames_out.as_mut() {
             *frames = p.frames;
         }

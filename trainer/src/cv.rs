@@ -104,27 +104,16 @@ pub fn ci95(values: &[f64]) -> Option<[f64; 2]> {
     })
 }
 
-/// Runs every (seed, fold) of the protocol under `out`, `jobs` at a time. `None`: the runs
-/// paused (see [`RunSpec::pause_after`]); resume to finish them.
-#[allow(clippy::too_many_arguments)]
-pub fn cross_validate(
-    spec: &RunSpec,
-    stage: Option<&PruneStage>,
-    seeds: &[u64],
-    out: &Path,
-    resume: bool,
-    jobs: usize,
-    progress: &MultiProgress,
-    style: &indicatif::ProgressStyle,
-) -> Result<Option<CvSummary>> {
-    let work: Vec<(u64, usize)> = seeds.iter().flat_map(|&s| (0..TEST_FOLD).map(move |k| (s, k))).collect();
-    run_all(spec, stage, &work, out, resume, jobs, progress, style)
+/// Every (seed, validation fold) of the protocol for `seeds`.
+pub fn protocol(seeds: &[u64]) -> Vec<(u64, usize)> {
+    seeds.iter().flat_map(|&s| (0..TEST_FOLD).map(move |k| (s, k))).collect()
 }
 
-/// Trains the (seed, validation fold) pairs of `work` under `out`, `jobs` at a time, and
-/// summarises them. `None`: the runs paused.
+/// Trains the (seed, validation fold) runs of `work` ([`protocol`], or one run of it) under
+/// `out`, `jobs` at a time, and summarises them. `None`: the runs paused (see
+/// [`RunSpec::pause_after`]); resume to finish them.
 #[allow(clippy::too_many_arguments)]
-pub fn run_all(
+pub fn cross_validate(
     spec: &RunSpec,
     stage: Option<&PruneStage>,
     work: &[(u64, usize)],

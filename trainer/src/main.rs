@@ -353,11 +353,11 @@ fn main() -> Result<()> {
                     let spec = prepared.spec(&model, 0);
                     let stage = prune.stage();
                     let s = match only {
-                        Some(one) => match cv::run_all(&spec, stage.as_ref(), &[one], &out, resume, 1, &multi, &bar_style())? {
+                        Some(one) => match cross_validate(&spec, stage.as_ref(), &[one], &out, resume, 1, &multi, &bar_style())? {
                             Some(_) => Some(cv::report(&out)?),
                             None => None,
                         },
-                        None => cross_validate(&spec, stage.as_ref(), &seeds, &out, resume, jobs, &multi, &bar_style())?,
+                        None => cross_validate(&spec, stage.as_ref(), &cv::protocol(&seeds), &out, resume, jobs, &multi, &bar_style())?,
                     };
                     let Some(s) = s else {
                         println!("paused; continue with the same command and --resume");
