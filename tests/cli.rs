@@ -283,7 +283,7 @@ fn train_prune_fine_tune_and_bake_make_a_smaller_model() {
     assert_eq!(file["baked"]["space"]["layers"][0]["ffn"]["fc1"]["rows"], 20);
 
     let err = fails(&["prune", r, "--out", dir.join("p2").to_str().unwrap()]);
-    assert!(err.contains("give --prune-channels and/or --prune-frames"), "{err}");
+    assert!(err.contains("give --prune-channels, --prune-frames and/or --prune-weights"), "{err}");
 
     // Exported by `train --export` and from the baked file: onnxruntime on raw frames equals
     // candle on normalised ones.

@@ -29,9 +29,10 @@ pub fn declutter(model: &mut TypedModel) -> TractResult<()> {
     let optimizer = Optimizer::declutter();
     let mut session = optimizer.session();
     model.compact()?;
+    // A pass that changed the model left it compacted (`run_one_pass_outer` compacts after each
+    // sweep that applied a patch); one that changed nothing needs no compaction.
     for pass in optimizer.passes.clone().iter_mut() {
         session.run_one_pass_outer(0, pass.as_mut(), model)?;
-        model.compact()?;
     }
     Ok(())
 }
