@@ -110,22 +110,24 @@ fn prefix_training_calibrates_a_stopping_rule_that_the_file_carries() {
     ok(&args);
     let provenance: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(run.join("model/provenance.json")).unwrap()).unwrap();
     let stopping = &provenance["stopping"];
-    let threshold = stopping["threshold"].as_f64().unwrap() as f32;
-    assert!(threshold > 0.0 && threshold <= 1.0, "{stopping}");
-    assert!(stopping["accuracy"].as_f64().unwrap() >= stopping["full_accuracy"].as_f64().unwrap() - 0.005 - 1e-12, "{stopping}");
+    let rule: pvt3_runtime::StopRule = serde_json::from_value(stopping["rule"].clone()).unwrap();
+    assert!(rule.problem().is_none() && rule.agreeing == 3, "{stopping}");
+    assert!(stopping["accuracy"].as_f64().unwrap() >= stopping["full_accuracy"].as_f64().unwrap() - 1e-12, "{stopping}");
     // The run's own data by default (no --data).
     let table = ok(&["eval", r, "--anytime"]);
     assert!(
         table.contains("provisional answers on") && table.contains("100%") && table.contains("stopping rule: top probability"),
         "{table}"
     );
+    let recorded = format!("≥ {:.4} with 3 answers in a row", rule.top_probability);
+    assert!(table.contains(&recorded), "the calibration training recorded: {table}");
     let report: serde_json::Value = serde_json::from_str(&ok(&["eval", r, "--anytime", "--json"])).unwrap();
     let curve = report["curve"].as_array().unwrap();
     assert_eq!(curve.len(), 10);
     assert_eq!(curve[9]["tokens"], 75);
     let eval = ok(&["eval", r]);
     assert!(eval.contains(&format!("accuracy {:.4}", curve[9]["accuracy"].as_f64().unwrap())), "the whole touch is plain eval: {eval}");
-    assert_eq!(pvt3_runtime::Classifier::load(&onnx).unwrap().stop_threshold(), Some(threshold));
+    assert_eq!(pvt3_runtime::Classifier::load(&onnx).unwrap().stop_rule(), Some(rule));
     let err = fails(&["train", "--data", d, "--out", dir.join("v").to_str().unwrap(), "--model", "vit", "--prefix-training", "0.5"]);
     assert!(err.contains("--prefix-training: PVT³ models only"), "{err}");
     let err = fails(&["train", "--data", d, "--out", dir.join("v").to_str().unwrap(), "--prefix-training", "1.5"]);

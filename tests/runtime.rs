@@ -9,7 +9,7 @@ use pvt3_models::bake::bake;
 use pvt3_models::normalization::Normalization;
 use pvt3_models::weights::{read_tensors, varmap_tensors};
 use pvt3_models::{reference, Config, Pvt3};
-use pvt3_runtime::{Classifier, Error};
+use pvt3_runtime::{Classifier, Error, StopRule};
 
 fn golden(file: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/golden/icub20").join(file)
@@ -78,11 +78,14 @@ fn streaming_equals_the_whole_window_with_heads_tubelets_and_pruned_tokens() {
     let meta = pvt3_export::Metadata {
         classes: (0..20).map(|k| format!("c{k}")).collect(),
         provenance: serde_json::json!({}),
-        stop_threshold: Some(0.095),
+        stop_rule: Some(StopRule { top_probability: 0.095, agreeing: 3 }),
     };
-    for bad in [0.0, 1.5, f32::NAN] {
-        let err = pvt3_export::export(&baked, &norm, &pvt3_export::Metadata { stop_threshold: Some(bad), ..meta.clone() }).unwrap_err();
-        assert!(err.to_string().contains("is not a probability in (0, 1]"), "{err}");
+    for (bad, says) in
+        [((0.0, 3), "is not in (0, 1]"), ((1.5, 3), "is not in (0, 1]"), ((f32::NAN, 3), "is not in (0, 1]"), ((0.5, 0), "agreeing = 0")]
+    {
+        let rule = StopRule { top_probability: bad.0, agreeing: bad.1 };
+        let err = pvt3_export::export(&baked, &norm, &pvt3_export::Metadata { stop_rule: Some(rule), ..meta.clone() }).unwrap_err();
+        assert!(err.to_string().contains(says), "{err}");
     }
     let dir = scratch("stream");
     let path = dir.join("tubelets.onnx");
@@ -102,10 +105,12 @@ fn streaming_equals_the_whole_window_with_heads_tubelets_and_pruned_tokens() {
     let reference = reference::forward(&baked, &normalised, 8).unwrap();
     let worst = logits.iter().zip(reference.iter().flatten()).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
     assert!(worst <= 1e-5, "tract against the f64 reference: {worst:e}");
-    assert_eq!(c.stop_threshold(), Some(0.095));
+    assert_eq!(c.stop_rule(), meta.stop_rule);
     let mut session = c.session().unwrap();
     let (mut stops, mut peeks) = (0, 0);
+    let mut first_window_stops = Vec::new();
     for ((sample, expected), normalised) in x.chunks(4500).zip(&whole).zip(normalised.chunks(4500)) {
+        let mut classes = Vec::new();
         for t in 0..75 {
             session.push_frame(&(0..60).map(|i| sample[i * 75 + t]).collect::<Vec<_>>()).unwrap();
             // A provisional answer after every whole token of 3 frames, pruned ones included, is
@@ -119,8 +124,16 @@ fn streaming_equals_the_whole_window_with_heads_tubelets_and_pruned_tokens() {
                         peek.prediction.probabilities.iter().zip(softmax(logits)).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
                     assert!(worst <= 1e-5, "{tokens} tokens: {worst:e}");
                     assert_eq!(peek.frames, 3 * tokens);
-                    assert_eq!(peek.stop, peek.prediction.probabilities[peek.prediction.class] >= 0.095);
+                    // The rule: a top probability of 0.095 or more, and three answers in a row
+                    // (after this token and the two before) on one class.
+                    let class = peek.prediction.class;
+                    classes.push(class);
+                    let agreed = tokens >= 3 && classes[tokens - 3..].iter().all(|c| *c == class);
+                    assert_eq!(peek.stop, peek.prediction.probabilities[class] >= 0.095 && agreed, "{tokens} tokens");
                     (stops, peeks) = (stops + usize::from(peek.stop), peeks + 1);
+                    if first_window_stops.len() < 25 && peeks <= 25 {
+                        first_window_stops.push(peek.stop);
+                    }
                 }
                 Ok(peek) => assert_eq!(peek.frames, 3 * tokens),
                 Err(e) => panic!("{e}"),
@@ -131,6 +144,16 @@ fn streaming_equals_the_whole_window_with_heads_tubelets_and_pruned_tokens() {
         assert!(worst <= 1e-5 && streamed.class == expected.class, "streamed against whole window: {worst:e}");
     }
     assert!(stops > 0 && stops < peeks, "the stopping rule is met by some provisional answers ({stops} of {peeks}), not all");
+    // A session that peeks only now and then gets the same verdict: it computes the answers
+    // before that it was not asked for.
+    let sample = &x[..4500];
+    for tokens in [2, 9, 17, 25] {
+        let mut sparse = c.session().unwrap();
+        for t in 0..3 * tokens {
+            sparse.push_frame(&(0..60).map(|i| sample[i * 75 + t]).collect::<Vec<_>>()).unwrap();
+        }
+        assert_eq!(sparse.peek().unwrap().stop, first_window_stops[tokens - 1], "{tokens} tokens");
+    }
     std::fs::remove_dir_all(dir).unwrap();
 }
 

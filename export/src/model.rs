@@ -23,8 +23,8 @@ pub struct Metadata {
     pub classes: Vec<String>,
     /// Where the model came from (data set, fold, accuracy, pruning), as JSON.
     pub provenance: serde_json::Value,
-    /// The stopping rule of provisional answers, a top probability in (0, 1] (`pvt3.stop_threshold`).
-    pub stop_threshold: Option<f32>,
+    /// The stopping rule of provisional answers (`pvt3.stop_rule`).
+    pub stop_rule: Option<pvt3_format::StopRule>,
 }
 
 /// One pre-norm block on the (centred) stream `x`: `[rows, dim]` out, or with `cls_only` the
@@ -78,8 +78,8 @@ fn check(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<()> {
     if meta.classes.len() != c.classes {
         return Err(Error::Inconsistent(format!("{} class names for {} classes", meta.classes.len(), c.classes)));
     }
-    if let Some(t) = meta.stop_threshold.filter(|t| !pvt3_format::valid_threshold(*t)) {
-        return Err(Error::Inconsistent(format!("stopping threshold {t} is not a probability in (0, 1]")));
+    if let Some(problem) = meta.stop_rule.and_then(|r| r.problem()) {
+        return Err(Error::Inconsistent(format!("stopping rule: {problem}")));
     }
     if m.kept_tokens.is_empty() {
         return Err(Error::Unsupported("every frame is pruned; the model would ignore its input".into()));
@@ -231,7 +231,7 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
         ..Default::default()
     };
     let dims = Dims { height: h, width: w, channels: ch, frames: c.frames, tubelet: tt, dim: d };
-    let header = Header { classes: meta.classes.clone(), kept_frames, dims, stop_threshold: meta.stop_threshold };
+    let header = Header { classes: meta.classes.clone(), kept_frames, dims, stop_rule: meta.stop_rule };
     let config = serde_json::to_value(c).expect("the configuration serialises");
     let mut props = header.entries(&config);
     props.push((keys::PROVENANCE, meta.provenance.to_string()));

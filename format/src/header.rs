@@ -44,14 +44,29 @@ pub struct Header {
     /// The frames of a window the model reads, ascending; whole tokens.
     pub kept_frames: Vec<usize>,
     pub dims: Dims,
-    /// The stopping rule: a provisional answer whose top probability reaches this is final
-    /// ([`keys::STOP_THRESHOLD`]); `None` when the file has none.
-    pub stop_threshold: Option<f32>,
+    /// The stopping rule of provisional answers ([`keys::STOP_RULE`]); `None` when the file has none.
+    pub stop_rule: Option<StopRule>,
 }
 
-/// Whether `t` is a stopping threshold a file may carry: a probability in (0, 1].
-pub fn valid_threshold(t: f32) -> bool {
-    t > 0.0 && t <= 1.0
+/// When a touch may end early: at the first whole temporal token whose provisional answer's top
+/// class probability is at least `top_probability` and whose top class is that of the answers
+/// after each of the `agreeing - 1` tokens before it (`agreeing` answers in a row agree).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct StopRule {
+    pub top_probability: f32,
+    pub agreeing: usize,
+}
+
+impl StopRule {
+    /// Why the rule cannot be a file's, if it cannot: a probability outside (0, 1], or no answer
+    /// to agree.
+    pub fn problem(&self) -> Option<String> {
+        let p = self.top_probability;
+        if !(p > 0.0 && p <= 1.0) {
+            return Some(format!("top probability {p} is not in (0, 1]"));
+        }
+        (self.agreeing == 0).then(|| "no answer to agree (agreeing = 0)".to_string())
+    }
 }
 
 impl Header {
@@ -80,8 +95,8 @@ impl Header {
             (keys::KEPT_FRAMES, serde_json::to_string(&self.kept_frames).expect("integers serialise")),
             (keys::CONFIG, config.to_string()),
         ];
-        if let Some(t) = self.stop_threshold {
-            entries.push((keys::STOP_THRESHOLD, t.to_string()));
+        if let Some(rule) = self.stop_rule {
+            entries.push((keys::STOP_RULE, serde_json::to_string(&rule).expect("plain data serialises")));
         }
         entries
     }
@@ -111,7 +126,7 @@ impl Header {
             classes: json(keys::CLASSES, get(keys::CLASSES)?)?,
             kept_frames: json(keys::KEPT_FRAMES, get(keys::KEPT_FRAMES)?)?,
             dims: json(keys::CONFIG, get(keys::CONFIG)?)?,
-            stop_threshold: get(keys::STOP_THRESHOLD).ok().map(|t| json(keys::STOP_THRESHOLD, t)).transpose()?,
+            stop_rule: get(keys::STOP_RULE).ok().map(|t| json(keys::STOP_RULE, t)).transpose()?,
         };
         header.check()?;
         Ok(header)
@@ -133,8 +148,8 @@ impl Header {
         if f.is_empty() || !whole_tokens || !f.windows(2).all(|w| w[0] < w[1]) || f.iter().any(|v| *v >= l.frames) {
             return bad(keys::KEPT_FRAMES, "is not a rising list of whole tokens within the window");
         }
-        if self.stop_threshold.is_some_and(|t| !valid_threshold(t)) {
-            return bad(keys::STOP_THRESHOLD, "is not a probability in (0, 1]");
+        if let Some(problem) = self.stop_rule.and_then(|r| r.problem()) {
+            return bad(keys::STOP_RULE, &problem);
         }
         Ok(())
     }
@@ -150,7 +165,7 @@ mod tests {
             classes: vec!["felt".into(), "wood".into()],
             kept_frames: (10..20).chain(40..45).collect(),
             dims,
-            stop_threshold: Some(0.875),
+            stop_rule: Some(StopRule { top_probability: 0.875, agreeing: 3 }),
         }
     }
 
@@ -171,9 +186,9 @@ mod tests {
         assert_eq!(parse(&entries).unwrap(), h);
         assert_eq!(h.sample_shape(), vec![6, 10, 75]);
         // The stopping threshold is optional.
-        let h = Header { stop_threshold: None, ..h };
+        let h = Header { stop_rule: None, ..h };
         let entries = h.entries(&config(&h));
-        assert!(entries.iter().all(|(k, _)| *k != keys::STOP_THRESHOLD));
+        assert!(entries.iter().all(|(k, _)| *k != keys::STOP_RULE));
         assert_eq!(parse(&entries).unwrap(), h);
     }
 
@@ -194,10 +209,11 @@ mod tests {
     #[test]
     fn inconsistent_metadata_is_refused() {
         let h = header();
-        let broken: [fn(&mut Header); 11] = [
-            |h| h.stop_threshold = Some(0.0),
-            |h| h.stop_threshold = Some(1.5),
-            |h| h.stop_threshold = Some(f32::NAN),
+        let broken: [fn(&mut Header); 12] = [
+            |h| h.stop_rule = Some(StopRule { top_probability: 0.0, agreeing: 1 }),
+            |h| h.stop_rule = Some(StopRule { top_probability: 1.5, agreeing: 1 }),
+            |h| h.stop_rule = Some(StopRule { top_probability: f32::NAN, agreeing: 1 }),
+            |h| h.stop_rule = Some(StopRule { top_probability: 0.9, agreeing: 0 }),
             |h| h.classes.clear(),
             |h| h.kept_frames.clear(),
             |h| h.kept_frames.reverse(),

@@ -8,7 +8,7 @@ mod digest;
 mod header;
 
 pub use digest::{digest, verify, Integrity};
-pub use header::{valid_threshold, Dims, Header, HeaderError, FORMAT_VERSION};
+pub use header::{Dims, Header, HeaderError, StopRule, FORMAT_VERSION};
 
 /// Input: raw sensor frames `[batch, height, width, (channels,) frames]`.
 pub const INPUT: &str = "frames";
@@ -43,10 +43,10 @@ pub mod keys {
     pub const CONFIG: &str = "pvt3.config";
     /// Where the model came from, a JSON object.
     pub const PROVENANCE: &str = "pvt3.provenance";
-    /// The stopping rule of provisional answers (format 1.1, optional): a touch may end once
-    /// its provisional answer's top class probability reaches this number, in (0, 1]; the
-    /// trainer calibrates it on the validation fold.
-    pub const STOP_THRESHOLD: &str = "pvt3.stop_threshold";
+    /// The stopping rule of provisional answers (format 1.1, optional), a JSON
+    /// [`crate::StopRule`]: `{"top_probability": 0.93, "agreeing": 3}`. The trainer calibrates
+    /// it on the validation fold.
+    pub const STOP_RULE: &str = "pvt3.stop_rule";
     /// The integrity digest: `sha256:` and the hex SHA-256 of everything else in the file
     /// ([`crate::digest`]).
     pub const DIGEST: &str = "pvt3.digest";

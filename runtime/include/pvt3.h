@@ -77,10 +77,11 @@ int pvt3_session_finish(pvt3_session *s, float *probabilities, size_t probabilit
  * temporal tokens received (pruned ones as their constants), as if the touch ended there; with
  * every frame in, what pvt3_session_finish answers. Writes the probabilities and, unless NULL,
  * the most probable class, the frames it read, and whether it meets the file's stopping rule
- * (1: its top probability reached the threshold calibrated at training, so the touch may end; 0
- * otherwise or without a rule). PVT3_ERR_INPUT before the first whole token; PVT3_ERR_MODEL for
+ * (1: its top probability reached the rule's and the answers after the tokens just before agree
+ * on its class, so the touch may end; 0 otherwise or without a rule; the rule is calibrated at
+ * training). PVT3_ERR_INPUT before the first whole token; PVT3_ERR_MODEL for
  * a file exported before format 1.1. */
-int pvt3_session_peek(const pvt3_session *s, float *probabilities, size_t probabilities_len, size_t *class_out,
+int pvt3_session_peek(pvt3_session *s, float *probabilities, size_t probabilities_len, size_t *class_out,
                       size_t *frames_out, int *stop_out);
 /* The library's version and the file format it reads, e.g. "0.1.0 (format 1.0)"; a static string.
  * The runtime reads every file of its format's major version and refuses others (PVT3_ERR_MODEL). */

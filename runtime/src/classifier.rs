@@ -120,10 +120,10 @@ impl Classifier {
         self.header.dims.dim
     }
 
-    /// The stopping rule of provisional answers ([`crate::Peek::stop`]): a top probability in
-    /// (0, 1], calibrated by the trainer; `None` when the file has none.
-    pub fn stop_threshold(&self) -> Option<f32> {
-        self.header.stop_threshold
+    /// The stopping rule of provisional answers ([`crate::Peek::stop`]), calibrated by the
+    /// trainer; `None` when the file has none.
+    pub fn stop_rule(&self) -> Option<pvt3_format::StopRule> {
+        self.header.stop_rule
     }
 
     /// The frames of a window the model reads; the others were pruned.

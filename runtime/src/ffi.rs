@@ -359,7 +359,7 @@ unsafe fn write_prediction(p: &Prediction, probabilities: *mut f32, class_out: *
 /// `s` is a live session or null; the other pointers are null or valid for the lengths given.
 #[no_mangle]
 pub unsafe extern "C" fn pvt3_session_peek(
-    s: *const Pvt3Session,
+    s: *mut Pvt3Session,
     probabilities: *mut f32,
     probabilities_len: usize,
     class_out: *mut usize,
@@ -367,7 +367,7 @@ pub unsafe extern "C" fn pvt3_session_peek(
     stop_out: *mut c_int,
 ) -> c_int {
     guard(|| {
-        let s = s.as_ref().ok_or_else(|| null("session"))?;
+        let s = s.as_mut().ok_or_else(|| null("session"))?;
         room(probabilities, probabilities_len, s.names)?;
         let p = s.session.peek().map_err(fail)?;
         write_prediction(&p.prediction, probabilities, class_out);

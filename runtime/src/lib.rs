@@ -36,4 +36,5 @@ pub use heap::keep_freed_memory;
 pub use kernels::{tune as tune_kernels, Kernels};
 pub use npy::read_npy;
 pub use plan::declutter;
+pub use pvt3_format::StopRule;
 pub use stream::{Peek, Session};

@@ -20,7 +20,7 @@ use tract_core::prelude::*;
 use crate::classifier::prediction;
 use crate::error::tract_error;
 use crate::plan::{outputs_of, Plan};
-use crate::{Classifier, Error, Prediction, Result};
+use crate::{Classifier, Error, Prediction, Result, StopRule};
 
 /// The two stages of a classifier, each optimised for its streaming shape.
 pub(crate) struct Stages {
@@ -31,8 +31,8 @@ pub(crate) struct Stages {
     temporal: Plan,
     /// Whether the temporal stage reads a key bias, so that it can answer for a prefix.
     prefixes: bool,
-    /// The file's stopping rule (`Header::stop_threshold`).
-    stop_threshold: Option<f32>,
+    /// The file's stopping rule (`Header::stop_rule`).
+    stop_rule: Option<StopRule>,
     /// For each temporal token, its index among the kept tokens.
     kept_index: Vec<Option<usize>>,
     /// `[1, tubelet, height, width, channels]`
@@ -62,7 +62,7 @@ impl Stages {
             spatial: c.optimise(c.wire(&spatial, &[TOKEN_ENCODINGS])?)?,
             temporal: c.optimise(c.wire(&temporal, &[PROBABILITIES])?)?,
             prefixes,
-            stop_threshold: c.stop_threshold(),
+            stop_rule: c.stop_rule(),
             kept_index,
             token_shape,
             dim: c.dim(),
@@ -77,9 +77,9 @@ pub struct Peek {
     pub prediction: Prediction,
     /// The frames it read: those of the whole temporal tokens received, pruned ones included.
     pub frames: usize,
-    /// Whether it meets the file's stopping rule: its top probability reached the threshold the
-    /// trainer calibrated (`pvt3.stop_threshold`), so the touch may end here. Always false for a
-    /// file without a rule.
+    /// Whether it meets the file's stopping rule (`pvt3.stop_rule`, calibrated by the trainer):
+    /// its top probability reached the rule's and the answers after the tokens just before agree
+    /// on its class, so the touch may end here. Always false for a file without a rule.
     pub stop: bool,
 }
 
@@ -94,12 +94,15 @@ pub struct Session {
     token: Vec<f32>,
     /// The encodings of the kept tokens completed so far, `[kept, dim]`.
     encodings: Vec<f32>,
+    /// The class answered after each number of tokens of this touch, where one was asked: what
+    /// the stopping rule's agreement reads.
+    answered: Vec<Option<usize>>,
 }
 
 impl Classifier {
     /// A streaming session (builds the two stages on first use).
     pub fn session(&self) -> Result<Session> {
-        Ok(Session { stages: self.stages()?, received: 0, token: Vec::new(), encodings: Vec::new() })
+        Ok(Session { stages: self.stages()?, received: 0, token: Vec::new(), encodings: Vec::new(), answered: Vec::new() })
     }
 }
 
@@ -172,8 +175,10 @@ impl Session {
     /// temporal tokens whose frames have all arrived (a pruned token as its constant), as if the
     /// touch ended there. With every frame in, it is what [`Session::finish`] answers.
     /// [`Error::NoTokenYet`] before the first token is complete; [`Error::NoPrefixes`] for a file
-    /// exported before format 1.1.
-    pub fn peek(&self) -> Result<Peek> {
+    /// exported before format 1.1. The stopping rule reads the answers after the tokens just
+    /// before too: those not asked for are computed here (a session that peeks after every token
+    /// runs one temporal stage per peek).
+    pub fn peek(&mut self) -> Result<Peek> {
         if !self.stages.prefixes {
             return Err(Error::NoPrefixes);
         }
@@ -182,8 +187,35 @@ impl Session {
             return Err(Error::NoTokenYet { tubelet: self.stages.tubelet() });
         }
         let prediction = self.temporal(tokens)?;
-        let stop = self.stages.stop_threshold.is_some_and(|t| prediction.probabilities[prediction.class] >= t);
+        self.remember(tokens, prediction.class);
+        let stop = match self.stages.stop_rule {
+            Some(rule) if prediction.probabilities[prediction.class] >= rule.top_probability && tokens >= rule.agreeing => {
+                let mut agree = true;
+                for before in tokens + 1 - rule.agreeing..tokens {
+                    agree &= self.class_after(before)? == prediction.class;
+                }
+                agree
+            }
+            _ => false,
+        };
         Ok(Peek { prediction, frames: tokens * self.stages.tubelet(), stop })
+    }
+
+    /// The class answered after the first `tokens` tokens of this touch (all received).
+    fn class_after(&mut self, tokens: usize) -> Result<usize> {
+        if let Some(Some(class)) = self.answered.get(tokens) {
+            return Ok(*class);
+        }
+        let class = self.temporal(tokens)?.class;
+        self.remember(tokens, class);
+        Ok(class)
+    }
+
+    fn remember(&mut self, tokens: usize, class: usize) {
+        if self.answered.len() <= tokens {
+            self.answered.resize(tokens + 1, None);
+        }
+        self.answered[tokens] = Some(class);
     }
 
     /// The temporal stage over the first `tokens` temporal tokens, all of them received: the kept
@@ -207,6 +239,7 @@ impl Session {
         self.received = 0;
         self.token.clear();
         self.encodings.clear();
+        self.answered.clear();
     }
 }
 

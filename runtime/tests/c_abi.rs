@@ -187,7 +187,7 @@ fn every_entry_point_reports_instead_of_crashing() {
         assert_eq!(pvt3_session_new(null(), &mut s), PVT3_ERR_NULL);
         assert_eq!(pvt3_session_push_frame(null_mut(), probs.as_ptr(), 60), PVT3_ERR_NULL);
         assert_eq!(pvt3_session_finish(null_mut(), probs.as_mut_ptr(), 40, null_mut()), PVT3_ERR_NULL);
-        assert_eq!(pvt3_session_peek(null(), probs.as_mut_ptr(), 40, null_mut(), null_mut(), null_mut()), PVT3_ERR_NULL);
+        assert_eq!(pvt3_session_peek(null_mut(), probs.as_mut_ptr(), 40, null_mut(), null_mut(), null_mut()), PVT3_ERR_NULL);
         pvt3_session_free(null_mut());
         pvt3_classifier_free(null_mut());
 

@@ -68,7 +68,7 @@ impl BakedFile {
         pvt3_export::Metadata {
             classes: self.classes.clone(),
             provenance: serde_json::to_value(&self.provenance).expect("plain data serialises"),
-            stop_threshold: self.provenance.stopping.as_ref().map(|s| s.threshold),
+            stop_rule: self.provenance.stopping.as_ref().map(|s| s.rule),
         }
     }
 }

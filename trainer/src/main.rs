@@ -588,7 +588,7 @@ fn eval(checkpoint_path: &Path, data_path: Option<&Path>, fold: &str, anytime: b
     }
     let samples = Samples::new(&data, &indices, &meta.normalization);
     if anytime {
-        return eval_anytime(&meta, &model, &samples, fold, json);
+        return eval_anytime(&meta, &model, &data, &samples, fold, json);
     }
     let e = evaluate(&model, &samples)?;
     println!("{} samples (fold {fold}): accuracy {:.4}, loss {:.4}", samples.len(), e.accuracy, e.loss);
@@ -607,9 +607,15 @@ fn eval(checkpoint_path: &Path, data_path: Option<&Path>, fold: &str, anytime: b
     Ok(())
 }
 
-/// `pvt3 eval --anytime`: accuracy against the share of the touch, and the stopping rule.
-fn eval_anytime(meta: &checkpoint::Meta, model: &Classifier, samples: &Samples, fold: &str, json: bool) -> Result<()> {
-    let prefixes = anytime::prefixes(model.pvt3("pvt3 eval --anytime")?, samples)?;
+/// `pvt3 eval --anytime`: accuracy against the share of the touch, and the stopping rule
+/// calibrated on the checkpoint's own validation fold (what training records, and the exported
+/// file carries) applied to `samples`.
+fn eval_anytime(meta: &checkpoint::Meta, model: &Classifier, data: &Dataset, samples: &Samples, fold: &str, json: bool) -> Result<()> {
+    let pvt3 = model.pvt3("pvt3 eval --anytime")?;
+    let prefixes = anytime::prefixes(pvt3, samples)?;
+    let val = Samples::new(data, &data.split(meta.provenance.val_fold)?.val, &meta.normalization);
+    let calibrated = anytime::prefixes(pvt3, &val)?.calibrate();
+    let here = prefixes.stop_by(calibrated.rule);
     let t = prefixes.tokens;
     let curve: Vec<(f64, usize, f64)> = (1..=10)
         .map(|tenth| {
@@ -617,12 +623,11 @@ fn eval_anytime(meta: &checkpoint::Meta, model: &Classifier, samples: &Samples, 
             (tenth as f64 / 10.0, k, prefixes.accuracy_at(k))
         })
         .collect();
-    let here = meta.provenance.stopping.as_ref().map(|s| prefixes.stop_at(s.threshold));
     if json {
         let curve: Vec<_> = curve.iter().map(|(share, k, acc)| serde_json::json!({"share": share, "tokens": k, "accuracy": acc})).collect();
         let out = serde_json::json!({
             "samples": samples.len(), "fold": fold, "tokens": t, "curve": curve,
-            "calibrated": meta.provenance.stopping, "stopping": here,
+            "calibrated": calibrated, "stopping": here,
         });
         println!("{out}");
         return Ok(());
@@ -632,25 +637,22 @@ fn eval_anytime(meta: &checkpoint::Meta, model: &Classifier, samples: &Samples, 
     for (share, k, acc) in &curve {
         println!("{:>7.0}% {k:>7} {acc:>9.4}", share * 100.0);
     }
-    match (&meta.provenance.stopping, here) {
-        (Some(cal), Some(s)) => {
-            println!(
-                "stopping rule: top probability ≥ {:.4} (validation fold {}: accuracy {:.4} against {:.4} for the whole touch, {:.0} % of the touch used)",
-                cal.threshold,
-                meta.provenance.val_fold,
-                cal.accuracy,
-                cal.full_accuracy,
-                cal.mean_share * 100.0
-            );
-            println!(
-                "here: accuracy {:.4} against {:.4} for the whole touch, {:.1} % of the touch used on average",
-                s.accuracy,
-                s.full_accuracy,
-                s.mean_share * 100.0
-            );
-        }
-        _ => println!("no stopping rule: the checkpoint was trained before provisional answers existed"),
-    }
+    let rule = calibrated.rule;
+    println!(
+        "stopping rule: top probability ≥ {:.4} with {} answers in a row agreeing (validation fold {}: accuracy {:.4} against {:.4} for the whole touch, {:.0} % of the touch used)",
+        rule.top_probability,
+        rule.agreeing,
+        meta.provenance.val_fold,
+        calibrated.accuracy,
+        calibrated.full_accuracy,
+        calibrated.mean_share * 100.0
+    );
+    println!(
+        "here: accuracy {:.4} against {:.4} for the whole touch, {:.1} % of the touch used on average",
+        here.accuracy,
+        here.full_accuracy,
+        here.mean_share * 100.0
+    );
     Ok(())
 }
 
