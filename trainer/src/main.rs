@@ -37,12 +37,10 @@ struct ModelArgs {
     /// Data set: an .npz file (x, y, optional fold) or a directory of x.npy, y.npy, fold.npy.
     #[arg(long, default_value = "data/icub20.npz")]
     data: PathBuf,
-    /// Network: PVT³, or one of the paper's baselines: `vit` (one transformer over all frames
-    /// tiled into one frame) or `raec` (the LSTM autoencoder classifier of Gao et al.; add
-    /// `--lr 5e-4 --weight-decay 0` to train it as published). Takes the `vit-`/`raec-` variant
-    /// of the sensor preset; only PVT³ can be pruned and exported.
-    #[arg(long = "model", value_name = "MODEL", value_parser = ["pvt3", "vit", "raec"], conflicts_with = "config")]
-    architecture: Option<String>,
+    /// Network: PVT³, or one of the paper's baselines. Takes the `vit-`/`raec-` variant of the
+    /// sensor preset; only PVT³ can be pruned and exported.
+    #[arg(long = "model", value_name = "MODEL", value_enum, conflicts_with = "config")]
+    architecture: Option<Network>,
     /// Model preset (icub20, biotac20, gelsight, each also as vit-NAME and raec-NAME); by default
     /// the one whose input fits the data.
     #[arg(long, conflicts_with = "config")]
@@ -63,6 +61,37 @@ struct ModelArgs {
     options: TrainOptions,
 }
 
+/// The networks `--model` names.
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum Network {
+    /// PVT³: the ViViT factorised encoder with channel- and frame-selection masks.
+    Pvt3,
+    /// The paper's ViT: one transformer over all frames tiled into one frame.
+    Vit,
+    /// The LSTM autoencoder classifier of Gao et al. (add `--lr 5e-4 --weight-decay 0` to train
+    /// it as published).
+    Raec,
+}
+
+impl From<Network> for Architecture {
+    fn from(n: Network) -> Self {
+        match n {
+            Network::Pvt3 => Architecture::Pvt3,
+            Network::Vit => Architecture::Vit,
+            Network::Raec => Architecture::Raec,
+        }
+    }
+}
+
+/// How `--prune-scope` shares channel pruning.
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum PruneScope {
+    /// The same share of every mask (of every head).
+    Local,
+    /// One threshold over all channel masks.
+    Global,
+}
+
 /// Pruning after training (the paper's schedule: train, prune, fine-tune).
 #[derive(clap::Args)]
 struct PruneArgs {
@@ -77,9 +106,9 @@ struct PruneArgs {
     /// held at zero. A regulariser: the matrices stay dense, the model no smaller.
     #[arg(long)]
     prune_weights: Option<f64>,
-    /// `local`: the same share of every mask (every head); `global`: one threshold over all masks.
-    #[arg(long, default_value = "local", value_parser = ["local", "global"])]
-    prune_scope: String,
+    /// How --prune-channels shares the pruning among the masks.
+    #[arg(long, value_enum, default_value_t = PruneScope::Local)]
+    prune_scope: PruneScope,
     /// Epochs of fine-tuning after pruning, pruned entries held at zero.
     #[arg(long, default_value_t = 30)]
     fine_tune_epochs: usize,
@@ -93,7 +122,10 @@ impl PruneArgs {
         if self.prune_channels.is_none() && self.prune_frames.is_none() && self.prune_weights.is_none() {
             return None;
         }
-        let scope = if self.prune_scope == "global" { Scope::Global } else { Scope::Local };
+        let scope = match self.prune_scope {
+            PruneScope::Local => Scope::Local,
+            PruneScope::Global => Scope::Global,
+        };
         Some(PruneStage {
             spec: PruneSpec {
                 channels: self.prune_channels.unwrap_or(0.0),
@@ -501,9 +533,10 @@ impl Prepared {
 fn prepare(args: &ModelArgs) -> Result<Prepared> {
     let data = Dataset::load(&args.data, args.options.seed)?;
     // `--model vit` turns preset `icub20` into `vit-icub20`.
-    let preset = |name: &str| match args.architecture.as_deref() {
-        Some(model) if model != "pvt3" => Config::preset(&format!("{model}-{name}")),
-        _ => Config::preset(name),
+    let architecture = args.architecture.map_or(Architecture::Pvt3, Architecture::from);
+    let preset = |name: &str| match architecture {
+        Architecture::Pvt3 => Config::preset(name),
+        model => Config::preset(&format!("{}-{name}", model.name())),
     };
     let mut cfg = match (&args.preset, &args.config) {
         (Some(p), _) => preset(p)?,
@@ -518,7 +551,6 @@ fn prepare(args: &ModelArgs) -> Result<Prepared> {
                 let shape = data.sample_shape.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(" × ");
                 let derived = Config::for_sensor(&data.sample_shape)
                     .with_context(|| format!("samples of shape {shape}: expected [height, width, (channels,) frames]"))?;
-                let architecture = args.architecture.as_deref().map_or(Ok(Architecture::Pvt3), |a| a.parse())?;
                 eprintln!(
                     "no preset takes samples of {shape}: derived the BioTac layout, one token per {} frames of all {} values of a frame ({} temporal tokens); `pvt3 info --json` and --config FILE to choose otherwise",
                     derived.tubelet,
