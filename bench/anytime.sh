@@ -40,7 +40,7 @@ train_one() {
 export -f train_one
 export out P pvt3
 echo "$(wc -l < "$jobs_file") trainings, $JOBS at a time" >&2
-xargs -P "$JOBS" -L 1 bash -c 'train_one "$@"' _ < "$jobs_file"
+xargs -r -P "$JOBS" -L 1 bash -c 'train_one "$@"' _ < "$jobs_file"
 
 results=$out/anytime.jsonl
 : > "$results"

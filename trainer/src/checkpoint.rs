@@ -31,9 +31,15 @@ pub struct Provenance {
     #[serde(default)]
     pub pruning: Option<pvt3_models::prune::PruneSpec>,
     /// The stopping rule of provisional answers, calibrated on the validation fold when the
-    /// run finished (PVT³ only).
-    #[serde(default)]
+    /// run finished (PVT³ only). A rule of another form (an earlier pvt3's) reads as none: such a
+    /// run exports without one, and `pvt3 eval --anytime` calibrates it afresh.
+    #[serde(default, deserialize_with = "current_or_none")]
     pub stopping: Option<crate::anytime::Stopping>,
+}
+
+fn current_or_none<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Option<crate::anytime::Stopping>, D::Error> {
+    let value = serde_json::Value::deserialize(d)?;
+    Ok(serde_json::from_value(value).ok())
 }
 
 /// A baked model with everything the exporter needs: what `pvt3 bake` writes.
@@ -199,4 +205,33 @@ fn resolve(path: &Path) -> Result<PathBuf> {
         .filter_map(|c| existing_dir(c))
         .find(|d| d.join("config.json").exists())
         .ok_or_else(|| checkpoint_error(path, "not a checkpoint directory (no config.json in it or in its model/)"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A run of an earlier pvt3 (its stopping rule in another form) still loads, without a rule.
+    #[test]
+    fn a_stopping_rule_of_another_form_reads_as_none() {
+        let p = Provenance {
+            pvt3_version: "test".into(),
+            data: "d".into(),
+            val_fold: 0,
+            seed: 0,
+            epoch: 1,
+            val_accuracy: 0.5,
+            test_accuracy: None,
+            options: TrainOptions::default(),
+            pruning: None,
+            stopping: None,
+        };
+        let mut json = serde_json::to_value(&p).unwrap();
+        json["stopping"] = serde_json::json!({"threshold": 0.9, "full_accuracy": 0.9, "accuracy": 0.9, "mean_share": 0.5});
+        assert_eq!(serde_json::from_value::<Provenance>(json.clone()).unwrap().stopping, None);
+        let rule =
+            serde_json::json!({"rule": {"top_probability": 0.9, "agreeing": 3}, "full_accuracy": 0.9, "accuracy": 0.9, "mean_share": 0.5});
+        json["stopping"] = rule;
+        assert_eq!(serde_json::from_value::<Provenance>(json).unwrap().stopping.unwrap().rule.agreeing, 3);
+    }
 }
