@@ -6,13 +6,13 @@
 # validation fold, applied to the test fold), and times a provisional answer at 10, 50 and 100 %
 # of a touch in the runtime (`pvt3-run --bench` on the exported file).
 #
-#   bash bench/anytime.sh                        # SEEDS="0 1 2" P=0.5 JOBS=2
+#   bash bench/anytime.sh                        # SEEDS="0 1 2" P=0.5 JOBS=2 DATASETS="icub20 biotac20"
 #   SEEDS="0 1 2 3 4" P=0.3 bash bench/anytime.sh
 #
 # Runs go to runs/anytime/ (a finished run is not trained again).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-SEEDS=${SEEDS:-"0 1 2"} P=${P:-0.5} JOBS=${JOBS:-2}
+SEEDS=${SEEDS:-"0 1 2"} P=${P:-0.5} JOBS=${JOBS:-2} DATASETS=${DATASETS:-"icub20 biotac20"}
 out=runs/anytime
 mkdir -p "$out"
 cargo build -q --release -p pvt3-trainer -p pvt3-runtime --bins
@@ -21,7 +21,7 @@ pvt3=target/release/pvt3
 # One training per line: data set, variant, seed. Finished runs are skipped.
 jobs_file=$(mktemp)
 trap 'rm -f "$jobs_file"' EXIT
-for data in icub20 biotac20; do
+for data in $DATASETS; do
   for seed in $SEEDS; do
     for variant in whole "prefix$P"; do
       [ -f "$out/$data-$variant-s$seed/result.json" ] || echo "$data $variant $seed" >> "$jobs_file"
@@ -44,7 +44,7 @@ xargs -r -P "$JOBS" -L 1 bash -c 'train_one "$@"' _ < "$jobs_file"
 
 results=$out/anytime.jsonl
 : > "$results"
-for data in icub20 biotac20; do
+for data in $DATASETS; do
   for seed in $SEEDS; do
     for variant in whole "prefix$P"; do
       run="$out/$data-$variant-s$seed"
@@ -56,7 +56,7 @@ done
 first=${SEEDS%% *}
 costs=$out/peek-cost.jsonl
 : > "$costs"
-for data in icub20 biotac20; do
+for data in $DATASETS; do
   env -u RUST_BACKTRACE target/release/pvt3-run --bench "$out/$data-prefix$P-s$first.onnx" 1 1 >> "$costs"
 done
 python3 bench/anytime_report.py "$results" "$costs" "$P" "$SEEDS"

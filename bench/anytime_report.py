@@ -11,7 +11,7 @@ import sys
 results_path, costs_path, p, seeds = sys.argv[1:]
 rows = [json.loads(line) for line in open(results_path)]
 costs = [json.loads(line) for line in open(costs_path)]
-names = {"icub20": "iCub-20", "biotac20": "BioTac-20"}
+names = {d: n for d, n in {"icub20": "iCub-20", "biotac20": "BioTac-20"}.items() if any(r["data"] == d for r in rows)}
 variants = ["whole", f"prefix{p}"]
 labels = {"whole": "whole windows", f"prefix{p}": f"`--prefix-training {p}`"}
 
@@ -80,7 +80,7 @@ for c in costs:
 # the stopping rule's (share, accuracy) as a marker.
 W, H, PAD = 360, 260, 46
 colors = {"whole": "#888888", f"prefix{p}": "#1f6fb4"}
-svg = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{2 * W}" height="{H + 40}" font-family="sans-serif" font-size="11">']
+svg = [f'<svg xmlns="http://www.w3.org/2000/svg" width="{len(names) * W}" height="{H + 40}" font-family="sans-serif" font-size="11">']
 for panel, data in enumerate(names):
     x0 = panel * W
     rs_all = [r for r in rows if r["data"] == data]
