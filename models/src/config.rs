@@ -18,6 +18,7 @@ pub const PRESETS: [&str; 3] = ["icub20", "biotac20", "gelsight"];
 
 /// The network a configuration describes.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Architecture {
     /// PVT³: the ViViT factorised encoder with channel- and frame-selection masks.

@@ -13,6 +13,7 @@ use crate::bake::Tensors;
 use crate::{Config, Error, Result};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 #[serde(rename_all = "lowercase")]
 pub enum Scope {
     /// The same share of every mask (of every head, for attention).

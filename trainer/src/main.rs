@@ -37,10 +37,11 @@ struct ModelArgs {
     /// Data set: an .npz file (x, y, optional fold) or a directory of x.npy, y.npy, fold.npy.
     #[arg(long, default_value = "data/icub20.npz")]
     data: PathBuf,
-    /// Network: PVT³, or one of the paper's baselines. Takes the `vit-`/`raec-` variant of the
-    /// sensor preset; only PVT³ can be pruned and exported.
+    /// Network: PVT³, or one of the paper's baselines (RAEC as published: add `--lr 5e-4
+    /// --weight-decay 0`). Takes the `vit-`/`raec-` variant of the sensor preset; only PVT³ can
+    /// be pruned and exported.
     #[arg(long = "model", value_name = "MODEL", value_enum, conflicts_with = "config")]
-    architecture: Option<Network>,
+    architecture: Option<Architecture>,
     /// Model preset (icub20, biotac20, gelsight, each also as vit-NAME and raec-NAME); by default
     /// the one whose input fits the data.
     #[arg(long, conflicts_with = "config")]
@@ -61,37 +62,6 @@ struct ModelArgs {
     options: TrainOptions,
 }
 
-/// The networks `--model` names.
-#[derive(Clone, Copy, clap::ValueEnum)]
-enum Network {
-    /// PVT³: the ViViT factorised encoder with channel- and frame-selection masks.
-    Pvt3,
-    /// The paper's ViT: one transformer over all frames tiled into one frame.
-    Vit,
-    /// The LSTM autoencoder classifier of Gao et al. (add `--lr 5e-4 --weight-decay 0` to train
-    /// it as published).
-    Raec,
-}
-
-impl From<Network> for Architecture {
-    fn from(n: Network) -> Self {
-        match n {
-            Network::Pvt3 => Architecture::Pvt3,
-            Network::Vit => Architecture::Vit,
-            Network::Raec => Architecture::Raec,
-        }
-    }
-}
-
-/// How `--prune-scope` shares channel pruning.
-#[derive(Clone, Copy, clap::ValueEnum)]
-enum PruneScope {
-    /// The same share of every mask (of every head).
-    Local,
-    /// One threshold over all channel masks.
-    Global,
-}
-
 /// Pruning after training (the paper's schedule: train, prune, fine-tune).
 #[derive(clap::Args)]
 struct PruneArgs {
@@ -107,8 +77,8 @@ struct PruneArgs {
     #[arg(long)]
     prune_weights: Option<f64>,
     /// How --prune-channels shares the pruning among the masks.
-    #[arg(long, value_enum, default_value_t = PruneScope::Local)]
-    prune_scope: PruneScope,
+    #[arg(long, value_enum, default_value_t = Scope::Local)]
+    prune_scope: Scope,
     /// Epochs of fine-tuning after pruning, pruned entries held at zero.
     #[arg(long, default_value_t = 30)]
     fine_tune_epochs: usize,
@@ -122,15 +92,11 @@ impl PruneArgs {
         if self.prune_channels.is_none() && self.prune_frames.is_none() && self.prune_weights.is_none() {
             return None;
         }
-        let scope = match self.prune_scope {
-            PruneScope::Local => Scope::Local,
-            PruneScope::Global => Scope::Global,
-        };
         Some(PruneStage {
             spec: PruneSpec {
                 channels: self.prune_channels.unwrap_or(0.0),
                 frames: self.prune_frames.unwrap_or(0.0),
-                scope,
+                scope: self.prune_scope,
                 weights: self.prune_weights.unwrap_or(0.0),
             },
             epochs: self.fine_tune_epochs,
@@ -533,7 +499,7 @@ impl Prepared {
 fn prepare(args: &ModelArgs) -> Result<Prepared> {
     let data = Dataset::load(&args.data, args.options.seed)?;
     // `--model vit` turns preset `icub20` into `vit-icub20`.
-    let architecture = args.architecture.map_or(Architecture::Pvt3, Architecture::from);
+    let architecture = args.architecture.unwrap_or_default();
     let preset = |name: &str| match architecture {
         Architecture::Pvt3 => Config::preset(name),
         model => Config::preset(&format!("{}-{name}", model.name())),
