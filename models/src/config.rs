@@ -362,6 +362,15 @@ impl Config {
         self.frames / self.tubelet
     }
 
+    /// Checks that `tokens` temporal tokens are a prefix of a window: 1 to all of them.
+    pub fn check_prefix(&self, tokens: usize) -> Result<()> {
+        let t = self.time_tokens();
+        if tokens == 0 || tokens > t {
+            return Err(Error::InputShape { got: vec![tokens], expected: format!("1 to {t} temporal tokens") });
+        }
+        Ok(())
+    }
+
     /// Width of the attention's q, k and v: heads × dim_head.
     pub fn inner_dim(&self) -> usize {
         self.heads * self.dim_head

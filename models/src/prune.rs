@@ -37,27 +37,37 @@ pub struct PruneSpec {
     pub weights: f64,
 }
 
-/// Zeroes `percent` % of the entries of every weight matrix in `tensors` (2-D `….weight`), chosen
-/// at random by `seed`: the exact count in each matrix, as PyTorch's `random_unstructured` does.
-/// Returns the entries zeroed.
-pub fn random_weights(tensors: &mut Tensors, percent: f64, seed: u64) -> Result<usize> {
-    if !(0.0..=100.0).contains(&percent) {
-        return Err(Error::Config(format!("cannot prune {percent} % of the weights: give a percentage from 0 to 100")));
-    }
+/// A linear layer's weight matrix, by its variable's name and rank: what weight decay and
+/// random pruning apply to.
+pub fn is_weight_matrix(name: &str, rank: usize) -> bool {
+    name.ends_with(".weight") && rank == 2
+}
+
+/// Zeroes `percent` % of the entries of every weight matrix in `tensors` ([`is_weight_matrix`]),
+/// chosen at random by `seed`: the exact count in each matrix, as PyTorch's `random_unstructured`
+/// does.
+pub fn random_weights(tensors: &mut Tensors, percent: f64, seed: u64) -> Result<()> {
+    check_percent("weights", percent)?;
     let mut rng = crate::Rng::new(seed);
-    let mut zeroed = 0;
     for (name, (shape, values)) in tensors.iter_mut() {
-        if !(name.ends_with(".weight") && shape.len() == 2) {
+        if !is_weight_matrix(name, shape.len()) {
             continue;
         }
         let mut order: Vec<usize> = (0..values.len()).collect();
         rng.shuffle(&mut order);
         for &i in order.iter().take(share(values.len(), percent)) {
             values[i] = 0.0;
-            zeroed += 1;
         }
     }
-    Ok(zeroed)
+    Ok(())
+}
+
+/// `percent` as a share of `what` to prune: from 0 to 100.
+fn check_percent(what: &str, percent: f64) -> Result<()> {
+    if !(0.0..=100.0).contains(&percent) {
+        return Err(Error::Config(format!("cannot prune {percent} % of the {what}: give a percentage from 0 to 100")));
+    }
+    Ok(())
 }
 
 /// For each mask name, which entries are kept.
@@ -92,9 +102,7 @@ fn share(n: usize, percent: f64) -> usize {
 pub fn plan(cfg: &Config, tensors: &Tensors, spec: &PruneSpec) -> Result<Plan> {
     cfg.require_pvt3("pruning")?;
     for (what, p) in [("channels", spec.channels), ("frames", spec.frames)] {
-        if !(0.0..=100.0).contains(&p) {
-            return Err(Error::Config(format!("cannot prune {p} % of the {what}: give a percentage from 0 to 100")));
-        }
+        check_percent(what, p)?;
     }
     let get = |name: &str| -> Result<&Vec<f32>> {
         tensors.get(name).map(|(_, v)| v).ok_or_else(|| Error::Config(format!("cannot prune: no mask `{name}`")))

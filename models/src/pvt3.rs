@@ -89,10 +89,7 @@ impl Pvt3 {
 
     /// The first `tokens` temporal tokens of a sequence from [`Self::sequence`], with its CLS token.
     pub fn prefix(&self, sequence: &Tensor, tokens: usize) -> Result<Tensor> {
-        let t = self.cfg.time_tokens();
-        if tokens == 0 || tokens > t {
-            return Err(crate::Error::InputShape { got: vec![tokens], expected: format!("1 to {t} temporal tokens") });
-        }
+        self.cfg.check_prefix(tokens)?;
         Ok(sequence.narrow(1, 0, tokens + 1)?)
     }
 

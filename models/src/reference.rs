@@ -110,9 +110,7 @@ pub fn forward_prefix(m: &BakedPvt3, x: &[f32], batch: usize, tokens: usize) -> 
     if x.len() != batch * sample_len {
         return Err(Error::InputShape { got: vec![x.len()], expected: format!("{batch} × {sample_len} values") });
     }
-    if tokens == 0 || tokens > c.time_tokens() {
-        return Err(Error::InputShape { got: vec![tokens], expected: format!("1 to {} temporal tokens", c.time_tokens()) });
-    }
+    c.check_prefix(tokens)?;
     let (n, d, eps) = (c.num_patches(), c.dim, c.layer_norm_eps);
     x.chunks(sample_len)
         .map(|sample| {

@@ -15,9 +15,10 @@ use candle_nn::VarMap;
 
 use crate::Result;
 
-/// A linear layer's weight matrix: what weight decay (and random pruning) applies to.
+/// A linear layer's weight matrix ([`pvt3_models::prune::is_weight_matrix`]): what weight decay
+/// and random pruning apply to.
 pub fn is_weight_matrix(name: &str, var: &Var) -> bool {
-    name.ends_with(".weight") && var.rank() == 2
+    pvt3_models::prune::is_weight_matrix(name, var.rank())
 }
 
 pub struct AdamW {
