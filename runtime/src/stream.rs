@@ -223,9 +223,12 @@ impl Session {
     fn temporal(&self, tokens: usize) -> Result<Prediction> {
         let (dim, total) = (self.stages.dim, self.stages.kept_index.len());
         let kept = self.stages.kept_index.iter().flatten().count();
-        let mut encodings = self.encodings.clone();
+        // One copy of the encodings, as finishing made before provisional answers existed.
+        let mut encodings = Vec::with_capacity(kept * dim);
+        encodings.extend_from_slice(&self.encodings);
         encodings.resize(kept * dim, 0.0);
-        let mut inputs = tvec!(Tensor::from_shape(&[kept, dim], &encodings).map_err(tract_error)?.into());
+        let encodings = tract_ndarray::Array2::from_shape_vec((kept, dim), encodings).map_err(tract_error)?;
+        let mut inputs = tvec!(Tensor::from(encodings).into());
         if self.stages.prefixes {
             let bias: Vec<f32> = (0..=total).map(|k| if k <= tokens { 0.0 } else { f32::NEG_INFINITY }).collect();
             inputs.push(Tensor::from_shape(&[1, 1, 1, total + 1], &bias).map_err(tract_error)?.into());
