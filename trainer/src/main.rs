@@ -611,8 +611,14 @@ fn eval(checkpoint_path: &Path, data_path: Option<&Path>, fold: &str, anytime: b
 fn eval_anytime(meta: &checkpoint::Meta, model: &Classifier, data: &Dataset, samples: &Samples, fold: &str, json: bool) -> Result<()> {
     let pvt3 = model.pvt3("pvt3 eval --anytime")?;
     let prefixes = anytime::prefixes(pvt3, samples)?;
-    let val = Samples::new(data, &data.split(meta.provenance.val_fold)?.val, &meta.normalization);
-    let calibrated = anytime::prefixes(pvt3, &val)?.calibrate();
+    // The rule training recorded; a run from before there was one is calibrated here the same way.
+    let calibrated = match &meta.provenance.stopping {
+        Some(recorded) => recorded.clone(),
+        None => {
+            let val = Samples::new(data, &data.split(meta.provenance.val_fold)?.val, &meta.normalization);
+            anytime::prefixes(pvt3, &val)?.calibrate()
+        }
+    };
     let here = prefixes.stop_by(calibrated.rule);
     let t = prefixes.tokens;
     let curve: Vec<(f64, usize, f64)> = (1..=10)
