@@ -38,6 +38,11 @@ pub struct CvSummary {
     pub pruned_runs: Vec<RunResult>,
     #[serde(default)]
     pub pruned_mean_test_accuracy: Option<f64>,
+    /// With pruning: each seed's mean over its pruned runs, and their 95 % interval.
+    #[serde(default)]
+    pub pruned_seed_means: Vec<f64>,
+    #[serde(default)]
+    pub pruned_ci95_test_accuracy: Option<[f64; 2]>,
     #[serde(default)]
     pub pruned_std_test_accuracy: Option<f64>,
     #[serde(default)]
@@ -56,6 +61,12 @@ struct FoldResult {
 }
 
 fn run_fold(spec: &RunSpec, stage: Option<&PruneStage>, dir: &Path, resume: bool, bar: &ProgressBar) -> Result<Option<FoldResult>> {
+    if stage.is_some() {
+        // The pruned half's directory exists from the start, so that `report` sees a run whose
+        // dense half has finished as unfinished, not as a run trained without pruning.
+        let pruned = dir.join("pruned");
+        std::fs::create_dir_all(&pruned).map_err(Error::io(&pruned))?;
+    }
     let Some(dense) = train(spec, dir, resume, bar)? else {
         return Ok(None);
     };
@@ -170,9 +181,19 @@ fn summarize(data: String, seeds: &[u64], runs: Vec<RunResult>, pruned_runs: Vec
     let tests: Vec<f64> = runs.iter().map(|r| r.test_accuracy).collect();
     let vals: Vec<f64> = runs.iter().map(|r| r.val_accuracy).collect();
     let (mean_test_accuracy, std_test_accuracy) = mean_std(&tests);
-    let seed_means: Vec<f64> =
-        seeds.iter().map(|&s| mean_std(&runs.iter().filter(|r| r.seed == s).map(|r| r.test_accuracy).collect::<Vec<_>>()).0).collect();
+    let seed_means = |runs: &[RunResult]| -> Vec<f64> {
+        seeds
+            .iter()
+            .filter_map(|&s| {
+                let tests: Vec<f64> = runs.iter().filter(|r| r.seed == s).map(|r| r.test_accuracy).collect();
+                (!tests.is_empty()).then(|| mean_std(&tests).0)
+            })
+            .collect()
+    };
+    let (pruned_seed_means, seed_means) = (seed_means(&pruned_runs), seed_means(&runs));
     CvSummary {
+        pruned_ci95_test_accuracy: ci95(&pruned_seed_means),
+        pruned_seed_means,
         ci95_test_accuracy: ci95(&seed_means),
         seed_means,
         data,
@@ -274,6 +295,54 @@ pub fn report(out: &Path) -> Result<CvSummary> {
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+    use crate::train::tests::{out_dir, spec, tiny_data};
+
+    /// A pruning run's `pruned/` exists while its dense half trains, so a report in that window
+    /// lists the run as unfinished rather than as trained without pruning.
+    #[test]
+    fn a_pruning_run_is_unfinished_until_its_pruned_half_is_done() {
+        let (data, out) = (tiny_data(), out_dir("cv-window"));
+        let dir = out.join("seed5/fold0");
+        let spec = spec(&data, 2, Some(1));
+        let stage = PruneStage {
+            spec: pvt3_models::prune::PruneSpec { channels: 0.0, frames: 0.0, scope: Default::default(), weights: 20.0 },
+            epochs: 1,
+            lr: 1e-3,
+        };
+        assert!(run_fold(&spec, Some(&stage), &dir, false, &ProgressBar::hidden()).unwrap().is_none(), "paused");
+        assert!(dir.join("pruned").is_dir());
+        // The dense half finished (as a job in the window would leave it): still unfinished.
+        let finished = RunSpec { pause_after: None, ..spec };
+        train(&finished, &dir, true, &ProgressBar::hidden()).unwrap().unwrap();
+        let err = report(&out).unwrap_err().to_string();
+        assert!(err.contains("no finished run under it") && err.contains("1 unfinished"), "{err}");
+        std::fs::remove_dir_all(out).unwrap();
+    }
+
+    /// Pruned runs get their own seed means and interval, as the dense ones.
+    #[test]
+    fn pruned_runs_are_summarised_per_seed_as_the_dense_ones() {
+        let run = |seed, val_fold, test_accuracy| RunResult {
+            val_fold,
+            seed,
+            best_epoch: 1,
+            val_accuracy: 0.9,
+            test_accuracy,
+            epochs: 1,
+            wall_seconds: 1.0,
+        };
+        let dense = vec![run(0, 0, 0.9), run(0, 1, 1.0), run(1, 0, 0.8), run(1, 1, 0.9)];
+        let pruned = vec![run(0, 0, 0.8), run(0, 1, 0.8), run(1, 0, 0.7), run(1, 1, 0.7)];
+        let s = summarize("d".into(), &[0, 1], dense, pruned, None);
+        assert_eq!((s.seed_means.len(), s.pruned_seed_means.len()), (2, 2));
+        assert!((s.seed_means[0] - 0.95).abs() < 1e-12 && (s.pruned_seed_means[1] - 0.7).abs() < 1e-12);
+        assert_eq!(s.pruned_ci95_test_accuracy, ci95(&[0.8, 0.7]));
+        assert!(s.pruned_ci95_test_accuracy.is_some() && s.ci95_test_accuracy != s.pruned_ci95_test_accuracy);
+        let unpruned = summarize("d".into(), &[0], vec![run(0, 0, 0.9)], Vec::new(), None);
+        assert!(unpruned.pruned_seed_means.is_empty() && unpruned.pruned_ci95_test_accuracy.is_none());
+    }
+
     #[test]
     fn mean_std_is_the_sample_statistic() {
         let (m, s) = super::mean_std(&[0.9, 0.95, 1.0]);

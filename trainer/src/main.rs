@@ -376,7 +376,9 @@ fn main() -> Result<()> {
                 );
             }
             if let (Some(m), Some(sd)) = (s.pruned_mean_test_accuracy, s.pruned_std_test_accuracy) {
-                println!("pruned and fine-tuned: mean test accuracy {m:.4} ± {sd:.4}");
+                let interval =
+                    s.pruned_ci95_test_accuracy.map_or(String::new(), |[lo, hi]| format!(", 95 % confidence interval [{lo:.4}, {hi:.4}]"));
+                println!("pruned and fine-tuned: mean test accuracy {m:.4} ± {sd:.4} over {} runs{interval}", s.pruned_runs.len());
             }
             println!(
                 "mean test accuracy {:.4} ± {:.4} over {} runs (wall {:.0} s); summary {}",

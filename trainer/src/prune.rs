@@ -23,7 +23,7 @@ pub struct PruneStage {
 }
 
 /// Mixed into the run's seed to draw the weights that random pruning zeroes.
-const RANDOM_WEIGHTS_SEED: u64 = 0x7a11_0f_5eed;
+const RANDOM_WEIGHTS_SEED: u64 = 0x007a_110f_5eed;
 
 /// Prunes the checkpoint of `parent` and fine-tunes it into `out` on the parent's split of `data`.
 pub fn prune_and_fine_tune(
