@@ -1,0 +1,123 @@
+//! `pvt3 eval`: a checkpoint's accuracy on a fold (by default its own data's test fold), per
+//! class, or with `--anytime` against the share of each touch it has seen.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context, Result};
+use pvt3_models::Classifier;
+use pvt3_trainer::anytime;
+use pvt3_trainer::checkpoint;
+use pvt3_trainer::data::{Dataset, TEST_FOLD};
+use pvt3_trainer::evaluate::{evaluate, Samples};
+
+/// Accuracy of a checkpoint on a data set (by default its test fold, or all samples).
+#[derive(clap::Args)]
+pub struct EvalArgs {
+    /// Checkpoint directory (or a run directory holding model/).
+    pub checkpoint: PathBuf,
+    /// The data set; by default the one the checkpoint was trained on.
+    #[arg(long)]
+    pub data: Option<PathBuf>,
+    /// Which samples: a fold number, or `all`.
+    #[arg(long, default_value = "4")]
+    pub fold: String,
+    /// Provisional answers (PVT³): accuracy from the first 10 %, 20 % … of each touch, and
+    /// what the checkpoint's stopping rule (calibrated on its validation fold) does here.
+    #[arg(long)]
+    pub anytime: bool,
+    /// With --anytime: print one JSON object instead of the table.
+    #[arg(long, requires = "anytime")]
+    pub json: bool,
+}
+
+pub fn run(a: EvalArgs) -> Result<()> {
+    let (checkpoint_path, fold) = (a.checkpoint.as_path(), a.fold.as_str());
+    let (meta, model, _) = checkpoint::load(checkpoint_path)?;
+    let own = PathBuf::from(&meta.provenance.data);
+    let data_path = a.data.as_deref().unwrap_or(&own);
+    let data = Dataset::load(data_path, meta.provenance.seed).with_context(|| format!("loading {}", data_path.display()))?;
+    data.check_fits(&meta.config)?;
+    let indices: Vec<usize> = if fold == "all" {
+        (0..data.len()).collect()
+    } else {
+        let k: usize = fold.parse().with_context(|| format!("--fold {fold}: expected a fold number or `all`"))?;
+        (0..data.len()).filter(|&i| data.folds[i] == k).collect()
+    };
+    if indices.is_empty() {
+        bail!("fold {fold} of {} holds no samples", data_path.display());
+    }
+    let samples = Samples::new(&data, &indices, &meta.normalization);
+    if a.anytime {
+        return anytime_report(&meta, &model, &data, &samples, fold, a.json);
+    }
+    let e = evaluate(&model, &samples)?;
+    println!("{} samples (fold {fold}): accuracy {:.4}, loss {:.4}", samples.len(), e.accuracy, e.loss);
+    if let (true, Some(test)) = (fold.parse::<usize>().ok() == Some(TEST_FOLD), meta.provenance.test_accuracy) {
+        println!("(the checkpoint's own record: test accuracy {test:.4})");
+    }
+    println!("{:<24} {:>8} {:>8}", "class", "samples", "accuracy");
+    for (c, name) in meta.classes.iter().enumerate() {
+        let rows: Vec<usize> = (0..samples.len()).filter(|&r| samples.labels[r] as usize == c).collect();
+        if rows.is_empty() {
+            continue;
+        }
+        let ok = rows.iter().filter(|&&r| e.predictions[r] as usize == c).count();
+        println!("{:<24} {:>8} {:>8.3}", name, rows.len(), ok as f64 / rows.len() as f64);
+    }
+    Ok(())
+}
+
+/// `pvt3 eval --anytime`: accuracy against the share of the touch, and the stopping rule
+/// calibrated on the checkpoint's own validation fold (what training records, and the exported
+/// file carries) applied to `samples`.
+fn anytime_report(meta: &checkpoint::Meta, model: &Classifier, data: &Dataset, samples: &Samples, fold: &str, json: bool) -> Result<()> {
+    let pvt3 = model.pvt3("pvt3 eval --anytime")?;
+    let prefixes = anytime::prefixes(pvt3, samples)?;
+    // The rule training recorded; a run from before there was one is calibrated here the same way.
+    let calibrated = match &meta.provenance.stopping {
+        Some(recorded) => recorded.clone(),
+        None => {
+            let val = Samples::new(data, &data.split(meta.provenance.val_fold)?.val, &meta.normalization);
+            anytime::prefixes(pvt3, &val)?.calibrate()
+        }
+    };
+    let here = prefixes.stop_by(calibrated.rule);
+    let t = prefixes.tokens;
+    let curve: Vec<(f64, usize, f64)> = (1..=10)
+        .map(|tenth| {
+            let k = (tenth * t).div_ceil(10).max(1);
+            (tenth as f64 / 10.0, k, prefixes.accuracy_at(k))
+        })
+        .collect();
+    if json {
+        let curve: Vec<_> = curve.iter().map(|(share, k, acc)| serde_json::json!({"share": share, "tokens": k, "accuracy": acc})).collect();
+        let out = serde_json::json!({
+            "samples": samples.len(), "fold": fold, "tokens": t, "curve": curve,
+            "calibrated": calibrated, "stopping": here,
+        });
+        println!("{out}");
+        return Ok(());
+    }
+    println!("provisional answers on {} samples (fold {fold}), {t} temporal tokens per touch", samples.len());
+    println!("{:>8} {:>7} {:>9}", "touch", "tokens", "accuracy");
+    for (share, k, acc) in &curve {
+        println!("{:>7.0}% {k:>7} {acc:>9.4}", share * 100.0);
+    }
+    let rule = calibrated.rule;
+    println!(
+        "stopping rule: top probability ≥ {:.4} with {} answers in a row agreeing (validation fold {}: accuracy {:.4} against {:.4} for the whole touch, {:.0} % of the touch used)",
+        rule.top_probability,
+        rule.agreeing,
+        meta.provenance.val_fold,
+        calibrated.accuracy,
+        calibrated.full_accuracy,
+        calibrated.mean_share * 100.0
+    );
+    println!(
+        "here: accuracy {:.4} against {:.4} for the whole touch, {:.1} % of the touch used on average",
+        here.accuracy,
+        here.full_accuracy,
+        here.mean_share * 100.0
+    );
+    Ok(())
+}

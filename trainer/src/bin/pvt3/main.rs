@@ -1,0 +1,122 @@
+//! `pvt3`: train, cross-validate, prune, export, evaluate and inspect PVT³ tactile texture
+//! classifiers. One module per command: its options (clap) and what it does.
+
+mod bench;
+mod cv;
+mod eval;
+mod export;
+mod info;
+mod model_args;
+mod progress;
+mod prune;
+mod prune_args;
+mod train;
+
+use anyhow::Result;
+use clap::{Parser, Subcommand};
+
+#[derive(Parser)]
+#[command(name = "pvt3", version, about = "PVT³ tactile texture classification: train, cross-validate, evaluate, inspect")]
+struct Cli {
+    /// CPU threads for training and evaluation (default: all cores). One run splits each batch's
+    /// sequences over them (two threads: 1.5-1.7x one); `cv --jobs N` uses the cores best, one
+    /// fold per thread. The result is the same bits on any count.
+    #[arg(long, global = true)]
+    threads: Option<usize>,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    Train(train::TrainArgs),
+    Cv(cv::CvArgs),
+    Prune(prune::PruneCommand),
+    Export(export::ExportArgs),
+    Bake(export::BakeArgs),
+    Eval(eval::EvalArgs),
+    /// Benchmarks (see docs/training-speed.md).
+    #[command(subcommand)]
+    Bench(bench::Bench),
+    Info(info::InfoArgs),
+}
+
+/// Process settings, before any other thread starts.
+/// - Memory: candle allocates fresh buffers for every op, and glibc hands large ones back to the
+///   kernel on free, so training spent a quarter of its time in page faults zeroing new pages.
+///   Keeping freed memory in the heap makes the next step reuse it.
+/// - SIGPIPE back to its default, so that `pvt3 info | head` ends quietly instead of panicking.
+fn set_up_process() {
+    // SAFETY: both only adjust process-wide settings, and no other thread exists yet.
+    unsafe {
+        libc::mallopt(libc::M_MMAP_THRESHOLD, 32 << 20);
+        libc::mallopt(libc::M_TRIM_THRESHOLD, 1 << 30);
+        libc::mallopt(libc::M_TOP_PAD, 64 << 20);
+        libc::signal(libc::SIGPIPE, libc::SIG_DFL);
+    }
+}
+
+fn main() -> Result<()> {
+    set_up_process();
+    let cli = Cli::parse();
+    let jobs = match &cli.command {
+        Command::Cv(a) => a.jobs,
+        _ => 1,
+    };
+    // candle reads the thread count from RAYON_NUM_THREADS; it must be set before its first use.
+    if let Some(t) = cli.threads.or((jobs > 1).then_some(1)) {
+        std::env::set_var("RAYON_NUM_THREADS", t.to_string());
+    }
+    match cli.command {
+        Command::Train(a) => train::run(a),
+        Command::Cv(a) => cv::run(a),
+        Command::Prune(a) => prune::run(a),
+        Command::Export(a) => export::export_onnx(&a.model, &a.out),
+        Command::Bake(a) => export::bake(a),
+        Command::Eval(a) => eval::run(a),
+        Command::Bench(b) => bench::run(b),
+        Command::Info(a) => info::run(a),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::{CommandFactory, Parser};
+
+    use super::{Cli, Command};
+
+    #[test]
+    fn the_command_line_is_consistent() {
+        Cli::command().debug_assert();
+    }
+
+    /// Options parse into their types: value enums, seeds, pruning, --only; bad values are
+    /// refused by the parser, before any work.
+    #[test]
+    fn options_parse_into_their_types() {
+        let cli =
+            Cli::try_parse_from(["pvt3", "cv", "--model", "vit", "--seeds", "0,1,2", "--prune-frames", "50", "--prune-scope", "global"])
+                .unwrap();
+        let Command::Cv(a) = cli.command else { panic!("not cv") };
+        assert_eq!(a.model.architecture, Some(pvt3_models::Architecture::Vit));
+        assert_eq!(a.seeds, [0, 1, 2]);
+        let stage = a.prune.stage().unwrap();
+        assert_eq!((stage.spec.frames, stage.spec.channels, stage.spec.scope), (50.0, 0.0, pvt3_models::prune::Scope::Global));
+        let cli = Cli::try_parse_from(["pvt3", "--threads", "1", "train", "--prefix-training", "0.5", "--fold", "2"]).unwrap();
+        let Command::Train(a) = cli.command else { panic!("not train") };
+        assert_eq!((cli.threads, a.fold, a.model.options.prefix_training, a.prune.stage().is_none()), (Some(1), 2, 0.5, true));
+        let cli = Cli::try_parse_from(["pvt3", "cv", "--only", "seed=1,fold=3"]).unwrap();
+        let Command::Cv(a) = cli.command else { panic!("not cv") };
+        assert_eq!(a.only, Some((1, 3)));
+        for bad in [
+            vec!["pvt3", "cv", "--model", "lstm"],
+            vec!["pvt3", "train", "--prune-scope", "everywhere"],
+            vec!["pvt3", "cv", "--only", "seed=1,fold=4"],
+            vec!["pvt3", "cv", "--only", "seed=1,fold=0", "--seeds", "1"],
+            vec!["pvt3", "cv", "--report", "runs/x", "--resume"],
+            vec!["pvt3", "eval", "runs/x", "--json"],
+        ] {
+            assert!(Cli::try_parse_from(&bad).is_err(), "{bad:?}");
+        }
+    }
+}

@@ -1,0 +1,152 @@
+//! Which data and which model: the options `train` and `cv` share, and how they become a
+//! configuration (a preset, a JSON file, a checkpoint's, or one derived for a new sensor shape)
+//! with `--set` overrides.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use pvt3_models::{Architecture, Config};
+use pvt3_trainer::checkpoint;
+use pvt3_trainer::data::Dataset;
+use pvt3_trainer::options::TrainOptions;
+use pvt3_trainer::train::RunSpec;
+
+/// Which data and which model.
+#[derive(clap::Args)]
+pub struct ModelArgs {
+    /// Data set: an .npz file (x, y, optional fold) or a directory of x.npy, y.npy, fold.npy.
+    #[arg(long, default_value = "data/icub20.npz")]
+    pub data: PathBuf,
+    /// Network: PVT³, or one of the paper's baselines (RAEC as published: add `--lr 5e-4
+    /// --weight-decay 0`). Takes the `vit-`/`raec-` variant of the sensor preset; only PVT³ can
+    /// be pruned and exported.
+    #[arg(long = "model", value_name = "MODEL", value_enum, conflicts_with = "config")]
+    pub architecture: Option<Architecture>,
+    /// Model preset (icub20, biotac20, gelsight, each also as vit-NAME and raec-NAME); by default
+    /// the one whose input fits the data.
+    #[arg(long, conflicts_with = "config")]
+    pub preset: Option<String>,
+    /// Model configuration as JSON (see `pvt3 info --json`).
+    #[arg(long)]
+    pub config: Option<PathBuf>,
+    /// Override one configuration field, e.g. `--set tubelet=5 --set dim=32` (repeatable).
+    #[arg(long = "set", value_name = "FIELD=VALUE")]
+    pub overrides: Vec<String>,
+    /// Class names, one per line (default: class_0, class_1, …).
+    #[arg(long)]
+    pub class_names: Option<PathBuf>,
+    /// Stop after this many epochs (per run), leaving the work to be continued with --resume.
+    #[arg(long)]
+    pub pause_after: Option<usize>,
+    #[command(flatten)]
+    pub options: TrainOptions,
+}
+
+/// A preset name, a JSON file, or a checkpoint directory.
+pub fn resolve_config(model: &str) -> Result<Config> {
+    let path = Path::new(model);
+    if path.is_dir() {
+        return Ok(checkpoint::load_meta(path)?.1.config);
+    }
+    if path.is_file() {
+        let text = std::fs::read_to_string(path).with_context(|| format!("reading {model}"))?;
+        return serde_json::from_str(&text).with_context(|| format!("{model} is not a model configuration"));
+    }
+    Ok(Config::preset(model)?)
+}
+
+/// A loaded data set with the model configuration and class names for it.
+pub struct Prepared {
+    pub data: Dataset,
+    pub config: Config,
+    pub classes: Vec<String>,
+}
+
+impl Prepared {
+    pub fn spec(&self, args: &ModelArgs, val_fold: usize) -> RunSpec<'_> {
+        RunSpec {
+            data: &self.data,
+            config: self.config.clone(),
+            val_fold,
+            options: args.options.clone(),
+            classes: self.classes.clone(),
+            pause_after: args.pause_after,
+            start: None,
+            pruning: None,
+        }
+    }
+}
+
+/// Loads the data set and builds the model configuration for it.
+pub fn prepare(args: &ModelArgs) -> Result<Prepared> {
+    let data = Dataset::load(&args.data, args.options.seed)?;
+    // `--model vit` turns preset `icub20` into `vit-icub20`.
+    let architecture = args.architecture.unwrap_or_default();
+    let preset = |name: &str| match architecture {
+        Architecture::Pvt3 => Config::preset(name),
+        model => Config::preset(&format!("{}-{name}", model.name())),
+    };
+    let mut cfg = match (&args.preset, &args.config) {
+        (Some(p), _) => preset(p)?,
+        (None, Some(path)) => resolve_config(&path.display().to_string())?,
+        (None, None) => match pvt3_models::config::PRESETS
+            .iter()
+            .map(|p| preset(p).expect("known preset"))
+            .find(|c| c.sample_shape() == data.sample_shape)
+        {
+            Some(cfg) => cfg,
+            None => {
+                let shape = data.sample_shape.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(" × ");
+                let derived = Config::for_sensor(&data.sample_shape)
+                    .with_context(|| format!("samples of shape {shape}: expected [height, width, (channels,) frames]"))?;
+                eprintln!(
+                    "no preset takes samples of {shape}: derived the BioTac layout, one token per {} frames of all {} values of a frame ({} temporal tokens); `pvt3 info --json` and --config FILE to choose otherwise",
+                    derived.tubelet,
+                    derived.height * derived.width * derived.channels,
+                    derived.time_tokens()
+                );
+                derived.for_model(architecture)
+            }
+        },
+    };
+    cfg.classes = data.classes();
+    cfg = apply_overrides(cfg, &args.overrides)?;
+    cfg.validate()?;
+    let prefix = args.options.prefix_training;
+    if !(0.0..=1.0).contains(&prefix) {
+        bail!("--prefix-training {prefix}: a probability, from 0 to 1");
+    }
+    if prefix > 0.0 {
+        cfg.require_pvt3("--prefix-training")?;
+    }
+    let classes = match &args.class_names {
+        Some(path) => {
+            let text = std::fs::read_to_string(path).with_context(|| format!("reading class names from {}", path.display()))?;
+            let names: Vec<String> = text.lines().map(str::trim).filter(|l| !l.is_empty()).map(String::from).collect();
+            if names.len() != cfg.classes {
+                bail!("{} names {} classes, the data has {}", path.display(), names.len(), cfg.classes);
+            }
+            names
+        }
+        None => (0..cfg.classes).map(|k| format!("class_{k}")).collect(),
+    };
+    if !data.folds_from_file {
+        eprintln!("note: {} has no fold array; stratified folds were drawn with seed {}", data.path.display(), args.options.seed);
+    }
+    Ok(Prepared { data, config: cfg, classes })
+}
+
+fn apply_overrides(cfg: Config, overrides: &[String]) -> Result<Config> {
+    let mut value = serde_json::to_value(&cfg)?;
+    for o in overrides {
+        let (key, raw) = o.split_once('=').with_context(|| format!("--set {o}: expected FIELD=VALUE"))?;
+        let fields = value.as_object_mut().expect("a config is a JSON object");
+        if !fields.contains_key(key) {
+            let known: Vec<&String> = fields.keys().collect();
+            bail!("--set {o}: unknown field `{key}`; the fields are {known:?}");
+        }
+        let parsed = serde_json::from_str(raw).with_context(|| format!("--set {o}: `{raw}` is not a number"))?;
+        fields.insert(key.to_string(), parsed);
+    }
+    serde_json::from_value(value).context("the overridden configuration does not parse")
+}

@@ -1,0 +1,66 @@
+//! The pruning options of `train`, `cv` and `prune`, and what a pruned run reports.
+
+use std::path::Path;
+
+use anyhow::Result;
+use pvt3_models::prune::{PruneSpec, Scope};
+use pvt3_trainer::checkpoint::BakedFile;
+use pvt3_trainer::prune::PruneStage;
+use pvt3_trainer::train::RunResult;
+
+/// Pruning after training (the paper's schedule: train, prune, fine-tune).
+#[derive(clap::Args)]
+pub struct PruneArgs {
+    /// Prune this percentage of channels (attention q/k/v channels and FFN units) by mask score.
+    #[arg(long)]
+    prune_channels: Option<f64>,
+    /// Prune this percentage of frames (temporal tokens) by mask score.
+    #[arg(long)]
+    prune_frames: Option<f64>,
+    /// Persistent random pruning (the PVT³ report's "random pruning"): this percentage of every
+    /// weight matrix's entries set to zero at random after training, then fine-tuned with them
+    /// held at zero. A regulariser: the matrices stay dense, the model no smaller.
+    #[arg(long)]
+    prune_weights: Option<f64>,
+    /// How --prune-channels shares the pruning among the masks.
+    #[arg(long, value_enum, default_value_t = Scope::Local)]
+    prune_scope: Scope,
+    /// Epochs of fine-tuning after pruning, pruned entries held at zero.
+    #[arg(long, default_value_t = 30)]
+    fine_tune_epochs: usize,
+    /// Peak learning rate of the fine-tuning.
+    #[arg(long, default_value_t = 5e-4)]
+    fine_tune_lr: f64,
+}
+
+impl PruneArgs {
+    pub fn stage(&self) -> Option<PruneStage> {
+        if self.prune_channels.is_none() && self.prune_frames.is_none() && self.prune_weights.is_none() {
+            return None;
+        }
+        Some(PruneStage {
+            spec: PruneSpec {
+                channels: self.prune_channels.unwrap_or(0.0),
+                frames: self.prune_frames.unwrap_or(0.0),
+                scope: self.prune_scope,
+                weights: self.prune_weights.unwrap_or(0.0),
+            },
+            epochs: self.fine_tune_epochs,
+            lr: self.fine_tune_lr,
+        })
+    }
+}
+
+pub fn report_pruned(r: &RunResult, out: &Path) -> Result<()> {
+    let baked = BakedFile::from_checkpoint(out)?.baked;
+    println!(
+        "pruned and fine-tuned: best epoch {} of {}, validation {:.4}, test {:.4}; baked: {}; checkpoint {}",
+        r.best_epoch,
+        r.epochs,
+        r.val_accuracy,
+        r.test_accuracy,
+        baked.size_summary(),
+        out.join("model").display()
+    );
+    Ok(())
+}
