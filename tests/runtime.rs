@@ -22,7 +22,7 @@ fn scratch(tag: &str) -> PathBuf {
 }
 
 /// The committed golden model (kept current by an export test), its input, and its baked form.
-fn golden_onnx() -> (PathBuf, Vec<f32>, pvt3_models::bake::BakedPvt3) {
+fn golden_onnx() -> (PathBuf, Vec<f32>, pvt3_models::baked::BakedPvt3) {
     let baked = bake(&Config::icub20(), &read_tensors(&golden("weights.safetensors")).unwrap()).unwrap();
     let input: Array4<f32> = read_npy(golden("input.npy")).unwrap();
     (golden("model.onnx"), input.iter().copied().collect(), baked)

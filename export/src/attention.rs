@@ -11,7 +11,7 @@
 //! keys and values are then the plain norm `x̂` itself; the mixed `x̂` goes through one output
 //! product. In the last layer of a stage only the CLS token is read, so only its query is asked.
 
-use pvt3_models::bake::{BakedAttention, Dense, Norm};
+use pvt3_models::baked::{BakedAttention, Dense, Norm};
 
 use crate::graph::{int, ints, Graph};
 use crate::layers::{absorb_norm, centred, linear, linear_columns, residual_linear};

@@ -6,7 +6,7 @@
 //! whole frame to all of its patch embeddings, which spares the rearrangement into patches; large
 //! frames (where that matrix would be large) are cut into patches first.
 
-use pvt3_models::bake::{BakedPvt3, Dense};
+use pvt3_models::baked::{BakedPvt3, Dense};
 use pvt3_models::normalization::Normalization;
 
 use crate::graph::{int, ints, Graph};

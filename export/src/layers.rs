@@ -5,7 +5,7 @@
 //! ([`rms_norm`]). tract runs that as one fused kernel, where a layer norm costs a sum, a
 //! subtraction and a norm.
 
-use pvt3_models::bake::{Dense, Norm};
+use pvt3_models::baked::{Dense, Norm};
 
 use crate::graph::{float, int, ints, Graph};
 

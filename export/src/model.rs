@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use prost::Message;
-use pvt3_models::bake::{BakedBlock, BakedPvt3, BakedTransformer};
+use pvt3_models::baked::{BakedBlock, BakedPvt3, BakedTransformer};
 use pvt3_models::normalization::Normalization;
 use tract_onnx::pb::{
     tensor_proto::DataType, tensor_shape_proto::dimension::Value as Dim, tensor_shape_proto::Dimension, type_proto, GraphProto, ModelProto,

@@ -9,6 +9,7 @@
 
 pub mod attention;
 pub mod bake;
+pub mod baked;
 pub mod classifier;
 pub mod config;
 pub mod dense;

@@ -2,7 +2,7 @@
 //! model (candle, ONNX in tract and in onnxruntime) is compared with. Written for clarity, not
 //! speed: loops over tokens and channels, no candle.
 
-use crate::bake::{BakedAttention, BakedFeedForward, BakedPvt3, BakedTransformer, Dense, Norm};
+use crate::baked::{BakedAttention, BakedFeedForward, BakedPvt3, BakedTransformer, Dense, Norm};
 use crate::{Error, Result};
 
 fn dense(l: &Dense, x: &[f64]) -> Vec<f64> {

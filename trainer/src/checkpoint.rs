@@ -45,7 +45,7 @@ fn current_or_none<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Resul
 /// A baked model with everything the exporter needs: what `pvt3 bake` writes.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct BakedFile {
-    pub baked: pvt3_models::bake::BakedPvt3,
+    pub baked: pvt3_models::baked::BakedPvt3,
     pub normalization: Normalization,
     pub classes: Vec<String>,
     pub provenance: Provenance,

@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use pvt3_models::bake::BakedPvt3;
+use pvt3_models::baked::BakedPvt3;
 use pvt3_models::{reference, Rng};
 use serde::Serialize;
 
