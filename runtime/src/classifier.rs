@@ -9,13 +9,13 @@ use tract_core::prelude::*;
 use tract_core::runtime::RunOptions;
 use tract_linalg::multithread::Executor;
 
-use pvt3_format::{Header, INPUT, LOGITS, PROBABILITIES};
+use pvt3_format::{Header, INPUT, LOGITS, PROBABILITIES, TOKEN_BIAS, TOKEN_ENCODINGS, TOKEN_FRAMES, TOKEN_INDEX};
 
 use crate::error::{catch_panic, tract_error};
 use crate::kernels::Kernels;
 use crate::onnx::{Graph, Model};
 use crate::plan::{outputs_of, Plan};
-use crate::stream::Stages;
+use crate::stages::Stages;
 use crate::{Error, Result};
 
 /// The answer for one window.
@@ -209,9 +209,38 @@ impl Classifier {
         if let Some(s) = stages.as_ref() {
             return Ok(s.clone());
         }
-        let s = Arc::new(Stages::new(self)?);
+        let s = Arc::new(self.build_stages()?);
         *stages = Some(s.clone());
         Ok(s)
+    }
+
+    /// The spatial and temporal stages of this file, cut at its seam.
+    fn build_stages(&self) -> Result<Stages> {
+        let frames = *self.sample_shape().last().expect("a sample has a frame axis");
+        let tubelet = self.tubelet();
+        let mut kept_index = vec![None; frames / tubelet];
+        for (kk, f) in self.kept_frames().iter().step_by(tubelet).enumerate() {
+            kept_index[f / tubelet] = Some(kk);
+        }
+        let kept = self.kept_frames().len() / tubelet;
+        let frame = &self.sample_shape()[..self.sample_shape().len() - 1];
+        let token_shape = vec![1, tubelet, frame[0], frame[1], frame.get(2).copied().unwrap_or(1)];
+        let spatial = [(TOKEN_FRAMES, f32::fact(&token_shape)), (TOKEN_INDEX, i64::fact([1]))];
+        let prefixes = self.has_tensor(TOKEN_BIAS);
+        let mut temporal = vec![(TOKEN_ENCODINGS, f32::fact([kept, self.dim()]))];
+        if prefixes {
+            temporal.push((TOKEN_BIAS, f32::fact([1, 1, 1, kept_index.len() + 1])));
+        }
+        Ok(Stages {
+            spatial: self.optimise(self.wire(&spatial, &[TOKEN_ENCODINGS])?)?,
+            temporal: self.optimise(self.wire(&temporal, &[PROBABILITIES])?)?,
+            prefixes,
+            stop_rule: self.stop_rule(),
+            kept_index,
+            token_shape,
+            dim: self.dim(),
+            classes: self.classes().to_vec(),
+        })
     }
 
     fn validate(&self, frames: &[f32], batch: usize) -> Result<()> {

@@ -27,6 +27,7 @@ mod onnx;
 mod plan;
 #[cfg(target_arch = "x86_64")]
 mod small_products;
+mod stages;
 mod stream;
 mod wire;
 

@@ -14,62 +14,13 @@
 
 use std::sync::Arc;
 
-use pvt3_format::{PROBABILITIES, TOKEN_BIAS, TOKEN_ENCODINGS, TOKEN_FRAMES, TOKEN_INDEX};
 use tract_core::prelude::*;
 
 use crate::classifier::prediction;
 use crate::error::tract_error;
-use crate::plan::{outputs_of, Plan};
-use crate::{Classifier, Error, Prediction, Result, StopRule};
-
-/// The two stages of a classifier, each optimised for its streaming shape.
-pub(crate) struct Stages {
-    /// One kept token's frames `[1, tubelet, height, width, channels]` and its index → `[1, dim]`.
-    spatial: Plan,
-    /// All kept tokens' encodings `[kept, dim]` (and, where the file has the seam, the key bias
-    /// `[1, 1, 1, tokens + 1]`) → probabilities `[1, classes]`.
-    temporal: Plan,
-    /// Whether the temporal stage reads a key bias, so that it can answer for a prefix.
-    prefixes: bool,
-    /// The file's stopping rule (`Header::stop_rule`).
-    stop_rule: Option<StopRule>,
-    /// For each temporal token, its index among the kept tokens.
-    kept_index: Vec<Option<usize>>,
-    /// `[1, tubelet, height, width, channels]`
-    token_shape: Vec<usize>,
-    dim: usize,
-    classes: Vec<String>,
-}
-
-impl Stages {
-    pub(crate) fn new(c: &Classifier) -> Result<Self> {
-        let frames = *c.sample_shape().last().expect("a sample has a frame axis");
-        let tubelet = c.tubelet();
-        let mut kept_index = vec![None; frames / tubelet];
-        for (kk, f) in c.kept_frames().iter().step_by(tubelet).enumerate() {
-            kept_index[f / tubelet] = Some(kk);
-        }
-        let kept = c.kept_frames().len() / tubelet;
-        let frame = &c.sample_shape()[..c.sample_shape().len() - 1];
-        let token_shape = vec![1, tubelet, frame[0], frame[1], frame.get(2).copied().unwrap_or(1)];
-        let spatial = [(TOKEN_FRAMES, f32::fact(&token_shape)), (TOKEN_INDEX, i64::fact([1]))];
-        let prefixes = c.has_tensor(TOKEN_BIAS);
-        let mut temporal = vec![(TOKEN_ENCODINGS, f32::fact([kept, c.dim()]))];
-        if prefixes {
-            temporal.push((TOKEN_BIAS, f32::fact([1, 1, 1, kept_index.len() + 1])));
-        }
-        Ok(Self {
-            spatial: c.optimise(c.wire(&spatial, &[TOKEN_ENCODINGS])?)?,
-            temporal: c.optimise(c.wire(&temporal, &[PROBABILITIES])?)?,
-            prefixes,
-            stop_rule: c.stop_rule(),
-            kept_index,
-            token_shape,
-            dim: c.dim(),
-            classes: c.classes().to_vec(),
-        })
-    }
-}
+use crate::plan::outputs_of;
+use crate::stages::Stages;
+use crate::{Classifier, Error, Prediction, Result};
 
 /// A provisional answer ([`Session::peek`]).
 #[derive(Clone, Debug)]
@@ -103,13 +54,6 @@ impl Classifier {
     /// A streaming session (builds the two stages on first use).
     pub fn session(&self) -> Result<Session> {
         Ok(Session { stages: self.stages()?, received: 0, token: Vec::new(), encodings: Vec::new(), answered: Vec::new() })
-    }
-}
-
-impl Stages {
-    /// Frames per temporal token.
-    fn tubelet(&self) -> usize {
-        self.token_shape[1]
     }
 }
 

@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use super::*;
 use crate::read_npy;
+use pvt3_format::TOKEN_BIAS;
 
 fn golden(file: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/golden/icub20").join(file)
