@@ -121,10 +121,29 @@ fn prefix_training_calibrates_a_stopping_rule_that_the_file_carries() {
     );
     let recorded = format!("≥ {:.4} with 3 answers in a row", rule.top_probability);
     assert!(table.contains(&recorded), "the calibration training recorded: {table}");
-    let report: serde_json::Value = serde_json::from_str(&ok(&["eval", r, "--anytime", "--json"])).unwrap();
+    let answers_path = dir.join("answers.json");
+    let report: serde_json::Value =
+        serde_json::from_str(&ok(&["eval", r, "--anytime", "--json", "--answers", answers_path.to_str().unwrap()])).unwrap();
     let curve = report["curve"].as_array().unwrap();
     assert_eq!(curve.len(), 10);
     assert_eq!(curve[9]["tokens"], 75);
+    // Every sample's probabilities after each token: the curve's accuracies read from them.
+    let answers: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&answers_path).unwrap()).unwrap();
+    let (probabilities, labels) = (answers["probabilities"].as_array().unwrap(), answers["labels"].as_array().unwrap());
+    assert_eq!(
+        (probabilities.len(), labels.len(), report["samples"].as_u64().unwrap() as usize),
+        (labels.len(), labels.len(), labels.len())
+    );
+    let argmax = |p: &serde_json::Value| {
+        let p: Vec<f64> = p.as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+        assert!(p.len() == 20 && (p.iter().sum::<f64>() - 1.0).abs() < 1e-4);
+        (0..p.len()).fold(0, |b, c| if p[c] > p[b] { c } else { b }) as u64
+    };
+    for point in curve {
+        let k = point["tokens"].as_u64().unwrap() as usize;
+        let right = probabilities.iter().zip(labels).filter(|(p, l)| argmax(&p[k - 1]) == l.as_u64().unwrap()).count();
+        assert_eq!(right as f64 / labels.len() as f64, point["accuracy"].as_f64().unwrap(), "after {k} tokens");
+    }
     let eval = ok(&["eval", r]);
     assert!(eval.contains(&format!("accuracy {:.4}", curve[9]["accuracy"].as_f64().unwrap())), "the whole touch is plain eval: {eval}");
     assert_eq!(pvt3_runtime::Classifier::load(&onnx).unwrap().stop_rule(), Some(rule));

@@ -7,7 +7,6 @@
 //! sample, did not hold on the test fold), and the exporter writes the rule into the file
 //! (`pvt3.stop_rule`).
 
-use candle_core::D;
 use pvt3_format::StopRule;
 use pvt3_models::Pvt3;
 use serde::{Deserialize, Serialize};
@@ -42,26 +41,47 @@ pub struct Stopping {
     pub mean_share: f64,
 }
 
-/// The provisional answers of `model` on `samples` after 1, 2, … every temporal token: the
-/// spatial stage once per window, the temporal one per prefix (as `Session::peek` runs it).
-pub fn prefixes(model: &Pvt3, samples: &Samples) -> Result<Prefixes> {
+/// Every sample's provisional class probabilities after 1, 2, … every temporal token
+/// (`pvt3 eval --anytime --answers FILE` writes them, to study other stopping rules).
+#[derive(Clone, Debug, Serialize)]
+pub struct Answers {
+    /// `[sample][tokens - 1][class]`.
+    pub probabilities: Vec<Vec<Vec<f32>>>,
+    pub labels: Vec<u32>,
+    pub tokens: usize,
+}
+
+/// The provisional answers of `model` on `samples`: the spatial stage once per window, the
+/// temporal one per prefix (as `Session::peek` runs it).
+pub fn answers(model: &Pvt3, samples: &Samples) -> Result<Answers> {
     let tokens = model.config().time_tokens();
-    let (mut top, mut class) = (vec![Vec::with_capacity(tokens); samples.len()], vec![Vec::with_capacity(tokens); samples.len()]);
+    let mut probabilities = vec![Vec::with_capacity(tokens); samples.len()];
     let rows: Vec<usize> = (0..samples.len()).collect();
     for chunk in rows.chunks(EVAL_BATCH) {
         let (x, _) = samples.batch(chunk, |_| {})?;
         let sequence = model.sequence(&x, None)?;
         for k in 1..=tokens {
-            let probabilities = candle_nn::ops::softmax_last_dim(&model.classify_sequence(&model.prefix(&sequence, k)?, None)?)?;
-            let best = probabilities.argmax(D::Minus1)?.to_vec1::<u32>()?;
-            let p = probabilities.max(D::Minus1)?.to_vec1::<f32>()?;
-            for (i, &r) in chunk.iter().enumerate() {
-                top[r].push(p[i]);
-                class[r].push(best[i]);
+            let p = candle_nn::ops::softmax_last_dim(&model.classify_sequence(&model.prefix(&sequence, k)?, None)?)?.to_vec2::<f32>()?;
+            for (row, &r) in p.into_iter().zip(chunk) {
+                probabilities[r].push(row);
             }
         }
     }
-    Ok(Prefixes { top, class, labels: samples.labels.clone(), tokens })
+    Ok(Answers { probabilities, labels: samples.labels.clone(), tokens })
+}
+
+/// The provisional answers of `model` on `samples`, as the stopping rule reads them.
+pub fn prefixes(model: &Pvt3, samples: &Samples) -> Result<Prefixes> {
+    Ok(Prefixes::from(&answers(model, samples)?))
+}
+
+impl From<&Answers> for Prefixes {
+    fn from(a: &Answers) -> Self {
+        let best =
+            |p: &Vec<f32>| p.iter().enumerate().fold((0u32, f32::NEG_INFINITY), |b, (c, &v)| if v > b.1 { (c as u32, v) } else { b });
+        let (class, top) = a.probabilities.iter().map(|sample| sample.iter().map(best).unzip()).unzip();
+        Prefixes { top, class, labels: a.labels.clone(), tokens: a.tokens }
+    }
 }
 
 impl Prefixes {

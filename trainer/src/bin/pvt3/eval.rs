@@ -28,6 +28,11 @@ pub struct EvalArgs {
     /// With --anytime: print one JSON object instead of the table.
     #[arg(long, requires = "anytime")]
     pub json: bool,
+    /// With --anytime: also write every sample's class probabilities after each temporal token
+    /// to this JSON file (`probabilities[sample][token][class]`, `labels`), to study other
+    /// stopping rules (bench/stop_rules.py).
+    #[arg(long, value_name = "FILE.json", requires = "anytime")]
+    pub answers: Option<PathBuf>,
 }
 
 pub fn run(a: EvalArgs) -> Result<()> {
@@ -48,7 +53,7 @@ pub fn run(a: EvalArgs) -> Result<()> {
     }
     let samples = Samples::new(&data, &indices, &meta.normalization);
     if a.anytime {
-        return anytime_report(&meta, &model, &data, &samples, fold, a.json);
+        return anytime_report(&meta, &model, &data, &samples, fold, &a);
     }
     let e = evaluate(&model, &samples)?;
     println!("{} samples (fold {fold}): accuracy {:.4}, loss {:.4}", samples.len(), e.accuracy, e.loss);
@@ -70,9 +75,13 @@ pub fn run(a: EvalArgs) -> Result<()> {
 /// `pvt3 eval --anytime`: accuracy against the share of the touch, and the stopping rule
 /// calibrated on the checkpoint's own validation fold (what training records, and the exported
 /// file carries) applied to `samples`.
-fn anytime_report(meta: &checkpoint::Meta, model: &Classifier, data: &Dataset, samples: &Samples, fold: &str, json: bool) -> Result<()> {
+fn anytime_report(meta: &checkpoint::Meta, model: &Classifier, data: &Dataset, samples: &Samples, fold: &str, a: &EvalArgs) -> Result<()> {
     let pvt3 = model.pvt3("pvt3 eval --anytime")?;
-    let prefixes = anytime::prefixes(pvt3, samples)?;
+    let answers = anytime::answers(pvt3, samples)?;
+    if let Some(path) = &a.answers {
+        checkpoint::write_json_atomically(path, &answers).with_context(|| format!("writing {}", path.display()))?;
+    }
+    let prefixes = anytime::Prefixes::from(&answers);
     // The rule training recorded; a run from before there was one is calibrated here the same way.
     let calibrated = match &meta.provenance.stopping {
         Some(recorded) => recorded.clone(),
@@ -89,7 +98,7 @@ fn anytime_report(meta: &checkpoint::Meta, model: &Classifier, data: &Dataset, s
             (tenth as f64 / 10.0, k, prefixes.accuracy_at(k))
         })
         .collect();
-    if json {
+    if a.json {
         let curve: Vec<_> = curve.iter().map(|(share, k, acc)| serde_json::json!({"share": share, "tokens": k, "accuracy": acc})).collect();
         let out = serde_json::json!({
             "samples": samples.len(), "fold": fold, "tokens": t, "curve": curve,

@@ -1,0 +1,152 @@
+"""Stopping rules for provisional answers, compared (docs/anytime.md, "Other rules"). Each rule is
+calibrated on a run's validation fold and applied to its test fold, as the trainer calibrates the
+rule it ships; the figures are the change in test accuracy against the whole touch (points) and
+the mean share of the touch used, mean ± std over the runs.
+
+    bash bench/anytime.sh                                   # the runs, in runs/anytime/
+    target/onnx-venv/bin/python bench/stop_rules.py runs/anytime/biotac20-prefix0.5-s{0,1,2} ...
+
+For each run it reads every sample's provisional answers after each token, from
+`pvt3 eval RUN --anytime --answers FILE` on the validation fold and on fold 4 (cached in
+target/stop_rules/). The rules:
+
+- shipped: top probability ≥ t with 3 answers in a row agreeing; t the lowest threshold such that
+  no threshold above it loses accuracy on the validation fold (trainer/src/anytime.rs; this
+  script's figure must equal `pvt3 eval --anytime`'s, which it checks).
+- margin: the same with the margin between the two most probable classes.
+- agreement calibrated: the agreement length chosen too (2 … 12), the earliest rule whose
+  stricter neighbours (higher t, longer agreement) lose nothing either.
+- per-class thresholds: one threshold per answered class, each calibrated as the shipped one.
+- 0.5-point allowance: the shipped rule calibrated to lose at most 0.5 points on validation.
+- best threshold on the test fold: not a rule (it looks at the test fold); the most a single
+  threshold with 3 agreeing answers could do, within 0.5 points of the whole touch. The classes
+  it stops wrongly on (that the whole touch gets right) are listed under the table.
+"""
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+
+PVT3 = "./target/release/pvt3"
+CACHE = Path("target/stop_rules")
+AGREEING = 3
+
+
+def answers(run, fold):
+    """probabilities [n, tokens, classes] and labels of `run` on `fold`, and eval's report."""
+    CACHE.mkdir(parents=True, exist_ok=True)
+    path = CACHE / f"{Path(run).name}-fold{fold}.json"
+    report = json.loads(subprocess.run([PVT3, "eval", run, "--anytime", "--json", "--fold", str(fold), "--answers", str(path)],
+                                       capture_output=True, text=True, check=True).stdout)
+    a = json.loads(path.read_text())
+    return np.array(a["probabilities"], dtype=np.float64), np.array(a["labels"]), report
+
+
+class Answers:
+    def __init__(self, p, y):
+        self.y, self.n, self.tokens = y, p.shape[0], p.shape[1]
+        self.cls = p.argmax(-1)
+        s = np.sort(p, -1)
+        self.score = {"top": s[..., -1], "margin": s[..., -1] - s[..., -2]}
+        # run[i, k]: how many answers in a row up to token k name the class of token k.
+        self.run = np.ones_like(self.cls)
+        for k in range(1, self.tokens):
+            self.run[:, k] = np.where(self.cls[:, k] == self.cls[:, k - 1], self.run[:, k - 1] + 1, 1)
+        self.full = (self.cls[:, -1] == y).mean()
+
+    def stops(self, kind, thresholds, agreeing):
+        """Each sample's answer where it stops: at its first token whose score reaches the
+        threshold of its answered class with `agreeing` answers in a row agreeing, and the token."""
+        hit = (self.score[kind] >= np.asarray(thresholds)[self.cls]) & (self.run >= agreeing)
+        k = np.where(hit.any(1), hit.argmax(1), self.tokens - 1)
+        return self.cls[np.arange(self.n), k], k
+
+    def stop(self, kind, thresholds, agreeing):
+        """Accuracy and mean share of the touch when each sample stops by the rule."""
+        answer, k = self.stops(kind, thresholds, agreeing)
+        return (answer == self.y).mean(), (k + 1).mean() / self.tokens
+
+    def wrong_stops(self, kind, thresholds, agreeing):
+        """(class, answer) of the samples the rule stops wrongly that the whole touch gets right."""
+        answer, _ = self.stops(kind, thresholds, agreeing)
+        wrong = (answer != self.y) & (self.cls[:, -1] == self.y)
+        return list(zip(self.y[wrong].tolist(), answer[wrong].tolist()))
+
+    def candidates(self, kind):
+        return np.concatenate([[1.0], np.unique(self.score[kind])[::-1]])
+
+    def calibrate(self, kind="top", agreeing=AGREEING, allowance=0.0, classes=None, base=None):
+        """The lowest threshold (for every class, or only for `classes`, the others at `base`)
+        such that none from it up to 1 loses more than `allowance` against the whole touch."""
+        c = self.cls.max() + 1 if base is None else len(base)
+        chosen = 1.0
+        for t in self.candidates(kind):
+            th = np.full(c, t) if base is None else np.where(np.isin(np.arange(c), classes), t, base)
+            if self.stop(kind, th, agreeing)[0] < self.full - allowance - 1e-12:
+                break
+            chosen = t
+        return chosen
+
+
+def rules(val, test, confusions):
+    """(name, test accuracy change in points, share) of each rule calibrated on `val`; adds the
+    wrong stops of the best test-fold threshold to `confusions`."""
+    c = max(val.cls.max(), test.cls.max()) + 1
+    out = []
+
+    def apply(name, kind, thresholds, agreeing):
+        acc, share = test.stop(kind, np.broadcast_to(thresholds, (c,)), agreeing)
+        out.append((name, 100 * (acc - test.full), share))
+
+    apply("shipped", "top", val.calibrate(), AGREEING)
+    apply("margin", "margin", val.calibrate("margin"), AGREEING)
+    lengths = [2, 3, 4, 6, 8, 12]
+    t = {a: val.calibrate(agreeing=a) for a in lengths}
+    robust = [(a, max(t[b] for b in lengths[i:])) for i, a in enumerate(lengths)]
+    a, th = min(robust, key=lambda r: val.stop("top", np.full(c, r[1]), r[0])[1])
+    apply("agreement calibrated", "top", th, a)
+    per_class = np.ones(c)
+    for k in range(c):
+        per_class[k] = val.calibrate(classes=[k], base=per_class)
+    apply("per-class thresholds", "top", per_class, AGREEING)
+    apply("0.5-point allowance", "top", val.calibrate(allowance=0.005), AGREEING)
+    best = min((test.stop("top", np.full(c, t), AGREEING)[1], t) for t in test.candidates("top")
+               if test.stop("top", np.full(c, t), AGREEING)[0] >= test.full - 0.005 - 1e-12)
+    apply("best threshold on the test fold (not a rule)", "top", best[1], AGREEING)
+    confusions.extend(test.wrong_stops("top", np.full(c, best[1]), AGREEING))
+    return out
+
+
+def main():
+    runs = sys.argv[1:]
+    if not runs:
+        sys.exit(__doc__)
+    table, confusions = {}, []
+    for run in runs:
+        val_fold = json.loads(Path(run, "model", "provenance.json").read_text())["val_fold"]
+        pv, yv, _ = answers(run, val_fold)
+        pt, yt, report = answers(run, 4)
+        val, test = Answers(pv, yv), Answers(pt, yt)
+        results = rules(val, test, confusions)
+        shipped = report["stopping"]
+        name, change, share = results[0]
+        if abs(share - shipped["mean_share"]) > 1e-9 or abs(change / 100 - (shipped["accuracy"] - shipped["full_accuracy"])) > 1e-9:
+            sys.exit(f"{run}: the shipped rule here ({change:+.2f} points, {share:.4f}) is not pvt3 eval's ({shipped})")
+        for name, change, share in results:
+            table.setdefault(name, []).append((change, share))
+        print(f"{run}: " + "; ".join(f"{n} {c:+.1f} @ {s:.2f}" for n, c, s in results), file=sys.stderr)
+    print(f"| rule ({len(runs)} runs) | test accuracy change (points) | share of the touch used (%) |")
+    print("|---|---:|---:|")
+    for name, rows in table.items():
+        r = np.array(rows)
+        sd = lambda v: v.std(ddof=1) if len(v) > 1 else 0.0
+        print(f"| {name} | {r[:, 0].mean():+.1f} ± {sd(r[:, 0]):.1f} | {100 * r[:, 1].mean():.0f} ± {100 * sd(r[:, 1]):.0f} |")
+    pairs = sorted({p: confusions.count(p) for p in confusions}.items(), key=lambda kv: -kv[1])
+    print("\nwrong stops of the best test-fold threshold, (class → answer) × count: "
+          + ", ".join(f"{a} → {b} × {n}" for (a, b), n in pairs[:8]))
+
+
+if __name__ == "__main__":
+    main()
