@@ -1,33 +1,76 @@
 #!/usr/bin/env bash
-# The comparison rows of docs/results.md: the paper's ViT and RAEC baselines and PVT³ trained with
-# random unstructured pruning, each by `pvt3 cv` under the published protocol (4 folds, test on
-# fold 4), on both shipped data sets. The PVT³ rows themselves come from the runs named in
-# docs/results.md. Each cross-validation resumes where it stopped, so the script can be rerun.
+# Every headline row of docs/results.md as a cross-validation under the published protocol (4
+# validation folds, test on fold 4) repeated over SEEDS, on both shipped data sets. Each row
+# resumes where it stopped, so the script can be rerun; `python3 bench/comparison.py` then prints
+# the tables from the runs.
 #
-#   bash bench/baselines.sh [ROW ...]     rows: raec-icub vit-biotac raec-biotac vit-icub rp-icub rp-biotac
+#   bash bench/baselines.sh [ROW ...]      SEEDS=0,1,2 JOBS=2 by default
 #
-# One thread per run (one is as fast as two for these models); JOBS=2 trains two folds side by side;
+# Rows (each for -icub and -biotac):
+#   rpp       PVT³ unpruned, then persistent random pruning of 20 % of every weight matrix
+#   masks     PVT³ with trained selection masks (--l1 0.25 --mask-lr 10), then 50 % of its frames pruned
+#   prunings  the masks row's runs pruned further (after masks): 50 % and 60 % of channels, 30 % and
+#             70 % of frames, 50 % of channels and 50 % of frames (LEVELS="channels50 channels60
+#             frames30 frames70 channels50-frames50" picks some); 20 epochs of fine-tuning each
+#   rp        PVT³ with per-step random pruning of 5 % of every weight matrix (--random-prune 0.05)
+#   vit, raec the paper's baselines
+#
+# One thread per run (one is as fast as two for these models); JOBS runs side by side.
 # PVT3=path/to/pvt3 picks the binary.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 pvt3=${PVT3:-target/release/pvt3}
 [ -x "$pvt3" ] || cargo build --release -p pvt3-trainer
+seeds=${SEEDS:-0,1,2} jobs=${JOBS:-2}
 rows=("$@")
-[ ${#rows[@]} -gt 0 ] || rows=(raec-icub vit-biotac raec-biotac vit-icub rp-icub rp-biotac)
+[ ${#rows[@]} -gt 0 ] || rows=(rpp-biotac masks-biotac prunings-biotac rp-biotac vit-biotac raec-biotac
+                                rpp-icub masks-icub prunings-icub rp-icub raec-icub vit-icub)
+
+# The masks row's runs pruned further: for each level a cross-validation directory of its own,
+# runs/cv-masks-SET-LEVEL, whose folds start as copies of the masks row's trained runs (so `pvt3
+# cv --resume` only prunes and fine-tunes them, and writes the level's cv.json with its interval).
+prunings() {
+    local set=$1 parent=runs/cv-masks-$1 level name run out copy
+    for run in "$parent"/seed*/fold?; do
+        [ -f "$run/result.json" ] || { echo "$run has not finished: run the masks-$set row first" >&2; exit 1; }
+    done
+    for name in ${LEVELS:-channels50 channels60 frames30 frames70 channels50-frames50}; do
+        case $name in
+            channels50) level="--prune-channels 50" ;;
+            channels60) level="--prune-channels 60" ;;
+            frames30) level="--prune-frames 30" ;;
+            frames70) level="--prune-frames 70" ;;
+            channels50-frames50) level="--prune-channels 50 --prune-frames 50" ;;
+            *) echo "unknown pruning level $name" >&2; exit 2 ;;
+        esac
+        out=$parent-$name
+        for run in "$parent"/seed*/fold?; do
+            copy=$out/${run#"$parent"/}
+            [ -d "$copy" ] || { mkdir -p "$copy" && cp -r "$run/result.json" "$run/metrics.jsonl" "$run/model" "$copy/"; }
+        done
+        echo "== prunings-$set $name: $pvt3 --threads 1 cv --data data/${set}20.npz $level --out $out --resume"
+        # shellcheck disable=SC2086
+        "$pvt3" --threads 1 cv --data "data/${set}20.npz" --l1 0.25 --mask-lr 10 $level --fine-tune-epochs 20 \
+            --seeds "$seeds" --epochs 100 --jobs "$jobs" --out "$out" --resume
+    done
+}
+
 for row in "${rows[@]}"; do
+    data=data/${row#*-}20.npz
     case $row in
+        rpp-*) args=(--prune-weights 20) ;;
+        masks-*) args=(--l1 0.25 --mask-lr 10 --prune-frames 50 --fine-tune-epochs 20) ;;
+        prunings-*) prunings "${row#*-}"; continue ;;
+        rp-*) args=(--random-prune 0.05) ;;
+        vit-*) args=(--model vit) ;;
         # RAEC as Gao et al. train it: Adam (AdamW without weight decay), lr 5e-4, batch 32.
-        raec-icub) args=(--data data/icub20.npz --model raec --lr 5e-4 --weight-decay 0) ;;
-        raec-biotac) args=(--data data/biotac20.npz --model raec --lr 5e-4 --weight-decay 0) ;;
-        vit-icub) args=(--data data/icub20.npz --model vit) ;;
-        vit-biotac) args=(--data data/biotac20.npz --model vit) ;;
-        rp-icub) args=(--data data/icub20.npz --random-prune 0.05) ;;
-        rp-biotac) args=(--data data/biotac20.npz --random-prune 0.05) ;;
+        raec-*) args=(--model raec --lr 5e-4 --weight-decay 0) ;;
         *) echo "unknown row $row" >&2; exit 2 ;;
     esac
+    [ -f "$data" ] || { echo "unknown row $row (no $data)" >&2; exit 2; }
     out=runs/cv-$row
     resume=()
     [ -d "$out" ] && resume=(--resume)
-    echo "== $row: $pvt3 --threads 1 cv ${args[*]} --seeds 0 --epochs 100 --out $out"
-    "$pvt3" --threads 1 cv "${args[@]}" --seeds 0 --epochs 100 --jobs "${JOBS:-1}" --out "$out" "${resume[@]}"
+    echo "== $row: $pvt3 --threads 1 cv --data $data ${args[*]} --seeds $seeds --epochs 100 --jobs $jobs --out $out"
+    "$pvt3" --threads 1 cv --data "$data" "${args[@]}" --seeds "$seeds" --epochs 100 --jobs "$jobs" --out "$out" "${resume[@]}"
 done

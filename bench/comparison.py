@@ -1,19 +1,18 @@
-"""The comparison table of docs/results.md: one row per model, each a set of finished runs (one
-per validation fold) under the published protocol, with parameters, multiply-adds, per-fold test
-accuracy, mean ± std and training wall time, and the published figure beside it.
+"""The comparison tables of docs/results.md: one row per model, each a cross-validation of several
+seeds × 4 folds (`bash bench/baselines.sh`), read from its `cv.json` as `pvt3 cv` wrote it: the
+mean ± std of all runs, each seed's mean, and the 95 % interval of the mean (Student's t over the
+seed means), with the model's size and the paper's figure beside it.
 
-    python3 bench/comparison.py                           # the two tables of docs/results.md
-    python3 bench/comparison.py 'LABEL|PUBLISHED|GLOB' ...  # one table of your own rows
+    python3 bench/comparison.py                             # the two tables of docs/results.md
+    python3 bench/comparison.py 'LABEL|PUBLISHED|DIR[:pruned]' ...   # one table of your own rows
 
-GLOB matches run directories holding `result.json` (e.g. `runs/cv-vit-icub/seed0/fold?`, or
-`runs/cv-icub20-l1/seed0/fold?/pruned`); PUBLISHED is the paper's figure or `—`. Sizes come from
-`pvt3 info` of the first run: the baked (deployed) size for a pruned PVT³ model, the trainable
-parameters otherwise.
+DIR is a `pvt3 cv` output directory; `:pruned` reads its pruned and fine-tuned runs. Sizes come
+from `pvt3 info` of its first run: the baked (deployed) size for a pruned PVT³ model, the
+trainable parameters otherwise (random pruning leaves the matrices dense). A row whose cross-validation has not run says which command
+runs it.
 """
-import glob
 import json
 import re
-import statistics
 import subprocess
 import sys
 from pathlib import Path
@@ -25,53 +24,73 @@ def size(run):
     out = subprocess.run([PVT3, "info", str(run)], capture_output=True, text=True, check=True).stdout
     provenance = json.loads((run / "model" / "provenance.json").read_text())
     baked = re.search(r"after baking\s+(\d+) parameters, (\d+) multiply-adds per sample", out)
-    if provenance.get("pruning") and baked:
+    pruning = provenance.get("pruning") or {}
+    if (pruning.get("channels") or pruning.get("frames")) and baked:
         return int(baked[1]), int(baked[2])
     return int(re.search(r"parameters\s+(\d+) trainable", out)[1]), int(re.search(r"mult-adds\s+(\d+) per sample", out)[1])
 
 
 def row(spec):
-    label, published, pattern = spec.split("|")
-    runs = sorted(Path(p) for p in glob.glob(pattern) if (Path(p) / "result.json").exists())
-    if not runs:
-        sys.exit(f"{label}: no finished run matches {pattern}")
-    results = [json.loads((r / "result.json").read_text()) for r in runs]
-    tests = [r["test_accuracy"] for r in results]
-    params, macs = size(runs[0])
-    std = statistics.stdev(tests) if len(tests) > 1 else 0.0
-    folds = " / ".join(f"{t:.3f}" for t in tests)
-    minutes = sum(r["wall_seconds"] for r in results) / 60
-    # Means of a few fold accuracies often end in a 5 at the fifth decimal: round it up, as `pvt3 cv` prints.
-    mean = statistics.mean(tests) + 1e-12
-    return f"| {label} | {params:,} | {macs / 1e6:.2f} M | {folds} | **{mean:.4f} ± {std:.4f}** | {published} | {minutes:.0f} |"
+    label, published, where = spec.split("|")
+    directory, _, part = where.partition(":")
+    summary_path = Path(directory) / "cv.json"
+    if not summary_path.exists():
+        name = re.sub(r"^masks-(\w+)-.*", r"prunings-\1", Path(directory).name.removeprefix("cv-"))
+        return f"| {label} | | | not run yet (`bash bench/baselines.sh {name}`) | | | | {published} |"
+    s = json.loads(summary_path.read_text())
+    first = s["runs"][0]
+    run = Path(directory) / f"seed{first['seed']}" / f"fold{first['val_fold']}"
+    if part == "pruned":
+        runs, mean, std = s["pruned_runs"], s["pruned_mean_test_accuracy"], s["pruned_std_test_accuracy"]
+        seed_means, interval, run = s.get("pruned_seed_means", []), s.get("pruned_ci95_test_accuracy"), run / "pruned"
+    else:
+        runs, mean, std = s["runs"], s["mean_test_accuracy"], s["std_test_accuracy"]
+        seed_means, interval = s.get("seed_means", []), s.get("ci95_test_accuracy")
+    params, macs = size(run)
+    seeds = len({r["seed"] for r in runs})
+    # Means of a few accuracies often end in a 5 at the fifth decimal: round it up, as `pvt3 cv` prints.
+    mean += 1e-12
+    means = ", ".join(f"{m:.4f}" for m in seed_means)
+    ci = f"[{interval[0]:.4f}, {interval[1]:.4f}]" if interval else "—"
+    return (f"| {label} | {params:,} | {macs / 1e6:.2f} M | {seeds} × {len(runs) // max(seeds, 1)} "
+            f"| **{mean:.4f} ± {std:.4f}** | {means} | {ci} | {published} |")
 
 
-# The rows of docs/results.md. Published: the PVT³ paper's ViViT and best PVT³ (with random
-# pruning); the baselines' own figures are not in the sources this project has.
+# The rows of docs/results.md. Published: the PVT³ report's Table 1 (ViViT unpruned, PVT³ with
+# random pruning; RAEC trained on one sensor, "independent", as here, with the joint-learning
+# figure beside it) and, for ViT, the best validation accuracy of its learning curves (the report
+# gives no ViT test figure).
 TABLES = {
     "iCub-20": [
-        "ViT|—|runs/cv-vit-icub/seed0/fold?",
-        "RAEC|—|runs/cv-raec-icub/seed0/fold?",
-        "ViViT backbone (PVT³ unpruned, masks untrained)|0.9224|runs/cv-icub20/seed0/fold?",
-        "PVT³, trained masks, unpruned|—|runs/cv-icub20-l1/seed0/fold?",
-        "PVT³ pruned: 50 % of channels|—|runs/cv-icub20-l1/seed0/fold?/pruned",
-        "PVT³ pruned: 50 % of frames|—|runs/frames-icub20/fold?-p50",
-        "PVT³ with random pruning|0.9425|runs/cv-rp-icub/seed0/fold?",
+        "ViT|0.8884 (validation)|runs/cv-vit-icub",
+        "RAEC|0.9114 (joint: 0.9323)|runs/cv-raec-icub",
+        "PVT³ unpruned (the ViViT backbone, masks untrained)|0.9224|runs/cv-rpp-icub",
+        "PVT³, trained masks, unpruned|—|runs/cv-masks-icub",
+        "PVT³ pruned: 50 % of channels|—|runs/cv-masks-icub-channels50:pruned",
+        "PVT³ pruned: 60 % of channels|—|runs/cv-masks-icub-channels60:pruned",
+        "PVT³ pruned: 50 % of frames|—|runs/cv-masks-icub:pruned",
+        "PVT³ pruned: 50 % of channels and 50 % of frames|—|runs/cv-masks-icub-channels50-frames50:pruned",
+        "PVT³, persistent random pruning 20 %|0.9425|runs/cv-rpp-icub:pruned",
+        "PVT³, per-step random pruning 5 %|0.9425|runs/cv-rp-icub",
     ],
     "BioTac-20": [
-        "ViT|—|runs/cv-vit-biotac/seed0/fold?",
-        "RAEC|—|runs/cv-raec-biotac/seed0/fold?",
-        "ViViT backbone (PVT³ unpruned, masks untrained)|0.9659|runs/cv-biotac20-frame/seed0/fold?",
-        "PVT³, trained masks, unpruned|—|runs/cv-biotac20-l1/seed0/fold?",
-        "PVT³ pruned: 50 % of frames|—|runs/cv-biotac20-l1/seed0/fold?/pruned",
-        "PVT³ with random pruning|0.9798|runs/cv-rp-biotac/seed0/fold?",
+        "ViT|0.9777 (validation)|runs/cv-vit-biotac",
+        "RAEC|0.9531 (joint: 0.9601)|runs/cv-raec-biotac",
+        "PVT³ unpruned (the ViViT backbone, masks untrained)|0.9659|runs/cv-rpp-biotac",
+        "PVT³, trained masks, unpruned|—|runs/cv-masks-biotac",
+        "PVT³ pruned: 50 % of channels|—|runs/cv-masks-biotac-channels50:pruned",
+        "PVT³ pruned: 60 % of channels|—|runs/cv-masks-biotac-channels60:pruned",
+        "PVT³ pruned: 50 % of frames|—|runs/cv-masks-biotac:pruned",
+        "PVT³ pruned: 50 % of channels and 50 % of frames|—|runs/cv-masks-biotac-channels50-frames50:pruned",
+        "PVT³, persistent random pruning 20 %|0.9798|runs/cv-rpp-biotac:pruned",
+        "PVT³, per-step random pruning 5 %|0.9798|runs/cv-rp-biotac",
     ],
 }
 
 
 def table(specs):
-    print("| model | parameters | multiply-adds | test accuracy per fold (0–3) | mean ± std | published | training (min) |")
-    print("|---|---:|---:|---|---:|---:|---:|")
+    print("| model | parameters | multiply-adds | seeds × folds | test accuracy, mean ± std | seed means | 95 % interval | published |")
+    print("|---|---:|---:|---|---:|---|---|---:|")
     for spec in specs:
         print(row(spec))
 
