@@ -83,7 +83,7 @@ def svg(rows, path):
         y, xp, xo = Y(1 - r["accuracy"]), X(r["pvt3_us"]), X(r["ort_us"])
         width = 6.2 * len(r["name"])
         right, left, middle = max(xp, xo) + 8, min(xp, xo) - 8 - width, (xp + xo - width) / 2
-        spots = [(right, y + 4), (left, y + 4)] + [(sx, y + dy) for dy in (-9, 17, -22, 30) for sx in (middle, right, left)]
+        spots = [(right, y + 4), (left, y + 4)] + [(sx, y + dy) for dy in (-9, 17, -22, 30, -35, 43, -48, 56) for sx in (right, middle, left)]
         lx, ly = next(((sx, sy) for sx, sy in spots if free((sx, sy - 10, sx + width, sy + 2))), spots[0])
         placed.append((lx, ly - 10, lx + width, ly + 2))
         out.append(f'<text x="{lx}" y="{ly}">{r["name"]}</text>')
