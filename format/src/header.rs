@@ -57,6 +57,13 @@ pub struct StopRule {
     pub agreeing: usize,
 }
 
+/// The answer in a row of class probabilities: the index of the largest (the first on a tie, as
+/// numpy's and ONNX's ArgMax choose) and its probability. The runtime's predictions and the
+/// trainer's calibration of the [`StopRule`] both read answers through this one function.
+pub fn top_class(probabilities: &[f32]) -> (usize, f32) {
+    probabilities.iter().enumerate().fold((0, f32::NEG_INFINITY), |best, (c, &p)| if p.total_cmp(&best.1).is_gt() { (c, p) } else { best })
+}
+
 impl StopRule {
     /// Why the rule cannot be a file's, if it cannot: a probability outside (0, 1], or no answer
     /// to agree.
@@ -177,6 +184,13 @@ mod tests {
 
     fn parse(entries: &[(&'static str, String)]) -> Result<Header, HeaderError> {
         Header::parse(entries.iter().map(|(k, v)| (*k, v.as_str())))
+    }
+
+    #[test]
+    fn the_top_class_is_the_first_largest_probability() {
+        assert_eq!(top_class(&[0.1, 0.6, 0.3]), (1, 0.6));
+        assert_eq!(top_class(&[0.4, 0.2, 0.4]), (0, 0.4), "a tie goes to the first, as ArgMax");
+        assert_eq!(top_class(&[0.25; 4]), (0, 0.25));
     }
 
     #[test]

@@ -8,7 +8,7 @@ mod digest;
 mod header;
 
 pub use digest::{digest, verify, Integrity};
-pub use header::{Dims, Header, HeaderError, StopRule, FORMAT_VERSION};
+pub use header::{top_class, Dims, Header, HeaderError, StopRule, FORMAT_VERSION};
 
 /// Input: raw sensor frames `[batch, height, width, (channels,) frames]`.
 pub const INPUT: &str = "frames";

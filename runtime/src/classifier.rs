@@ -42,7 +42,7 @@ pub struct Classifier {
 
 /// The prediction for one row of probabilities.
 pub(crate) fn prediction(classes: &[String], probabilities: &[f32]) -> Prediction {
-    let class = probabilities.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map_or(0, |(i, _)| i);
+    let class = pvt3_format::top_class(probabilities).0;
     Prediction { class, label: classes[class].clone(), probabilities: probabilities.to_vec() }
 }
 

@@ -77,8 +77,10 @@ pub fn prefixes(model: &Pvt3, samples: &Samples) -> Result<Prefixes> {
 
 impl From<&Answers> for Prefixes {
     fn from(a: &Answers) -> Self {
-        let best =
-            |p: &Vec<f32>| p.iter().enumerate().fold((0u32, f32::NEG_INFINITY), |b, (c, &v)| if v > b.1 { (c as u32, v) } else { b });
+        let best = |p: &Vec<f32>| {
+            let (class, top) = pvt3_format::top_class(p);
+            (class as u32, top)
+        };
         let (class, top) = a.probabilities.iter().map(|sample| sample.iter().map(best).unzip()).unzip();
         Prefixes { top, class, labels: a.labels.clone(), tokens: a.tokens }
     }
