@@ -30,22 +30,32 @@ def size(run):
     return int(re.search(r"parameters\s+(\d+) trainable", out)[1]), int(re.search(r"mult-adds\s+(\d+) per sample", out)[1])
 
 
-def row(spec):
-    label, published, where = spec.split("|")
+def cv_part(where):
+    """`DIR` or `DIR:pruned` (a `pvt3 cv` directory, its pruned runs with `:pruned`): that part of
+    its cv.json under plain keys (runs, mean, std, seed_means, interval) and the first run's
+    directory, or None if the directory has no cv.json yet."""
     directory, _, part = where.partition(":")
     summary_path = Path(directory) / "cv.json"
     if not summary_path.exists():
-        name = re.sub(r"^masks-(\w+)-.*", r"prunings-\1", Path(directory).name.removeprefix("cv-"))
-        return f"| {label} | | | not run yet (`bash bench/baselines.sh {name}`) | | | | {published} |"
+        return None
     s = json.loads(summary_path.read_text())
     first = s["runs"][0]
     run = Path(directory) / f"seed{first['seed']}" / f"fold{first['val_fold']}"
+    key = "pruned_" if part == "pruned" else ""
     if part == "pruned":
-        runs, mean, std = s["pruned_runs"], s["pruned_mean_test_accuracy"], s["pruned_std_test_accuracy"]
-        seed_means, interval, run = s.get("pruned_seed_means", []), s.get("pruned_ci95_test_accuracy"), run / "pruned"
-    else:
-        runs, mean, std = s["runs"], s["mean_test_accuracy"], s["std_test_accuracy"]
-        seed_means, interval = s.get("seed_means", []), s.get("ci95_test_accuracy")
+        run = run / "pruned"
+    return dict(runs=s[f"{key}runs"], mean=s[f"{key}mean_test_accuracy"], std=s[f"{key}std_test_accuracy"],
+                seed_means=s.get(f"{key}seed_means", []), interval=s.get(f"{key}ci95_test_accuracy"), run=run)
+
+
+def row(spec):
+    label, published, where = spec.split("|")
+    part = cv_part(where)
+    if part is None:
+        directory = where.partition(":")[0]
+        name = re.sub(r"^masks-(\w+)-.*", r"prunings-\1", Path(directory).name.removeprefix("cv-"))
+        return f"| {label} | | | not run yet (`bash bench/baselines.sh {name}`) | | | | {published} |"
+    runs, mean, std, seed_means, interval, run = (part[k] for k in ("runs", "mean", "std", "seed_means", "interval", "run"))
     params, macs = size(run)
     seeds = len({r["seed"] for r in runs})
     # Means of a few accuracies often end in a 5 at the fifth decimal: round it up, as `pvt3 cv` prints.

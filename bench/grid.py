@@ -19,7 +19,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-PVT3 = "./target/release/pvt3"
+from comparison import PVT3, cv_part
 
 
 def info(run):
@@ -103,17 +103,15 @@ def main():
     rows = []
     for spec in a.models:
         name, where = spec.split("=", 1)
-        directory, _, part = where.partition(":")
-        summary = json.loads(Path(directory, "cv.json").read_text())
-        first = summary["runs"][0]
-        run = Path(directory, f"seed{first['seed']}", f"fold{first['val_fold']}", *(["pruned"] if part == "pruned" else []))
-        key = "pruned_" if part == "pruned" else ""
-        runs = len(summary[f"{key}runs"])
+        part = cv_part(where)
+        if part is None:
+            sys.exit(f"{where}: no cv.json (run its cross-validation first)")
+        run, runs = part["run"], len(part["runs"])
         onnx = f"target/grid/{name}.onnx"
         subprocess.run([PVT3, "export", str(run), "-o", onnx], capture_output=True, check=True)
         params, macs, kept = info(str(run))
-        rows.append(dict(name=name, runs=runs, seeds=len({r["seed"] for r in summary[f"{key}runs"]}),
-                         accuracy=summary[f"{key}mean_test_accuracy"], std=summary[f"{key}std_test_accuracy"],
+        rows.append(dict(name=name, runs=runs, seeds=len({r["seed"] for r in part["runs"]}),
+                         accuracy=part["mean"], std=part["std"],
                          params=params, macs=macs, kept=kept, onnx=onnx, pvt3=[], ort=[]))
     for i in range(a.rounds):
         for r in rows:
