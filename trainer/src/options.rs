@@ -38,6 +38,12 @@ pub struct TrainOptions {
     #[arg(long, default_value_t = 0)]
     #[serde(default)]
     pub aug_shift: usize,
+    /// Weight averaging: evaluate, select and checkpoint an exponential moving average of the
+    /// weights with this decay per step (e.g. 0.995: about the last 200 steps), not the raw
+    /// weights. 0 turns it off.
+    #[arg(long, default_value_t = 0.0)]
+    #[serde(default)]
+    pub ema: f64,
     /// Seed of initialisation, shuffling, dropout and augmentation: a fixed seed gives the same run.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,

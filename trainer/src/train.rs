@@ -1,5 +1,6 @@
 //! The training loop: AdamW with warm-up and cosine decay, label smoothing, gradient clipping,
-//! optional gain and noise augmentation, and epoch selection by validation accuracy. Every epoch
+//! optional gain, noise and time-shift augmentation, optional weight averaging ([`crate::average`]),
+//! and epoch selection by validation accuracy. Every epoch
 //! appends a line to `metrics.jsonl` and saves the run state under `last/`, so `--resume`
 //! continues an interrupted run exactly; the best epoch's checkpoint is kept under `model/`.
 //!
@@ -18,6 +19,7 @@ use pvt3_models::prune::PruneSpec;
 use pvt3_models::{Classifier, Config, Rng};
 use serde::{Deserialize, Serialize};
 
+use crate::average::WeightAverage;
 use crate::checkpoint::{self, read_json, write_json, write_json_atomically, Meta, Provenance};
 use crate::data::{Dataset, Split};
 use crate::evaluate::{evaluate, Samples};
@@ -25,6 +27,9 @@ use crate::optim::{is_weight_matrix, AdamW};
 use crate::options::TrainOptions;
 use crate::schedule::Schedule;
 use crate::{Error, Result};
+
+/// The weight average's state in `last/` (with `--ema`).
+const AVERAGE_FILE: &str = "average.safetensors";
 
 /// The outcome of a finished run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -239,6 +244,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
 
     std::fs::create_dir_all(out).map_err(Error::io(out))?;
     let mut learner = Learner::new(&config, opts, spec.start.as_ref())?;
+    let mut average = if opts.ema > 0.0 { Some(WeightAverage::new(&learner.varmap, opts.ema)?) } else { None };
     let steps_per_epoch = train_set.len().div_ceil(opts.batch_size);
     let schedule = Schedule {
         peak: opts.lr,
@@ -250,6 +256,9 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
         Some((dir, st)) => {
             pvt3_models::weights::load_weights(&learner.varmap, &dir.join("weights.safetensors"))?;
             learner.optimizer.load(&dir.join("optimizer.safetensors"), st.step)?;
+            if let Some(average) = &mut average {
+                average.load(&dir.join(AVERAGE_FILE))?;
+            }
             truncate_metrics(&out.join("metrics.jsonl"), st.epochs_done)?;
             st
         }
@@ -302,10 +311,17 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
             lr = schedule.at(run.step);
             let (loss, logits) = learner.step(&x, &y, opts, lr, &mut run.rng)?;
             run.step += 1;
+            if let Some(average) = &mut average {
+                average.update(run.step)?;
+            }
             loss_sum += loss * rows.len() as f64;
             let predicted = logits.argmax(D::Minus1)?.to_vec1::<u32>()?;
             correct += predicted.iter().zip(y.to_vec1::<u32>()?).filter(|(p, l)| **p == *l).count();
             bar.inc(1);
+        }
+        // With weight averaging, the average is what is evaluated, selected and checkpointed.
+        if let Some(average) = &mut average {
+            average.swap()?;
         }
         let val = evaluate(&learner.model, &val_set)?;
         let improved =
@@ -316,6 +332,9 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
             test_accuracy = test;
             checkpoint::save(&out.join("model"), &learner.varmap, &meta_for(epoch, val.accuracy, test))?;
             run.best = Some(Best { epoch, val_accuracy: val.accuracy, val_loss: val.loss, test_accuracy: test.unwrap_or(f64::NAN) });
+        }
+        if let Some(average) = &mut average {
+            average.swap()?;
         }
         let seconds = started.elapsed().as_secs_f64();
         run.wall_seconds += seconds;
@@ -334,6 +353,9 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
         checkpoint::replace_dir(&last, |dir| {
             checkpoint::write_files(dir, &learner.varmap, &meta_for(epoch, val.accuracy, None))?;
             learner.optimizer.save(&dir.join("optimizer.safetensors"))?;
+            if let Some(average) = &average {
+                average.save(&dir.join(AVERAGE_FILE))?;
+            }
             write_json(&dir.join("state.json"), &run)
         })?;
         writeln!(log, "{}", serde_json::to_string(&line).expect("plain data")).map_err(Error::io(out))?;

@@ -67,6 +67,7 @@ fn options(epochs: usize) -> TrainOptions {
         aug_gain: 0.1,
         aug_noise: 0.05,
         aug_shift: 0,
+        ema: 0.0,
         seed: 5,
         l1: 0.0,
         mask_lr: 1.0,
@@ -165,6 +166,28 @@ fn prefix_training_resumes_exactly_and_calibrates_a_stopping_rule() {
     assert!(stopping.rule.problem().is_none() && stopping.mean_share <= 1.0, "{stopping:?}");
     assert!(stopping.accuracy >= stopping.full_accuracy - 1e-12, "no accuracy lost on the validation fold: {stopping:?}");
     for d in [a, b, whole] {
+        std::fs::remove_dir_all(d).unwrap();
+    }
+}
+
+/// The weight average is what is selected and saved, and its state resumes bit for bit.
+#[test]
+fn weight_averaging_resumes_exactly_and_checkpoints_the_average() {
+    let data = tiny_data();
+    let averaged = |pause| RunSpec { options: TrainOptions { ema: 0.9, ..options(5) }, ..spec(&data, 5, pause) };
+    let (a, b, raw) = (out_dir("ema-a"), out_dir("ema-b"), out_dir("ema-raw"));
+    train(&averaged(None), &a, false, &ProgressBar::hidden()).unwrap().unwrap();
+    assert!(train(&averaged(Some(3)), &b, false, &ProgressBar::hidden()).unwrap().is_none());
+    assert!(b.join("last").join(super::AVERAGE_FILE).exists());
+    train(&averaged(None), &b, true, &ProgressBar::hidden()).unwrap().unwrap();
+    train(&spec(&data, 5, None), &raw, false, &ProgressBar::hidden()).unwrap().unwrap();
+    let weights = |d: &PathBuf, w: &str| std::fs::read(d.join(w).join("weights.safetensors")).unwrap();
+    assert_eq!(metrics(&a), metrics(&b));
+    assert_eq!(weights(&a, "model"), weights(&b, "model"), "identical averaged weights, bit for bit");
+    assert_eq!(weights(&a, "last"), weights(&raw, "last"), "averaging leaves the raw weights' training alone");
+    let val_losses = |d: &PathBuf| metrics(d).iter().map(|m| m["val_loss"].as_f64().unwrap()).collect::<Vec<_>>();
+    assert_ne!(val_losses(&a), val_losses(&raw), "the average is what is evaluated");
+    for d in [a, b, raw] {
         std::fs::remove_dir_all(d).unwrap();
     }
 }
