@@ -12,6 +12,8 @@
 #   prunings  the masks row's runs pruned further (after masks): 50 % and 60 % of channels, 30 % and
 #             70 % of frames, 50 % of channels and 50 % of frames (LEVELS="channels50 channels60
 #             frames30 frames70 channels50-frames50" picks some); 20 epochs of fine-tuning each
+#   unpruned-prunings  the rpp row's unpruned runs (masks trained without L1) pruned by their mask
+#             scores (after rpp): 60 % of channels by default (LEVELS picks others), 20 epochs each
 #   rp        PVT³ with per-step random pruning of 5 % of every weight matrix (--random-prune 0.05)
 #   vit, raec the paper's baselines
 #
@@ -23,18 +25,21 @@ pvt3=${PVT3:-target/release/pvt3}
 [ -x "$pvt3" ] || cargo build --release -p pvt3-trainer
 seeds=${SEEDS:-0,1,2} jobs=${JOBS:-2}
 rows=("$@")
-[ ${#rows[@]} -gt 0 ] || rows=(rpp-biotac masks-biotac prunings-biotac rp-biotac vit-biotac raec-biotac
-                                rpp-icub masks-icub prunings-icub rp-icub raec-icub vit-icub)
+[ ${#rows[@]} -gt 0 ] || rows=(rpp-biotac unpruned-prunings-biotac masks-biotac prunings-biotac rp-biotac vit-biotac raec-biotac
+                                rpp-icub unpruned-prunings-icub masks-icub prunings-icub rp-icub raec-icub vit-icub)
 
-# The masks row's runs pruned further: for each level a cross-validation directory of its own,
-# runs/cv-masks-SET-LEVEL, whose folds start as copies of the masks row's trained runs (so `pvt3
-# cv --resume` only prunes and fine-tunes them, and writes the level's cv.json with its interval).
+# A row's trained runs pruned further: for each level a cross-validation directory of its own,
+# OUT-LEVEL, whose folds start as copies of PARENT's trained runs (so `pvt3 cv --resume` only
+# prunes and fine-tunes them, and writes the level's cv.json with its interval). ARGS are the
+# options the parent row trained with.
+#   prunings SET PARENT_ROW PARENT_DIR OUT DEFAULT_LEVELS ARGS...
 prunings() {
-    local set=$1 parent=runs/cv-masks-$1 level name run out copy
+    local set=$1 parent_row=$2 parent=$3 prefix=$4 levels=$5 level name run out copy
+    shift 5
     for run in "$parent"/seed*/fold?; do
-        [ -f "$run/result.json" ] || { echo "$run has not finished: run the masks-$set row first" >&2; exit 1; }
+        [ -f "$run/result.json" ] || { echo "$run has not finished: run the $parent_row-$set row first" >&2; exit 1; }
     done
-    for name in ${LEVELS:-channels50 channels60 frames30 frames70 channels50-frames50}; do
+    for name in ${LEVELS:-$levels}; do
         case $name in
             channels50) level="--prune-channels 50" ;;
             channels60) level="--prune-channels 60" ;;
@@ -43,14 +48,14 @@ prunings() {
             channels50-frames50) level="--prune-channels 50 --prune-frames 50" ;;
             *) echo "unknown pruning level $name" >&2; exit 2 ;;
         esac
-        out=$parent-$name
+        out=$prefix-$name
         for run in "$parent"/seed*/fold?; do
             copy=$out/${run#"$parent"/}
             [ -d "$copy" ] || { mkdir -p "$copy" && cp -r "$run/result.json" "$run/metrics.jsonl" "$run/model" "$copy/"; }
         done
-        echo "== prunings-$set $name: $pvt3 --threads 1 cv --data data/${set}20.npz $level --out $out --resume"
+        echo "== prunings of $parent_row-$set, $name: $pvt3 --threads 1 cv --data data/${set}20.npz $* $level --out $out --resume"
         # shellcheck disable=SC2086
-        "$pvt3" --threads 1 cv --data "data/${set}20.npz" --l1 0.25 --mask-lr 10 $level --fine-tune-epochs 20 \
+        "$pvt3" --threads 1 cv --data "data/${set}20.npz" "$@" $level --fine-tune-epochs 20 \
             --seeds "$seeds" --epochs 100 --jobs "$jobs" --out "$out" --resume
     done
 }
@@ -60,7 +65,13 @@ for row in "${rows[@]}"; do
     case $row in
         rpp-*) args=(--prune-weights 20) ;;
         masks-*) args=(--l1 0.25 --mask-lr 10 --prune-frames 50 --fine-tune-epochs 20) ;;
-        prunings-*) prunings "${row#*-}"; continue ;;
+        prunings-*) set=${row#*-}
+            prunings "$set" masks "runs/cv-masks-$set" "runs/cv-masks-$set" \
+                "channels50 channels60 frames30 frames70 channels50-frames50" --l1 0.25 --mask-lr 10
+            continue ;;
+        unpruned-prunings-*) set=${row##*-}
+            prunings "$set" rpp "runs/cv-rpp-$set" "runs/cv-unpruned-$set" channels60
+            continue ;;
         rp-*) args=(--random-prune 0.05) ;;
         vit-*) args=(--model vit) ;;
         # RAEC as Gao et al. train it: Adam (AdamW without weight decay), lr 5e-4, batch 32.

@@ -53,7 +53,8 @@ def row(spec):
     part = cv_part(where)
     if part is None:
         directory = where.partition(":")[0]
-        name = re.sub(r"^masks-(\w+)-.*", r"prunings-\1", Path(directory).name.removeprefix("cv-"))
+        name = Path(directory).name.removeprefix("cv-")
+        name = re.sub(r"^unpruned-(\w+)-.*", r"unpruned-prunings-\1", re.sub(r"^masks-(\w+)-.*", r"prunings-\1", name))
         return f"| {label} | | | not run yet (`bash bench/baselines.sh {name}`) | | | | {published} |"
     runs, mean, std, seed_means, interval, run = (part[k] for k in ("runs", "mean", "std", "seed_means", "interval", "run"))
     params, macs = size(run)
@@ -75,6 +76,7 @@ TABLES = {
         "ViT|0.8884 (validation)|runs/cv-vit-icub",
         "RAEC|0.9114 (joint: 0.9323)|runs/cv-raec-icub",
         "PVT³ unpruned (the ViViT backbone, masks untrained)|0.9224|runs/cv-rpp-icub",
+        "PVT³ pruned: 60 % of channels, from the unpruned runs (masks trained without L1)|—|runs/cv-unpruned-icub-channels60:pruned",
         "PVT³, trained masks, unpruned|—|runs/cv-masks-icub",
         "PVT³ pruned: 50 % of channels|—|runs/cv-masks-icub-channels50:pruned",
         "PVT³ pruned: 60 % of channels|—|runs/cv-masks-icub-channels60:pruned",
@@ -87,6 +89,7 @@ TABLES = {
         "ViT|0.9777 (validation)|runs/cv-vit-biotac",
         "RAEC|0.9531 (joint: 0.9601)|runs/cv-raec-biotac",
         "PVT³ unpruned (the ViViT backbone, masks untrained)|0.9659|runs/cv-rpp-biotac",
+        "PVT³ pruned: 60 % of channels, from the unpruned runs (masks trained without L1)|—|runs/cv-unpruned-biotac-channels60:pruned",
         "PVT³, trained masks, unpruned|—|runs/cv-masks-biotac",
         "PVT³ pruned: 50 % of channels|—|runs/cv-masks-biotac-channels50:pruned",
         "PVT³ pruned: 60 % of channels|—|runs/cv-masks-biotac-channels60:pruned",
