@@ -10,6 +10,7 @@ pub mod data;
 pub mod error;
 pub mod evaluate;
 pub mod info;
+pub mod mixup;
 pub mod normalization;
 pub mod optim;
 pub mod options;

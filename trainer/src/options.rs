@@ -38,6 +38,11 @@ pub struct TrainOptions {
     #[arg(long, default_value_t = 0)]
     #[serde(default)]
     pub aug_shift: usize,
+    /// Mixup: blend each training batch with a shuffled copy of itself, λ ~ Beta(α, α) per batch,
+    /// and the two labels' losses alike; this is α (e.g. 0.2). 0 turns it off.
+    #[arg(long, default_value_t = 0.0)]
+    #[serde(default)]
+    pub mixup: f64,
     /// Weight averaging: evaluate, select and checkpoint an exponential moving average of the
     /// weights with this decay per step (e.g. 0.995: about the last 200 steps), not the raw
     /// weights. 0 turns it off.

@@ -1,8 +1,8 @@
 //! The training loop: AdamW with warm-up and cosine decay, label smoothing, gradient clipping,
-//! optional gain, noise and time-shift augmentation, optional weight averaging ([`crate::average`]),
-//! and epoch selection by validation accuracy. Every epoch
-//! appends a line to `metrics.jsonl` and saves the run state under `last/`, so `--resume`
-//! continues an interrupted run exactly; the best epoch's checkpoint is kept under `model/`.
+//! optional gain, noise and time-shift augmentation, mixup ([`crate::mixup`]) and weight
+//! averaging ([`crate::average`]), and epoch selection by validation accuracy. Every epoch appends
+//! a line to `metrics.jsonl` and saves the run state under `last/`, so `--resume` continues an
+//! interrupted run exactly; the best epoch's checkpoint is kept under `model/`.
 //!
 //! Run directory: `model/` (the checkpoint), `last/` (resume state), `metrics.jsonl`,
 //! `result.json` (written when the run is complete).
@@ -136,8 +136,9 @@ impl Learner {
         Ok(())
     }
 
-    /// One optimiser step on a batch: forward with dropout, smoothed cross-entropy (plus the L1
-    /// penalty on the masks), backward, gradient clipping, AdamW. Returns the loss and logits.
+    /// One optimiser step on a batch: optional mixup, forward with dropout, smoothed cross-entropy
+    /// (plus the L1 penalty on the masks), backward, gradient clipping, AdamW. Returns the loss and
+    /// logits.
     pub fn step(&mut self, x: &Tensor, y: &Tensor, opts: &TrainOptions, lr: f64, rng: &mut Rng) -> Result<(f64, Tensor)> {
         let mut saved = Vec::new();
         if opts.random_prune > 0.0 {
@@ -149,6 +150,8 @@ impl Learner {
                 saved.push(full);
             }
         }
+        let mixed = if opts.mixup > 0.0 { Some(crate::mixup::mix(x, y, opts.mixup, rng)?) } else { None };
+        let x = mixed.as_ref().map_or(x, |m| &m.x);
         let (logits, extra) = if opts.prefix_training > 0.0 && rng.uniform() < opts.prefix_training as f32 {
             let pvt3 = self.model.pvt3("--prefix-training")?;
             let tokens = 1 + rng.below(pvt3.config().time_tokens());
@@ -157,6 +160,10 @@ impl Learner {
             self.model.forward_with_loss(x, Some(rng))?
         };
         let mut loss = smoothed_cross_entropy(&logits, y, opts.label_smoothing)?;
+        if let Some(m) = &mixed {
+            let partners = smoothed_cross_entropy(&logits, &m.partner_labels, opts.label_smoothing)?;
+            loss = ((loss * m.lambda)? + (partners * (1.0 - m.lambda))?)?;
+        }
         if let Some(extra) = extra {
             loss = (loss + extra)?;
         }

@@ -67,6 +67,7 @@ fn options(epochs: usize) -> TrainOptions {
         aug_gain: 0.1,
         aug_noise: 0.05,
         aug_shift: 0,
+        mixup: 0.0,
         ema: 0.0,
         seed: 5,
         l1: 0.0,
@@ -145,27 +146,36 @@ fn a_seed_fixes_the_run_and_a_paused_run_resumes_exactly() {
     std::fs::remove_dir_all(b).unwrap();
 }
 
+/// Trains `options` for `epochs` twice, once paused after 2 epochs and resumed: the two must
+/// agree bit for bit. Returns the uninterrupted run's directory.
+fn resumes_exactly(tag: &str, data: &Dataset, options: TrainOptions) -> PathBuf {
+    let with = |pause| RunSpec { options: options.clone(), ..spec(data, options.epochs, pause) };
+    let (a, b) = (out_dir(&format!("{tag}-a")), out_dir(&format!("{tag}-b")));
+    train(&with(None), &a, false, &ProgressBar::hidden()).unwrap().unwrap();
+    assert!(train(&with(Some(2)), &b, false, &ProgressBar::hidden()).unwrap().is_none());
+    train(&with(None), &b, true, &ProgressBar::hidden()).unwrap().unwrap();
+    let weights = |d: &PathBuf| std::fs::read(d.join("model/weights.safetensors")).unwrap();
+    assert_eq!(metrics(&a), metrics(&b), "{tag}");
+    assert_eq!(weights(&a), weights(&b), "{tag}: identical weights, bit for bit");
+    std::fs::remove_dir_all(b).unwrap();
+    a
+}
+
 /// Training on prefixes draws from the run's own generator: a paused run still resumes bit for
 /// bit, the run differs from one on whole windows, and the finished run carries a calibrated
 /// stopping rule.
 #[test]
 fn prefix_training_resumes_exactly_and_calibrates_a_stopping_rule() {
     let data = tiny_data();
-    let prefixed = |pause| RunSpec { options: TrainOptions { prefix_training: 0.5, ..options(4) }, ..spec(&data, 4, pause) };
-    let (a, b, whole) = (out_dir("prefix-a"), out_dir("prefix-b"), out_dir("prefix-whole"));
-    train(&prefixed(None), &a, false, &ProgressBar::hidden()).unwrap().unwrap();
-    assert!(train(&prefixed(Some(2)), &b, false, &ProgressBar::hidden()).unwrap().is_none());
-    train(&prefixed(None), &b, true, &ProgressBar::hidden()).unwrap().unwrap();
+    let a = resumes_exactly("prefix", &data, TrainOptions { prefix_training: 0.5, ..options(4) });
+    let whole = out_dir("prefix-whole");
     train(&spec(&data, 4, None), &whole, false, &ProgressBar::hidden()).unwrap().unwrap();
-    let weights = |d: &PathBuf| std::fs::read(d.join("model/weights.safetensors")).unwrap();
-    assert_eq!(metrics(&a), metrics(&b));
-    assert_eq!(weights(&a), weights(&b), "identical weights, bit for bit");
     assert_ne!(metrics(&a), metrics(&whole), "prefixes change the training");
     let (_, meta) = crate::checkpoint::load_meta(&a).unwrap();
     let stopping = meta.provenance.stopping.expect("a calibrated stopping rule");
     assert!(stopping.rule.problem().is_none() && stopping.mean_share <= 1.0, "{stopping:?}");
     assert!(stopping.accuracy >= stopping.full_accuracy - 1e-12, "no accuracy lost on the validation fold: {stopping:?}");
-    for d in [a, b, whole] {
+    for d in [a, whole] {
         std::fs::remove_dir_all(d).unwrap();
     }
 }
@@ -174,22 +184,36 @@ fn prefix_training_resumes_exactly_and_calibrates_a_stopping_rule() {
 #[test]
 fn weight_averaging_resumes_exactly_and_checkpoints_the_average() {
     let data = tiny_data();
-    let averaged = |pause| RunSpec { options: TrainOptions { ema: 0.9, ..options(5) }, ..spec(&data, 5, pause) };
-    let (a, b, raw) = (out_dir("ema-a"), out_dir("ema-b"), out_dir("ema-raw"));
-    train(&averaged(None), &a, false, &ProgressBar::hidden()).unwrap().unwrap();
-    assert!(train(&averaged(Some(3)), &b, false, &ProgressBar::hidden()).unwrap().is_none());
-    assert!(b.join("last").join(super::AVERAGE_FILE).exists());
-    train(&averaged(None), &b, true, &ProgressBar::hidden()).unwrap().unwrap();
+    let a = resumes_exactly("ema", &data, TrainOptions { ema: 0.9, ..options(5) });
+    assert!(a.join("last").join(super::AVERAGE_FILE).exists());
+    let raw = out_dir("ema-raw");
     train(&spec(&data, 5, None), &raw, false, &ProgressBar::hidden()).unwrap().unwrap();
     let weights = |d: &PathBuf, w: &str| std::fs::read(d.join(w).join("weights.safetensors")).unwrap();
-    assert_eq!(metrics(&a), metrics(&b));
-    assert_eq!(weights(&a, "model"), weights(&b, "model"), "identical averaged weights, bit for bit");
     assert_eq!(weights(&a, "last"), weights(&raw, "last"), "averaging leaves the raw weights' training alone");
     let val_losses = |d: &PathBuf| metrics(d).iter().map(|m| m["val_loss"].as_f64().unwrap()).collect::<Vec<_>>();
     assert_ne!(val_losses(&a), val_losses(&raw), "the average is what is evaluated");
-    for d in [a, b, raw] {
+    for d in [a, raw] {
         std::fs::remove_dir_all(d).unwrap();
     }
+}
+
+/// Mixup draws from the run's own generator too, and still learns the tiny problem.
+#[test]
+fn mixup_learns_and_resumes_exactly() {
+    let data = tiny_data();
+    let a = resumes_exactly("mixup", &data, TrainOptions { mixup: 0.4, ..options(4) });
+    std::fs::remove_dir_all(a).unwrap();
+    let dir = out_dir("mixup-learn");
+    let r = train(
+        &RunSpec { options: TrainOptions { mixup: 0.4, ..options(30) }, ..spec(&data, 30, None) },
+        &dir,
+        false,
+        &ProgressBar::hidden(),
+    )
+    .unwrap()
+    .unwrap();
+    assert!(r.test_accuracy >= 0.9, "{r:?}");
+    std::fs::remove_dir_all(dir).unwrap();
 }
 
 #[test]
