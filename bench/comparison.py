@@ -4,6 +4,7 @@ mean ± std of all runs, each seed's mean, and the 95 % interval of the mean (St
 seed means), with the model's size and the paper's figure beside it.
 
     python3 bench/comparison.py                             # the two tables of docs/results.md
+    python3 bench/comparison.py tried                       # its "Pushing accuracy" tables
     python3 bench/comparison.py 'LABEL|PUBLISHED|DIR[:pruned]' ...   # one table of your own rows
 
 DIR is a `pvt3 cv` output directory; `:pruned` reads its pruned and fine-tuned runs. Sizes come
@@ -101,6 +102,29 @@ TABLES = {
 }
 
 
+# The rows of docs/results.md's "Pushing accuracy": each change beside the rows it starts from.
+TRIED = {
+    "iCub-20, masks trained without L1 (the trainer's defaults), pruned to 60 % of channels": [
+        "100 epochs (the headline rows), unpruned|—|runs/cv-rpp-icub",
+        "100 epochs, pruned to 60 % of channels|—|runs/cv-unpruned-icub-channels60:pruned",
+        "300 epochs, unpruned|—|runs/cv-e300-icub",
+        "300 epochs, pruned to 60 % of channels|—|runs/cv-e300-icub:pruned",
+        "mixup 0.2, unpruned|—|runs/cv-mixup-icub",
+        "mixup 0.2, pruned to 60 % of channels|—|runs/cv-mixup-icub:pruned",
+    ],
+    "BioTac-20, trained masks (`--l1 0.25 --mask-lr 10`), pruned to 60 % of channels": [
+        "as in the headline rows, unpruned|—|runs/cv-masks-biotac",
+        "as in the headline rows, pruned to 60 % of channels|—|runs/cv-masks-biotac-channels60:pruned",
+        "EMA 0.995, unpruned|—|runs/cv-ema-biotac",
+        "EMA 0.995, pruned to 60 % of channels|—|runs/cv-ema-biotac:pruned",
+        "mixup 0.2, unpruned|—|runs/cv-mixup-biotac",
+        "mixup 0.2, pruned to 60 % of channels|—|runs/cv-mixup-biotac:pruned",
+        "time shift ±20 frames, unpruned|—|runs/cv-shift-biotac",
+        "time shift ±20 frames, pruned to 60 % of channels|—|runs/cv-shift-biotac:pruned",
+    ],
+}
+
+
 def table(specs):
     print("| model | parameters | multiply-adds | seeds × folds | test accuracy, mean ± std | seed means | 95 % interval | published |")
     print("|---|---:|---:|---|---:|---|---|---:|")
@@ -109,10 +133,11 @@ def table(specs):
 
 
 def main():
-    if sys.argv[1:]:
+    tried = sys.argv[1:] == ["tried"]
+    if sys.argv[1:] and not tried:
         table(sys.argv[1:])
         return
-    for name, specs in TABLES.items():
+    for name, specs in (TRIED if tried else TABLES).items():
         print(f"### {name}\n")
         table(specs)
         print()
