@@ -8,11 +8,15 @@
 #
 #   bash bench/anytime.sh                        # SEEDS="0 1 2" P=0.5 JOBS=2 DATASETS="icub20 biotac20"
 #   SEEDS="0 1 2 3 4" P=0.3 bash bench/anytime.sh
+#   DATASETS=biotac20 P=0.8 EXTRA="--mixup 0.2" bash bench/anytime.sh   # more trainer options, both variants
 #
-# Runs go to runs/anytime/ (a finished run is not trained again).
+# Runs go to runs/anytime/DATA-VARIANT[-EXTRA]-sSEED, EXTRA without its spaces and dashes (a finished
+# run is not trained again).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-SEEDS=${SEEDS:-"0 1 2"} P=${P:-0.5} JOBS=${JOBS:-2} DATASETS=${DATASETS:-"icub20 biotac20"}
+SEEDS=${SEEDS:-"0 1 2"} P=${P:-0.5} JOBS=${JOBS:-2} DATASETS=${DATASETS:-"icub20 biotac20"} EXTRA=${EXTRA:-}
+tag=$(printf %s "$EXTRA" | tr -d ' -')
+[ -z "$tag" ] || tag=-$tag
 out=runs/anytime
 mkdir -p "$out"
 cargo build -q --release -p pvt3-trainer -p pvt3-runtime --bins
@@ -24,21 +28,22 @@ trap 'rm -f "$jobs_file"' EXIT
 for data in $DATASETS; do
   for seed in $SEEDS; do
     for variant in whole "prefix$P"; do
-      [ -f "$out/$data-$variant-s$seed/result.json" ] || echo "$data $variant $seed" >> "$jobs_file"
+      [ -f "$out/$data-$variant$tag-s$seed/result.json" ] || echo "$data $variant $seed" >> "$jobs_file"
     done
   done
 done
 train_one() {
-  local data=$1 variant=$2 seed=$3 run="$out/$1-$2-s$3"
+  local data=$1 variant=$2 seed=$3 run="$out/$1-$2$tag-s$3"
   local prefix=0
   [ "$variant" = whole ] || prefix=$P
   rm -rf "$run"
-  "$pvt3" --threads 1 train --data "data/$data.npz" --seed "$seed" --prefix-training "$prefix" --out "$run" \
+  # shellcheck disable=SC2086  # EXTRA is a list of options
+  "$pvt3" --threads 1 train --data "data/$data.npz" --seed "$seed" --prefix-training "$prefix" $EXTRA --out "$run" \
     --export "$run.onnx" > "$run.log" 2>&1
   echo "trained $run: $(grep 'best epoch' "$run.log")" >&2
 }
 export -f train_one
-export out P pvt3
+export out P pvt3 EXTRA tag
 echo "$(wc -l < "$jobs_file") trainings, $JOBS at a time" >&2
 xargs -r -P "$JOBS" -L 1 bash -c 'train_one "$@"' _ < "$jobs_file"
 
@@ -47,7 +52,7 @@ results=$out/anytime.jsonl
 for data in $DATASETS; do
   for seed in $SEEDS; do
     for variant in whole "prefix$P"; do
-      run="$out/$data-$variant-s$seed"
+      run="$out/$data-$variant$tag-s$seed"
       "$pvt3" eval "$run" --anytime --json | sed "s/^{/{\"data\":\"$data\",\"variant\":\"$variant\",\"seed\":$seed,/" >> "$results"
     done
   done
@@ -57,6 +62,6 @@ first=${SEEDS%% *}
 costs=$out/peek-cost.jsonl
 : > "$costs"
 for data in $DATASETS; do
-  env -u RUST_BACKTRACE target/release/pvt3-run --bench "$out/$data-prefix$P-s$first.onnx" 1 1 >> "$costs"
+  env -u RUST_BACKTRACE target/release/pvt3-run --bench "$out/$data-prefix$P$tag-s$first.onnx" 1 1 >> "$costs"
 done
 python3 bench/anytime_report.py "$results" "$costs" "$P" "$SEEDS"

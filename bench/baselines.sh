@@ -24,6 +24,8 @@
 #   ema       weight averaging, --ema 0.995
 #   mixup     --mixup 0.2
 #   shift     random time shifts of up to ±20 frames, --aug-shift 20
+#   e300-mixup     300 epochs with --mixup 0.2
+#   e300-mixup0.4  300 epochs with --mixup 0.4
 #
 # One thread per run (one is as fast as two for these models); JOBS runs side by side.
 # PVT3=path/to/pvt3 picks the binary.
@@ -69,10 +71,10 @@ prunings() {
 }
 
 for row in "${rows[@]}"; do
-    data=data/${row#*-}20.npz
+    data=data/${row##*-}20.npz
     epochs=100
     tried=(--prune-channels 60 --fine-tune-epochs 20)
-    [ "${row#*-}" = biotac ] && tried+=(--l1 0.25 --mask-lr 10)
+    [ "${row##*-}" = biotac ] && tried+=(--l1 0.25 --mask-lr 10)
     case $row in
         rpp-*) args=(--prune-weights 20) ;;
         masks-*) args=(--l1 0.25 --mask-lr 10 --prune-frames 50 --fine-tune-epochs 20) ;;
@@ -87,6 +89,8 @@ for row in "${rows[@]}"; do
         vit-*) args=(--model vit) ;;
         # RAEC as Gao et al. train it: Adam (AdamW without weight decay), lr 5e-4, batch 32.
         raec-*) args=(--model raec --lr 5e-4 --weight-decay 0) ;;
+        e300-mixup-*) args=("${tried[@]}" --mixup 0.2) epochs=300 ;;
+        e300-mixup0.4-*) args=("${tried[@]}" --mixup 0.4) epochs=300 ;;
         e300-*) args=("${tried[@]}") epochs=300 ;;
         ema-*) args=("${tried[@]}" --ema 0.995) ;;
         mixup-*) args=("${tried[@]}" --mixup 0.2) ;;

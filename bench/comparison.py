@@ -121,6 +121,10 @@ TRIED = {
         "mixup 0.2, pruned to 60 % of channels|—|runs/cv-mixup-biotac:pruned",
         "time shift ±20 frames, unpruned|—|runs/cv-shift-biotac",
         "time shift ±20 frames, pruned to 60 % of channels|—|runs/cv-shift-biotac:pruned",
+        "300 epochs with mixup 0.2, unpruned|—|runs/cv-e300-mixup-biotac",
+        "300 epochs with mixup 0.2, pruned to 60 % of channels|—|runs/cv-e300-mixup-biotac:pruned",
+        "300 epochs with mixup 0.4, unpruned|—|runs/cv-e300-mixup0.4-biotac",
+        "300 epochs with mixup 0.4, pruned to 60 % of channels|—|runs/cv-e300-mixup0.4-biotac:pruned",
     ],
 }
 
