@@ -19,6 +19,8 @@ tag=$(printf %s "$EXTRA" | tr -d ' -')
 [ -z "$tag" ] || tag=-$tag
 out=runs/anytime
 mkdir -p "$out"
+# The run of data set $1, variant $2 (whole or prefixP), seed $3.
+run_dir() { printf %s "$out/$1-$2$tag-s$3"; }
 cargo build -q --release -p pvt3-trainer -p pvt3-runtime --bins
 pvt3=target/release/pvt3
 
@@ -28,12 +30,13 @@ trap 'rm -f "$jobs_file"' EXIT
 for data in $DATASETS; do
   for seed in $SEEDS; do
     for variant in whole "prefix$P"; do
-      [ -f "$out/$data-$variant$tag-s$seed/result.json" ] || echo "$data $variant $seed" >> "$jobs_file"
+      [ -f "$(run_dir "$data" "$variant" "$seed")/result.json" ] || echo "$data $variant $seed" >> "$jobs_file"
     done
   done
 done
 train_one() {
-  local data=$1 variant=$2 seed=$3 run="$out/$1-$2$tag-s$3"
+  local data=$1 variant=$2 seed=$3 run
+  run=$(run_dir "$@")
   local prefix=0
   [ "$variant" = whole ] || prefix=$P
   rm -rf "$run"
@@ -42,7 +45,7 @@ train_one() {
     --export "$run.onnx" > "$run.log" 2>&1
   echo "trained $run: $(grep 'best epoch' "$run.log")" >&2
 }
-export -f train_one
+export -f train_one run_dir
 export out P pvt3 EXTRA tag
 echo "$(wc -l < "$jobs_file") trainings, $JOBS at a time" >&2
 xargs -r -P "$JOBS" -L 1 bash -c 'train_one "$@"' _ < "$jobs_file"
@@ -52,7 +55,7 @@ results=$out/anytime.jsonl
 for data in $DATASETS; do
   for seed in $SEEDS; do
     for variant in whole "prefix$P"; do
-      run="$out/$data-$variant$tag-s$seed"
+      run=$(run_dir "$data" "$variant" "$seed")
       "$pvt3" eval "$run" --anytime --json | sed "s/^{/{\"data\":\"$data\",\"variant\":\"$variant\",\"seed\":$seed,/" >> "$results"
     done
   done
@@ -62,6 +65,6 @@ first=${SEEDS%% *}
 costs=$out/peek-cost.jsonl
 : > "$costs"
 for data in $DATASETS; do
-  env -u RUST_BACKTRACE target/release/pvt3-run --bench "$out/$data-prefix$P$tag-s$first.onnx" 1 1 >> "$costs"
+  env -u RUST_BACKTRACE target/release/pvt3-run --bench "$(run_dir "$data" "prefix$P" "$first").onnx" 1 1 >> "$costs"
 done
 python3 bench/anytime_report.py "$results" "$costs" "$P" "$SEEDS"

@@ -71,18 +71,19 @@ prunings() {
 }
 
 for row in "${rows[@]}"; do
-    data=data/${row##*-}20.npz
+    set=${row##*-}
+    data=data/${set}20.npz
     epochs=100
     tried=(--prune-channels 60 --fine-tune-epochs 20)
-    [ "${row##*-}" = biotac ] && tried+=(--l1 0.25 --mask-lr 10)
+    [ "$set" = biotac ] && tried+=(--l1 0.25 --mask-lr 10)
     case $row in
         rpp-*) args=(--prune-weights 20) ;;
         masks-*) args=(--l1 0.25 --mask-lr 10 --prune-frames 50 --fine-tune-epochs 20) ;;
-        prunings-*) set=${row#*-}
+        prunings-*)
             prunings "$set" masks "runs/cv-masks-$set" "runs/cv-masks-$set" \
                 "channels50 channels60 frames30 frames70 channels50-frames50" --l1 0.25 --mask-lr 10
             continue ;;
-        unpruned-prunings-*) set=${row##*-}
+        unpruned-prunings-*)
             prunings "$set" rpp "runs/cv-rpp-$set" "runs/cv-unpruned-$set" channels60
             continue ;;
         rp-*) args=(--random-prune 0.05) ;;

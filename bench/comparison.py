@@ -102,29 +102,27 @@ TABLES = {
 }
 
 
+def unpruned_and_pruned(label, directory):
+    """The two rows of a tried change: its unpruned runs and their pruning to 60 % of channels."""
+    return [f"{label}, unpruned|—|{directory}", f"{label}, pruned to 60 % of channels|—|{directory}:pruned"]
+
+
 # The rows of docs/results.md's "Pushing accuracy": each change beside the rows it starts from.
 TRIED = {
     "iCub-20, masks trained without L1 (the trainer's defaults), pruned to 60 % of channels": [
         "100 epochs (the headline rows), unpruned|—|runs/cv-rpp-icub",
         "100 epochs, pruned to 60 % of channels|—|runs/cv-unpruned-icub-channels60:pruned",
-        "300 epochs, unpruned|—|runs/cv-e300-icub",
-        "300 epochs, pruned to 60 % of channels|—|runs/cv-e300-icub:pruned",
-        "mixup 0.2, unpruned|—|runs/cv-mixup-icub",
-        "mixup 0.2, pruned to 60 % of channels|—|runs/cv-mixup-icub:pruned",
+        *unpruned_and_pruned("300 epochs", "runs/cv-e300-icub"),
+        *unpruned_and_pruned("mixup 0.2", "runs/cv-mixup-icub"),
     ],
     "BioTac-20, trained masks (`--l1 0.25 --mask-lr 10`), pruned to 60 % of channels": [
         "as in the headline rows, unpruned|—|runs/cv-masks-biotac",
         "as in the headline rows, pruned to 60 % of channels|—|runs/cv-masks-biotac-channels60:pruned",
-        "EMA 0.995, unpruned|—|runs/cv-ema-biotac",
-        "EMA 0.995, pruned to 60 % of channels|—|runs/cv-ema-biotac:pruned",
-        "mixup 0.2, unpruned|—|runs/cv-mixup-biotac",
-        "mixup 0.2, pruned to 60 % of channels|—|runs/cv-mixup-biotac:pruned",
-        "time shift ±20 frames, unpruned|—|runs/cv-shift-biotac",
-        "time shift ±20 frames, pruned to 60 % of channels|—|runs/cv-shift-biotac:pruned",
-        "300 epochs with mixup 0.2, unpruned|—|runs/cv-e300-mixup-biotac",
-        "300 epochs with mixup 0.2, pruned to 60 % of channels|—|runs/cv-e300-mixup-biotac:pruned",
-        "300 epochs with mixup 0.4, unpruned|—|runs/cv-e300-mixup0.4-biotac",
-        "300 epochs with mixup 0.4, pruned to 60 % of channels|—|runs/cv-e300-mixup0.4-biotac:pruned",
+        *unpruned_and_pruned("EMA 0.995", "runs/cv-ema-biotac"),
+        *unpruned_and_pruned("mixup 0.2", "runs/cv-mixup-biotac"),
+        *unpruned_and_pruned("time shift ±20 frames", "runs/cv-shift-biotac"),
+        *unpruned_and_pruned("300 epochs with mixup 0.2", "runs/cv-e300-mixup-biotac"),
+        *unpruned_and_pruned("300 epochs with mixup 0.4", "runs/cv-e300-mixup0.4-biotac"),
     ],
 }
 
