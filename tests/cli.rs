@@ -270,6 +270,8 @@ fn bad_input_gets_a_clear_error() {
     assert!(err.contains("unknown field `depth`"), "{err}");
     let err = fails(&["train", "--set", "patch_width=3", "--out", dir.join("r").to_str().unwrap()]);
     assert!(err.contains("patch_width = 3 does not divide width = 10"), "{err}");
+    let err = fails(&["train", "--lr-floor", "2", "--out", dir.join("r").to_str().unwrap()]);
+    assert!(err.contains("--lr-floor 2: a share of the peak learning rate"), "{err}");
     let err = fails(&["eval", dir.to_str().unwrap()]);
     assert!(err.contains("not a checkpoint directory"), "{err}");
     assert!(!dir.join("r").exists(), "nothing written on failure");

@@ -11,9 +11,14 @@ pub struct TrainOptions {
     pub epochs: usize,
     #[arg(long, default_value_t = 32)]
     pub batch_size: usize,
-    /// Peak learning rate (reached after the warm-up, then cosine decay to 1 % of it).
+    /// Peak learning rate (reached after the warm-up, then cosine decay to `--lr-floor` of it).
     #[arg(long, default_value_t = 2e-3)]
     pub lr: f64,
+    /// Where the cosine decay ends, as a share of the peak learning rate: 1 holds the rate
+    /// constant after the warm-up (the RAEC authors' schedule: Adam at a constant 5e-4).
+    #[arg(long, default_value_t = 0.01)]
+    #[serde(default = "hundredth")]
+    pub lr_floor: f64,
     #[arg(long, default_value_t = 5)]
     pub warmup_epochs: usize,
     /// Decoupled weight decay on weight matrices.
@@ -86,6 +91,10 @@ pub struct TrainOptions {
 
 fn one() -> f64 {
     1.0
+}
+
+fn hundredth() -> f64 {
+    0.01
 }
 
 impl Default for TrainOptions {

@@ -34,4 +34,11 @@ mod tests {
         assert!((s.at(110) - 1e-5).abs() < 1e-12);
         assert!((1..110).all(|i| s.at(i) <= s.at(i - 1) || i < 10));
     }
+
+    /// A floor at the peak (`--lr-floor 1`) holds the rate after the warm-up.
+    #[test]
+    fn a_floor_at_the_peak_is_a_constant_rate() {
+        let s = Schedule { peak: 5e-4, floor: 5e-4, warmup_steps: 0, total_steps: 100 };
+        assert!((0..150).all(|i| (s.at(i) - 5e-4).abs() < 1e-15));
+    }
 }

@@ -255,7 +255,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
     let steps_per_epoch = train_set.len().div_ceil(opts.batch_size);
     let schedule = Schedule {
         peak: opts.lr,
-        floor: opts.lr * 0.01,
+        floor: opts.lr * opts.lr_floor,
         warmup_steps: opts.warmup_epochs * steps_per_epoch,
         total_steps: opts.epochs * steps_per_epoch,
     };

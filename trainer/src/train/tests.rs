@@ -59,6 +59,7 @@ fn options(epochs: usize) -> TrainOptions {
         epochs,
         batch_size: 8,
         lr: 5e-3,
+        lr_floor: 0.01,
         warmup_epochs: 1,
         weight_decay: 0.01,
         dropout: 0.1,

@@ -119,6 +119,10 @@ pub fn prepare(args: &ModelArgs) -> Result<Prepared> {
     if prefix > 0.0 {
         cfg.require_pvt3("--prefix-training")?;
     }
+    let floor = args.options.lr_floor;
+    if !(0.0..=1.0).contains(&floor) {
+        bail!("--lr-floor {floor}: a share of the peak learning rate, from 0 to 1");
+    }
     let classes = match &args.class_names {
         Some(path) => {
             let text = std::fs::read_to_string(path).with_context(|| format!("reading class names from {}", path.display()))?;
