@@ -10,7 +10,7 @@ For each run it reads every sample's provisional answers after each token, from
 `pvt3 eval RUN --anytime --answers FILE` on the validation fold and on fold 4 (cached in
 target/stop_rules/). The rules:
 
-- shipped: top probability ≥ t with 3 answers in a row agreeing; t the lowest threshold such that
+- pvt3 train's: top probability ≥ t with 3 answers in a row agreeing; t the lowest threshold such that
   no threshold above it loses accuracy on the validation fold (trainer/src/anytime.rs; this
   script's figure must equal `pvt3 eval --anytime`'s, which it checks).
 - margin: the same with the margin between the two most probable classes.
@@ -18,6 +18,13 @@ target/stop_rules/). The rules:
   stricter neighbours (higher t, longer agreement) lose nothing either.
 - per-class thresholds: one threshold per answered class, each calibrated as the shipped one.
 - 0.5-point allowance: the shipped rule calibrated to lose at most 0.5 points on validation.
+- pooled over the cross-validation (runs of one `pvt3 cv`, `OUT/seedS/foldK`, given together):
+  calibrated once on the validation answers of all its runs (each fold's model on its own
+  validation fold; 12 × 200 samples for 3 seeds) and applied to each run's test answers; with no
+  loss allowed and 3 agreeing, and as `pvt3 cv` ships it (trainer/src/cv_stopping.rs): a loss of
+  0.5 points allowed (a dozen samples, not one) and the agreement length chosen too (the one of
+  2 … 12 that stops earliest on those answers). Where a run carries that rule, this script's
+  figure for it must equal `pvt3 eval --anytime`'s, which it checks.
 - best threshold on the test fold: not a rule (it looks at the test fold); the most a single
   threshold with 3 agreeing answers could do, within 0.5 points of the whole touch. The classes
   it stops wrongly on (that the whole touch gets right) are listed under the table.
@@ -37,7 +44,8 @@ AGREEING = 3
 def answers(run, fold):
     """probabilities [n, tokens, classes] and labels of `run` on `fold`, and eval's report."""
     CACHE.mkdir(parents=True, exist_ok=True)
-    path = CACHE / f"{Path(run).name}-fold{fold}.json"
+    # Named by the whole path: the runs of a cross-validation are all called foldK.
+    path = CACHE / f"{str(Path(run).resolve()).strip('/').replace('/', '_')}-fold{fold}.json"
     report = json.loads(subprocess.run([PVT3, "eval", run, "--anytime", "--json", "--fold", str(fold), "--answers", str(path)],
                                        capture_output=True, text=True, check=True).stdout)
     a = json.loads(path.read_text())
@@ -100,7 +108,7 @@ def rules(val, test, confusions):
         acc, share = test.stop(kind, np.broadcast_to(thresholds, (c,)), agreeing)
         out.append((name, 100 * (acc - test.full), share))
 
-    apply("shipped", "top", val.calibrate(), AGREEING)
+    apply("pvt3 train's (its own validation fold)", "top", val.calibrate(), AGREEING)
     apply("margin", "margin", val.calibrate("margin"), AGREEING)
     lengths = [2, 3, 4, 6, 8, 12]
     t = {a: val.calibrate(agreeing=a) for a in lengths}
@@ -119,27 +127,66 @@ def rules(val, test, confusions):
     return out
 
 
+LENGTHS = [2, 3, 4, 5, 6, 8, 12]  # trainer/src/anytime.rs, AGREEMENT_LENGTHS
+POOLED_ALLOWANCE = 0.005          # and POOLED_ALLOWANCE
+
+
+def pooled_rules(group):
+    """(name, (threshold, agreeing), [(change, share) per run]) of the rules calibrated on the
+    validation answers of all runs of `group` together, each applied to each run's test answers."""
+    pv = np.concatenate([v[0] for v, _ in group])
+    pooled = Answers(pv, np.concatenate([v[1] for v, _ in group]))
+    c = pv.shape[-1]
+    shipped = min(((pooled.stop("top", np.full(c, t), a)[1], a, t) for a in LENGTHS if a <= pooled.tokens
+                   for t in [pooled.calibrate(agreeing=a, allowance=POOLED_ALLOWANCE)]), key=lambda r: r[0])
+    out = []
+    for name, t, a in [("pooled over the cross-validation, 3 agreeing, no loss", pooled.calibrate(), AGREEING),
+                       ("pooled over the cross-validation, 0.5 points, agreement chosen (pvt3 cv's)", shipped[2], shipped[1])]:
+        out.append((name, (t, a), [(100 * (acc - test.full), share)
+                                   for _, test in group for acc, share in [test.stop("top", np.full(c, t), a)]]))
+    return out
+
+
+def check(run, row, report):
+    """This script's figures for the rule `run` carries must be `pvt3 eval --anytime`'s."""
+    change, share = row
+    shipped = report["stopping"]
+    if abs(share - shipped["mean_share"]) > 1e-9 or abs(change / 100 - (shipped["accuracy"] - shipped["full_accuracy"])) > 1e-9:
+        sys.exit(f"{run}: the rule it carries gives {change:+.2f} points at {share:.4f} here, not pvt3 eval's ({shipped})")
+
+
 def main():
     runs = sys.argv[1:]
     if not runs:
         sys.exit(__doc__)
     table, confusions = {}, []
+    cv_of = {}  # a cv's directory -> [((p, y) of validation, test Answers, eval's report)] of its runs
     for run in runs:
         val_fold = json.loads(Path(run, "model", "provenance.json").read_text())["val_fold"]
         pv, yv, _ = answers(run, val_fold)
         pt, yt, report = answers(run, 4)
         val, test = Answers(pv, yv), Answers(pt, yt)
+        here = Path(run).resolve()
+        if here.name.startswith("fold") and here.parent.name.startswith("seed"):
+            cv_of.setdefault(here.parent.parent, []).append(((pv, yv), test, report, run))
         results = rules(val, test, confusions)
-        shipped = report["stopping"]
-        name, change, share = results[0]
-        if abs(share - shipped["mean_share"]) > 1e-9 or abs(change / 100 - (shipped["accuracy"] - shipped["full_accuracy"])) > 1e-9:
-            sys.exit(f"{run}: the shipped rule here ({change:+.2f} points, {share:.4f}) is not pvt3 eval's ({shipped})")
+        if report["calibrated"].get("calibrated_on", "validation_fold") == "validation_fold":
+            check(run, results[0][1:], report)
         for name, change, share in results:
             table.setdefault(name, []).append((change, share))
         print(f"{run}: " + "; ".join(f"{n} {c:+.1f} @ {s:.2f}" for n, c, s in results), file=sys.stderr)
+    for cv, group in cv_of.items():
+        if len(group) > 1:
+            for name, (t, a), rows in pooled_rules([(g[0], g[1]) for g in group]):
+                table.setdefault(name, []).extend(rows)
+                print(f"{cv}: {name} (≥ {t:.4f}, {a} agreeing): " + "; ".join(f"{c:+.1f} @ {s:.2f}" for c, s in rows), file=sys.stderr)
+            for (_, _, report, run), row in zip(group, rows):
+                if report["calibrated"].get("calibrated_on", "validation_fold") != "validation_fold":
+                    check(run, row, report)
     print(f"| rule ({len(runs)} runs) | test accuracy change (points) | share of the touch used (%) |")
     print("|---|---:|---:|")
-    for name, rows in table.items():
+    best = [n for n in table if n.startswith("best")]
+    for name, rows in sorted(table.items(), key=lambda kv: kv[0] in best):
         r = np.array(rows)
         sd = lambda v: v.std(ddof=1) if len(v) > 1 else 0.0
         print(f"| {name} | {r[:, 0].mean():+.1f} ± {sd(r[:, 0]):.1f} | {100 * r[:, 1].mean():.0f} ± {100 * sd(r[:, 1]):.0f} |")

@@ -167,6 +167,25 @@ fn cv_runs_folds_side_by_side_and_resumes_without_retraining() {
     assert!(first.contains("mean test accuracy"), "{first}");
     let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("cv.json")).unwrap()).unwrap();
     assert_eq!(summary["runs"].as_array().unwrap().len(), 4);
+    // One stopping rule, calibrated on the four runs' validation answers, in every run and in
+    // the file any of them exports.
+    let stopping = &summary["stopping"];
+    assert_eq!(stopping["calibrated_on"], serde_json::json!({"cross_validation": {"runs": 4, "samples": 48}}), "{summary}");
+    assert!(first.contains(&format!("with {} answers in a row agreeing", stopping["rule"]["agreeing"])), "{first}");
+    for fold in 0..4 {
+        let provenance: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join(format!("seed0/fold{fold}/model/provenance.json"))).unwrap()).unwrap();
+        assert_eq!(&provenance["stopping"], stopping, "fold {fold}");
+    }
+    let onnx = dir.join("fold1.onnx");
+    ok(&["export", out.join("seed0/fold1").to_str().unwrap(), "-o", onnx.to_str().unwrap()]);
+    let carried = pvt3_runtime::Classifier::load(&onnx).unwrap().stop_rule().unwrap();
+    assert_eq!(
+        (carried.top_probability, carried.agreeing as u64),
+        (stopping["rule"]["top_probability"].as_f64().unwrap() as f32, stopping["rule"]["agreeing"].as_u64().unwrap())
+    );
+    let eval = ok(&["eval", out.join("seed0/fold1").to_str().unwrap(), "--anytime"]);
+    assert!(eval.contains("the validation answers of the cross-validation's 4 runs, 48 samples"), "{eval}");
     let weights = std::fs::read(out.join("seed0/fold3/model/weights.safetensors")).unwrap();
     args.push("--resume");
     let second = ok(&args);
@@ -188,6 +207,7 @@ fn cv_runs_folds_side_by_side_and_resumes_without_retraining() {
     let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("cv.json")).unwrap()).unwrap();
     assert_eq!(summary["seeds"], serde_json::json!([0, 1]));
     assert_eq!(summary["runs"].as_array().unwrap().len(), 5);
+    assert_eq!(summary["stopping"]["calibrated_on"]["cross_validation"]["runs"], 5, "the report calibrates on every finished run");
     let err = fails(&["cv", "--data", d, "--out", o, "--only", "seed=1,fold=4"]);
     assert!(err.contains("expected seed=S,fold=K with a validation fold from 0 to 3"), "{err}");
 

@@ -1,11 +1,14 @@
 //! Provisional answers from part of a touch: how well the first k temporal tokens classify, and
 //! the stopping rule a robot applies to the runtime's `Session::peek`. The rule
 //! ([`StopRule`]) stops a touch at the first token whose provisional top class probability
-//! reaches a threshold while the answers after the [`AGREEING`]` - 1` tokens before agree on the
-//! class. The trainer calibrates the threshold on the validation fold so that stopping costs no
-//! accuracy there (docs/anytime.md: a 0.5-point allowance on about 200 validation samples, one
-//! sample, did not hold on the test fold), and the exporter writes the rule into the file
-//! (`pvt3.stop_rule`).
+//! reaches a threshold while the answers after the `agreeing - 1` tokens before agree on the
+//! class. A single run (`pvt3 train`) calibrates the threshold on its validation fold so that
+//! stopping costs no accuracy there, with [`AGREEING`] answers (docs/anytime.md: a 0.5-point
+//! allowance on about 200 validation samples, one sample, did not hold on the test fold). A
+//! cross-validation (`pvt3 cv`) calibrates one rule on the validation answers of all its runs
+//! together, thousands of samples, where the 0.5 points ([`POOLED_ALLOWANCE`]) are many
+//! samples and the agreement length can be chosen too ([`Prefixes::calibrate_pooled`]). The
+//! exporter writes the rule into the file (`pvt3.stop_rule`).
 
 use pvt3_format::StopRule;
 use pvt3_models::Pvt3;
@@ -17,6 +20,13 @@ use crate::Result;
 /// Answers in a row that must agree on the class before a touch stops: a single confident
 /// answer early in a touch was often wrong (docs/anytime.md).
 pub const AGREEING: usize = 3;
+
+/// The agreement lengths a cross-validation's calibration chooses among.
+pub const AGREEMENT_LENGTHS: [usize; 7] = [2, 3, 4, 5, 6, 8, 12];
+
+/// The accuracy (a share of the samples) a cross-validation's calibration may lose against the
+/// whole touch on its pooled validation answers: the 0.5 points.
+pub const POOLED_ALLOWANCE: f64 = 0.005;
 
 /// Every sample's provisional answer after each number of temporal tokens, 1 to all of them.
 #[derive(Clone, Debug)]
@@ -39,6 +49,21 @@ pub struct Stopping {
     pub accuracy: f64,
     /// The share of the touch used before stopping, on average (1: the whole touch).
     pub mean_share: f64,
+    /// Which validation answers the rule was calibrated on (the figures above are theirs).
+    #[serde(default)]
+    pub calibrated_on: CalibratedOn,
+}
+
+/// Where a stopping rule was calibrated.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CalibratedOn {
+    /// The run's own validation fold (`pvt3 train`).
+    #[default]
+    ValidationFold,
+    /// The validation answers of every run of a cross-validation, each run's model on its own
+    /// validation fold (`pvt3 cv`).
+    CrossValidation { runs: usize, samples: usize },
 }
 
 /// Every sample's provisional class probabilities after 1, 2, … every temporal token
@@ -117,28 +142,96 @@ impl Prefixes {
             full_accuracy: self.accuracy_at(self.tokens),
             accuracy: right as f64 / self.samples(),
             mean_share: used as f64 / (self.samples() * self.tokens as f64),
+            calibrated_on: CalibratedOn::ValidationFold,
         }
     }
 
-    /// The lowest threshold (the earliest stops) such that no threshold from it up to 1 loses
-    /// accuracy against the whole touch, with [`AGREEING`] answers agreeing. Candidates are the
-    /// top probabilities seen; requiring the whole range above to hold keeps one lucky threshold
-    /// from being chosen.
+    /// The rule of a single run: [`AGREEING`] answers, the lowest threshold that loses no
+    /// accuracy here ([`Prefixes::calibrate_with`]).
     pub fn calibrate(&self) -> Stopping {
-        let mut candidates: Vec<f32> = self.top.iter().flatten().copied().filter(|p| *p > 0.0).collect();
-        candidates.push(1.0);
-        candidates.sort_by(|a, b| b.total_cmp(a));
-        candidates.dedup();
-        let rule = |top_probability| StopRule { top_probability, agreeing: AGREEING };
-        let mut chosen = self.stop_by(rule(1.0));
-        for t in candidates {
-            let s = self.stop_by(rule(t));
-            if s.accuracy < s.full_accuracy - 1e-12 {
+        self.calibrate_with(AGREEING, 0.0)
+    }
+
+    /// The rule of a cross-validation, on its runs' validation answers [`Prefixes::pooled`]:
+    /// for each of [`AGREEMENT_LENGTHS`] the lowest threshold that loses at most
+    /// [`POOLED_ALLOWANCE`] here, and of those the one that stops earliest here.
+    pub fn calibrate_pooled(&self, runs: usize) -> Stopping {
+        let best = AGREEMENT_LENGTHS
+            .iter()
+            .filter(|&&a| a <= self.tokens)
+            .map(|&a| self.calibrate_with(a, POOLED_ALLOWANCE))
+            .min_by(|a, b| a.mean_share.total_cmp(&b.mean_share))
+            .unwrap_or_else(|| self.calibrate_with(1, POOLED_ALLOWANCE));
+        Stopping { calibrated_on: CalibratedOn::CrossValidation { runs, samples: self.top.len() }, ..best }
+    }
+
+    /// The lowest threshold (the earliest stops) such that no threshold from it up to 1 loses
+    /// more than `allowance` (a share of the samples) against the whole touch, with `agreeing`
+    /// answers agreeing. Candidates are the top probabilities seen; requiring the whole range
+    /// above to hold keeps one lucky threshold from being chosen.
+    ///
+    /// One sweep down the thresholds: a sample's stop moves to an earlier token only where the
+    /// threshold passes a score that beats every earlier agreed token's, so only those scores
+    /// (a few per sample) change the accuracy, and each moves one sample.
+    pub fn calibrate_with(&self, agreeing: usize, allowance: f64) -> Stopping {
+        let (n, last, agreeing) = (self.top.len(), self.tokens, agreeing.max(1));
+        let mut moves: Vec<(f32, usize, usize)> = Vec::new();
+        for i in 0..n {
+            let mut record = f32::NEG_INFINITY;
+            for k in agreeing..=last {
+                let agreed = self.class[i][k - agreeing..k].iter().all(|c| *c == self.class[i][k - 1]);
+                if agreed && self.top[i][k - 1] > record {
+                    record = self.top[i][k - 1];
+                    moves.push((record, i, k));
+                }
+            }
+        }
+        moves.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let right_at = |i: usize, k: usize| usize::from(self.class[i][k - 1] == self.labels[i]);
+        let mut stop = vec![last; n];
+        let full = (0..n).map(|i| right_at(i, last)).sum::<usize>();
+        let mut right = full;
+        let loses = |right: usize| right as f64 / self.samples() < full as f64 / self.samples() - allowance - 1e-12;
+        let mut failed_at = None;
+        for group in moves.chunk_by(|a, b| a.0 == b.0) {
+            for &(_, i, k) in group {
+                right = right - right_at(i, stop[i]) + right_at(i, k);
+                stop[i] = k;
+            }
+            if loses(right) {
+                failed_at = Some(group[0].0);
                 break;
             }
-            chosen = s;
         }
-        chosen
+        // Every top probability seen is a candidate: the lowest one above the first that loses.
+        let candidates = self.top.iter().flatten().copied().filter(|p| *p > 0.0);
+        let threshold = match failed_at {
+            Some(t) => candidates.filter(|p| *p > t).min_by(f32::total_cmp).unwrap_or(1.0),
+            None => candidates.min_by(f32::total_cmp).unwrap_or(1.0),
+        };
+        self.stop_by(StopRule { top_probability: threshold, agreeing })
+    }
+
+    /// The answers of several runs' samples as one set (runs of one configuration).
+    pub fn pooled(parts: impl IntoIterator<Item = Prefixes>) -> Result<Prefixes> {
+        let mut all: Option<Prefixes> = None;
+        for p in parts {
+            match &mut all {
+                None => all = Some(p),
+                Some(a) if a.tokens != p.tokens => {
+                    return Err(crate::Error::Usage(format!(
+                        "runs with {} and {} temporal tokens cannot be calibrated together",
+                        a.tokens, p.tokens
+                    )))
+                }
+                Some(a) => {
+                    a.top.extend(p.top);
+                    a.class.extend(p.class);
+                    a.labels.extend(p.labels);
+                }
+            }
+        }
+        all.ok_or_else(|| crate::Error::Usage("no runs' answers to calibrate a stopping rule on".into()))
     }
 }
 
@@ -170,5 +263,83 @@ mod tests {
         let c = p.calibrate();
         assert_eq!(c.rule.agreeing, AGREEING);
         assert!(c.accuracy == 1.0 && c.rule.top_probability <= 0.95, "{c:?}");
+    }
+
+    /// The definition `calibrate_with` sweeps: try every top probability seen, from 1 down, and
+    /// keep the last before the first that loses more than the allowance.
+    fn calibrate_by_trying_every_threshold(p: &Prefixes, agreeing: usize, allowance: f64) -> Stopping {
+        let mut candidates: Vec<f32> = p.top.iter().flatten().copied().filter(|p| *p > 0.0).collect();
+        candidates.push(1.0);
+        candidates.sort_by(|a, b| b.total_cmp(a));
+        candidates.dedup();
+        let rule = |top_probability| StopRule { top_probability, agreeing };
+        let mut chosen = p.stop_by(rule(1.0));
+        for t in candidates {
+            let s = p.stop_by(rule(t));
+            if s.accuracy < s.full_accuracy - allowance - 1e-12 {
+                break;
+            }
+            chosen = s;
+        }
+        chosen
+    }
+
+    /// Answers of `n` samples over `tokens` tokens, drawn so that classes change along a touch,
+    /// early answers are often wrong and probabilities repeat (ties between samples).
+    fn random_prefixes(rng: &mut pvt3_models::Rng, n: usize, tokens: usize) -> Prefixes {
+        let labels: Vec<u32> = (0..n).map(|_| rng.below(3) as u32).collect();
+        let (mut top, mut class) = (Vec::new(), Vec::new());
+        for &label in &labels {
+            let (mut t, mut c) = (Vec::new(), Vec::new());
+            for k in 0..tokens {
+                let right = rng.uniform() < 0.3 + 0.6 * k as f32 / tokens as f32;
+                c.push(if right { label } else { rng.below(3) as u32 });
+                t.push(0.4 + 0.05 * rng.below(13) as f32);
+            }
+            top.push(t);
+            class.push(c);
+        }
+        Prefixes { top, class, labels, tokens }
+    }
+
+    /// The sweep chooses what trying every threshold chooses, for every agreement length and
+    /// allowance, on many random sets of answers.
+    #[test]
+    fn the_sweep_calibrates_as_trying_every_threshold() {
+        let mut rng = pvt3_models::Rng::new(7);
+        for case in 0..200 {
+            let p = random_prefixes(&mut rng, 1 + case % 40, 1 + case % 9);
+            for agreeing in 1..=4 {
+                for allowance in [0.0, 0.02, 0.1] {
+                    let fast = p.calibrate_with(agreeing, allowance);
+                    assert_eq!(
+                        fast,
+                        calibrate_by_trying_every_threshold(&p, agreeing, allowance),
+                        "case {case}, {agreeing} agreeing, {allowance}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// Pooling concatenates the runs' samples; the pooled rule loses at most the allowance on
+    /// them, stops no later than any agreement length would, and says where it was calibrated.
+    #[test]
+    fn the_pooled_rule_chooses_the_earliest_agreement_within_the_allowance() {
+        let mut rng = pvt3_models::Rng::new(11);
+        let parts: Vec<Prefixes> = (0..3).map(|_| random_prefixes(&mut rng, 300, 16)).collect();
+        let pooled = Prefixes::pooled(parts.clone()).unwrap();
+        assert_eq!(pooled.labels.len(), 900);
+        assert_eq!(pooled.labels[300..600], parts[1].labels[..]);
+        let rule = pooled.calibrate_pooled(3);
+        assert_eq!(rule.calibrated_on, CalibratedOn::CrossValidation { runs: 3, samples: 900 });
+        assert!(rule.accuracy >= rule.full_accuracy - POOLED_ALLOWANCE - 1e-12, "{rule:?}");
+        assert!(rule.mean_share < 1.0, "random answers leave room to stop early: {rule:?}");
+        for a in AGREEMENT_LENGTHS {
+            assert!(rule.mean_share <= pooled.calibrate_with(a, POOLED_ALLOWANCE).mean_share);
+        }
+        let other = random_prefixes(&mut rng, 2, 5);
+        assert!(Prefixes::pooled([parts[0].clone(), other]).is_err(), "different token counts are refused");
+        assert!(Prefixes::pooled([]).is_err());
     }
 }

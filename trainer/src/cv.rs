@@ -3,6 +3,8 @@
 //! test accuracy on fold 4 at that epoch; then the mean and standard deviation over all runs, and
 //! with several seeds a 95 % confidence interval of the mean from the seeds' own means.
 //! Runs live in `OUT/seed{S}/fold{K}/` and resume one by one; `jobs` runs train side by side.
+//! With more than one PVT³ run, one stopping rule for provisional answers is calibrated on all
+//! their validation answers and written into every run ([`crate::cv_stopping`]).
 
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -11,6 +13,7 @@ use std::sync::Mutex;
 use indicatif::{MultiProgress, ProgressBar};
 use serde::{Deserialize, Serialize};
 
+use crate::anytime::Stopping;
 use crate::checkpoint::{read_json, write_json_atomically};
 use crate::data::TEST_FOLD;
 use crate::prune::{prune_and_fine_tune, PruneStage};
@@ -52,6 +55,13 @@ pub struct CvSummary {
     /// Run directories found still training by `report` (not counted).
     #[serde(default)]
     pub unfinished: Vec<String>,
+    /// The stopping rule calibrated on the validation answers of all `runs` (PVT³, more than
+    /// one run), as each run's provenance now carries it.
+    #[serde(default)]
+    pub stopping: Option<Stopping>,
+    /// The same for `pruned_runs`.
+    #[serde(default)]
+    pub pruned_stopping: Option<Stopping>,
 }
 
 /// One fold's results: the trained run and, with pruning, its pruned and fine-tuned successor.
@@ -147,7 +157,7 @@ pub fn cross_validate(
                 bar.set_prefix(format!("seed {seed} fold {fold}"));
                 let run_spec =
                     RunSpec { val_fold: fold, options: crate::options::TrainOptions { seed, ..spec.options.clone() }, ..spec.clone() };
-                let dir = out.join(format!("seed{seed}")).join(format!("fold{fold}"));
+                let dir = run_dir(out, seed, fold);
                 let result = run_fold(&run_spec, stage, &dir, resume, &bar);
                 bar.finish();
                 let failed = result.is_err();
@@ -158,20 +168,42 @@ pub fn cross_validate(
             });
         }
     });
-    let (mut runs, mut pruned_runs) = (Vec::new(), Vec::new());
-    for r in results.into_inner().expect("threads joined").into_iter().flatten() {
+    let (mut runs, mut pruned_runs, mut dirs) = (Vec::new(), Vec::new(), Vec::new());
+    let finished = results.into_inner().expect("threads joined").into_iter().zip(work).filter_map(|(r, w)| Some((r?, w)));
+    for (r, &(seed, fold)) in finished {
         match r? {
-            Some(fold) => {
-                runs.push(fold.dense);
-                pruned_runs.extend(fold.pruned);
+            Some(result) => {
+                runs.push(result.dense);
+                pruned_runs.extend(result.pruned);
+                dirs.push(run_dir(out, seed, fold));
             }
             None => return Ok(None),
         }
     }
     let seeds: Vec<u64> = work.iter().map(|w| w.0).collect::<std::collections::BTreeSet<_>>().into_iter().collect();
-    let summary = summarize(spec.data.path.display().to_string(), &seeds, runs, pruned_runs, stage.cloned());
+    let mut summary = summarize(spec.data.path.display().to_string(), &seeds, runs, pruned_runs, stage.cloned());
+    calibrate_stopping(&mut summary, &dirs)?;
     write_json_atomically(&out.join("cv.json"), &summary)?;
     Ok(Some(summary))
+}
+
+/// The directory of the run of `seed` with validation fold `fold`.
+fn run_dir(out: &Path, seed: u64, fold: usize) -> std::path::PathBuf {
+    out.join(format!("seed{seed}")).join(format!("fold{fold}"))
+}
+
+/// With more than one run: one stopping rule on all the runs' validation answers, and one on
+/// their pruned successors' ([`crate::cv_stopping`]), into the runs and the summary.
+fn calibrate_stopping(summary: &mut CvSummary, dirs: &[std::path::PathBuf]) -> Result<()> {
+    if dirs.len() < 2 {
+        return Ok(());
+    }
+    summary.stopping = crate::cv_stopping::calibrate_together(dirs)?;
+    if !summary.pruned_runs.is_empty() {
+        let pruned: Vec<_> = dirs.iter().map(|d| d.join("pruned")).collect();
+        summary.pruned_stopping = crate::cv_stopping::calibrate_together(&pruned)?;
+    }
+    Ok(())
 }
 
 /// The summary of finished runs (each seed's folds, and with pruning their pruned successors).
@@ -208,6 +240,8 @@ fn summarize(data: String, seeds: &[u64], runs: Vec<RunResult>, pruned_runs: Vec
         pruned_runs,
         pruning: stage,
         unfinished: Vec::new(),
+        stopping: None,
+        pruned_stopping: None,
     }
 }
 
@@ -221,8 +255,9 @@ struct Setup {
 }
 
 /// Reports every finished run under `out` (`seed{S}/fold{K}/`, as `cross_validate` and separate
-/// `--only` jobs write them) into `out/cv.json`, trains nothing and deletes nothing. Runs still
-/// training are listed as unfinished. Refused: no finished run, runs trained differently (data,
+/// `--only` jobs write them) into `out/cv.json`, trains nothing and deletes nothing; with more
+/// than one finished PVT³ run, their stopping rule is calibrated on all of them and written into
+/// each (as `cross_validate` does). Runs still training are listed as unfinished. Refused: no finished run, runs trained differently (data,
 /// configuration, options or pruning), a run whose files are damaged or half written.
 pub fn report(out: &Path) -> Result<CvSummary> {
     let refuse = |reason: String| Error::Usage(format!("cannot report {}: {reason}", out.display()));
@@ -238,7 +273,7 @@ pub fn report(out: &Path) -> Result<CvSummary> {
         found.sort();
         Ok(found)
     };
-    let (mut runs, mut pruned_runs, mut unfinished) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut runs, mut pruned_runs, mut unfinished, mut dirs) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut setup: Option<(Setup, std::path::PathBuf)> = None;
     for (seed, seed_dir) in entries(out, "seed")? {
         for (fold, dir) in entries(&seed_dir, "fold")? {
@@ -281,6 +316,7 @@ pub fn report(out: &Path) -> Result<CvSummary> {
             }
             runs.push(run);
             pruned_runs.extend(pruned_run);
+            dirs.push(dir);
         }
     }
     let Some((setup, _)) = setup else {
@@ -289,6 +325,7 @@ pub fn report(out: &Path) -> Result<CvSummary> {
     let seeds: Vec<u64> = runs.iter().map(|r| r.seed).collect::<std::collections::BTreeSet<_>>().into_iter().collect();
     let mut summary = summarize(setup.data, &seeds, runs, pruned_runs, setup.pruning);
     summary.unfinished = unfinished;
+    calibrate_stopping(&mut summary, &dirs)?;
     write_json_atomically(&out.join("cv.json"), &summary)?;
     Ok(summary)
 }

@@ -104,6 +104,17 @@ fn print_summary(s: &CvSummary, wall: f64, summary: &std::path::Path) {
         let means: Vec<String> = s.seed_means.iter().map(|m| format!("{m:.4}")).collect();
         println!("95 % confidence interval of the mean [{lo:.4}, {hi:.4}] (Student's t over the seeds' means {})", means.join(", "));
     }
+    for (runs, stopping) in [("runs", &s.stopping), ("pruned runs", &s.pruned_stopping)] {
+        if let Some(st) = stopping {
+            println!(
+                "stopping rule, written into every one of the {runs}: {}; on their validation answers accuracy {:.4} against {:.4} for the whole touch, {:.0} % of the touch used",
+                crate::eval::describe(st),
+                st.accuracy,
+                st.full_accuracy,
+                st.mean_share * 100.0
+            );
+        }
+    }
 }
 
 /// `--only seed=S,fold=K`.

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
 use pvt3_models::Classifier;
-use pvt3_trainer::anytime;
+use pvt3_trainer::anytime::{self, CalibratedOn, Stopping};
 use pvt3_trainer::checkpoint;
 use pvt3_trainer::data::{Dataset, TEST_FOLD};
 use pvt3_trainer::evaluate::{evaluate, Samples};
@@ -22,7 +22,8 @@ pub struct EvalArgs {
     #[arg(long, default_value = "4")]
     pub fold: String,
     /// Provisional answers (PVT³): accuracy from the first 10 %, 20 % … of each touch, and
-    /// what the checkpoint's stopping rule (calibrated on its validation fold) does here.
+    /// what the checkpoint's stopping rule (calibrated on its validation fold, or by `pvt3 cv`
+    /// on all its runs' validation answers) does here.
     #[arg(long)]
     pub anytime: bool,
     /// With --anytime: print one JSON object instead of the table.
@@ -72,9 +73,14 @@ pub fn run(a: EvalArgs) -> Result<()> {
     Ok(())
 }
 
+/// A stopping rule in words.
+pub fn describe(s: &Stopping) -> String {
+    format!("top probability ≥ {:.4} with {} answers in a row agreeing", s.rule.top_probability, s.rule.agreeing)
+}
+
 /// `pvt3 eval --anytime`: accuracy against the share of the touch, and the stopping rule
-/// calibrated on the checkpoint's own validation fold (what training records, and the exported
-/// file carries) applied to `samples`.
+/// the checkpoint records, as the exported file carries it (calibrated on its own validation
+/// fold, or by `pvt3 cv` on all its runs' validation answers), applied to `samples`.
 fn anytime_report(meta: &checkpoint::Meta, model: &Classifier, data: &Dataset, samples: &Samples, fold: &str, a: &EvalArgs) -> Result<()> {
     let pvt3 = model.pvt3("pvt3 eval --anytime")?;
     let answers = anytime::answers(pvt3, samples)?;
@@ -112,12 +118,15 @@ fn anytime_report(meta: &checkpoint::Meta, model: &Classifier, data: &Dataset, s
     for (share, k, acc) in &curve {
         println!("{:>7.0}% {k:>7} {acc:>9.4}", share * 100.0);
     }
-    let rule = calibrated.rule;
+    let on = match calibrated.calibrated_on {
+        CalibratedOn::ValidationFold => format!("validation fold {}", meta.provenance.val_fold),
+        CalibratedOn::CrossValidation { runs, samples } => {
+            format!("the validation answers of the cross-validation's {runs} runs, {samples} samples")
+        }
+    };
     println!(
-        "stopping rule: top probability ≥ {:.4} with {} answers in a row agreeing (validation fold {}: accuracy {:.4} against {:.4} for the whole touch, {:.0} % of the touch used)",
-        rule.top_probability,
-        rule.agreeing,
-        meta.provenance.val_fold,
+        "stopping rule: {} ({on}: accuracy {:.4} against {:.4} for the whole touch, {:.0} % of the touch used)",
+        describe(&calibrated),
         calibrated.accuracy,
         calibrated.full_accuracy,
         calibrated.mean_share * 100.0
