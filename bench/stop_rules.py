@@ -177,10 +177,12 @@ def main():
         print(f"{run}: " + "; ".join(f"{n} {c:+.1f} @ {s:.2f}" for n, c, s in results), file=sys.stderr)
     for cv, group in cv_of.items():
         if len(group) > 1:
-            for name, (t, a), rows in pooled_rules([(g[0], g[1]) for g in group]):
+            pooled = pooled_rules([(g[0], g[1]) for g in group])
+            for name, (t, a), rows in pooled:
                 table.setdefault(name, []).extend(rows)
                 print(f"{cv}: {name} (≥ {t:.4f}, {a} agreeing): " + "; ".join(f"{c:+.1f} @ {s:.2f}" for c, s in rows), file=sys.stderr)
-            for (_, _, report, run), row in zip(group, rows):
+            cv_rule_rows = pooled[-1][2]  # pvt3 cv's rule, the last of pooled_rules
+            for (_, _, report, run), row in zip(group, cv_rule_rows):
                 if report["calibrated"].get("calibrated_on", "validation_fold") != "validation_fold":
                     check(run, row, report)
     print(f"| rule ({len(runs)} runs) | test accuracy change (points) | share of the touch used (%) |")
