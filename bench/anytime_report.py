@@ -63,7 +63,9 @@ for data in names:
             m_change, m_share = statistics.mean(change), statistics.mean(share)
             verdict.append((names[data], m_change, m_share))
 
-out.append("\nThe goal (accuracy within 0.5 points of the whole window, ≤ 40 % of the touch on average), prefix-trained: " +
+out.append("\nThe goal (accuracy within 0.5 points of the whole window, ≤ 40 % of the touch on average), prefix-trained, "
+           "by each run's own rule (`pvt3 train`'s, one validation fold; `pvt3 cv`'s rule, calibrated on a whole "
+           "cross-validation, is measured in \"Calibrated on a cross-validation\" above): " +
            "; ".join(f"{n}: {c * 100:+.1f} points at {s:.0%} of the touch ({'met' if c >= -0.005 and s <= 0.40 else 'not met'})"
                      for n, c, s in verdict) + ".")
 
