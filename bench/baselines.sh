@@ -16,7 +16,8 @@
 #             scores (after rpp): 60 % of channels by default (LEVELS picks others), 20 epochs each
 #   rp        PVT³ with per-step random pruning of 5 % of every weight matrix (--random-prune 0.05)
 #   vit, raec the paper's baselines
-#   raec-published  RAEC with Gao et al.'s training: Adam at a constant 5e-4 (no warm-up, decay,
+#   raec-published  RAEC with Gao et al.'s decoder (zeros in, its state mapped from the code:
+#             decoder_from_state) and training: Adam at a constant 5e-4 (no warm-up, decay,
 #             weight decay, label smoothing, dropout, clipping or augmentation) for EPOCHS (2000,
 #             theirs); not in the default list. The rate is constant, so the run's first E epochs
 #             are the run of E epochs: bench/epochs_curve.py reads the test accuracy that
@@ -95,7 +96,7 @@ for row in "${rows[@]}"; do
         vit-*) args=(--model vit) ;;
         # RAEC: Gao et al.'s Adam (AdamW without weight decay), lr 5e-4, batch 32; -published with
         # the rest of their training too (before raec-*, which it would match).
-        raec-published-*) args=(--model raec --lr 5e-4 --lr-floor 1 --warmup-epochs 0 --weight-decay 0 --label-smoothing 0
+        raec-published-*) args=(--model raec --set decoder_from_state=true --lr 5e-4 --lr-floor 1 --warmup-epochs 0 --weight-decay 0 --label-smoothing 0
                                 --dropout 0 --clip-grad 0 --aug-gain 0 --aug-noise 0) epochs=${EPOCHS:-2000} ;;
         raec-*) args=(--model raec --lr 5e-4 --weight-decay 0) ;;
         e300-mixup-*) args=("${tried[@]}" --mixup 0.2) epochs=300 ;;

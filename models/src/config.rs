@@ -109,6 +109,12 @@ pub struct Config {
     /// RAEC: weight of the reconstruction error (mean squared, on normalised frames) in the loss.
     #[serde(default = "default_reconstruction_weight")]
     pub reconstruction_weight: f64,
+    /// RAEC: the decoder as Gao et al. published it (their `vrae.py`): its LSTM reads zeros at
+    /// every step and starts from a hidden state that is a linear map of the latent code. Off
+    /// (the default), it reads the code at every step from the zero state. Written only when
+    /// on, so that every other model's files (and their digests) are as before.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub decoder_from_state: bool,
 }
 
 fn default_eps() -> f64 {
@@ -132,6 +138,10 @@ fn default_reconstruction_weight() -> f64 {
 }
 
 impl Config {
+    /// The fields written only when they differ from their default (`skip_serializing_if`), so
+    /// absent from a configuration's JSON otherwise.
+    pub const OPTIONAL_FIELDS: &[&str] = &["decoder_from_state"];
+
     /// The iCub forearm skin preset of DESIGN.md: 6 × 10 taxels, 75 frames, 20 classes,
     /// exactly 64,272 trainable parameters besides the frame mask.
     pub fn icub20() -> Self {
@@ -158,6 +168,7 @@ impl Config {
             latent: default_latent(),
             conv_channels: 0,
             reconstruction_weight: default_reconstruction_weight(),
+            decoder_from_state: false,
         }
     }
 
@@ -426,7 +437,9 @@ impl Config {
                 let lstm = |input: usize| 4 * h * (input + h) + 2 * 4 * h;
                 let conv = self.conv_channels * (self.patch_height * self.patch_width * self.channels + 1);
                 let step = self.step_values();
-                conv + lstm(self.rnn_input()) + (h * l + l) + (l * c + c) + lstm(l) + (h * step + step)
+                // The published decoder: an LSTM of one (zero) input, its state mapped from the code.
+                let decoder = if self.decoder_from_state { lstm(1) + (l * h + h) } else { lstm(l) };
+                conv + lstm(self.rnn_input()) + (h * l + l) + (l * c + c) + decoder + (h * step + step)
             }
         }
     }
@@ -461,9 +474,11 @@ impl Config {
                 let (ch, cw) = self.conv_output();
                 let conv = if self.conv_channels == 0 { 0 } else { ch * cw * self.conv_channels * self.patch_height * self.patch_width };
                 let lstm = |input: usize| 4 * h * (input + h);
-                // The decoder's input (the latent code) is the same at every step: projected once.
+                // The decoder's input is the same at every step (the latent code, projected once)
+                // or zeros (the published decoder, whose state is mapped from the code once).
                 let per_step = conv * self.channels + lstm(self.rnn_input()) + 4 * h * h + h * self.step_values();
-                (t * per_step + 4 * h * l + h * l + l * c) as u64
+                let decoder_once = if self.decoder_from_state { h * l } else { 4 * h * l };
+                (t * per_step + decoder_once + h * l + l * c) as u64
             }
         }
     }

@@ -25,13 +25,13 @@ impl Lstm {
         Ok(Self { w_ih, w_hh, b_ih, b_hh, hidden })
     }
 
-    /// Runs `steps` steps from the zero state; `input(t)` is step t's projected input,
-    /// `[batch, 4 · hidden]`. Returns every step's hidden state.
-    fn run(&self, batch: usize, steps: usize, input: impl Fn(usize) -> Result<Tensor>) -> Result<Vec<Tensor>> {
+    /// Runs `steps` steps from the hidden state `state` (`[batch, hidden]`) and a zero cell;
+    /// `input(t)` is step t's projected input, `[batch, 4 · hidden]`. Returns every step's
+    /// hidden state.
+    fn run(&self, mut state: Tensor, steps: usize, input: impl Fn(usize) -> Result<Tensor>) -> Result<Vec<Tensor>> {
         let h = self.hidden;
         let w_hh = self.w_hh.t()?;
-        let mut state = Tensor::zeros((batch, h), self.w_hh.dtype(), self.w_hh.device())?;
-        let mut cell = state.clone();
+        let mut cell = state.zeros_like()?;
         let mut out = Vec::with_capacity(steps);
         for t in 0..steps {
             let gates = (input(t)? + state.matmul(&w_hh)?)?;
@@ -52,7 +52,7 @@ impl Lstm {
         let (w_ih, bias) = (self.w_ih.t()?, (&self.b_ih + &self.b_hh)?);
         // Step by step, not one product over all steps narrowed per step: the gradient of each
         // narrow is a zero-padded copy of the whole sequence, quadratic in the step count.
-        let states = self.run(b, t, |k| x.narrow(1, k, 1)?.squeeze(1)?.matmul(&w_ih)?.broadcast_add(&bias))?;
+        let states = self.run(self.zero_state(b)?, t, |k| x.narrow(1, k, 1)?.squeeze(1)?.matmul(&w_ih)?.broadcast_add(&bias))?;
         Ok(states.last().expect("at least one step").clone())
     }
 
@@ -60,8 +60,21 @@ impl Lstm {
     /// `[batch, steps, hidden]` (the decoder of an autoencoder).
     pub fn repeat_input(&self, z: &Tensor, steps: usize) -> Result<Tensor> {
         let projected = z.matmul(&self.w_ih.t()?)?.broadcast_add(&(&self.b_ih + &self.b_hh)?)?;
-        let states = self.run(z.dim(0)?, steps, |_| Ok(projected.clone()))?;
+        let states = self.run(self.zero_state(z.dim(0)?)?, steps, |_| Ok(projected.clone()))?;
         Tensor::stack(&states, 1)
+    }
+
+    /// Zeros at each of `steps` steps from the hidden state `h0` (`[batch, hidden]`) and a zero
+    /// cell → every hidden state, `[batch, steps, hidden]` (the decoder of Gao et al.'s RAEC).
+    pub fn from_state(&self, h0: &Tensor, steps: usize) -> Result<Tensor> {
+        // A zero input projects to the biases alone.
+        let bias = (&self.b_ih + &self.b_hh)?.unsqueeze(0)?.broadcast_as((h0.dim(0)?, 4 * self.hidden))?;
+        let states = self.run(h0.clone(), steps, |_| Ok(bias.clone()))?;
+        Tensor::stack(&states, 1)
+    }
+
+    fn zero_state(&self, batch: usize) -> Result<Tensor> {
+        Tensor::zeros((batch, self.hidden), self.w_hh.dtype(), self.w_hh.device())
     }
 }
 
@@ -85,5 +98,28 @@ mod tests {
         let (i, g, o) = (sig(0.5 - 2.0 + 0.1), (2.0f32 + 0.3).tanh(), sig(-0.5 + 3.0 + 0.5));
         let want = o * (i * g).tanh();
         assert!((got - want).abs() < 1e-6, "{got} vs {want}");
+    }
+
+    /// The published decoder's first step by hand: zero input, so the gates are the biases plus
+    /// `W_hh h0`; the cell starts at zero.
+    #[test]
+    fn from_state_starts_from_the_given_hidden_state_on_zero_input() {
+        let varmap = VarMap::new();
+        let lstm = super::Lstm::new(1, 1, VarBuilder::from_varmap(&varmap, DType::F32, &Device::Cpu)).unwrap();
+        let set = |name: &str, v: Tensor| varmap.data().lock().unwrap()[name].set(&v).unwrap();
+        set("weight_ih_l0", Tensor::new(&[[9.0f32], [9.0], [9.0], [9.0]], &Device::Cpu).unwrap());
+        set("weight_hh_l0", Tensor::new(&[[0.5f32], [-1.0], [2.0], [1.5]], &Device::Cpu).unwrap());
+        set("bias_ih_l0", Tensor::new(&[0.1f32, 0.2, 0.3, 0.4], &Device::Cpu).unwrap());
+        set("bias_hh_l0", Tensor::new(&[0.0f32, 0.0, 0.0, 0.1], &Device::Cpu).unwrap());
+        let h0 = Tensor::new(&[[0.8f32], [-0.4]], &Device::Cpu).unwrap();
+        let states = lstm.from_state(&h0, 3).unwrap();
+        assert_eq!(states.dims(), &[2, 3, 1]);
+        let first = states.narrow(1, 0, 1).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap();
+        let sig = |v: f32| 1.0 / (1.0 + (-v).exp());
+        for (got, h) in first.into_iter().zip([0.8f32, -0.4]) {
+            let (i, g, o) = (sig(0.1 + 0.5 * h), (0.3 + 2.0 * h).tanh(), sig(0.5 + 1.5 * h));
+            let want = o * (i * g).tanh();
+            assert!((got - want).abs() < 1e-6, "{got} vs {want}");
+        }
     }
 }

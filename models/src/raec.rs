@@ -1,9 +1,10 @@
 //! The RAEC baseline of Gao et al. (IROS 2020), a recurrent autoencoder classifier: an LSTM
 //! encoder reads the window frame by frame (after a small convolution and 2 × 2 max-pooling for
 //! grids big enough for it; long recordings `tubelet` frames per step), its last hidden state is projected to a latent code, a linear
-//! classifier reads the code, and an LSTM decoder fed the code at every step reconstructs the
-//! (normalised) frames. Training minimises cross-entropy plus `reconstruction_weight` × the
-//! reconstruction's mean squared error.
+//! classifier reads the code, and an LSTM decoder reconstructs the (normalised) frames: fed the
+//! code at every step, or (`decoder_from_state`, as Gao et al.'s code does it) fed zeros from a
+//! hidden state mapped from the code. Training minimises cross-entropy plus
+//! `reconstruction_weight` × the reconstruction's mean squared error.
 
 use candle_core::{Module, Tensor};
 use candle_nn::{linear, Linear, VarBuilder, VarMap};
@@ -21,6 +22,8 @@ pub struct Raec {
     to_latent: Linear,
     classifier: Linear,
     decoder: Lstm,
+    /// The published decoder's initial hidden state from the code (`decoder_from_state`).
+    to_decoder_state: Option<Linear>,
     reconstruct: Linear,
     dropout: Dropout,
     cfg: Config,
@@ -42,7 +45,8 @@ impl Raec {
             encoder: Lstm::new(cfg.rnn_input(), h, vb.pp("encoder"))?,
             to_latent: linear(h, l, vb.pp("to_latent"))?,
             classifier: linear(l, cfg.classes, vb.pp("classifier"))?,
-            decoder: Lstm::new(l, h, vb.pp("decoder"))?,
+            decoder: Lstm::new(if cfg.decoder_from_state { 1 } else { l }, h, vb.pp("decoder"))?,
+            to_decoder_state: if cfg.decoder_from_state { Some(linear(l, h, vb.pp("to_decoder_state"))?) } else { None },
             reconstruct: linear(h, cfg.step_values(), vb.pp("reconstruct"))?,
             dropout: Dropout::new(cfg.dropout),
             cfg: cfg.clone(),
@@ -86,7 +90,10 @@ impl Raec {
             return Ok((logits, None));
         }
         let (b, t, f) = frames.dims3()?;
-        let states = self.decoder.repeat_input(&latent, t)?;
+        let states = match &self.to_decoder_state {
+            Some(to_state) => self.decoder.from_state(&to_state.forward(&latent)?, t)?,
+            None => self.decoder.repeat_input(&latent, t)?,
+        };
         let rebuilt = self.reconstruct.forward(&states.reshape((b * t, self.cfg.rnn_hidden))?)?;
         let error = (rebuilt - frames.reshape((b * t, f))?)?.sqr()?.mean_all()?;
         Ok((logits, Some((error * self.cfg.reconstruction_weight)?)))
@@ -112,7 +119,9 @@ mod tests {
         assert_eq!(icub.rnn_input(), 18);
         let biotac = Config::preset("raec-biotac20").unwrap();
         assert_eq!((biotac.conv_channels, biotac.time_tokens(), biotac.rnn_input()), (0, 40, 190));
-        for cfg in [icub, biotac] {
+        let published = Config { decoder_from_state: true, ..biotac.clone() };
+        assert_ne!(published.parameter_count(), biotac.parameter_count());
+        for cfg in [icub, biotac, published] {
             let (_, varmap) = super::Raec::init(&cfg, 0).unwrap();
             let counted: usize = varmap.all_vars().iter().map(|v| v.elem_count()).sum();
             assert_eq!(counted, cfg.parameter_count());
@@ -130,5 +139,21 @@ mod tests {
         // Weight 0.01 times a mean squared error of about the data's variance.
         assert!(loss > 0.001 && loss < 0.1, "{loss}");
         assert!(raec.forward_with_loss(&x, None).unwrap().1.is_none());
+    }
+
+    /// Gao et al.'s decoder (zeros in, state from the code): the reconstruction loss trains the
+    /// map from the code to the decoder's state.
+    #[test]
+    fn the_published_decoder_trains_its_state_map() {
+        let cfg = Config { frames: 8, decoder_from_state: true, ..Config::preset("raec-icub20").unwrap() };
+        let (raec, varmap) = super::Raec::init(&cfg, 1).unwrap();
+        let x = Tensor::randn(0f32, 1.0, (2, 6, 10, 8), &Device::Cpu).unwrap();
+        let loss = raec.forward_with_loss(&x, Some(&mut Rng::new(0))).unwrap().1.unwrap();
+        let value = loss.to_scalar::<f32>().unwrap();
+        assert!(value > 0.001 && value < 0.1, "{value}");
+        let grads = loss.backward().unwrap();
+        let data = varmap.data().lock().unwrap();
+        let grad = grads.get(data["to_decoder_state.weight"].as_tensor()).expect("a gradient for the state map");
+        assert!(grad.abs().unwrap().sum_all().unwrap().to_scalar::<f32>().unwrap() > 0.0);
     }
 }

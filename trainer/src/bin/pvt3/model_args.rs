@@ -145,12 +145,29 @@ fn apply_overrides(cfg: Config, overrides: &[String]) -> Result<Config> {
     for o in overrides {
         let (key, raw) = o.split_once('=').with_context(|| format!("--set {o}: expected FIELD=VALUE"))?;
         let fields = value.as_object_mut().expect("a config is a JSON object");
-        if !fields.contains_key(key) {
-            let known: Vec<&String> = fields.keys().collect();
+        if !fields.contains_key(key) && !Config::OPTIONAL_FIELDS.contains(&key) {
+            let mut known: Vec<&str> = fields.keys().map(String::as_str).chain(Config::OPTIONAL_FIELDS.iter().copied()).collect();
+            known.sort_unstable();
             bail!("--set {o}: unknown field `{key}`; the fields are {known:?}");
         }
-        let parsed = serde_json::from_str(raw).with_context(|| format!("--set {o}: `{raw}` is not a number"))?;
+        let parsed = serde_json::from_str(raw).with_context(|| format!("--set {o}: `{raw}` is not a number, true or false"))?;
         fields.insert(key.to_string(), parsed);
     }
     serde_json::from_value(value).context("the overridden configuration does not parse")
+}
+
+#[cfg(test)]
+mod tests {
+    use pvt3_models::Config;
+
+    #[test]
+    fn set_reaches_fields_written_only_when_set_and_names_the_unknown() {
+        let raec = Config::preset("raec-biotac20").unwrap();
+        assert!(!serde_json::to_value(&raec).unwrap().as_object().unwrap().contains_key("decoder_from_state"));
+        let set = super::apply_overrides(raec.clone(), &["decoder_from_state=true".into(), "latent=20".into()]).unwrap();
+        assert!(set.decoder_from_state);
+        assert_eq!(set.latent, 20);
+        let err = super::apply_overrides(raec, &["decoder=true".into()]).unwrap_err().to_string();
+        assert!(err.contains("unknown field `decoder`") && err.contains("decoder_from_state"), "{err}");
+    }
 }
