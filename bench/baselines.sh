@@ -32,6 +32,9 @@
 #   shift     random time shifts of up to ±20 frames, --aug-shift 20
 #   e300-mixup     300 epochs with --mixup 0.2
 #   e300-mixup0.4  300 epochs with --mixup 0.4
+#   e300-mixup-prunings  the e300-mixup row's trained runs pruned otherwise (after e300-mixup), as
+#             the prunings row does: 60 % of channels with 100 epochs of fine-tuning, and 70 % of
+#             channels (LEVELS picks; a level NAME-ftN fine-tunes N epochs instead of 20)
 #
 # One thread per run (one is as fast as two for these models); JOBS runs side by side.
 # PVT3=path/to/pvt3 picks the binary.
@@ -50,15 +53,18 @@ rows=("$@")
 # options the parent row trained with.
 #   prunings SET PARENT_ROW PARENT_DIR OUT DEFAULT_LEVELS ARGS...
 prunings() {
-    local set=$1 parent_row=$2 parent=$3 prefix=$4 levels=$5 level name run out copy
+    local set=$1 parent_row=$2 parent=$3 prefix=$4 levels=$5 level name run out copy base fine_tune
     shift 5
     for run in "$parent"/seed*/fold?; do
         [ -f "$run/result.json" ] || { echo "$run has not finished: run the $parent_row-$set row first" >&2; exit 1; }
     done
     for name in ${LEVELS:-$levels}; do
-        case $name in
+        base=${name%-ft*} fine_tune=20
+        [ "$base" = "$name" ] || fine_tune=${name##*-ft}
+        case $base in
             channels50) level="--prune-channels 50" ;;
             channels60) level="--prune-channels 60" ;;
+            channels70) level="--prune-channels 70" ;;
             frames30) level="--prune-frames 30" ;;
             frames70) level="--prune-frames 70" ;;
             channels50-frames50) level="--prune-channels 50 --prune-frames 50" ;;
@@ -69,10 +75,10 @@ prunings() {
             copy=$out/${run#"$parent"/}
             [ -d "$copy" ] || { mkdir -p "$copy" && cp -r "$run/result.json" "$run/metrics.jsonl" "$run/model" "$copy/"; }
         done
-        echo "== prunings of $parent_row-$set, $name: $pvt3 --threads 1 cv --data data/${set}20.npz $* $level --out $out --resume"
+        echo "== prunings of $parent_row-$set, $name: $pvt3 --threads 1 cv --data data/${set}20.npz $* $level --fine-tune-epochs $fine_tune --epochs $epochs --out $out --resume"
         # shellcheck disable=SC2086
-        "$pvt3" --threads 1 cv --data "data/${set}20.npz" "$@" $level --fine-tune-epochs 20 \
-            --seeds "$seeds" --epochs 100 --jobs "$jobs" --out "$out" --resume
+        "$pvt3" --threads 1 cv --data "data/${set}20.npz" "$@" $level --fine-tune-epochs "$fine_tune" \
+            --seeds "$seeds" --epochs "$epochs" --jobs "$jobs" --out "$out" --resume
     done
 }
 
@@ -99,6 +105,12 @@ for row in "${rows[@]}"; do
         raec-published-*) args=(--model raec --set decoder_from_state=true --lr 5e-4 --lr-floor 1 --warmup-epochs 0 --weight-decay 0 --label-smoothing 0
                                 --dropout 0 --clip-grad 0 --aug-gain 0 --aug-noise 0) epochs=${EPOCHS:-2000} ;;
         raec-*) args=(--model raec --lr 5e-4 --weight-decay 0) ;;
+        e300-mixup-prunings-*)
+            # The parent's options: the tried route's, less its pruning (the first four words).
+            epochs=300
+            prunings "$set" e300-mixup "runs/cv-e300-mixup-$set" "runs/cv-e300-mixup-$set" \
+                "channels60-ft100 channels70" "${tried[@]:4}" --mixup 0.2
+            continue ;;
         e300-mixup-*) args=("${tried[@]}" --mixup 0.2) epochs=300 ;;
         e300-mixup0.4-*) args=("${tried[@]}" --mixup 0.4) epochs=300 ;;
         e300-*) args=("${tried[@]}") epochs=300 ;;

@@ -123,6 +123,8 @@ TRIED = {
         *unpruned_and_pruned("time shift ±20 frames", "runs/cv-shift-biotac"),
         *unpruned_and_pruned("300 epochs with mixup 0.2", "runs/cv-e300-mixup-biotac"),
         *unpruned_and_pruned("300 epochs with mixup 0.4", "runs/cv-e300-mixup0.4-biotac"),
+        "300 epochs with mixup 0.2, pruned to 60 % of channels, 100 epochs of fine-tuning|—|runs/cv-e300-mixup-biotac-channels60-ft100:pruned",
+        "300 epochs with mixup 0.2, pruned to 70 % of channels|—|runs/cv-e300-mixup-biotac-channels70:pruned",
     ],
 }
 
