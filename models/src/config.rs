@@ -313,6 +313,12 @@ impl Config {
                         self.patch_height, self.patch_width, self.height, self.width
                     )));
                 }
+                let (ch, cw) = self.conv_output();
+                if self.conv_channels > 0 && self.decoder_from_state && (ch % 2 != 0 || cw % 2 != 0) {
+                    return Err(Error::Config(format!(
+                        "decoder_from_state un-pools the {ch} × {cw} convolution output, which 2 × 2 pooling must tile"
+                    )));
+                }
                 vec![("tubelet", self.tubelet, "frames", self.frames)]
             }
         };
@@ -345,6 +351,22 @@ impl Config {
     /// RAEC: the values of one step (`tubelet` raw frames) that the decoder reconstructs.
     pub fn step_values(&self) -> usize {
         self.tubelet * self.height * self.width * self.channels
+    }
+
+    /// RAEC: whether the decoder mirrors the convolution (Gao et al.'s iCub decoder: un-pooling,
+    /// then a transposed convolution), which it does for the published decoder of a model with one.
+    pub fn decoder_mirrors_conv(&self) -> bool {
+        self.decoder_from_state && self.conv_channels > 0
+    }
+
+    /// RAEC: the width of the decoder's linear output per step: the pooled convolution's output
+    /// when the decoder mirrors the convolution, the step's raw frames otherwise.
+    pub fn decoder_output(&self) -> usize {
+        if self.decoder_mirrors_conv() {
+            self.rnn_input()
+        } else {
+            self.step_values()
+        }
     }
 
     /// RAEC: the width of one step of the encoder's input sequence (the pooled convolution's
@@ -436,10 +458,12 @@ impl Config {
                 let (h, l) = (self.rnn_hidden, self.latent);
                 let lstm = |input: usize| 4 * h * (input + h) + 2 * 4 * h;
                 let conv = self.conv_channels * (self.patch_height * self.patch_width * self.channels + 1);
-                let step = self.step_values();
-                // The published decoder: an LSTM of one (zero) input, its state mapped from the code.
+                let out = self.decoder_output();
+                // The published decoder: an LSTM of one (zero) input, its state mapped from the
+                // code; with a convolution, a transposed one mirrors it.
                 let decoder = if self.decoder_from_state { lstm(1) + (l * h + h) } else { lstm(l) };
-                conv + lstm(self.rnn_input()) + (h * l + l) + (l * c + c) + decoder + (h * step + step)
+                let deconv = if self.decoder_mirrors_conv() { self.conv_channels * self.channels * self.patch_height * self.patch_width + self.channels } else { 0 };
+                conv + lstm(self.rnn_input()) + (h * l + l) + (l * c + c) + decoder + (h * out + out) + deconv
             }
         }
     }
@@ -476,7 +500,9 @@ impl Config {
                 let lstm = |input: usize| 4 * h * (input + h);
                 // The decoder's input is the same at every step (the latent code, projected once)
                 // or zeros (the published decoder, whose state is mapped from the code once).
-                let per_step = conv * self.channels + lstm(self.rnn_input()) + 4 * h * h + h * self.step_values();
+                // A transposed convolution costs what the convolution it mirrors does.
+                let deconv = if self.decoder_mirrors_conv() { conv * self.channels } else { 0 };
+                let per_step = conv * self.channels + lstm(self.rnn_input()) + 4 * h * h + h * self.decoder_output() + deconv;
                 let decoder_once = if self.decoder_from_state { h * l } else { 4 * h * l };
                 (t * per_step + decoder_once + h * l + l * c) as u64
             }

@@ -3,8 +3,9 @@
 //! grids big enough for it; long recordings `tubelet` frames per step), its last hidden state is projected to a latent code, a linear
 //! classifier reads the code, and an LSTM decoder reconstructs the (normalised) frames: fed the
 //! code at every step, or (`decoder_from_state`, as Gao et al.'s code does it) fed zeros from a
-//! hidden state mapped from the code. Training minimises cross-entropy plus
-//! `reconstruction_weight` × the reconstruction's mean squared error.
+//! hidden state mapped from the code; that decoder mirrors a convolution as theirs does (un-pool
+//! to the positions the last frame's pooling chose, a transposed convolution, ReLU). Training
+//! minimises cross-entropy plus `reconstruction_weight` × the reconstruction's mean squared error.
 
 use candle_core::{Module, Tensor};
 use candle_nn::{linear, Linear, VarBuilder, VarMap};
@@ -25,6 +26,9 @@ pub struct Raec {
     /// The published decoder's initial hidden state from the code (`decoder_from_state`).
     to_decoder_state: Option<Linear>,
     reconstruct: Linear,
+    /// The published decoder's transposed convolution, `[conv_channels, channels, patch_height,
+    /// patch_width]`, and its bias (`Config::decoder_mirrors_conv`).
+    deconv: Option<(Tensor, Tensor)>,
     dropout: Dropout,
     cfg: Config,
 }
@@ -33,13 +37,14 @@ impl Raec {
     pub fn new(cfg: &Config, vb: VarBuilder) -> Result<Self> {
         cfg.validate()?;
         let (h, l) = (cfg.rnn_hidden, cfg.latent);
-        let conv = if cfg.conv_channels == 0 {
-            None
-        } else {
-            let init = candle_nn::init::DEFAULT_KAIMING_UNIFORM;
-            let shape = (cfg.conv_channels, cfg.channels, cfg.patch_height, cfg.patch_width);
-            Some((vb.pp("conv").get_with_hints(shape, "weight", init)?, vb.pp("conv").get_with_hints(cfg.conv_channels, "bias", init)?))
+        let init = candle_nn::init::DEFAULT_KAIMING_UNIFORM;
+        let kernel = |vb: VarBuilder, shape: (usize, usize, usize, usize), bias: usize| -> Result<(Tensor, Tensor)> {
+            Ok((vb.get_with_hints(shape, "weight", init)?, vb.get_with_hints(bias, "bias", init)?))
         };
+        let (k, c) = ((cfg.patch_height, cfg.patch_width), cfg.channels);
+        let conv = if cfg.conv_channels == 0 { None } else { Some(kernel(vb.pp("conv"), (cfg.conv_channels, c, k.0, k.1), cfg.conv_channels)?) };
+        // PyTorch's ConvTranspose2d weight: [in, out, kh, kw].
+        let deconv = if cfg.decoder_mirrors_conv() { Some(kernel(vb.pp("deconv"), (cfg.conv_channels, c, k.0, k.1), c)?) } else { None };
         Ok(Self {
             conv,
             encoder: Lstm::new(cfg.rnn_input(), h, vb.pp("encoder"))?,
@@ -47,7 +52,8 @@ impl Raec {
             classifier: linear(l, cfg.classes, vb.pp("classifier"))?,
             decoder: Lstm::new(if cfg.decoder_from_state { 1 } else { l }, h, vb.pp("decoder"))?,
             to_decoder_state: if cfg.decoder_from_state { Some(linear(l, h, vb.pp("to_decoder_state"))?) } else { None },
-            reconstruct: linear(h, cfg.step_values(), vb.pp("reconstruct"))?,
+            reconstruct: linear(h, cfg.decoder_output(), vb.pp("reconstruct"))?,
+            deconv,
             dropout: Dropout::new(cfg.dropout),
             cfg: cfg.clone(),
         })
@@ -66,16 +72,43 @@ impl Raec {
         Ok(taxels.permute((0, 2, 3, 1))?.reshape((b, c.time_tokens(), c.step_values()))?)
     }
 
-    /// The encoder's input sequence, `[b, t, rnn_input]`.
-    fn encoder_input(&self, frames: &Tensor) -> Result<Tensor> {
+    /// The encoder's input sequence, `[b, t, rnn_input]`, and, for a decoder that mirrors the
+    /// convolution, where the last frame's pooling took each maximum: `[b, conv_channels, ch, cw]`,
+    /// 1 there and 0 elsewhere (Gao et al.'s encoder keeps the last frame's pooling indices, and
+    /// their decoder un-pools every frame with them).
+    fn encoder_input(&self, frames: &Tensor) -> Result<(Tensor, Option<Tensor>)> {
         let Some((weight, bias)) = &self.conv else {
-            return Ok(frames.clone());
+            return Ok((frames.clone(), None));
         };
         let c = &self.cfg;
         let (b, t, _) = frames.dims3()?;
         let images = frames.reshape((b * t, c.height, c.width, c.channels))?.permute((0, 3, 1, 2))?.contiguous()?;
         let conv = images.conv2d(weight, 0, 1, 1, 1)?.broadcast_add(&bias.reshape((1, (), 1, 1))?)?;
-        Ok(conv.max_pool2d(2)?.reshape((b, t, c.rnn_input()))?)
+        let pooled = conv.max_pool2d(2)?;
+        let maxima = if self.deconv.is_some() {
+            let last = |x: &Tensor| -> Result<Tensor> {
+                let (_, k, h, w) = x.dims4()?;
+                Ok(x.reshape((b, t, k, h, w))?.narrow(1, t - 1, 1)?.squeeze(1)?.detach())
+            };
+            let (conv, pooled) = (last(&conv)?, last(&pooled)?);
+            Some(conv.eq(&unpool(&pooled)?)?.to_dtype(conv.dtype())?)
+        } else {
+            None
+        };
+        Ok((pooled.reshape((b, t, c.rnn_input()))?, maxima))
+    }
+
+    /// The published decoder's frames from its linear output `[b · t, rnn_input]`: un-pooled to
+    /// the positions in `maxima`, then the transposed convolution and ReLU → `[b · t, step_values]`.
+    fn mirror_conv(&self, out: &Tensor, maxima: &Tensor, steps: usize) -> Result<Tensor> {
+        let (weight, bias) = self.deconv.as_ref().expect("a decoder that mirrors the convolution");
+        let (b, k, h, w) = maxima.dims4()?;
+        let pooled = out.reshape((b * steps, k, h / 2, w / 2))?;
+        let maxima = maxima.unsqueeze(1)?.broadcast_as((b, steps, k, h, w))?.reshape((b * steps, k, h, w))?;
+        let unpooled = (unpool(&pooled)? * maxima)?;
+        let frames = unpooled.conv_transpose2d(weight, 0, 0, 1, 1)?.broadcast_add(&bias.reshape((1, (), 1, 1))?)?.relu()?;
+        // [b · t, channels, height, width] → frame rows of taxels, channels innermost.
+        Ok(frames.permute((0, 2, 3, 1))?.reshape((b * steps, self.cfg.step_values()))?)
     }
 
     /// Logits `[b, classes]` and, when training, the weighted reconstruction loss (to be added
@@ -83,7 +116,8 @@ impl Raec {
     /// evaluation skips the decoder.
     pub fn forward_with_loss(&self, x: &Tensor, rng: Option<&mut Rng>) -> Result<(Tensor, Option<Tensor>)> {
         let frames = self.frames(x)?;
-        let latent = self.to_latent.forward(&self.encoder.last_hidden(&self.encoder_input(&frames)?)?)?;
+        let (sequence, maxima) = self.encoder_input(&frames)?;
+        let latent = self.to_latent.forward(&self.encoder.last_hidden(&sequence)?)?;
         let training = rng.is_some();
         let logits = self.classifier.forward(&self.dropout.forward(&latent, rng)?)?;
         if !training || self.cfg.reconstruction_weight == 0.0 {
@@ -94,7 +128,10 @@ impl Raec {
             Some(to_state) => self.decoder.from_state(&to_state.forward(&latent)?, t)?,
             None => self.decoder.repeat_input(&latent, t)?,
         };
-        let rebuilt = self.reconstruct.forward(&states.reshape((b * t, self.cfg.rnn_hidden))?)?;
+        let mut rebuilt = self.reconstruct.forward(&states.reshape((b * t, self.cfg.rnn_hidden))?)?;
+        if let Some(maxima) = &maxima {
+            rebuilt = self.mirror_conv(&rebuilt, maxima, t)?;
+        }
         let error = (rebuilt - frames.reshape((b * t, f))?)?.sqr()?.mean_all()?;
         Ok((logits, Some((error * self.cfg.reconstruction_weight)?)))
     }
@@ -103,6 +140,13 @@ impl Raec {
     pub fn forward(&self, x: &Tensor, rng: Option<&mut Rng>) -> Result<Tensor> {
         Ok(self.forward_with_loss(x, rng)?.0)
     }
+}
+
+/// Nearest 2 × up-sampling, `[n, k, h, w]` → `[n, k, 2h, 2w]` (a broadcast, so that its gradient
+/// sums each 2 × 2 block): with a mask of the maxima, max-un-pooling.
+fn unpool(x: &Tensor) -> Result<Tensor> {
+    let (n, k, h, w) = x.dims4()?;
+    Ok(x.reshape((n, k, h, 1, w, 1))?.broadcast_as((n, k, h, 2, w, 2))?.reshape((n, k, 2 * h, 2 * w))?)
 }
 
 #[cfg(test)]
@@ -121,7 +165,10 @@ mod tests {
         assert_eq!((biotac.conv_channels, biotac.time_tokens(), biotac.rnn_input()), (0, 40, 190));
         let published = Config { decoder_from_state: true, ..biotac.clone() };
         assert_ne!(published.parameter_count(), biotac.parameter_count());
-        for cfg in [icub, biotac, published] {
+        // Gao et al.'s iCub decoder: 18 values a step, un-pooled and transposed back to 6 × 10.
+        let published_icub = Config { decoder_from_state: true, ..icub.clone() };
+        assert_eq!(published_icub.decoder_output(), 18);
+        for cfg in [icub, biotac, published, published_icub] {
             let (_, varmap) = super::Raec::init(&cfg, 0).unwrap();
             let counted: usize = varmap.all_vars().iter().map(|v| v.elem_count()).sum();
             assert_eq!(counted, cfg.parameter_count());
@@ -141,19 +188,34 @@ mod tests {
         assert!(raec.forward_with_loss(&x, None).unwrap().1.is_none());
     }
 
-    /// Gao et al.'s decoder (zeros in, state from the code): the reconstruction loss trains the
-    /// map from the code to the decoder's state.
+    /// Gao et al.'s iCub decoder (zeros in, state from the code, un-pooling and a transposed
+    /// convolution): the reconstruction loss trains the state map and the transposed convolution.
     #[test]
     fn the_published_decoder_trains_its_state_map() {
         let cfg = Config { frames: 8, decoder_from_state: true, ..Config::preset("raec-icub20").unwrap() };
         let (raec, varmap) = super::Raec::init(&cfg, 1).unwrap();
+        // A positive bias keeps the final ReLU open (this seed's draw, −0.14, closes it for
+        // every output, and no gradient passes: a decoder that, like Gao et al.'s, can start dead).
+        varmap.data().lock().unwrap()["deconv.bias"].set(&Tensor::new(&[0.5f32], &Device::Cpu).unwrap()).unwrap();
         let x = Tensor::randn(0f32, 1.0, (2, 6, 10, 8), &Device::Cpu).unwrap();
         let loss = raec.forward_with_loss(&x, Some(&mut Rng::new(0))).unwrap().1.unwrap();
         let value = loss.to_scalar::<f32>().unwrap();
         assert!(value > 0.001 && value < 0.1, "{value}");
         let grads = loss.backward().unwrap();
         let data = varmap.data().lock().unwrap();
-        let grad = grads.get(data["to_decoder_state.weight"].as_tensor()).expect("a gradient for the state map");
-        assert!(grad.abs().unwrap().sum_all().unwrap().to_scalar::<f32>().unwrap() > 0.0);
+        for name in ["to_decoder_state.weight", "deconv.weight", "deconv.bias"] {
+            let grad = grads.get(data[name].as_tensor()).unwrap_or_else(|| panic!("no gradient for {name}"));
+            assert!(grad.abs().unwrap().sum_all().unwrap().to_scalar::<f32>().unwrap() > 0.0, "{name}");
+        }
+    }
+
+    /// Un-pooling puts each pooled value back where the pooling found it, zeros elsewhere.
+    #[test]
+    fn unpooling_with_the_maxima_inverts_max_pooling_at_the_maxima() {
+        let x = Tensor::new(&[[[[1f32, 5.0, 2.0, 0.0], [3.0, 4.0, 8.0, 1.0]]]], &Device::Cpu).unwrap();
+        let pooled = x.max_pool2d(2).unwrap();
+        let maxima = x.eq(&super::unpool(&pooled).unwrap()).unwrap().to_dtype(x.dtype()).unwrap();
+        let unpooled = (super::unpool(&pooled).unwrap() * maxima).unwrap();
+        assert_eq!(unpooled.flatten_all().unwrap().to_vec1::<f32>().unwrap(), [0.0, 5.0, 0.0, 0.0, 0.0, 0.0, 8.0, 0.0]);
     }
 }
