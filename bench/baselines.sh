@@ -86,8 +86,11 @@ for row in "${rows[@]}"; do
     set=${row##*-}
     data=data/${set}20.npz
     epochs=100
-    tried=(--prune-channels 60 --fine-tune-epochs 20)
-    [ "$set" = biotac ] && tried+=(--l1 0.25 --mask-lr 10)
+    # The set's best pruning route (its training options), and the tried rows' options: the route
+    # pruned to 60 % of channels.
+    route=()
+    [ "$set" = biotac ] && route=(--l1 0.25 --mask-lr 10)
+    tried=(--prune-channels 60 --fine-tune-epochs 20 "${route[@]}")
     case $row in
         rpp-*) args=(--prune-weights 20) ;;
         masks-*) args=(--l1 0.25 --mask-lr 10 --prune-frames 50 --fine-tune-epochs 20) ;;
@@ -106,10 +109,9 @@ for row in "${rows[@]}"; do
                                 --dropout 0 --clip-grad 0 --aug-gain 0 --aug-noise 0) epochs=${EPOCHS:-2000} ;;
         raec-*) args=(--model raec --lr 5e-4 --weight-decay 0) ;;
         e300-mixup-prunings-*)
-            # The parent's options: the tried route's, less its pruning (the first four words).
             epochs=300
             prunings "$set" e300-mixup "runs/cv-e300-mixup-$set" "runs/cv-e300-mixup-$set" \
-                "channels60-ft100 channels70" "${tried[@]:4}" --mixup 0.2
+                "channels60-ft100 channels70" "${route[@]}" --mixup 0.2
             continue ;;
         e300-mixup-*) args=("${tried[@]}" --mixup 0.2) epochs=300 ;;
         e300-mixup0.4-*) args=("${tried[@]}" --mixup 0.4) epochs=300 ;;

@@ -314,7 +314,7 @@ impl Config {
                     )));
                 }
                 let (ch, cw) = self.conv_output();
-                if self.conv_channels > 0 && self.decoder_from_state && (ch % 2 != 0 || cw % 2 != 0) {
+                if self.decoder_mirrors_conv() && (ch % 2 != 0 || cw % 2 != 0) {
                     return Err(Error::Config(format!(
                         "decoder_from_state un-pools the {ch} × {cw} convolution output, which 2 × 2 pooling must tile"
                     )));

@@ -73,10 +73,10 @@ impl Raec {
     }
 
     /// The encoder's input sequence, `[b, t, rnn_input]`, and, for a decoder that mirrors the
-    /// convolution, where the last frame's pooling took each maximum: `[b, conv_channels, ch, cw]`,
-    /// 1 there and 0 elsewhere (Gao et al.'s encoder keeps the last frame's pooling indices, and
-    /// their decoder un-pools every frame with them).
-    fn encoder_input(&self, frames: &Tensor) -> Result<(Tensor, Option<Tensor>)> {
+    /// convolution, the last frame's convolution output `[b, conv_channels, ch, cw]` and its
+    /// pooling (Gao et al.'s encoder keeps the last frame's pooling indices, and their decoder
+    /// un-pools every frame with them).
+    fn encoder_input(&self, frames: &Tensor) -> Result<(Tensor, Option<(Tensor, Tensor)>)> {
         let Some((weight, bias)) = &self.conv else {
             return Ok((frames.clone(), None));
         };
@@ -85,23 +85,25 @@ impl Raec {
         let images = frames.reshape((b * t, c.height, c.width, c.channels))?.permute((0, 3, 1, 2))?.contiguous()?;
         let conv = images.conv2d(weight, 0, 1, 1, 1)?.broadcast_add(&bias.reshape((1, (), 1, 1))?)?;
         let pooled = conv.max_pool2d(2)?;
-        let maxima = if self.deconv.is_some() {
+        let last_frame = if self.deconv.is_some() {
             let last = |x: &Tensor| -> Result<Tensor> {
                 let (_, k, h, w) = x.dims4()?;
                 Ok(x.reshape((b, t, k, h, w))?.narrow(1, t - 1, 1)?.squeeze(1)?.detach())
             };
-            let (conv, pooled) = (last(&conv)?, last(&pooled)?);
-            Some(conv.eq(&unpool(&pooled)?)?.to_dtype(conv.dtype())?)
+            Some((last(&conv)?, last(&pooled)?))
         } else {
             None
         };
-        Ok((pooled.reshape((b, t, c.rnn_input()))?, maxima))
+        Ok((pooled.reshape((b, t, c.rnn_input()))?, last_frame))
     }
 
     /// The published decoder's frames from its linear output `[b · t, rnn_input]`: un-pooled to
-    /// the positions in `maxima`, then the transposed convolution and ReLU → `[b · t, step_values]`.
-    fn mirror_conv(&self, out: &Tensor, maxima: &Tensor, steps: usize) -> Result<Tensor> {
+    /// where the last frame's pooling (`last_frame`: its convolution output and pooling) took each
+    /// maximum, then the transposed convolution and ReLU → `[b · t, step_values]`.
+    fn mirror_conv(&self, out: &Tensor, last_frame: &(Tensor, Tensor), steps: usize) -> Result<Tensor> {
         let (weight, bias) = self.deconv.as_ref().expect("a decoder that mirrors the convolution");
+        let (conv, pooled) = last_frame;
+        let maxima = conv.eq(&unpool(pooled)?)?.to_dtype(conv.dtype())?;
         let (b, k, h, w) = maxima.dims4()?;
         let pooled = out.reshape((b * steps, k, h / 2, w / 2))?;
         let maxima = maxima.unsqueeze(1)?.broadcast_as((b, steps, k, h, w))?.reshape((b * steps, k, h, w))?;
@@ -116,7 +118,7 @@ impl Raec {
     /// evaluation skips the decoder.
     pub fn forward_with_loss(&self, x: &Tensor, rng: Option<&mut Rng>) -> Result<(Tensor, Option<Tensor>)> {
         let frames = self.frames(x)?;
-        let (sequence, maxima) = self.encoder_input(&frames)?;
+        let (sequence, last_frame) = self.encoder_input(&frames)?;
         let latent = self.to_latent.forward(&self.encoder.last_hidden(&sequence)?)?;
         let training = rng.is_some();
         let logits = self.classifier.forward(&self.dropout.forward(&latent, rng)?)?;
@@ -129,8 +131,8 @@ impl Raec {
             None => self.decoder.repeat_input(&latent, t)?,
         };
         let mut rebuilt = self.reconstruct.forward(&states.reshape((b * t, self.cfg.rnn_hidden))?)?;
-        if let Some(maxima) = &maxima {
-            rebuilt = self.mirror_conv(&rebuilt, maxima, t)?;
+        if let Some(last_frame) = &last_frame {
+            rebuilt = self.mirror_conv(&rebuilt, last_frame, t)?;
         }
         let error = (rebuilt - frames.reshape((b * t, f))?)?.sqr()?.mean_all()?;
         Ok((logits, Some((error * self.cfg.reconstruction_weight)?)))
