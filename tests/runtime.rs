@@ -189,3 +189,44 @@ fn bad_input_and_bad_files_are_typed_errors() {
     assert!(matches!(Classifier::load(dir.join("absent.onnx")), Err(Error::Io { .. })));
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// A model with a spectral head runs in tract (its DFT op an FFT) as the f64 reference computes
+/// it, at batch 1 and 3; streaming it is refused with a typed error, since it reads the whole
+/// window.
+#[test]
+fn a_spectral_head_runs_in_tract_as_the_reference_and_is_not_streamed() {
+    let cfg = Config { spectral_bands: 16, ..Config::biotac20() };
+    let (_, varmap) = Pvt3::init(&cfg, 6).unwrap();
+    let baked = bake(&cfg, &varmap_tensors(&varmap).unwrap()).unwrap();
+    let mut rng = pvt3_models::Rng::new(8);
+    let norm = Normalization {
+        mean: (0..19).map(|_| 100.0 * rng.normal()).collect(),
+        std: (0..19).map(|_| 1.0 + 20.0 * rng.normal().abs()).collect(),
+        frames: 400,
+    };
+    let x: Vec<f32> = (0..3 * 19 * 400)
+        .map(|i| {
+            let (c, t) = ((i / 400) % 19, (i % 400) as f32);
+            norm.mean[c] + norm.std[c] * ((0.05 * (c + 1) as f32 * t).sin() + 0.3 * rng.normal())
+        })
+        .collect();
+    let mut normalised = Vec::new();
+    x.chunks(19 * 400).for_each(|s| norm.apply_into(s, &mut normalised));
+    let reference = reference::forward(&baked, &normalised, 3).unwrap();
+    let meta = pvt3_export::Metadata {
+        classes: (0..20).map(|k| format!("c{k}")).collect(),
+        provenance: serde_json::json!({"data": "synthetic"}),
+        stop_rule: None,
+    };
+    let dir = scratch("spectral");
+    let path = dir.join("spectral.onnx");
+    pvt3_export::write(&pvt3_export::export(&baked, &norm, &meta).unwrap(), &path).unwrap();
+    let c = Classifier::load(&path).unwrap();
+    for batch in [3, 1] {
+        let (logits, _) = c.run(&x[..batch * 7600], batch).unwrap();
+        let worst = logits.iter().zip(reference.iter().flatten()).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
+        assert!(worst <= 1e-5, "batch {batch}: tract against the f64 reference: {worst:e}");
+    }
+    assert!(matches!(c.session(), Err(Error::WholeWindowOnly)));
+    std::fs::remove_dir_all(dir).unwrap();
+}

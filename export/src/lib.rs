@@ -15,6 +15,7 @@ mod error;
 mod graph;
 mod layers;
 mod model;
+mod spectrum;
 
 pub use error::{Error, Result};
 pub use model::{export, write, Metadata};

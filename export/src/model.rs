@@ -13,6 +13,7 @@ use tract_onnx::pb::{
 use crate::attention::{attention, Heads, Layout, Rows};
 use crate::embedding::embed;
 use crate::graph::{int, ints, Graph};
+use crate::spectrum::spectral_logits;
 use crate::layers::{absorb_norm, centre_rows, centred, gelu, layer_norm, linear, norm_affine, residual_linear, rms_norm};
 use crate::{Error, Result};
 use pvt3_format::{keys, Dims, Header, INPUT, LOGITS, PROBABILITIES, TOKEN_BIAS, TOKEN_ENCODINGS, TOKEN_FRAMES, TOKEN_INDEX};
@@ -77,6 +78,9 @@ fn check(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<()> {
     }
     if meta.classes.len() != c.classes {
         return Err(Error::Inconsistent(format!("{} class names for {} classes", meta.classes.len(), c.classes)));
+    }
+    if m.spectrum.is_some() && meta.stop_rule.is_some() {
+        return Err(Error::Inconsistent("a stopping rule for provisional answers, and a spectral head that reads the whole window".into()));
     }
     if let Some(problem) = meta.stop_rule.and_then(|r| r.problem()) {
         return Err(Error::Inconsistent(format!("stopping rule: {problem}")));
@@ -215,7 +219,11 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
     let pooled = transformer_cls(&mut g, &sequence, temporal, &m.temporal, eps, "temporal");
     let pooled = layer_norm(&mut g, &pooled, &m.temporal.norm, eps, "temporal_norm");
     let normed = layer_norm(&mut g, &pooled, &m.head_norm, eps, "head_norm");
-    let logits = linear(&mut g, &normed, &m.head, "head");
+    let mut logits = linear(&mut g, &normed, &m.head, "head");
+    if let Some(s) = &m.spectrum {
+        let spectral = spectral_logits(&mut g, m, s, norm);
+        logits = g.op("Add", &[&logits, &spectral]);
+    }
     g.node("Identity", &[&logits], vec![], Some(LOGITS));
     g.node("Softmax", &[&logits], vec![int("axis", -1)], Some(PROBABILITIES));
     let kept_frames: Vec<usize> = m.kept_tokens.iter().flat_map(|k| k * tt..(k + 1) * tt).collect();

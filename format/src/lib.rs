@@ -26,6 +26,10 @@ pub const TOKEN_ENCODINGS: &str = "token_encodings";
 /// `[1, 1, 1, time tokens + 1]` (the CLS token first). Zeros in the file; a runtime that puts −∞
 /// on the tokens a touch has not reached yet classifies the touch so far (a provisional answer).
 pub const TOKEN_BIAS: &str = "token_bias";
+/// The logits of a spectral head (a model with `spectral_bands`), `[batch, classes]`, added to
+/// the transformer's: computed from the whole window, so such a file classifies whole windows
+/// only, and a runtime that streams refuses it by this name.
+pub const SPECTRAL_LOGITS: &str = "spectral_logits";
 
 /// Metadata keys (`metadata_props` of the ONNX model).
 pub mod keys {

@@ -17,7 +17,7 @@
 
 use std::collections::HashMap;
 
-use crate::baked::{BakedAttention, BakedBlock, BakedFeedForward, BakedPvt3, BakedTransformer, Dense, Norm};
+use crate::baked::{BakedAttention, BakedBlock, BakedFeedForward, BakedPvt3, BakedSpectrum, BakedTransformer, Dense, Norm};
 use crate::reference;
 use crate::{Config, Error, Result};
 
@@ -170,7 +170,20 @@ pub fn bake(cfg: &Config, tensors: &Tensors) -> Result<BakedPvt3> {
         temporal: bake_transformer(&src, "temporal", cfg.time_depth, cfg)?,
         head_norm: src.norm("head_norm", d)?,
         head: src.dense("head", cfg.classes, d, true)?,
+        spectrum: bake_spectrum(&src, cfg)?,
     })
+}
+
+fn bake_spectrum(src: &Source, cfg: &Config) -> Result<Option<BakedSpectrum>> {
+    let f = cfg.spectral_features();
+    if f == 0 {
+        return Ok(None);
+    }
+    Ok(Some(BakedSpectrum {
+        scale: src.get("spectral.scale", &[f])?.to_vec(),
+        shift: src.get("spectral.shift", &[f])?.to_vec(),
+        linear: src.dense("spectral.linear", cfg.classes, f, true)?,
+    }))
 }
 
 #[cfg(test)]

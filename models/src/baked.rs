@@ -58,6 +58,16 @@ pub struct BakedTransformer {
     pub norm: Norm,
 }
 
+/// The spectral head (`crate::spectrum`), as trained: pruning leaves it whole.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct BakedSpectrum {
+    /// `[features]` each: the standardisation, `feature · scale + shift`.
+    pub scale: Vec<f32>,
+    pub shift: Vec<f32>,
+    /// `[classes, features]`.
+    pub linear: Dense,
+}
+
 /// A baked PVT³: dense f32 weights, pruned channels and frames physically gone.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct BakedPvt3 {
@@ -78,6 +88,9 @@ pub struct BakedPvt3 {
     pub temporal: BakedTransformer,
     pub head_norm: Norm,
     pub head: Dense,
+    /// The spectral head, when the configuration has one; written only then.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spectrum: Option<BakedSpectrum>,
 }
 
 impl BakedPvt3 {
@@ -111,6 +124,7 @@ impl BakedPvt3 {
             + transformer(&self.temporal)
             + norm(&self.head_norm)
             + dense(&self.head)
+            + self.spectrum.as_ref().map_or(0, |s| s.scale.len() + s.shift.len() + dense(&s.linear))
     }
 
     /// "N parameters, M multiply-adds per sample, k of T temporal tokens kept".
@@ -143,6 +157,6 @@ impl BakedPvt3 {
         let embed = (kept * n * self.patch_embed.weight.len()) as u64;
         let space: u64 = self.space.layers.iter().map(|b| layer(b, kept, n + 1)).sum();
         let time: u64 = self.temporal.layers.iter().map(|b| layer(b, 1, t + 1)).sum();
-        embed + space + time + self.head.weight.len() as u64
+        embed + space + time + self.head.weight.len() as u64 + c.spectral_mult_adds()
     }
 }

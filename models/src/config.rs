@@ -115,6 +115,16 @@ pub struct Config {
     /// on, so that every other model's files (and their digests) are as before.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub decoder_from_state: bool,
+    /// PVT³: frequency bands of the spectral head (`crate::spectrum`), which adds to the
+    /// transformer's logits a linear map of each channel's mean level and log band powers over
+    /// the window; 0 (the default) has no such head. Written only when set, as
+    /// `decoder_from_state`.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub spectral_bands: usize,
+}
+
+fn is_zero(v: &usize) -> bool {
+    *v == 0
 }
 
 fn default_eps() -> f64 {
@@ -140,7 +150,7 @@ fn default_reconstruction_weight() -> f64 {
 impl Config {
     /// The fields written only when they differ from their default (`skip_serializing_if`), so
     /// absent from a configuration's JSON otherwise.
-    pub const OPTIONAL_FIELDS: &[&str] = &["decoder_from_state"];
+    pub const OPTIONAL_FIELDS: &[&str] = &["decoder_from_state", "spectral_bands"];
 
     /// The iCub forearm skin preset of DESIGN.md: 6 × 10 taxels, 75 frames, 20 classes,
     /// exactly 64,272 trainable parameters besides the frame mask.
@@ -169,6 +179,7 @@ impl Config {
             conv_channels: 0,
             reconstruction_weight: default_reconstruction_weight(),
             decoder_from_state: false,
+            spectral_bands: 0,
         }
     }
 
@@ -322,6 +333,17 @@ impl Config {
                 vec![("tubelet", self.tubelet, "frames", self.frames)]
             }
         };
+        if self.spectral_bands > 0 {
+            self.require_pvt3("spectral_bands")?;
+            if self.spectral_bands > self.frames / 2 {
+                return Err(Error::Config(format!(
+                    "spectral_bands = {} is more than the {} frequencies above 0 of {} frames",
+                    self.spectral_bands,
+                    self.frames / 2,
+                    self.frames
+                )));
+            }
+        }
         for (pn, p, n, v) in divides {
             if v % p != 0 {
                 return Err(Error::Config(format!("{pn} = {p} does not divide {n} = {v}")));
@@ -336,6 +358,15 @@ impl Config {
             return Ok(());
         }
         Err(Error::Config(format!("{what}: PVT³ models only, and this is a {} model", self.model)))
+    }
+
+    /// Fails, naming `what`, if the model has a spectral head: its features are the whole
+    /// window's, so it has no answer from a part of it.
+    pub fn require_whole_window(&self, what: &str) -> Result<()> {
+        if self.spectral_bands == 0 {
+            return Ok(());
+        }
+        Err(Error::Config(format!("{what}: a model with a spectral head (spectral_bands = {}) reads the whole window", self.spectral_bands)))
     }
 
     /// ViT: rows and columns of the frame all frames are tiled into.
@@ -447,7 +478,7 @@ impl Config {
                 let embed = self.patch_dim() * d + d;
                 let pos = self.time_tokens() * (n + 1) * d;
                 let transformers = (self.space_depth + self.time_depth) * self.layer_parameters() + 2 * 2 * d;
-                embed + pos + 2 * d + transformers + head
+                embed + pos + 2 * d + transformers + head + self.spectral_parameters()
             }
             Architecture::Vit => {
                 let embed = self.patch_dim() * d + d;
@@ -466,6 +497,45 @@ impl Config {
                 conv + lstm(self.rnn_input()) + (h * l + l) + (l * c + c) + decoder + (h * out + out) + deconv
             }
         }
+    }
+
+    /// PVT³: the sensor channels of a window (taxels or electrodes, times colours), the rows
+    /// the spectral head reads.
+    pub fn sensor_channels(&self) -> usize {
+        self.height * self.width * self.channels
+    }
+
+    /// PVT³: the spectral head's features, a level and `spectral_bands` log powers per channel
+    /// (0 without the head).
+    pub fn spectral_features(&self) -> usize {
+        if self.spectral_bands == 0 {
+            0
+        } else {
+            self.sensor_channels() * (1 + self.spectral_bands)
+        }
+    }
+
+    /// The spectral head's parameters: a scale and a shift per feature, and the linear map.
+    fn spectral_parameters(&self) -> usize {
+        let f = self.spectral_features();
+        if f == 0 {
+            0
+        } else {
+            2 * f + f * self.classes + self.classes
+        }
+    }
+
+    /// The spectral head's multiply-adds as the exported graph computes them: per channel a
+    /// Fourier transform of the frames (counted as a radix-2 FFT's `2 T log2 T`), the band sums of
+    /// the squared transform, then the linear map.
+    pub fn spectral_mult_adds(&self) -> u64 {
+        if self.spectral_bands == 0 {
+            return 0;
+        }
+        let t = self.frames as f64;
+        let fft = (2.0 * t * t.log2()).ceil() as u64;
+        let bands = (2 * crate::spectrum::bins(self.frames) * self.spectral_bands) as u64;
+        self.sensor_channels() as u64 * (fft + bands) + (self.spectral_features() * self.classes) as u64
     }
 
     /// Multiply-adds of one transformer layer over `seqs` sequences of `len` tokens.
@@ -487,7 +557,7 @@ impl Config {
                 let embed = (t * n * self.patch_dim() * d) as u64;
                 let space = self.space_depth as u64 * self.layer_mult_adds(t, n + 1);
                 let time = self.time_depth as u64 * self.layer_mult_adds(1, t + 1);
-                embed + space + time + head
+                embed + space + time + head + self.spectral_mult_adds()
             }
             Architecture::Vit => {
                 let embed = (n * self.patch_dim() * d) as u64;

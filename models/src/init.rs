@@ -1,6 +1,6 @@
 //! Seeded initialisation of every variable, replacing candle's own (whose CPU generator cannot be
 //! seeded). Linear layers follow PyTorch's default (uniform ±1/√fan_in for weight and bias), norms
-//! and masks start at one and zero, and the CLS tokens and position embedding at std 0.02: std 1
+//! masks and the spectral head's standardisation start at one and zero, and the CLS tokens and position embedding at std 0.02: std 1
 //! there, as common ViViT code does, leaves the model at chance for many epochs. LSTM weights
 //! and biases follow PyTorch too (uniform ±1/√hidden).
 
@@ -27,9 +27,9 @@ pub fn init_weights(varmap: &VarMap, seed: u64) -> Result<()> {
         let var = &vars[name];
         let shape = var.shape().clone();
         let n = shape.elem_count();
-        let values: Vec<f32> = if name.ends_with("mask") || is_norm(name, "weight") {
+        let values: Vec<f32> = if name.ends_with("mask") || is_norm(name, "weight") || name == "spectral.scale" {
             vec![1.0; n]
-        } else if is_norm(name, "bias") {
+        } else if is_norm(name, "bias") || name == "spectral.shift" {
             vec![0.0; n]
         } else if name == "pos_embed" || name.ends_with("cls") {
             (0..n).map(|_| 0.02 * rng.normal()).collect()

@@ -30,6 +30,7 @@ pub mod pvt3;
 pub mod raec;
 pub mod reference;
 pub mod rng;
+pub mod spectrum;
 pub mod transformer;
 pub mod vit;
 pub mod weights;

@@ -13,6 +13,7 @@ use crate::dropout::Dropout;
 use crate::fused_block::pack;
 use crate::fused_embed::{EmbedDims, EmbedOp};
 use crate::head::Head;
+use crate::spectrum::Spectrum;
 use crate::transformer::{composed_ops, Transformer};
 use crate::{Config, Result, Rng};
 
@@ -29,6 +30,8 @@ pub struct Pvt3 {
     space: Transformer,
     temporal: Transformer,
     head: Head,
+    /// The spectral head, when the configuration has one (`spectral_bands > 0`).
+    spectrum: Option<Spectrum>,
     dropout: Dropout,
     cfg: Config,
 }
@@ -48,6 +51,7 @@ impl Pvt3 {
             space: Transformer::new(cfg, cfg.space_depth, vb.pp("space"))?,
             temporal: Transformer::new(cfg, cfg.time_depth, vb.pp("temporal"))?,
             head: Head::new(cfg, vb.clone())?,
+            spectrum: if cfg.spectral_bands > 0 { Some(Spectrum::new(cfg, vb.clone())?) } else { None },
             dropout: Dropout::new(cfg.dropout),
             cfg: cfg.clone(),
         })
@@ -76,13 +80,23 @@ impl Pvt3 {
     /// Logits `[b, classes]`. Pass an `rng` to train (dropout on), `None` to evaluate.
     pub fn forward(&self, x: &Tensor, mut rng: Option<&mut Rng>) -> Result<Tensor> {
         let sequence = self.sequence(x, rng.as_deref_mut())?;
-        self.classify_sequence(&sequence, rng)
+        let logits = self.classify_sequence(&sequence, rng)?;
+        match &self.spectrum {
+            Some(spectrum) => Ok((logits + spectrum.forward(x)?)?),
+            None => Ok(logits),
+        }
+    }
+
+    /// The spectral head, if the model has one.
+    pub fn spectrum(&self) -> Option<&Spectrum> {
+        self.spectrum.as_ref()
     }
 
     /// Logits `[b, classes]` from the first `tokens` temporal tokens of each window alone: the
     /// touch so far, as the runtime's `Session::peek` answers it (the f64 reference's
     /// `forward_prefix`). The temporal transformer runs over the CLS token and those.
     pub fn forward_prefix(&self, x: &Tensor, tokens: usize, mut rng: Option<&mut Rng>) -> Result<Tensor> {
+        self.cfg.require_whole_window("provisional answers from a prefix of the touch")?;
         let sequence = self.sequence(x, rng.as_deref_mut())?;
         self.classify_sequence(&self.prefix(&sequence, tokens)?, rng)
     }

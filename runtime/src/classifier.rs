@@ -9,7 +9,7 @@ use tract_core::prelude::*;
 use tract_core::runtime::RunOptions;
 use tract_linalg::multithread::Executor;
 
-use pvt3_format::{Header, INPUT, LOGITS, PROBABILITIES, TOKEN_BIAS, TOKEN_ENCODINGS, TOKEN_FRAMES, TOKEN_INDEX};
+use pvt3_format::{Header, INPUT, LOGITS, PROBABILITIES, SPECTRAL_LOGITS, TOKEN_BIAS, TOKEN_ENCODINGS, TOKEN_FRAMES, TOKEN_INDEX};
 
 use crate::error::{catch_panic, tract_error};
 use crate::kernels::Kernels;
@@ -216,6 +216,9 @@ impl Classifier {
 
     /// The spatial and temporal stages of this file, cut at its seam.
     fn build_stages(&self) -> Result<Stages> {
+        if self.has_tensor(SPECTRAL_LOGITS) {
+            return Err(Error::WholeWindowOnly);
+        }
         let frames = *self.sample_shape().last().expect("a sample has a frame axis");
         let tubelet = self.tubelet();
         let mut kept_index = vec![None; frames / tubelet];

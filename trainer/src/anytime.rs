@@ -79,6 +79,7 @@ pub struct Answers {
 /// The provisional answers of `model` on `samples`: the spatial stage once per window, the
 /// temporal one per prefix (as `Session::peek` runs it).
 pub fn answers(model: &Pvt3, samples: &Samples) -> Result<Answers> {
+    model.config().require_whole_window("provisional answers")?;
     let tokens = model.config().time_tokens();
     let mut probabilities = vec![Vec::with_capacity(tokens); samples.len()];
     let rows: Vec<usize> = (0..samples.len()).collect();

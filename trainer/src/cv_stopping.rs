@@ -21,6 +21,9 @@ pub fn calibrate_together(dirs: &[PathBuf]) -> Result<Option<Stopping>> {
     for dir in dirs {
         let (meta, model, _) = checkpoint::load(dir)?;
         let Ok(pvt3) = model.pvt3("provisional answers") else { return Ok(None) };
+        if pvt3.spectrum().is_some() {
+            return Ok(None);
+        }
         let key = (meta.provenance.data.clone(), meta.provenance.seed);
         let data = match datasets.entry(key) {
             std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),

@@ -17,6 +17,7 @@ pub mod optim;
 pub mod options;
 pub mod prune;
 pub mod schedule;
+pub mod spectrum_fit;
 pub mod stress;
 pub mod train;
 

@@ -270,6 +270,9 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
             st
         }
         None => {
+            if spec.start.is_none() {
+                crate::spectrum_fit::fit(&learner.model, &learner.varmap, &train_set)?;
+            }
             let _ = std::fs::remove_file(out.join("metrics.jsonl"));
             RunState { epochs_done: 0, step: 0, rng: Rng::new(opts.seed.wrapping_add(1)), best: None, wall_seconds: 0.0 }
         }
@@ -389,10 +392,14 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
 
 /// Calibrates the stopping rule of provisional answers ([`crate::anytime`]) for the PVT³
 /// checkpoint in `dir` on the validation samples, into its provenance (which the exporter
-/// writes into the file). Other networks give no provisional answers.
+/// writes into the file). Other networks, and PVT³ with a spectral head, give no provisional answers.
 fn calibrate_stopping(dir: &Path, val_set: &Samples) -> Result<()> {
     let (mut meta, model, _) = checkpoint::load(dir)?;
     let Ok(pvt3) = model.pvt3("provisional answers") else { return Ok(()) };
+    if pvt3.spectrum().is_some() {
+        // A spectral head reads the whole window: no provisional answers to calibrate.
+        return Ok(());
+    }
     meta.provenance.stopping = Some(crate::anytime::prefixes(pvt3, val_set)?.calibrate());
     write_json_atomically(&dir.join("provenance.json"), &meta.provenance)
 }

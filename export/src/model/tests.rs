@@ -185,3 +185,46 @@ fn large_frames_are_cut_into_patches_and_normalised() {
     assert!(msg.starts_with("ok"), "{msg}");
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// A model with a spectral head (BioTac's layout, a normalisation that is not the identity, a
+/// standardisation that is not either) equals the f64 reference in onnxruntime; a stopping rule
+/// is refused. The tolerance is onnxruntime's: its DFT op over 400 frames is 7e-4 off in these
+/// logits (measured, 1.32.0), where tract's FFT is within 1e-5 (tests/runtime.rs).
+#[test]
+fn a_spectral_head_matches_the_reference() {
+    let cfg = Config { spectral_bands: 16, ..Config::biotac20() };
+    let (_, varmap) = pvt3_models::Pvt3::init(&cfg, 6).unwrap();
+    let mut tensors = pvt3_models::weights::varmap_tensors(&varmap).unwrap();
+    let mut rng = pvt3_models::Rng::new(7);
+    for name in ["spectral.scale", "spectral.shift"] {
+        tensors.get_mut(name).unwrap().1.iter_mut().for_each(|v| *v = 0.5 + rng.normal().abs());
+    }
+    let baked = bake(&cfg, &tensors).unwrap();
+    let norm = Normalization {
+        mean: (0..19).map(|_| 100.0 * rng.normal()).collect(),
+        std: (0..19).map(|_| 1.0 + 20.0 * rng.normal().abs()).collect(),
+        frames: 400,
+    };
+    let raw: Vec<f32> = (0..2 * 19 * 400)
+        .map(|i| {
+            let (c, t) = ((i / 400) % 19, (i % 400) as f32);
+            norm.mean[c] + norm.std[c] * ((0.05 * (c + 1) as f32 * t).sin() + 0.3 * rng.normal())
+        })
+        .collect();
+    let mut normalised = Vec::new();
+    raw.chunks(19 * 400).for_each(|sample| norm.apply_into(sample, &mut normalised));
+    let expected: Vec<f32> = reference::forward(&baked, &normalised, 2).unwrap().into_iter().flatten().map(|v| v as f32).collect();
+    let model = export(&baked, &norm, &meta(20)).unwrap();
+    let graph = model.graph.as_ref().unwrap();
+    assert!(graph.node.iter().any(|n| n.op_type == "DFT"));
+    assert!(graph.node.iter().any(|n| n.output.iter().any(|o| o == pvt3_format::SPECTRAL_LOGITS)));
+    let dir = scratch("spectral");
+    let path = dir.join("spectral.onnx");
+    write(&model, &path).unwrap();
+    let msg = onnx_check::assert_onnxruntime_matches(&path, (&[2, 19, 1, 400], &raw), &expected, 2e-3);
+    assert!(msg.starts_with("ok"), "{msg}");
+    std::fs::remove_dir_all(dir).unwrap();
+    let rule = pvt3_format::StopRule { top_probability: 0.9, agreeing: 2 };
+    let err = export(&baked, &norm, &Metadata { stop_rule: Some(rule), ..meta(20) }).unwrap_err().to_string();
+    assert!(err.contains("spectral head"), "{err}");
+}

@@ -71,6 +71,11 @@ fn check_against_parent(cfg: Config, prune_channels: bool, prune_frames: bool) {
         }
     }
     set_mask(&varmap, "frame_mask", &mut rng, |t| prune_frames && t % 4 != 0);
+    if cfg.spectral_bands > 0 {
+        // A standardisation of the spectral features other than the identity.
+        set_mask(&varmap, "spectral.scale", &mut rng, |_| false);
+        set_mask(&varmap, "spectral.shift", &mut rng, |_| false);
+    }
     let baked = bake(&cfg, &varmap_tensors(&varmap).unwrap()).unwrap();
     if prune_channels {
         assert_eq!(baked.space.layers[0].ffn.fc1.rows, 1);
@@ -85,8 +90,14 @@ fn check_against_parent(cfg: Config, prune_channels: bool, prune_frames: bool) {
     let got = reference::forward(&baked, &x, b).unwrap();
     let err = worst(&got, expected.iter().map(|v| *v as f64));
     assert!(err <= 1e-5, "{cfg:?} channels {prune_channels} frames {prune_frames}: worst {err:e}");
-    // The touch so far (pruned tokens as their constants) agrees too.
     let t = cfg.time_tokens();
+    if cfg.spectral_bands > 0 {
+        assert!(baked.spectrum.is_some());
+        // The spectral head reads the whole window: no answer from a part of it.
+        assert!(parent.forward_prefix(&input, t / 3, None).is_err() && reference::forward_prefix(&baked, &x, b, t / 3).is_err());
+        return;
+    }
+    // The touch so far (pruned tokens as their constants) agrees too.
     for tokens in [1, 2, t / 3, t - 1] {
         let expected = parent.forward_prefix(&input, tokens, None).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap();
         let got = reference::forward_prefix(&baked, &x, b, tokens).unwrap();
@@ -109,6 +120,21 @@ fn baked_equals_masked_parent_with_several_heads_and_tubelets() {
     for (c, f) in [(true, false), (false, true), (true, true)] {
         check_against_parent(cfg.clone(), c, f);
     }
+}
+
+#[test]
+fn baked_equals_masked_parent_with_a_spectral_head() {
+    let cfg = Config { spectral_bands: 8, ..Config::icub20() };
+    check_against_parent(cfg.clone(), true, true);
+    let (parent, varmap) = Pvt3::init(&cfg, 9).unwrap();
+    let baked = bake(&cfg, &varmap_tensors(&varmap).unwrap()).unwrap();
+    // The head is counted: 2 · 60 · 9 standardisation values, a 20 × 540 map and its bias.
+    let plain = bake(&Config::icub20(), &varmap_tensors(&Pvt3::init(&Config::icub20(), 9).unwrap().1).unwrap()).unwrap();
+    assert_eq!(baked.parameter_count() - plain.parameter_count(), 2 * 540 + 20 * 540 + 20);
+    assert_eq!(cfg.parameter_count() - Config::icub20().parameter_count(), 2 * 540 + 20 * 540 + 20);
+    assert_eq!(baked.mult_adds() - plain.mult_adds(), cfg.mult_adds() - Config::icub20().mult_adds());
+    assert!(cfg.spectral_mult_adds() > 20 * 540);
+    assert!(parent.spectrum().is_some());
 }
 
 #[test]

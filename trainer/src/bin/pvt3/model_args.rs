@@ -169,5 +169,12 @@ mod tests {
         assert_eq!(set.latent, 20);
         let err = super::apply_overrides(raec, &["decoder=true".into()]).unwrap_err().to_string();
         assert!(err.contains("unknown field `decoder`") && err.contains("decoder_from_state"), "{err}");
+        // Every field written only when set is reachable.
+        let biotac = Config::preset("biotac20").unwrap();
+        for field in Config::OPTIONAL_FIELDS {
+            assert!(!serde_json::to_value(&biotac).unwrap().as_object().unwrap().contains_key(*field), "{field}");
+        }
+        let set = super::apply_overrides(biotac, &["spectral_bands=16".into()]).unwrap();
+        assert_eq!(set.spectral_bands, 16);
     }
 }
