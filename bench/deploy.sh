@@ -109,6 +109,9 @@ for m in dict.fromkeys(r["model"] for r in rows):
                f"{med(o,'batch32_windows_per_second'):.0f} | {med(p,'batch1_median_us') / med(o,'batch1_median_us'):.2f} |")
     start.append(f"| `{m}` | {med(p,'load_ms'):.1f} | {med(p,'digest_check_ms'):.2f} | {med(p,'batch1_first_call_ms'):.0f} | {med(p,'batch1_measured_first_call_ms'):.0f} | "
                  f"{med(p,'prepare_ms'):.0f} | {med(p,'batch1_first_call_after_prepare_ms'):.2f} |")
+    if "stream_kept_frame_median_us" not in p[0]:
+        stream.append(f"| `{m}` | not streamed: a spectral head reads the whole window | | | |")
+        continue
     stream.append(f"| `{m}` | {med(p,'stream_kept_frame_median_us'):.0f} / {med(p,'stream_kept_frame_p99_us'):.0f} | "
                   f"{med(p,'stream_pruned_frame_median_us'):.2f} | {med(p,'stream_end_of_touch_median_us'):.0f} / {med(p,'stream_end_of_touch_p99_us'):.0f} | "
                   f"{med(p,'stream_compute_per_touch_us'):.0f} |")

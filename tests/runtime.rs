@@ -36,6 +36,7 @@ fn golden_logits_from_tract_match_the_golden_and_the_f64_reference() {
     let c = Classifier::load(&path).unwrap();
     assert_eq!(c.sample_shape(), &[6, 10, 75]);
     assert_eq!(c.kept_frames().len(), 55);
+    assert!(c.streams());
     for batch in [8, 1] {
         let (logits, probabilities) = c.run(&x[..batch * 4500], batch).unwrap();
         let golden_err = logits.iter().zip(expected.iter()).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
@@ -227,6 +228,8 @@ fn a_spectral_head_runs_in_tract_as_the_reference_and_is_not_streamed() {
         let worst = logits.iter().zip(reference.iter().flatten()).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
         assert!(worst <= 1e-5, "batch {batch}: tract against the f64 reference: {worst:e}");
     }
-    assert!(matches!(c.session(), Err(Error::WholeWindowOnly)));
+    assert!(!c.streams() && matches!(c.session(), Err(Error::WholeWindowOnly)));
+    assert!(matches!(c.prepare(&[1], true), Err(Error::WholeWindowOnly)));
+    c.prepare(&[1, 3], false).unwrap();
     std::fs::remove_dir_all(dir).unwrap();
 }

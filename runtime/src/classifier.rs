@@ -164,6 +164,12 @@ impl Classifier {
         plan.map(Plan::new).map_err(|e| Error::NotOnnx { path: self.path.clone(), reason: format!("{e:#}") })
     }
 
+    /// Whether the file can be streamed (sessions, provisional answers): not a model with a
+    /// spectral head, which reads the whole window (`Error::WholeWindowOnly`).
+    pub fn streams(&self) -> bool {
+        !self.has_tensor(SPECTRAL_LOGITS)
+    }
+
     /// Builds now what the first call at each batch size of `batches`, and with `streaming` the
     /// first session, would otherwise build: tract's optimisation of each plan, tens of
     /// milliseconds (docs/deploy.md). A robot calls this at start-up, so that its first touch
@@ -216,7 +222,7 @@ impl Classifier {
 
     /// The spatial and temporal stages of this file, cut at its seam.
     fn build_stages(&self) -> Result<Stages> {
-        if self.has_tensor(SPECTRAL_LOGITS) {
+        if !self.streams() {
             return Err(Error::WholeWindowOnly);
         }
         let frames = *self.sample_shape().last().expect("a sample has a frame axis");
