@@ -35,6 +35,8 @@
 #   spectral  with a spectral head of 16 bands (--set spectral_bands=16): each channel's level and
 #             log band powers, standardised, mapped linearly to logits added to the transformer's
 #   spectral-mixup  the same with --mixup 0.2
+#   spectral-prunings  the spectral row's trained runs pruned further (after spectral): 70 % of
+#             channels, and 50 % of channels with 50 % of frames (LEVELS picks)
 #   e300-mixup-prunings  the e300-mixup row's trained runs pruned otherwise (after e300-mixup), as
 #             the prunings row does: 60 % of channels with 100 epochs of fine-tuning, and 70 % of
 #             channels (LEVELS picks; a level NAME-ftN fine-tunes N epochs instead of 20)
@@ -119,6 +121,10 @@ for row in "${rows[@]}"; do
         e300-mixup-*) args=("${tried[@]}" --mixup 0.2) epochs=300 ;;
         e300-mixup0.4-*) args=("${tried[@]}" --mixup 0.4) epochs=300 ;;
         e300-*) args=("${tried[@]}") epochs=300 ;;
+        spectral-prunings-*)
+            prunings "$set" spectral "runs/cv-spectral-$set" "runs/cv-spectral-$set" \
+                "channels70 channels50-frames50" "${route[@]}" --set spectral_bands=16
+            continue ;;
         spectral-mixup-*) args=("${tried[@]}" --set spectral_bands=16 --mixup 0.2) ;;
         spectral-*) args=("${tried[@]}" --set spectral_bands=16) ;;
         ema-*) args=("${tried[@]}" --ema 0.995) ;;

@@ -114,7 +114,6 @@ TRIED = {
         "100 epochs, pruned to 60 % of channels|—|runs/cv-unpruned-icub-channels60:pruned",
         *unpruned_and_pruned("300 epochs", "runs/cv-e300-icub"),
         *unpruned_and_pruned("mixup 0.2", "runs/cv-mixup-icub"),
-        *unpruned_and_pruned("spectral head of 16 bands", "runs/cv-spectral-icub"),
     ],
     "BioTac-20, trained masks (`--l1 0.25 --mask-lr 10`), pruned to 60 % of channels": [
         "as in the headline rows, unpruned|—|runs/cv-masks-biotac",
@@ -127,6 +126,8 @@ TRIED = {
         "300 epochs with mixup 0.2, pruned to 60 % of channels, 100 epochs of fine-tuning|—|runs/cv-e300-mixup-biotac-channels60-ft100:pruned",
         "300 epochs with mixup 0.2, pruned to 70 % of channels|—|runs/cv-e300-mixup-biotac-channels70:pruned",
         *unpruned_and_pruned("spectral head of 16 bands", "runs/cv-spectral-biotac"),
+        "spectral head of 16 bands, pruned to 70 % of channels|—|runs/cv-spectral-biotac-channels70:pruned",
+        "spectral head of 16 bands, pruned to 50 % of channels and 50 % of frames|—|runs/cv-spectral-biotac-channels50-frames50:pruned",
     ],
 }
 
