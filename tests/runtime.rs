@@ -11,6 +11,9 @@ use pvt3_models::weights::{read_tensors, varmap_tensors};
 use pvt3_models::{reference, Config, Pvt3};
 use pvt3_runtime::{Classifier, Error, StopRule};
 
+#[path = "support/spectral_case.rs"]
+mod spectral_case;
+
 fn golden(file: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/golden/icub20").join(file)
 }
@@ -196,23 +199,7 @@ fn bad_input_and_bad_files_are_typed_errors() {
 /// window.
 #[test]
 fn a_spectral_head_runs_in_tract_as_the_reference_and_is_not_streamed() {
-    let cfg = Config { spectral_bands: 16, ..Config::biotac20() };
-    let (_, varmap) = Pvt3::init(&cfg, 6).unwrap();
-    let baked = bake(&cfg, &varmap_tensors(&varmap).unwrap()).unwrap();
-    let mut rng = pvt3_models::Rng::new(8);
-    let norm = Normalization {
-        mean: (0..19).map(|_| 100.0 * rng.normal()).collect(),
-        std: (0..19).map(|_| 1.0 + 20.0 * rng.normal().abs()).collect(),
-        frames: 400,
-    };
-    let x: Vec<f32> = (0..3 * 19 * 400)
-        .map(|i| {
-            let (c, t) = ((i / 400) % 19, (i % 400) as f32);
-            norm.mean[c] + norm.std[c] * ((0.05 * (c + 1) as f32 * t).sin() + 0.3 * rng.normal())
-        })
-        .collect();
-    let mut normalised = Vec::new();
-    x.chunks(19 * 400).for_each(|s| norm.apply_into(s, &mut normalised));
+    let spectral_case::SpectralCase { baked, norm, raw: x, normalised } = spectral_case::spectral_case(3);
     let reference = reference::forward(&baked, &normalised, 3).unwrap();
     let meta = pvt3_export::Metadata {
         classes: (0..20).map(|k| format!("c{k}")).collect(),

@@ -13,6 +13,8 @@ use super::*;
 
 #[path = "../../../tests/support/onnx_check.rs"]
 mod onnx_check;
+#[path = "../../../tests/support/spectral_case.rs"]
+mod spectral_case;
 
 fn golden(file: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/golden/icub20").join(file)
@@ -192,27 +194,7 @@ fn large_frames_are_cut_into_patches_and_normalised() {
 /// logits (measured, 1.32.0), where tract's FFT is within 1e-5 (tests/runtime.rs).
 #[test]
 fn a_spectral_head_matches_the_reference() {
-    let cfg = Config { spectral_bands: 16, ..Config::biotac20() };
-    let (_, varmap) = pvt3_models::Pvt3::init(&cfg, 6).unwrap();
-    let mut tensors = pvt3_models::weights::varmap_tensors(&varmap).unwrap();
-    let mut rng = pvt3_models::Rng::new(7);
-    for name in ["spectral.scale", "spectral.shift"] {
-        tensors.get_mut(name).unwrap().1.iter_mut().for_each(|v| *v = 0.5 + rng.normal().abs());
-    }
-    let baked = bake(&cfg, &tensors).unwrap();
-    let norm = Normalization {
-        mean: (0..19).map(|_| 100.0 * rng.normal()).collect(),
-        std: (0..19).map(|_| 1.0 + 20.0 * rng.normal().abs()).collect(),
-        frames: 400,
-    };
-    let raw: Vec<f32> = (0..2 * 19 * 400)
-        .map(|i| {
-            let (c, t) = ((i / 400) % 19, (i % 400) as f32);
-            norm.mean[c] + norm.std[c] * ((0.05 * (c + 1) as f32 * t).sin() + 0.3 * rng.normal())
-        })
-        .collect();
-    let mut normalised = Vec::new();
-    raw.chunks(19 * 400).for_each(|sample| norm.apply_into(sample, &mut normalised));
+    let spectral_case::SpectralCase { baked, norm, raw, normalised } = spectral_case::spectral_case(2);
     let expected: Vec<f32> = reference::forward(&baked, &normalised, 2).unwrap().into_iter().flatten().map(|v| v as f32).collect();
     let model = export(&baked, &norm, &meta(20)).unwrap();
     let graph = model.graph.as_ref().unwrap();
