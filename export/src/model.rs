@@ -13,8 +13,8 @@ use tract_onnx::pb::{
 use crate::attention::{attention, Heads, Layout, Rows};
 use crate::embedding::embed;
 use crate::graph::{int, ints, Graph};
-use crate::spectrum::spectral_logits;
 use crate::layers::{absorb_norm, centre_rows, centred, gelu, layer_norm, linear, norm_affine, residual_linear, rms_norm};
+use crate::spectrum::spectral_logits;
 use crate::{Error, Result};
 use pvt3_format::{keys, Dims, Header, INPUT, LOGITS, PROBABILITIES, TOKEN_BIAS, TOKEN_ENCODINGS, TOKEN_FRAMES, TOKEN_INDEX};
 

@@ -127,6 +127,12 @@ fn is_zero(v: &usize) -> bool {
     *v == 0
 }
 
+/// The frequencies of a real transform of `frames` values, 0 to `frames / 2`: what the spectral
+/// head (`crate::spectrum`) reads of each channel.
+pub fn spectral_bins(frames: usize) -> usize {
+    frames / 2 + 1
+}
+
 fn default_eps() -> f64 {
     1e-5
 }
@@ -366,7 +372,10 @@ impl Config {
         if self.spectral_bands == 0 {
             return Ok(());
         }
-        Err(Error::Config(format!("{what}: a model with a spectral head (spectral_bands = {}) reads the whole window", self.spectral_bands)))
+        Err(Error::Config(format!(
+            "{what}: a model with a spectral head (spectral_bands = {}) reads the whole window",
+            self.spectral_bands
+        )))
     }
 
     /// ViT: rows and columns of the frame all frames are tiled into.
@@ -493,7 +502,11 @@ impl Config {
                 // The published decoder: an LSTM of one (zero) input, its state mapped from the
                 // code; with a convolution, a transposed one mirrors it.
                 let decoder = if self.decoder_from_state { lstm(1) + (l * h + h) } else { lstm(l) };
-                let deconv = if self.decoder_mirrors_conv() { self.conv_channels * self.channels * self.patch_height * self.patch_width + self.channels } else { 0 };
+                let deconv = if self.decoder_mirrors_conv() {
+                    self.conv_channels * self.channels * self.patch_height * self.patch_width + self.channels
+                } else {
+                    0
+                };
                 conv + lstm(self.rnn_input()) + (h * l + l) + (l * c + c) + decoder + (h * out + out) + deconv
             }
         }
@@ -534,7 +547,7 @@ impl Config {
         }
         let t = self.frames as f64;
         let fft = (2.0 * t * t.log2()).ceil() as u64;
-        let bands = (2 * crate::spectrum::bins(self.frames) * self.spectral_bands) as u64;
+        let bands = (2 * spectral_bins(self.frames) * self.spectral_bands) as u64;
         self.sensor_channels() as u64 * (fft + bands) + (self.spectral_features() * self.classes) as u64
     }
 

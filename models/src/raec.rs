@@ -42,7 +42,8 @@ impl Raec {
             Ok((vb.get_with_hints(shape, "weight", init)?, vb.get_with_hints(bias, "bias", init)?))
         };
         let (k, c) = ((cfg.patch_height, cfg.patch_width), cfg.channels);
-        let conv = if cfg.conv_channels == 0 { None } else { Some(kernel(vb.pp("conv"), (cfg.conv_channels, c, k.0, k.1), cfg.conv_channels)?) };
+        let conv =
+            if cfg.conv_channels == 0 { None } else { Some(kernel(vb.pp("conv"), (cfg.conv_channels, c, k.0, k.1), cfg.conv_channels)?) };
         // PyTorch's ConvTranspose2d weight: [in, out, kh, kw].
         let deconv = if cfg.decoder_mirrors_conv() { Some(kernel(vb.pp("deconv"), (cfg.conv_channels, c, k.0, k.1), c)?) } else { None };
         Ok(Self {

@@ -18,10 +18,7 @@ use crate::Config;
 /// Power added before the logarithm (normalised units), so that a silent band is finite.
 pub const POWER_FLOOR: f64 = 1e-6;
 
-/// The frequencies of a real transform of `frames` values: 0 to `frames / 2`.
-pub fn bins(frames: usize) -> usize {
-    frames / 2 + 1
-}
+pub use crate::config::spectral_bins as bins;
 
 /// Band `j` sums the power of frequencies `edges[j]..edges[j + 1]`: `bands` geometrically spaced
 /// bands from frequency 1 (0, the level, is a feature of its own) to the last, each at least
