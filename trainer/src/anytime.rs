@@ -76,6 +76,12 @@ pub struct Answers {
     pub tokens: usize,
 }
 
+/// The PVT³ network of `model` if it gives provisional answers: not another network, nor a PVT³
+/// with a spectral head, which reads the whole window.
+pub fn answering(model: &pvt3_models::Classifier) -> Option<&Pvt3> {
+    model.pvt3("provisional answers").ok().filter(|m| m.spectrum().is_none())
+}
+
 /// The provisional answers of `model` on `samples`: the spatial stage once per window, the
 /// temporal one per prefix (as `Session::peek` runs it).
 pub fn answers(model: &Pvt3, samples: &Samples) -> Result<Answers> {

@@ -20,10 +20,7 @@ pub fn calibrate_together(dirs: &[PathBuf]) -> Result<Option<Stopping>> {
     let mut answers = Vec::with_capacity(dirs.len());
     for dir in dirs {
         let (meta, model, _) = checkpoint::load(dir)?;
-        let Ok(pvt3) = model.pvt3("provisional answers") else { return Ok(None) };
-        if pvt3.spectrum().is_some() {
-            return Ok(None);
-        }
+        let Some(pvt3) = crate::anytime::answering(&model) else { return Ok(None) };
         let key = (meta.provenance.data.clone(), meta.provenance.seed);
         let data = match datasets.entry(key) {
             std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),

@@ -395,11 +395,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
 /// writes into the file). Other networks, and PVT³ with a spectral head, give no provisional answers.
 fn calibrate_stopping(dir: &Path, val_set: &Samples) -> Result<()> {
     let (mut meta, model, _) = checkpoint::load(dir)?;
-    let Ok(pvt3) = model.pvt3("provisional answers") else { return Ok(()) };
-    if pvt3.spectrum().is_some() {
-        // A spectral head reads the whole window: no provisional answers to calibrate.
-        return Ok(());
-    }
+    let Some(pvt3) = crate::anytime::answering(&model) else { return Ok(()) };
     meta.provenance.stopping = Some(crate::anytime::prefixes(pvt3, val_set)?.calibrate());
     write_json_atomically(&dir.join("provenance.json"), &meta.provenance)
 }
