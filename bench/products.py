@@ -1,5 +1,5 @@
 """The iCub model's matrix products one at a time, in both engines: the pvt3 runtime (tract, timed
-by `runtime/examples/profile`, built with `cargo build --release -p pvt3-runtime --example
+by `bench/tools/src/bin/profile.rs`, built with `cargo build --release -p pvt3-bench-tools --bin
 profile`), with its products tuned as the runtime tunes them and with tract's own kernels, and
 onnxruntime (one intra-op thread). Each file is one product with a bias,
 `[m, k] x [k, n]`; an Identity file shows what a call that does nothing costs each engine.
@@ -23,7 +23,7 @@ import onnx
 import onnxruntime as ort
 from onnx import TensorProto, helper, numpy_helper
 
-PROFILE = "target/release/examples/profile"
+PROFILE = "target/release/profile"
 SHAPES = [
     ("a call that does nothing (Identity)", 375, 20, None),
     ("spatial queries, output projection (unpruned)", 375, 20, 20),

@@ -1,12 +1,12 @@
 """Exported models timed whole and stage by stage, in both engines: the spatial stage (raw frames
 to token encodings) and the temporal stage (token encodings to logits), each cut out of the file
-at its seam with `onnx.utils.extract_model`. tract is timed by `runtime/examples/profile` (a cut
+at its seam with `onnx.utils.extract_model`. tract is timed by `bench/tools/src/bin/profile.rs` (a cut
 file has no pvt3 metadata, so it is read by tract's ONNX loader, where the runtime wires the same
 operators itself; kernels chosen as the runtime chooses them, median of untimed runs), onnxruntime with one
 intra-op thread (median), alternating in rounds (the median of the rounds is printed). Prints a
 markdown table (docs/benchmarks.md).
 
-    cargo build --release -p pvt3-runtime --example profile
+    cargo build --release -p pvt3-bench-tools --bin profile
     target/onnx-venv/bin/python bench/stages.py [--runs N] [--rounds R] MODEL.onnx ...
 """
 import argparse

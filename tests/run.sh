@@ -2,7 +2,8 @@
 # The tests, exactly as CI runs them (.ci/run):
 #   1. the whole workspace on this machine (cargo test --release --workspace);
 #   2. the runtime's lints: clippy with warnings denied (every unsafe block has a SAFETY note);
-#   3. the robot runtime cross-built for aarch64 (64-bit ARM: Jetson Orin, Raspberry Pi 4/5) and
+#   3. the small robot library's size: built as docs/deploy.md says, it must stay within 8 MiB;
+#   4. the robot runtime cross-built for aarch64 (64-bit ARM: Jetson Orin, Raspberry Pi 4/5) and
 #      its tests run under qemu: golden logits, bit-identical loads, threads, damaged files,
 #      streaming, every C-ABI error path, and runtime/examples/classify.c built with
 #      aarch64-linux-gnu-gcc and run. What needs onnxruntime or candle stays on the host.
@@ -22,12 +23,38 @@ log=$(mktemp)
 trap 'rm -f "$log"' EXIT
 cargo_test() { cargo test "$@" 2>&1 | tee -a "$log"; }
 
+# The runtime's x86-64 kernels are tested for every instruction set they are written for, and a
+# test fails on a machine that lacks one it was asked to cover (it never passes by checking
+# nothing). Machines differ: cover the sets this one has, and say which were left out.
+if [ "$(uname -m)" = x86_64 ] && [ -z "${PVT3_TEST_ISAS:-}" ]; then
+  isas=()
+  grep -qw avx512f /proc/cpuinfo && isas+=(avx512)
+  grep -qw avx2 /proc/cpuinfo && grep -qw fma /proc/cpuinfo && isas+=(avx2)
+  [ ${#isas[@]} -gt 0 ] || missing "a CPU with AVX2 and FMA: the runtime's kernel tests need one"
+  PVT3_TEST_ISAS=$(IFS=,; echo "${isas[*]}")
+  export PVT3_TEST_ISAS
+  [[ $PVT3_TEST_ISAS == *avx512* ]] || echo "note: this machine has no AVX-512, so the runtime's AVX-512 kernels are not tested here (PVT3_TEST_ISAS=$PVT3_TEST_ISAS)"
+fi
+
 step "host: cargo test --release --workspace"
 cargo_test --release --workspace
 
 step "runtime lints: cargo clippy -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings"
 cargo clippy --version >/dev/null 2>&1 || rustup component add clippy || missing "clippy (rustup component add clippy)"
 cargo clippy --release -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings
+
+step "the small robot library: at most 8 MiB (docs/deploy.md)"
+# Built exactly as docs/deploy.md says, as the shared library alone (the static one is not what
+# a robot loads, and its link-time optimisation would double the build).
+limit=$((8 * 1024 * 1024))
+RUSTFLAGS="-C llvm-args=-inline-threshold=60" \
+  cargo rustc --profile robot-small -p pvt3-runtime --no-default-features --lib --crate-type cdylib
+size=$(stat -c %s target/robot-small/libpvt3_runtime.so)
+echo "target/robot-small/libpvt3_runtime.so: $size bytes (limit $limit)"
+if [ "$size" -gt "$limit" ]; then
+  echo "tests/run.sh: the small robot library has outgrown 8 MiB: see docs/deploy.md for what it holds (bench/deploy.sh sizes it by crate)" >&2
+  exit 1
+fi
 
 step "aarch64: the cross toolchain and qemu"
 target=aarch64-unknown-linux-gnu

@@ -5,11 +5,13 @@ use std::path::{Path, PathBuf};
 
 use ndarray::{Array2, Array4};
 use ndarray_npy::read_npy;
-use pvt3_models::bake::bake;
-use pvt3_models::normalization::Normalization;
-use pvt3_models::weights::{read_tensors, varmap_tensors};
-use pvt3_models::{reference, Config, Pvt3};
+use pvt3_models::weights::varmap_tensors;
+use pvt3_models::{Config, Pvt3};
 use pvt3_runtime::{Classifier, Error, StopRule};
+use pvt3_spec::bake::bake;
+use pvt3_spec::normalization::Normalization;
+use pvt3_spec::reference;
+use pvt3_spec::weights::read_tensors;
 
 #[path = "support/spectral_case.rs"]
 mod spectral_case;
@@ -25,10 +27,29 @@ fn scratch(tag: &str) -> PathBuf {
 }
 
 /// The committed golden model (kept current by an export test), its input, and its baked form.
-fn golden_onnx() -> (PathBuf, Vec<f32>, pvt3_models::baked::BakedPvt3) {
+fn golden_onnx() -> (PathBuf, Vec<f32>, pvt3_spec::baked::BakedPvt3) {
     let baked = bake(&Config::icub20(), &read_tensors(&golden("weights.safetensors")).unwrap()).unwrap();
     let input: Array4<f32> = read_npy(golden("input.npy")).unwrap();
     (golden("model.onnx"), input.iter().copied().collect(), baked)
+}
+
+/// The runtime's own reader (`runtime/src/wire.rs`, tract-core operators wired from the nodes)
+/// held to tract-onnx's ONNX loader on the same file: the same logits at batch `batch`.
+fn tract_onnx_agrees(path: &Path, c: &Classifier, x: &[f32], batch: usize) {
+    use tract_onnx::prelude::*;
+    let shape: Vec<usize> = std::iter::once(batch).chain(c.sample_shape().iter().copied()).collect();
+    let plan = tract_onnx::onnx()
+        .model_for_path(path)
+        .and_then(|m| m.with_input_fact(0, f32::fact(&shape).into()))
+        .and_then(|m| m.into_optimized())
+        .and_then(|m| m.into_runnable())
+        .unwrap_or_else(|e| panic!("tract-onnx cannot load {}: {e:#}", path.display()));
+    let out = plan.run(tvec!(Tensor::from_shape(&shape, x).unwrap().into())).unwrap();
+    let theirs: Vec<f32> = out[0].to_plain_array_view::<f32>().unwrap().iter().copied().collect();
+    let (ours, _) = c.run(x, batch).unwrap();
+    assert_eq!(theirs.len(), ours.len(), "{}: logits", path.display());
+    let worst = ours.iter().zip(&theirs).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+    assert!(worst <= 1e-5, "{}: the runtime's reader against tract-onnx's: {worst:e}", path.display());
 }
 
 #[test]
@@ -49,6 +70,7 @@ fn golden_logits_from_tract_match_the_golden_and_the_f64_reference() {
             assert!((p.iter().sum::<f32>() - 1.0).abs() < 1e-5);
         }
     }
+    tract_onnx_agrees(&path, &c, &x, 8);
     let p = c.classify(&x[..4500]).unwrap();
     let best = expected.row(0).iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).unwrap().0;
     assert_eq!((p.class, p.label.as_str()), (best, format!("material_{}", best + 1).as_str()));
@@ -96,6 +118,7 @@ fn streaming_equals_the_whole_window_with_heads_tubelets_and_pruned_tokens() {
     pvt3_export::write(&pvt3_export::export(&baked, &norm, &meta).unwrap(), &path).unwrap();
     let (_, x, _) = golden_onnx();
     let c = Classifier::load(&path).unwrap();
+    tract_onnx_agrees(&path, &c, &x, 8);
     let whole = c.classify_batch(&x, 8).unwrap();
     let (logits, _) = c.run(&x, 8).unwrap();
     let normalised: Vec<f32> = x
@@ -215,6 +238,7 @@ fn a_spectral_head_runs_in_tract_as_the_reference_and_is_not_streamed() {
         let worst = logits.iter().zip(reference.iter().flatten()).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
         assert!(worst <= 1e-5, "batch {batch}: tract against the f64 reference: {worst:e}");
     }
+    tract_onnx_agrees(&path, &c, &x, 3);
     assert!(!c.streams() && matches!(c.session(), Err(Error::WholeWindowOnly)));
     assert!(matches!(c.prepare(&[1], true), Err(Error::WholeWindowOnly)));
     c.prepare(&[1, 3], false).unwrap();

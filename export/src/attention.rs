@@ -11,9 +11,11 @@
 //! keys and values are then the plain norm `x̂` itself; the mixed `x̂` goes through one output
 //! product. In the last layer of a stage only the CLS token is read, so only its query is asked.
 
-use pvt3_models::baked::{BakedAttention, Dense, Norm};
+use pvt3_spec::baked::{BakedAttention, Dense, Norm};
 
-use crate::graph::{int, ints, Graph};
+use pvt3_format::onnx::{int, ints, Op};
+
+use crate::graph::Graph;
 use crate::layers::{absorb_norm, centred, linear, linear_columns, residual_linear};
 
 /// How a stage lays out its rows `[rows, dim]`.
@@ -42,9 +44,9 @@ impl Rows {
             Layout::SequenceMajor => (vec![-1, self.tokens as i64, dim as i64], 1),
         };
         let shape = g.i64s("sequences", &[3], shape);
-        let x = g.op("Reshape", &[x, &shape]);
+        let x = g.op(Op::Reshape, &[x, &shape]);
         let zero = g.i64s("first", &[], vec![0]);
-        g.node("Gather", &[&x, &zero], vec![int("axis", axis)], None)
+        g.node(Op::Gather, &[&x, &zero], vec![int("axis", axis)], None)
     }
 }
 
@@ -164,7 +166,7 @@ fn per_head(g: &mut Graph, x: &str, shared: bool, heads: usize) -> String {
         return x.to_string();
     }
     let idx = g.i64s("heads", &[heads], vec![0; heads]);
-    g.node("Gather", &[x, &idx], vec![int("axis", 0)], None)
+    g.node(Op::Gather, &[x, &idx], vec![int("axis", 0)], None)
 }
 
 /// Token-major attention; the mixed values, `[queries, heads · value width]`.
@@ -176,15 +178,15 @@ fn per_head(g: &mut Graph, x: &str, shared: bool, heads: usize) -> String {
 fn rolled(g: &mut Graph, xhat: &str, rows: Rows, cls_only: bool, h: &Heads, hint: &str) -> String {
     let (t, heads, e, ev, d) = (rows.tokens, h.heads, h.width(), h.value_width(), h.queries.cols);
     let nq = if cls_only { 1 } else { t };
-    let xf = g.node("Transpose", &[xhat], vec![ints("perm", &[1, 0])], None);
+    let xf = g.node(Op::Transpose, &[xhat], vec![ints("perm", &[1, 0])], None);
     let shape = |g: &mut Graph, x: &str, dims: Vec<i64>| {
         let s = g.i64s("shape", &[dims.len()], dims);
-        g.op("Reshape", &[x, &s])
+        g.op(Op::Reshape, &[x, &s])
     };
     let queries_in = if cls_only {
         let x3 = shape(g, &xf, vec![d as i64, t as i64, -1]);
         let zero = g.i64s("first", &[], vec![0]);
-        g.node("Gather", &[&x3, &zero], vec![int("axis", 1)], None)
+        g.node(Op::Gather, &[&x3, &zero], vec![int("axis", 1)], None)
     } else {
         xf.clone()
     };
@@ -192,7 +194,7 @@ fn rolled(g: &mut Graph, xhat: &str, rows: Rows, cls_only: bool, h: &Heads, hint
     let q = shape(g, &q, vec![heads as i64, e as i64, nq as i64, -1]);
     let same = g.i64s("query_of", &[t, nq], (0..t).flat_map(|_| 0..nq as i64).collect());
     let roll = g.i64s("key_of", &[t, nq], (0..t).flat_map(|r| (0..nq).map(move |i| ((i + r) % t) as i64)).collect());
-    let q = g.node("Gather", &[&q, &same], vec![int("axis", 2)], None);
+    let q = g.node(Op::Gather, &[&q, &same], vec![int("axis", 2)], None);
     let projected = |g: &mut Graph, l: Option<&Dense>, width: usize, tag: &str| match l {
         Some(l) => {
             let y = linear_columns(g, &xf, l, &format!("{hint}_{tag}"));
@@ -202,35 +204,35 @@ fn rolled(g: &mut Graph, xhat: &str, rows: Rows, cls_only: bool, h: &Heads, hint
     };
     let shared = h.projections.is_none();
     let keys = projected(g, h.projections.as_ref().map(|p| &p.0), e, "keys");
-    let keys = g.node("Gather", &[&keys, &roll], vec![int("axis", 2)], None);
+    let keys = g.node(Op::Gather, &[&keys, &roll], vec![int("axis", 2)], None);
     let keys = per_head(g, &keys, shared, heads);
     let values = match &h.projections {
         None => keys.clone(),
         Some((_, v)) => {
             let v = projected(g, Some(v), ev, "values");
-            g.node("Gather", &[&v, &roll], vec![int("axis", 2)], None)
+            g.node(Op::Gather, &[&v, &roll], vec![int("axis", 2)], None)
         }
     };
-    let prod = g.op("Mul", &[&q, &keys]);
+    let prod = g.op(Op::Mul, &[&q, &keys]);
     let features = g.i64s("features", &[1], vec![1]);
-    let scores = g.node("ReduceSum", &[&prod, &features], vec![int("keepdims", 1)], None);
+    let scores = g.node(Op::ReduceSum, &[&prod, &features], vec![int("keepdims", 1)], None);
     let scores = if h.bounded() {
         scores
     } else {
         let max = max_over(g, &scores, t, 2);
-        g.op("Sub", &[&scores, &max])
+        g.op(Op::Sub, &[&scores, &max])
     };
-    let weights = g.op("Exp", &[&scores]);
+    let weights = g.op(Op::Exp, &[&scores]);
     let spread = g.i64s("spread", &[ev], vec![0; ev]);
-    let repeated = g.node("Gather", &[&weights, &spread], vec![int("axis", 1)], None);
-    let weighted = g.op("Mul", &[&repeated, &values]);
+    let repeated = g.node(Op::Gather, &[&weights, &spread], vec![int("axis", 1)], None);
+    let weighted = g.op(Op::Mul, &[&repeated, &values]);
     let offsets = g.i64s("offsets", &[1], vec![2]);
-    let mixed = g.node("ReduceSum", &[&weighted, &offsets], vec![int("keepdims", 0)], None);
-    let total = g.node("ReduceSum", &[&weights, &offsets], vec![int("keepdims", 0)], None);
-    let total = g.node("Gather", &[&total, &spread], vec![int("axis", 1)], None);
-    let mixed = g.op("Div", &[&mixed, &total]);
+    let mixed = g.node(Op::ReduceSum, &[&weighted, &offsets], vec![int("keepdims", 0)], None);
+    let total = g.node(Op::ReduceSum, &[&weights, &offsets], vec![int("keepdims", 0)], None);
+    let total = g.node(Op::Gather, &[&total, &spread], vec![int("axis", 1)], None);
+    let mixed = g.op(Op::Div, &[&mixed, &total]);
     let mixed = shape(g, &mixed, vec![(heads * ev) as i64, -1]);
-    g.node("Transpose", &[&mixed], vec![ints("perm", &[1, 0])], None)
+    g.node(Op::Transpose, &[&mixed], vec![ints("perm", &[1, 0])], None)
 }
 
 /// Sequence-major attention with two batched products; the mixed values, `[queries, heads · value width]`.
@@ -240,16 +242,16 @@ fn batched(g: &mut Graph, xhat: &str, rows: Rows, cls_only: bool, h: &Heads, hin
     let queries_in = if cls_only { rows.first(g, xhat, d) } else { xhat.to_string() };
     let split = |g: &mut Graph, x: &str, len: usize, width: usize, perm: &[i64]| {
         let s = g.i64s("split_heads", &[4], vec![-1, len as i64, heads as i64, width as i64]);
-        let r = g.op("Reshape", &[x, &s]);
-        g.node("Transpose", &[&r], vec![ints("perm", perm)], None)
+        let r = g.op(Op::Reshape, &[x, &s]);
+        g.node(Op::Transpose, &[&r], vec![ints("perm", perm)], None)
     };
     let q = linear(g, &queries_in, &h.queries, &format!("{hint}_queries"));
     let q = split(g, &q, nq, e, &[0, 2, 1, 3]);
     let (keys_t, values) = match &h.projections {
         None => {
             let s = g.i64s("per_sequence", &[4], vec![-1, 1, t as i64, d as i64]);
-            let x4 = g.op("Reshape", &[xhat, &s]);
-            (g.node("Transpose", &[&x4], vec![ints("perm", &[0, 1, 3, 2])], None), x4)
+            let x4 = g.op(Op::Reshape, &[xhat, &s]);
+            (g.node(Op::Transpose, &[&x4], vec![ints("perm", &[0, 1, 3, 2])], None), x4)
         }
         Some((k, v)) => {
             let k = linear(g, xhat, k, &format!("{hint}_keys"));
@@ -257,18 +259,18 @@ fn batched(g: &mut Graph, xhat: &str, rows: Rows, cls_only: bool, h: &Heads, hin
             (split(g, &k, t, e, &[0, 2, 3, 1]), split(g, &v, t, ev, &[0, 2, 1, 3]))
         }
     };
-    let scores = g.op("MatMul", &[&q, &keys_t]);
+    let scores = g.op(Op::MatMul, &[&q, &keys_t]);
     let scores = match rows.key_bias {
-        Some(bias) => g.op("Add", &[&scores, bias]),
+        Some(bias) => g.op(Op::Add, &[&scores, bias]),
         None => scores,
     };
     let (weights, total) = softmax_terms(g, &scores, t, h.bounded());
-    let mixed = g.op("MatMul", &[&weights, &values]);
+    let mixed = g.op(Op::MatMul, &[&weights, &values]);
     // Normalised after mixing: a division of `[queries, width]` rather than `[queries, keys]`.
-    let mixed = g.op("Div", &[&mixed, &total]);
-    let back = g.node("Transpose", &[&mixed], vec![ints("perm", &[0, 2, 1, 3])], None);
+    let mixed = g.op(Op::Div, &[&mixed, &total]);
+    let back = g.node(Op::Transpose, &[&mixed], vec![ints("perm", &[0, 2, 1, 3])], None);
     let flat = g.i64s("merge_heads", &[2], vec![-1, (heads * ev) as i64]);
-    g.op("Reshape", &[&back, &flat])
+    g.op(Op::Reshape, &[&back, &flat])
 }
 
 /// A softmax over the last axis (rows of `len`) as its two terms, the exponentials and their row
@@ -281,10 +283,10 @@ fn softmax_terms(g: &mut Graph, x: &str, len: usize, bounded: bool) -> (String, 
         x.to_string()
     } else {
         let max = max_over(g, x, len, -1);
-        g.op("Sub", &[x, &max])
+        g.op(Op::Sub, &[x, &max])
     };
-    let e = g.op("Exp", &[&shifted]);
-    let sum = g.node("ReduceSum", &[&e, &axis], vec![int("keepdims", 1)], None);
+    let e = g.op(Op::Exp, &[&shifted]);
+    let sum = g.node(Op::ReduceSum, &[&e, &axis], vec![int("keepdims", 1)], None);
     (e, sum)
 }
 
@@ -302,9 +304,9 @@ fn max_over(g: &mut Graph, x: &str, len: usize, axis: i64) -> String {
             g.i64s("start", &[1], vec![n - half]),
             g.i64s("end", &[1], vec![n]),
         );
-        let low = g.op("Slice", &[&max, &zero, &h, &axes]);
-        let high = g.op("Slice", &[&max, &rest, &end, &axes]);
-        max = g.op("Max", &[&low, &high]);
+        let low = g.op(Op::Slice, &[&max, &zero, &h, &axes]);
+        let high = g.op(Op::Slice, &[&max, &rest, &end, &axes]);
+        max = g.op(Op::Max, &[&low, &high]);
         n = half;
     }
     max

@@ -6,10 +6,12 @@
 //! whole frame to all of its patch embeddings, which spares the rearrangement into patches; large
 //! frames (where that matrix would be large) are cut into patches first.
 
-use pvt3_models::baked::{BakedPvt3, Dense};
-use pvt3_models::normalization::Normalization;
+use pvt3_spec::baked::{BakedPvt3, Dense};
+use pvt3_spec::normalization::Normalization;
 
-use crate::graph::{int, ints, Graph};
+use pvt3_format::onnx::{int, ints, Op};
+
+use crate::graph::Graph;
 use crate::layers::{centred, linear};
 
 /// Values per vector that tract's broadcasts need to take their fast path (AVX-512: 64).
@@ -25,13 +27,13 @@ pub(crate) fn embed(g: &mut Graph, frames: &str, m: &BakedPvt3, norm: &Normaliza
     let (tt, h, w, ch, d, n) = (c.tubelet, c.height, c.width, c.channels, c.dim, c.num_patches());
     let features = tt * h * w * ch;
     let flat = g.i64s("frame_rows", &[2], vec![-1, features as i64]);
-    let rows = g.op("Reshape", &[frames, &flat]);
+    let rows = g.op(Op::Reshape, &[frames, &flat]);
     // Padded to whole vectors: tract runs a row broadcast fast only if the row is a multiple of
     // 64 values, and element by element otherwise.
     let padded = features.div_ceil(ALIGN) * ALIGN;
     let rows = if padded > features {
         let columns = g.i64s("pad_columns", &[padded], (0..padded).map(|i| (i % features) as i64).collect());
-        g.node("Gather", &[&rows, &columns], vec![int("axis", 1)], None)
+        g.node(Op::Gather, &[&rows, &columns], vec![int("axis", 1)], None)
     } else {
         rows
     };
@@ -42,26 +44,26 @@ pub(crate) fn embed(g: &mut Graph, frames: &str, m: &BakedPvt3, norm: &Normaliza
     };
     let mean = g.f32s("norm_mean", &[padded], per_feature(&norm.mean, 0.0));
     let std = g.f32s("norm_std", &[padded], per_feature(&norm.std, 1.0));
-    let shifted = g.op("Sub", &[&rows, &mean]);
-    let rows = g.op("Div", &[&shifted, &std]);
+    let shifted = g.op(Op::Sub, &[&rows, &mean]);
+    let rows = g.op(Op::Div, &[&shifted, &std]);
     let embedding = centred(&m.patch_embed);
     let x = if padded * n * d <= DENSE_LIMIT {
         linear(g, &rows, &block_diagonal(m, &embedding, padded), "patch_embed")
     } else {
         let (start, end, axis) =
             (g.i64s("start", &[1], vec![0]), g.i64s("end", &[1], vec![features as i64]), g.i64s("axis", &[1], vec![1]));
-        let rows = g.op("Slice", &[&rows, &start, &end, &axis]);
+        let rows = g.op(Op::Slice, &[&rows, &start, &end, &axis]);
         // [N, tt, gh, ph, gw, pw, c] → [N, gh, gw, tt, ph, pw, c] → [N · n, patch_dim].
         let (ph, pw) = (c.patch_height, c.patch_width);
         let grid = g.i64s("grid", &[7], [0, tt, h / ph, ph, w / pw, pw, ch].map(|v| v as i64).to_vec());
-        let x = g.op("Reshape", &[&rows, &grid]);
-        let x = g.node("Transpose", &[&x], vec![ints("perm", &[0, 2, 4, 1, 3, 5, 6])], None);
+        let x = g.op(Op::Reshape, &[&rows, &grid]);
+        let x = g.node(Op::Transpose, &[&x], vec![ints("perm", &[0, 2, 4, 1, 3, 5, 6])], None);
         let patch_rows = g.i64s("patch_rows", &[2], vec![-1, c.patch_dim() as i64]);
-        let x = g.op("Reshape", &[&x, &patch_rows]);
+        let x = g.op(Op::Reshape, &[&x, &patch_rows]);
         linear(g, &x, &embedding, "patch_embed")
     };
     let tokens = g.i64s("tokens", &[3], vec![-1, n as i64, d as i64]);
-    g.op("Reshape", &[&x, &tokens])
+    g.op(Op::Reshape, &[&x, &tokens])
 }
 
 /// The embedding `e` of each patch as one layer over a token's whole frame, `[tt·h·w·c]` →

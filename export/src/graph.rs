@@ -1,7 +1,7 @@
 //! A small builder for ONNX graphs: constants become initializers, every node gets a fresh
 //! output name, attributes are built by helpers.
 
-use tract_onnx::pb::{attribute_proto::AttributeType, tensor_proto::DataType, AttributeProto, NodeProto, TensorProto};
+use pvt3_format::onnx::{AttributeProto, DataType, NodeProto, Op, TensorProto};
 
 /// Constants up to this size are shared between the nodes that use the same value.
 const SHARED_BYTES: usize = 1024;
@@ -11,18 +11,6 @@ pub struct Graph {
     pub nodes: Vec<NodeProto>,
     pub initializers: Vec<TensorProto>,
     count: usize,
-}
-
-pub fn int(name: &str, v: i64) -> AttributeProto {
-    AttributeProto { name: name.into(), r#type: AttributeType::Int as i32, i: v, ..Default::default() }
-}
-
-pub fn ints(name: &str, v: &[i64]) -> AttributeProto {
-    AttributeProto { name: name.into(), r#type: AttributeType::Ints as i32, ints: v.to_vec(), ..Default::default() }
-}
-
-pub fn float(name: &str, v: f32) -> AttributeProto {
-    AttributeProto { name: name.into(), r#type: AttributeType::Float as i32, f: v, ..Default::default() }
 }
 
 impl Graph {
@@ -56,10 +44,10 @@ impl Graph {
     }
 
     /// A node with one output, named after `hint` unless `output` is given.
-    pub fn node(&mut self, op: &str, inputs: &[&str], attribute: Vec<AttributeProto>, output: Option<&str>) -> String {
-        let out = output.map_or_else(|| self.fresh(&op.to_lowercase()), str::to_string);
+    pub fn node(&mut self, op: Op, inputs: &[&str], attribute: Vec<AttributeProto>, output: Option<&str>) -> String {
+        let out = output.map_or_else(|| self.fresh(&op.name().to_lowercase()), str::to_string);
         self.nodes.push(NodeProto {
-            op_type: op.into(),
+            op_type: op.name().into(),
             name: format!("{op}_{}", self.nodes.len()),
             input: inputs.iter().map(|s| s.to_string()).collect(),
             output: vec![out.clone()],
@@ -69,7 +57,7 @@ impl Graph {
         out
     }
 
-    pub fn op(&mut self, op: &str, inputs: &[&str]) -> String {
+    pub fn op(&mut self, op: Op, inputs: &[&str]) -> String {
         self.node(op, inputs, vec![], None)
     }
 }

@@ -5,22 +5,24 @@
 //! ([`rms_norm`]). tract runs that as one fused kernel, where a layer norm costs a sum, a
 //! subtraction and a norm.
 
-use pvt3_models::baked::{Dense, Norm};
+use pvt3_spec::baked::{Dense, Norm};
 
-use crate::graph::{float, int, ints, Graph};
+use pvt3_format::onnx::{float, int, ints, Op};
+
+use crate::graph::Graph;
 
 /// `x Wᵀ + b` on rows `[…, cols]`.
 pub(crate) fn linear(g: &mut Graph, x: &str, l: &Dense, hint: &str) -> String {
     let wt: Vec<f32> = (0..l.cols).flat_map(|c| (0..l.rows).map(move |r| (r, c))).map(|(r, c)| l.weight[r * l.cols + c]).collect();
     let w = g.f32s(&format!("{hint}_w"), &[l.cols, l.rows], wt);
-    let y = g.op("MatMul", &[x, &w]);
+    let y = g.op(Op::MatMul, &[x, &w]);
     add_bias(g, &y, l, &[l.rows], hint)
 }
 
 /// `W x + b` on feature-major `x` `[cols, n]`: the transposed product, `[rows, n]`.
 pub(crate) fn linear_columns(g: &mut Graph, x: &str, l: &Dense, hint: &str) -> String {
     let w = g.f32s(&format!("{hint}_w"), &[l.rows, l.cols], l.weight.clone());
-    let y = g.op("MatMul", &[&w, x]);
+    let y = g.op(Op::MatMul, &[&w, x]);
     add_bias(g, &y, l, &[l.rows, 1], hint)
 }
 
@@ -29,7 +31,7 @@ fn add_bias(g: &mut Graph, y: &str, l: &Dense, dims: &[usize], hint: &str) -> St
     match &l.bias {
         Some(b) => {
             let b = g.f32s(&format!("{hint}_b"), dims, b.clone());
-            g.op("Add", &[y, &b])
+            g.op(Op::Add, &[y, &b])
         }
         None => y.to_string(),
     }
@@ -42,7 +44,7 @@ pub(crate) fn residual_linear(g: &mut Graph, x: &str, y: &str, l: &Dense, hint: 
     let negated =
         Dense { weight: l.weight.iter().map(|w| -w).collect(), bias: l.bias.as_ref().map(|b| b.iter().map(|v| -v).collect()), ..l.clone() };
     let update = linear(g, y, &negated, hint);
-    g.op("Sub", &[x, &update])
+    g.op(Op::Sub, &[x, &update])
 }
 
 /// A full layer norm with scale and bias, for rows whose mean is not known to be zero.
@@ -50,19 +52,19 @@ pub(crate) fn layer_norm(g: &mut Graph, x: &str, n: &Norm, eps: f64, hint: &str)
     let d = n.weight.len();
     let w = g.f32s(&format!("{hint}_scale"), &[d], n.weight.clone());
     let b = g.f32s(&format!("{hint}_bias"), &[d], n.bias.clone());
-    g.node("LayerNormalization", &[x, &w, &b], vec![int("axis", -1), float("epsilon", eps as f32)], None)
+    g.node(Op::LayerNormalization, &[x, &w, &b], vec![int("axis", -1), float("epsilon", eps as f32)], None)
 }
 
 /// `x / √(mean(x²) + ε)` over the last axis: the layer norm of rows with zero mean, without its
 /// scale and bias. Written as the pattern tract fuses into its `RmsNorm` kernel.
 pub(crate) fn rms_norm(g: &mut Graph, x: &str, eps: f64) -> String {
     let eps = g.f32s("eps", &[], vec![eps as f32]);
-    let squares = g.op("Mul", &[x, x]);
+    let squares = g.op(Op::Mul, &[x, x]);
     // Opset 17's ReduceMean takes its axes as an attribute (ReduceSum as an input).
-    let mean = g.node("ReduceMean", &[&squares], vec![ints("axes", &[-1]), int("keepdims", 1)], None);
-    let shifted = g.op("Add", &[&mean, &eps]);
-    let root = g.op("Sqrt", &[&shifted]);
-    g.op("Div", &[x, &root])
+    let mean = g.node(Op::ReduceMean, &[&squares], vec![ints("axes", &[-1]), int("keepdims", 1)], None);
+    let shifted = g.op(Op::Add, &[&mean, &eps]);
+    let root = g.op(Op::Sqrt, &[&shifted]);
+    g.op(Op::Div, &[x, &root])
 }
 
 /// `l` applied after the affine part of `n`: `W (γ ∘ x + β) + b = (W diag γ) x + (W β + b)`.
@@ -110,11 +112,11 @@ pub(crate) fn gelu(g: &mut Graph, x: &str) -> String {
     let root2 = g.f32s("sqrt2", &[], vec![std::f32::consts::SQRT_2]);
     let one = g.f32s("one", &[], vec![1.0]);
     let half = g.f32s("half", &[], vec![0.5]);
-    let scaled = g.op("Div", &[x, &root2]);
-    let erf = g.op("Erf", &[&scaled]);
-    let plus = g.op("Add", &[&erf, &one]);
-    let prod = g.op("Mul", &[x, &plus]);
-    g.op("Mul", &[&prod, &half])
+    let scaled = g.op(Op::Div, &[x, &root2]);
+    let erf = g.op(Op::Erf, &[&scaled]);
+    let plus = g.op(Op::Add, &[&erf, &one]);
+    let prod = g.op(Op::Mul, &[x, &plus]);
+    g.op(Op::Mul, &[&prod, &half])
 }
 
 #[cfg(test)]

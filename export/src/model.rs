@@ -3,16 +3,17 @@
 use std::path::Path;
 
 use prost::Message;
-use pvt3_models::baked::{BakedBlock, BakedPvt3, BakedTransformer};
-use pvt3_models::normalization::Normalization;
-use tract_onnx::pb::{
-    tensor_proto::DataType, tensor_shape_proto::dimension::Value as Dim, tensor_shape_proto::Dimension, type_proto, GraphProto, ModelProto,
-    OperatorSetIdProto, StringStringEntryProto, TensorShapeProto, TypeProto, ValueInfoProto,
-};
+use pvt3_spec::baked::{BakedBlock, BakedPvt3, BakedTransformer};
+use pvt3_spec::normalization::Normalization;
 
 use crate::attention::{attention, Heads, Layout, Rows};
 use crate::embedding::embed;
-use crate::graph::{int, ints, Graph};
+use pvt3_format::onnx::{
+    int, ints, DataType, Dimension, DimensionValue as Dim, GraphProto, ModelProto, Op, OperatorSetIdProto, StringStringEntryProto,
+    TensorShapeProto, TensorTypeProto, TypeProto, ValueInfoProto,
+};
+
+use crate::graph::Graph;
 use crate::layers::{absorb_norm, centre_rows, centred, gelu, layer_norm, linear, norm_affine, residual_linear, rms_norm};
 use crate::spectrum::spectral_logits;
 use crate::{Error, Result};
@@ -58,14 +59,14 @@ fn transformer_cls(g: &mut Graph, x: &str, rows: Rows, t: &BakedTransformer, eps
 /// The first entry of a shape, as a 1-element shape.
 fn first_dim(g: &mut Graph, shape: &str) -> String {
     let (s0, s1) = (g.i64s("start", &[1], vec![0]), g.i64s("end", &[1], vec![1]));
-    g.op("Slice", &[shape, &s0, &s1])
+    g.op(Op::Slice, &[shape, &s0, &s1])
 }
 
 /// `token` `[1, 1, (1,) dim]` repeated to `[batch, rest…]`.
 fn expand_over_batch(g: &mut Graph, token: &str, batch: &str, rest: &[usize]) -> String {
     let rest = g.i64s("shape_rest", &[rest.len()], rest.iter().map(|v| *v as i64).collect());
-    let shape = g.node("Concat", &[batch, &rest], vec![int("axis", 0)], None);
-    g.op("Expand", &[token, &shape])
+    let shape = g.node(Op::Concat, &[batch, &rest], vec![int("axis", 0)], None);
+    g.op(Op::Expand, &[token, &shape])
 }
 
 /// Checks the parts of a baked model the graph relies on.
@@ -108,19 +109,13 @@ fn value_info(name: &str, dims: &[Option<usize>]) -> ValueInfoProto {
                 Some(v) => Dim::DimValue(*v as i64),
                 None => Dim::DimParam("batch".into()),
             }),
-            ..Default::default()
         })
         .collect();
     ValueInfoProto {
         name: name.into(),
         r#type: Some(TypeProto {
-            value: Some(type_proto::Value::TensorType(type_proto::Tensor {
-                elem_type: DataType::Float as i32,
-                shape: Some(TensorShapeProto { dim }),
-            })),
-            ..Default::default()
+            tensor_type: Some(TensorTypeProto { elem_type: DataType::Float as i32, shape: Some(TensorShapeProto { dim }) }),
         }),
-        ..Default::default()
     }
 }
 
@@ -144,56 +139,56 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
 
     // The kept tokens' raw frames: [b, h, w, (c,) f] → [b, h, w, c, t, tt] → gather → [b·tk, tt, h, w, c].
     let split = g.i64s("split_tokens", &[6], [0, h, w, ch, t, tt].map(|v| v as i64).to_vec());
-    let mut x = g.op("Reshape", &[INPUT, &split]);
+    let mut x = g.op(Op::Reshape, &[INPUT, &split]);
     if tk < t {
         let idx = g.i64s("kept_tokens", &[tk], m.kept_tokens.iter().map(|k| *k as i64).collect());
-        x = g.node("Gather", &[&x, &idx], vec![int("axis", 4)], None);
+        x = g.node(Op::Gather, &[&x, &idx], vec![int("axis", 4)], None);
     }
-    let x = g.node("Transpose", &[&x], vec![ints("perm", &[0, 4, 5, 1, 2, 3])], None);
+    let x = g.node(Op::Transpose, &[&x], vec![ints("perm", &[0, 4, 5, 1, 2, 3])], None);
     let per_token = g.i64s("per_token", &[5], [-1, tt as i64, h as i64, w as i64, ch as i64].to_vec());
-    let x = g.op("Reshape", &[&x, &per_token]);
-    g.node("Identity", &[&x], vec![], Some(TOKEN_FRAMES));
-    let input_shape = g.op("Shape", &[INPUT]);
+    let x = g.op(Op::Reshape, &[&x, &per_token]);
+    g.node(Op::Identity, &[&x], vec![], Some(TOKEN_FRAMES));
+    let input_shape = g.op(Op::Shape, &[INPUT]);
     let batch = first_dim(&mut g, &input_shape);
     let kept_row = g.i64s("kept_row", &[1, tk], (0..tk as i64).collect());
     let rows = g.i64s("rows", &[1], vec![tk as i64]);
-    let b_tk = g.node("Concat", &[&batch, &rows], vec![int("axis", 0)], None);
-    let index = g.op("Expand", &[&kept_row, &b_tk]);
+    let b_tk = g.node(Op::Concat, &[&batch, &rows], vec![int("axis", 0)], None);
+    let index = g.op(Op::Expand, &[&kept_row, &b_tk]);
     let flat = g.i64s("flat", &[1], vec![-1]);
-    let index = g.op("Reshape", &[&index, &flat]);
-    g.node("Identity", &[&index], vec![], Some(TOKEN_INDEX));
+    let index = g.op(Op::Reshape, &[&index, &flat]);
+    g.node(Op::Identity, &[&index], vec![], Some(TOKEN_INDEX));
 
     // Spatial stage. Everything written to the residual stream is centred (see `layers`), so
     // every pre-norm is a root-mean-square norm: the patch embedding, the CLS tokens, the
     // position embedding, each block's outputs, and the encodings handed to the temporal stage.
     let x = embed(&mut g, TOKEN_FRAMES, m, norm);
     let scales = g.f32s("frame_scale", &[tk], m.token_scale.clone());
-    let scale = g.node("Gather", &[&scales, TOKEN_INDEX], vec![int("axis", 0)], None);
+    let scale = g.node(Op::Gather, &[&scales, TOKEN_INDEX], vec![int("axis", 0)], None);
     let column = g.i64s("column", &[3], vec![-1, 1, 1]);
-    let scale = g.op("Reshape", &[&scale, &column]);
-    let embedded = g.op("Mul", &[&x, &scale]);
-    let token_shape = g.op("Shape", &[TOKEN_FRAMES]);
+    let scale = g.op(Op::Reshape, &[&scale, &column]);
+    let embedded = g.op(Op::Mul, &[&x, &scale]);
+    let token_shape = g.op(Op::Shape, &[TOKEN_FRAMES]);
     let count = first_dim(&mut g, &token_shape);
     let space_cls = g.f32s("space_cls", &[1, 1, d], centre_rows(&m.space_cls, d));
     let cls = expand_over_batch(&mut g, &space_cls, &count, &[1, d]);
-    let tokens = g.node("Concat", &[&cls, &embedded], vec![int("axis", 1)], None);
+    let tokens = g.node(Op::Concat, &[&cls, &embedded], vec![int("axis", 1)], None);
     let positions = g.f32s("pos_embed", &[tk, n + 1, d], centre_rows(&m.pos_embed, d));
-    let pos = g.node("Gather", &[&positions, TOKEN_INDEX], vec![int("axis", 0)], None);
-    let tokens = g.op("Add", &[&tokens, &pos]);
+    let pos = g.node(Op::Gather, &[&positions, TOKEN_INDEX], vec![int("axis", 0)], None);
+    let tokens = g.op(Op::Add, &[&tokens, &pos]);
     // Token-major rows [n + 1, sequences, dim] for the spatial attention (see `attention`).
-    let tokens = g.node("Transpose", &[&tokens], vec![ints("perm", &[1, 0, 2])], None);
+    let tokens = g.node(Op::Transpose, &[&tokens], vec![ints("perm", &[1, 0, 2])], None);
     let flat = g.i64s("rows", &[2], vec![-1, d as i64]);
-    let tokens = g.op("Reshape", &[&tokens, &flat]);
+    let tokens = g.op(Op::Reshape, &[&tokens, &flat]);
     let space = Rows { layout: Layout::TokenMajor, tokens: n + 1, key_bias: None };
     let cls = transformer_cls(&mut g, &tokens, space, &m.space, eps, "space");
     let cls = rms_norm(&mut g, &cls, eps);
     let encoded = linear(&mut g, &cls, &centred(&norm_affine(&m.space.norm)), "space_norm");
-    g.node("Identity", &[&encoded], vec![], Some(TOKEN_ENCODINGS));
+    g.node(Op::Identity, &[&encoded], vec![], Some(TOKEN_ENCODINGS));
 
     // Temporal stage.
     let per_sample = g.i64s("per_sample", &[3], vec![-1, tk as i64, d as i64]);
-    let frames = g.op("Reshape", &[TOKEN_ENCODINGS, &per_sample]);
-    let frames_shape = g.op("Shape", &[&frames]);
+    let frames = g.op(Op::Reshape, &[TOKEN_ENCODINGS, &per_sample]);
+    let frames_shape = g.op(Op::Shape, &[&frames]);
     let batch = first_dim(&mut g, &frames_shape);
     // The sequence: the CLS token, then every time token in order, a pruned one as its constant
     // encoding. The constants come first, [CLS, pruned…, kept…], and one gather orders them.
@@ -202,19 +197,19 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
     constants.extend(pruned.iter().flat_map(|&k| centre_rows(&m.pruned_encodings[k * d..(k + 1) * d], d)));
     let constants = g.f32s("temporal_constants", &[1, 1 + pruned.len(), d], constants);
     let constants = expand_over_batch(&mut g, &constants, &batch, &[1 + pruned.len(), d]);
-    let mut sequence = g.node("Concat", &[&constants, &frames], vec![int("axis", 1)], None);
+    let mut sequence = g.node(Op::Concat, &[&constants, &frames], vec![int("axis", 1)], None);
     if tk < t {
         let place = |k: usize| match m.kept_tokens.binary_search(&k) {
             Ok(kept) => 1 + pruned.len() + kept,
             Err(_) => 1 + pruned.binary_search(&k).expect("a token is kept or pruned"),
         };
         let order = g.i64s("token_order", &[t + 1], std::iter::once(0).chain((0..t).map(|k| place(k) as i64)).collect());
-        sequence = g.node("Gather", &[&sequence, &order], vec![int("axis", 1)], None);
+        sequence = g.node(Op::Gather, &[&sequence, &order], vec![int("axis", 1)], None);
     }
-    let sequence = g.op("Reshape", &[&sequence, &flat]);
+    let sequence = g.op(Op::Reshape, &[&sequence, &flat]);
     // The key bias, zeros here, is a seam: a runtime feeds −∞ for the tokens not yet received.
     let zeros = g.f32s("no_key_bias", &[1, 1, 1, t + 1], vec![0.0; t + 1]);
-    g.node("Identity", &[&zeros], vec![], Some(TOKEN_BIAS));
+    g.node(Op::Identity, &[&zeros], vec![], Some(TOKEN_BIAS));
     let temporal = Rows { layout: Layout::SequenceMajor, tokens: t + 1, key_bias: Some(TOKEN_BIAS) };
     let pooled = transformer_cls(&mut g, &sequence, temporal, &m.temporal, eps, "temporal");
     let pooled = layer_norm(&mut g, &pooled, &m.temporal.norm, eps, "temporal_norm");
@@ -222,10 +217,10 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
     let mut logits = linear(&mut g, &normed, &m.head, "head");
     if let Some(s) = &m.spectrum {
         let spectral = spectral_logits(&mut g, m, s, norm);
-        logits = g.op("Add", &[&logits, &spectral]);
+        logits = g.op(Op::Add, &[&logits, &spectral]);
     }
-    g.node("Identity", &[&logits], vec![], Some(LOGITS));
-    g.node("Softmax", &[&logits], vec![int("axis", -1)], Some(PROBABILITIES));
+    g.node(Op::Identity, &[&logits], vec![], Some(LOGITS));
+    g.node(Op::Softmax, &[&logits], vec![int("axis", -1)], Some(PROBABILITIES));
     let kept_frames: Vec<usize> = m.kept_tokens.iter().flat_map(|k| k * tt..(k + 1) * tt).collect();
 
     let mut input_dims = vec![None];
@@ -236,7 +231,6 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
         initializer: g.initializers,
         input: vec![value_info(INPUT, &input_dims)],
         output: vec![value_info(LOGITS, &[None, Some(c.classes)]), value_info(PROBABILITIES, &[None, Some(c.classes)])],
-        ..Default::default()
     };
     let dims = Dims { height: h, width: w, channels: ch, frames: c.frames, tubelet: tt, dim: d };
     let header = Header { classes: meta.classes.clone(), kept_frames, dims, stop_rule: meta.stop_rule };
@@ -250,11 +244,9 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
         producer_version: env!("CARGO_PKG_VERSION").into(),
         graph: Some(graph),
         metadata_props: props.into_iter().map(|(k, v)| StringStringEntryProto { key: k.into(), value: v }).collect(),
-        ..Default::default()
     };
     // Last: the digest of everything above, which the runtime checks before it reads the file.
-    let digest = pvt3_format::digest(&model.encode_to_vec()).expect("prost writes well-formed messages");
-    model.metadata_props.push(StringStringEntryProto { key: keys::DIGEST.into(), value: digest });
+    model.sign();
     Ok(model)
 }
 

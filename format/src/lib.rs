@@ -6,6 +6,7 @@
 
 mod digest;
 mod header;
+pub mod onnx;
 
 pub use digest::{digest, verify, Integrity};
 pub use header::{top_class, Dims, Header, HeaderError, StopRule, FORMAT_VERSION};

@@ -4,10 +4,9 @@
 use candle_core::Tensor;
 use candle_nn::{VarBuilder, VarMap};
 
-use crate::config::Architecture;
 use crate::raec::Raec;
 use crate::vit::Vit;
-use crate::{Config, Pvt3, Result, Rng};
+use crate::{Architecture, Config, Pvt3, Result, Rng};
 
 #[derive(Clone, Debug)]
 pub enum Classifier {
@@ -49,8 +48,8 @@ impl Classifier {
     pub fn pvt3(&self, what: &str) -> Result<&Pvt3> {
         match self {
             Self::Pvt3(m) => Ok(m),
-            Self::Vit(_) => Err(crate::Error::Config(format!("{what}: PVT³ models only, and this is a ViT"))),
-            Self::Raec(_) => Err(crate::Error::Config(format!("{what}: PVT³ models only, and this is a RAEC"))),
+            Self::Vit(_) => Err(pvt3_spec::Error::Config(format!("{what}: PVT³ models only, and this is a ViT")).into()),
+            Self::Raec(_) => Err(pvt3_spec::Error::Config(format!("{what}: PVT³ models only, and this is a RAEC")).into()),
         }
     }
 }

@@ -6,12 +6,12 @@
 //! token. Trainable *channel-selection* masks (attention q/k/v channels, feed-forward units) and a
 //! *frame-selection* mask let training find what can be pruned. The paper's baselines, ViT and
 //! RAEC, live beside it so that one trainer fits all three ([`Classifier`]).
+//!
+//! What the model is without a tensor library (configuration, cost model, pruning, baking, the
+//! f64 reference) lives in `pvt3-spec`; this crate is its candle form for training.
 
 pub mod attention;
-pub mod bake;
-pub mod baked;
 pub mod classifier;
-pub mod config;
 pub mod dense;
 pub mod dropout;
 pub mod error;
@@ -24,19 +24,14 @@ pub mod head;
 pub mod init;
 pub mod layer_norm;
 pub mod lstm;
-pub mod normalization;
-pub mod prune;
 pub mod pvt3;
 pub mod raec;
-pub mod reference;
-pub mod rng;
 pub mod spectrum;
 pub mod transformer;
 pub mod vit;
 pub mod weights;
 
 pub use classifier::Classifier;
-pub use config::{Architecture, Config};
 pub use error::{Error, Result};
 pub use pvt3::Pvt3;
-pub use rng::Rng;
+pub use pvt3_spec::{Architecture, Config, Rng};

@@ -69,7 +69,7 @@ impl Pvt3 {
     /// Cuts `[b, h, w, (c,) t]` into `[b, time_tokens, num_patches, patch_dim]`.
     pub fn patchify(&self, x: &Tensor) -> Result<Tensor> {
         let c = &self.cfg;
-        let b = c.check_input(x)?;
+        let b = c.check_input(x.dims())?;
         let (gh, gw, tt) = (c.height / c.patch_height, c.width / c.patch_width, c.time_tokens());
         let grid = x.reshape(vec![b, gh, c.patch_height, gw, c.patch_width, c.channels, tt, c.tubelet])?;
         // → [b, tt, gh, gw, tubelet, ph, pw, c]

@@ -68,7 +68,7 @@ impl Raec {
     /// (within a step: frame, then taxel).
     fn frames(&self, x: &Tensor) -> Result<Tensor> {
         let c = &self.cfg;
-        let b = c.check_input(x)?;
+        let b = c.check_input(x.dims())?;
         let taxels = x.reshape((b, c.height * c.width * c.channels, c.time_tokens(), c.tubelet))?;
         Ok(taxels.permute((0, 2, 3, 1))?.reshape((b, c.time_tokens(), c.step_values()))?)
     }

@@ -8,62 +8,13 @@
 //!
 //! The transform is a plain product with `[cos | sin]` columns here (the trainer's candle graph),
 //! and a Fourier transform op in the exported graph; the f64 reference computes it from the same
-//! [`dft_matrix`].
+//! [`dft_matrix`] (the band maths live in `pvt3_spec::spectrum`).
 
 use candle_core::{DType, Device, Tensor, D};
 use candle_nn::{linear, Init, Linear, Module, VarBuilder};
+use pvt3_spec::spectrum::{band_matrix, bins, dft_matrix, POWER_FLOOR};
 
 use crate::Config;
-
-/// Power added before the logarithm (normalised units), so that a silent band is finite.
-pub const POWER_FLOOR: f64 = 1e-6;
-
-pub use crate::config::spectral_bins as bins;
-
-/// Band `j` sums the power of frequencies `edges[j]..edges[j + 1]`: `bands` geometrically spaced
-/// bands from frequency 1 (0, the level, is a feature of its own) to the last, each at least
-/// one frequency wide. `bands` must be at most `frames / 2` ([`Config::validate`] checks).
-pub fn band_edges(frames: usize, bands: usize) -> Vec<usize> {
-    let top = bins(frames);
-    let mut edges = vec![1];
-    for j in 1..=bands {
-        let geometric = (top as f64).powf(j as f64 / bands as f64).round() as usize;
-        let lowest = edges[j - 1] + 1;
-        edges.push(geometric.max(lowest).min(top - (bands - j)));
-    }
-    edges
-}
-
-/// `[frames, 2 · bins]` row-major: frame `n`'s `cos(2π k n / T) / √T` for each frequency `k`,
-/// then its `sin`, so that a row vector of frames times it gives the transform's real and
-/// (negated) imaginary parts, scaled so that white noise of unit variance has unit power.
-pub fn dft_matrix(frames: usize) -> Vec<f64> {
-    let k = bins(frames);
-    let norm = (frames as f64).sqrt();
-    let mut m = vec![0.0; frames * 2 * k];
-    for n in 0..frames {
-        for f in 0..k {
-            let angle = 2.0 * std::f64::consts::PI * ((f * n) % frames) as f64 / frames as f64;
-            m[n * 2 * k + f] = angle.cos() / norm;
-            m[n * 2 * k + k + f] = angle.sin() / norm;
-        }
-    }
-    m
-}
-
-/// `[2 · bins, bands]`: 1 where a real or imaginary part's square belongs to a band.
-pub fn band_matrix(frames: usize, bands: usize) -> Vec<f64> {
-    let k = bins(frames);
-    let edges = band_edges(frames, bands);
-    let mut m = vec![0.0; 2 * k * bands];
-    for (j, w) in edges.windows(2).enumerate() {
-        for f in w[0]..w[1] {
-            m[f * bands + j] = 1.0;
-            m[(k + f) * bands + j] = 1.0;
-        }
-    }
-    m
-}
 
 #[derive(Clone, Debug)]
 pub struct Spectrum {
@@ -118,20 +69,7 @@ impl Spectrum {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn bands_tile_the_frequencies_above_zero() {
-        for (frames, bands) in [(400, 16), (75, 16), (75, 37), (10, 1), (11, 5)] {
-            let e = band_edges(frames, bands);
-            assert_eq!(e.len(), bands + 1);
-            assert_eq!((e[0], e[bands]), (1, bins(frames)), "{frames} {bands}: {e:?}");
-            assert!(e.windows(2).all(|w| w[0] < w[1]), "{frames} {bands}: {e:?}");
-        }
-        // Geometric (round(201^(j/16)), at least one wider than the last): one frequency wide at
-        // the bottom, 57 at the top.
-        let e = band_edges(400, 16);
-        assert_eq!(e, [1, 2, 3, 4, 5, 6, 7, 10, 14, 20, 28, 38, 53, 74, 104, 144, 201]);
-    }
+    use pvt3_spec::spectrum::band_edges;
 
     /// The features are what their definition says: a sine of frequency 5 and amplitude 2
     /// around a level of 3 has its power in the band holding frequency 5 and almost none

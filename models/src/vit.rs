@@ -46,7 +46,7 @@ impl Vit {
     /// patches are row-major over the tiled frame, features `(dy · pw + dx) · c + ci`.
     pub fn patchify(&self, x: &Tensor) -> Result<Tensor> {
         let c = &self.cfg;
-        let b = c.check_input(x)?;
+        let b = c.check_input(x.dims())?;
         let (rows, cols) = (c.tile_rows, c.frames / c.tile_rows);
         let frames = x.reshape(vec![b, c.height, c.width, c.channels, rows, cols])?;
         // → [b, rows, h, cols, w, c]: the tiled frame, (rows · h) × (cols · w) × c.
@@ -76,8 +76,7 @@ impl Vit {
 mod tests {
     use candle_core::{Device, Tensor};
 
-    use crate::config::Architecture;
-    use crate::Config;
+    use crate::{Architecture, Config};
 
     /// Tiling and patching put every taxel value exactly once, where the layout says.
     #[test]

@@ -37,7 +37,8 @@ typedef struct Pvt3Session pvt3_session;
 
 /* Loads an .onnx written by `pvt3 export`; *out owns a handle to free with pvt3_classifier_free.
  * The file's integrity digest is checked first: a file altered or damaged after export is
- * refused with PVT3_ERR_MODEL. */
+ * refused with PVT3_ERR_MODEL, and so is a file with a spectral head where the library was built
+ * without the `spectral` feature (the small robot build). */
 int pvt3_classifier_load(const char *path, pvt3_classifier **out);
 /* Frees a handle (NULL is ignored). */
 void pvt3_classifier_free(pvt3_classifier *c);

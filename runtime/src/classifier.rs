@@ -13,10 +13,10 @@ use pvt3_format::{Header, INPUT, LOGITS, PROBABILITIES, SPECTRAL_LOGITS, TOKEN_B
 
 use crate::error::{catch_panic, tract_error};
 use crate::kernels::Kernels;
-use crate::onnx::{Graph, Model};
 use crate::plan::{outputs_of, Plan};
 use crate::stages::Stages;
 use crate::{Error, Result};
+use pvt3_format::onnx::GraphProto;
 
 /// The answer for one window.
 #[derive(Clone, Debug, PartialEq)]
@@ -29,7 +29,7 @@ pub struct Prediction {
 }
 
 pub struct Classifier {
-    graph: Graph,
+    graph: GraphProto,
     header: Header,
     sample_shape: Vec<usize>,
     plans: Mutex<HashMap<usize, Arc<Plan>>>,
@@ -62,7 +62,7 @@ impl Classifier {
     pub fn from_bytes(bytes: &[u8], name: &str) -> Result<Self> {
         let name = name.to_string();
         pvt3_format::verify(bytes).map_err(|reason| Error::Corrupted { path: name.clone(), reason })?;
-        let model = Model::decode(bytes).map_err(|reason| Error::NotOnnx { path: name.clone(), reason })?;
+        let model = crate::onnx::decode(bytes).map_err(|reason| Error::NotOnnx { path: name.clone(), reason })?;
         let entries = model.metadata_props.iter().map(|e| (e.key.as_str(), e.value.as_str()));
         let header = Header::parse(entries).map_err(|reason| Error::NotPvt3 { path: name.clone(), reason })?;
         let graph = model.graph.unwrap_or_default();
@@ -70,7 +70,11 @@ impl Classifier {
         let plans = Mutex::new(HashMap::new());
         let stages = Mutex::new(None);
         let kernels = Kernels::default();
-        Ok(Self { graph, header, sample_shape, plans, stages, threads: 1, kernels, path: name })
+        let classifier = Self { graph, header, sample_shape, plans, stages, threads: 1, kernels, path: name };
+        if cfg!(not(feature = "spectral")) && !classifier.streams() {
+            return Err(Error::NoSpectral { path: classifier.path });
+        }
+        Ok(classifier)
     }
 
     /// Runs on `threads` threads from now on (default 1; small models rarely gain from more).
@@ -188,7 +192,7 @@ impl Classifier {
     }
 
     /// The tract model that the plan for `batch` windows is built from, before tract optimises
-    /// it: for profiling (`examples/profile.rs`).
+    /// it: for profiling (`bench/tools/src/bin/profile.rs`).
     pub fn tract_model(&self, batch: usize) -> Result<TypedModel> {
         self.wire(&[(INPUT, f32::fact(self.batch_shape(batch)))], &[LOGITS, PROBABILITIES])
     }

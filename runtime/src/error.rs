@@ -36,6 +36,8 @@ pub enum Error {
     BatchTooLarge { batch: usize },
     #[error("{asked} threads asked for, but this build runs one thread per plan (built without the `threads` feature)")]
     NoThreads { asked: usize },
+    #[error("{path} has a spectral head, and this runtime was built without the `spectral` feature (build it with `--features spectral`)")]
+    NoSpectral { path: String },
     /// tract failed (or panicked, caught) on a file that passed every check.
     #[error("tract: {0}")]
     Tract(String),

@@ -54,7 +54,7 @@ fn status(e: &Error) -> c_int {
         | Error::TooManyFrames { .. }
         | Error::Incomplete { .. }
         | Error::NoTokenYet { .. } => PVT3_ERR_INPUT,
-        Error::NoPrefixes | Error::WholeWindowOnly => PVT3_ERR_MODEL,
+        Error::NoPrefixes | Error::WholeWindowOnly | Error::NoSpectral { .. } => PVT3_ERR_MODEL,
         Error::Tract(_) => PVT3_ERR_INTERNAL,
     }
 }

@@ -14,11 +14,12 @@ use tract_core::internal::*;
 use tract_core::ops::array::{Gather, MultiBroadcastTo, Slice, TypedConcat};
 use tract_core::ops::change_axes::{perm_to_ops, to_axis_ops_with_onnx_rules, wire_with_rank_broadcast};
 use tract_core::ops::einsum::EinSum;
+#[cfg(feature = "spectral")]
 use tract_core::ops::fft::Fft;
 use tract_core::ops::math;
 use tract_core::ops::nn::{Reduce, Reducer, Softmax};
 
-use crate::onnx::{Graph, Node};
+use pvt3_format::onnx::{GraphProto as Graph, NodeProto as Node, Op};
 
 /// The model computing `outputs` from the tensors named in `sources`, each with its fixed fact.
 /// An error names what is missing or not understood.
@@ -68,7 +69,7 @@ impl Builder<'_> {
             return Ok(*o);
         }
         let init = self.graph.initializer.iter().find(|t| t.name == name).ok_or_else(|| format_err!("no tensor named `{name}`"))?;
-        let tensor = init.to_tensor().map_err(|e| format_err!("{e}"))?;
+        let tensor = crate::onnx::to_tensor(init).map_err(|e| format_err!("{e}"))?;
         let o = self.model.add_const(name, tensor)?;
         self.wires.insert(name.into(), o);
         Ok(o)
@@ -110,30 +111,33 @@ impl Builder<'_> {
         let name = node.name.clone();
         let x = *inputs.first().ok_or_else(|| format_err!("no input"))?;
         let rank = self.fact(x)?.rank();
-        match node.op_type.as_str() {
-            "Identity" => Ok(x),
-            op @ ("Add" | "Sub" | "Mul" | "Div" | "Max") => {
+        let op = node.op().ok_or_else(|| format_err!("operator {}, which pvt3 does not export", node.op_type))?;
+        // Every operator the exporter writes, and no other (`Op` is exhaustive).
+        match op {
+            Op::Identity => Ok(x),
+            Op::Add | Op::Sub | Op::Mul | Op::Div | Op::Max => {
                 arity(2..=2)?;
                 let op = match op {
-                    "Add" => math::add(),
-                    "Sub" => math::sub(),
-                    "Mul" => math::mul(),
-                    "Div" => math::div(),
+                    Op::Add => math::add(),
+                    Op::Sub => math::sub(),
+                    Op::Mul => math::mul(),
+                    Op::Div => math::div(),
                     _ => math::max(),
                 };
                 Ok(wire_with_rank_broadcast(name, &mut self.model, op, &inputs)?[0])
             }
-            op @ ("Exp" | "Sqrt" | "Erf" | "Log") => {
+            Op::Exp | Op::Sqrt | Op::Erf | Op::Log => {
                 arity(1..=1)?;
                 let op = match op {
-                    "Exp" => math::exp(),
-                    "Sqrt" => math::sqrt(),
-                    "Log" => math::ln(),
+                    Op::Exp => math::exp(),
+                    Op::Sqrt => math::sqrt(),
+                    Op::Log => math::ln(),
                     _ => math::erf(),
                 };
                 self.wire(name, op, &inputs)
             }
-            "DFT" => {
+            #[cfg(feature = "spectral")]
+            Op::Dft => {
                 // Opset 17, as the exporter writes it (the spectral head): a forward, two-sided
                 // transform of a real signal `[…, n, 1]` along `axis`, to `[…, n, 2]`. tract's FFT
                 // reads complex values: the imaginary parts, zeros, are appended first.
@@ -147,7 +151,10 @@ impl Builder<'_> {
                 let complex = self.wire(format!("{name}.complex"), TypedConcat::new(rank - 1), &[x, zeros])?;
                 self.wire(name, Fft { axis, inverse: false }, &[complex])
             }
-            "MatMul" => {
+            // `Classifier::from_bytes` refuses a spectral file first (`Error::NoSpectral`).
+            #[cfg(not(feature = "spectral"))]
+            Op::Dft => bail!("the DFT op: this runtime was built without the `spectral` feature"),
+            Op::MatMul => {
                 arity(2..=2)?;
                 let (a, b) = (rank, self.fact(inputs[1])?.rank());
                 ensure!(a >= 2 && b >= 2, "a product of vectors");
@@ -157,7 +164,7 @@ impl Builder<'_> {
                 let dt = self.fact(x)?.datum_type;
                 self.wire(name, EinSum { axes: expr.parse()?, operating_dt: dt, q_params: None }, &inputs)
             }
-            "Transpose" => {
+            Op::Transpose => {
                 arity(1..=1)?;
                 let perm: Vec<usize> = match node.ints("perm") {
                     Some(p) => p.iter().map(|a| Self::axis(*a, rank)).collect::<TractResult<_>>()?,
@@ -170,7 +177,7 @@ impl Builder<'_> {
                 }
                 Ok(wire)
             }
-            "Reshape" => {
+            Op::Reshape => {
                 arity(2..=2)?;
                 ensure!(node.int("allowzero", 0) == 0, "allowzero");
                 let from: TVec<TDim> = self.shape(x)?.iter().map(|d| d.to_dim()).collect();
@@ -181,26 +188,26 @@ impl Builder<'_> {
                 }
                 Ok(wire)
             }
-            "Expand" => {
+            Op::Expand => {
                 arity(2..=2)?;
                 let to: TVec<TDim> = self.konst(inputs[1])?.iter().map(|d| d.to_dim()).collect();
                 let from: TVec<TDim> = self.shape(x)?.iter().map(|d| d.to_dim()).collect();
                 let dims = tract_core::broadcast::multi_broadcast(&[&*from, &*to])?;
                 self.wire(name, MultiBroadcastTo::new(dims.into()), &[x])
             }
-            "Gather" => {
+            Op::Gather => {
                 arity(2..=2)?;
                 ensure!(self.fact(inputs[1])?.datum_type == i64::datum_type(), "indices that are not int64");
                 self.wire(name, Gather::new(Self::axis(node.int("axis", 0), rank)?), &inputs)
             }
-            "Concat" => self.wire(name, TypedConcat::new(Self::axis(node.int("axis", 0), rank)?), &inputs),
-            "Shape" => {
+            Op::Concat => self.wire(name, TypedConcat::new(Self::axis(node.int("axis", 0), rank)?), &inputs),
+            Op::Shape => {
                 arity(1..=1)?;
                 ensure!(!node.has("start") && !node.has("end"), "start or end");
                 let shape: Vec<i64> = self.shape(x)?.iter().map(|d| *d as i64).collect();
                 Ok(self.model.add_const(name, tensor1(&shape))?)
             }
-            "Slice" => {
+            Op::Slice => {
                 arity(3..=5)?;
                 let (starts, ends) = (self.konst(inputs[1])?, self.konst(inputs[2])?);
                 let axes = match inputs.get(3) {
@@ -222,7 +229,7 @@ impl Builder<'_> {
                 }
                 Ok(wire)
             }
-            op @ ("ReduceSum" | "ReduceMean") => {
+            Op::ReduceSum | Op::ReduceMean => {
                 arity(1..=2)?;
                 let axes = match (inputs.get(1), node.ints("axes")) {
                     (Some(a), _) => self.konst(*a)?,
@@ -233,7 +240,7 @@ impl Builder<'_> {
                 axes.sort();
                 axes.dedup();
                 let mut wire = match op {
-                    "ReduceMean" => self.mean(&name, x, &axes)?,
+                    Op::ReduceMean => self.mean(&name, x, &axes)?,
                     _ => self.wire(format!("{name}.sum"), Reduce::new(axes.iter().copied().collect(), Reducer::Sum), &[x])?,
                 };
                 if node.int("keepdims", 1) == 0 {
@@ -243,16 +250,15 @@ impl Builder<'_> {
                 }
                 Ok(wire)
             }
-            "Softmax" => {
+            Op::Softmax => {
                 arity(1..=1)?;
                 let axis = Self::axis(node.int("axis", -1), rank)?;
                 self.wire(name, Softmax { axes: tvec!(axis), ..Softmax::default() }, &[x])
             }
-            "LayerNormalization" => {
+            Op::LayerNormalization => {
                 arity(2..=3)?;
                 self.layer_norm(node, &inputs, rank)
             }
-            other => bail!("operator {other}, which pvt3 does not export"),
         }
     }
 
@@ -291,25 +297,17 @@ impl Builder<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::onnx::{Attribute, TensorProto};
+    use pvt3_format::onnx::{int, ints, AttributeProto, DataType, TensorProto};
 
-    fn node(op: &str, inputs: &[&str], output: &str, attribute: Vec<Attribute>) -> Node {
+    fn node(op: &str, inputs: &[&str], output: &str, attribute: Vec<AttributeProto>) -> Node {
         let input = inputs.iter().map(|s| s.to_string()).collect();
         Node { input, output: vec![output.into()], name: format!("{op}_{output}"), op_type: op.into(), attribute, domain: String::new() }
-    }
-
-    fn ints(name: &str, v: &[i64]) -> Attribute {
-        Attribute { name: name.into(), ints: v.to_vec(), ..Default::default() }
-    }
-
-    fn int(name: &str, i: i64) -> Attribute {
-        Attribute { name: name.into(), i, ..Default::default() }
     }
 
     fn i64s(name: &str, v: &[i64]) -> TensorProto {
         TensorProto {
             dims: vec![v.len() as i64],
-            data_type: 7,
+            data_type: DataType::Int64 as i32,
             name: name.into(),
             raw_data: v.iter().flat_map(|x| x.to_le_bytes()).collect(),
             ..Default::default()
@@ -349,6 +347,7 @@ mod tests {
                     ..Default::default()
                 },
             ],
+            ..Default::default()
         };
         let (shape, y) = run(&graph, &[2, 3, 1], &[1.0, 2.0, 3.0, 4.0, 5.0, 6.0], "y");
         assert_eq!(shape, vec![2, 3]);
@@ -368,6 +367,7 @@ mod tests {
                 node("Softmax", &["t"], "soft", vec![int("axis", -1)]),
             ],
             initializer: vec![i64s("last", &[1]), i64s("pick", &[2, 0])],
+            ..Default::default()
         };
         let x = [1.0, 2.0, 3.0, 4.0, 5.0, 6.0];
         assert_eq!(run(&graph, &[2, 3], &x, "mean"), (vec![3], vec![2.5, 3.5, 4.5]));
@@ -383,7 +383,7 @@ mod tests {
     /// What the runtime does not read is refused by name, never guessed at.
     #[test]
     fn unknown_operators_and_tensors_are_named() {
-        let graph = Graph { node: vec![node("Conv", &["x", "w"], "y", vec![])], initializer: vec![i64s("w", &[1])] };
+        let graph = Graph { node: vec![node("Conv", &["x", "w"], "y", vec![])], initializer: vec![i64s("w", &[1])], ..Default::default() };
         let err = typed_model(&graph, &[("x", f32::fact([1]))], &["y"]).unwrap_err();
         assert!(err.contains("operator Conv, which pvt3 does not export"), "{err}");
         let err = typed_model(&graph, &[("x", f32::fact([1]))], &["z"]).unwrap_err();

@@ -2,11 +2,11 @@
 //! the identity) and raw windows for it: what the export test runs in onnxruntime and the runtime
 //! test in tract, each against the f64 reference of the same baked model.
 
-use pvt3_models::bake::bake;
-use pvt3_models::baked::BakedPvt3;
-use pvt3_models::normalization::Normalization;
 use pvt3_models::weights::varmap_tensors;
 use pvt3_models::{Config, Pvt3, Rng};
+use pvt3_spec::bake::bake;
+use pvt3_spec::baked::BakedPvt3;
+use pvt3_spec::normalization::Normalization;
 
 pub struct SpectralCase {
     pub baked: BakedPvt3,

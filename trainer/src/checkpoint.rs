@@ -29,7 +29,7 @@ pub struct Provenance {
     pub options: TrainOptions,
     /// The pruning applied before fine-tuning, if any.
     #[serde(default)]
-    pub pruning: Option<pvt3_models::prune::PruneSpec>,
+    pub pruning: Option<pvt3_spec::prune::PruneSpec>,
     /// The stopping rule of provisional answers, calibrated on the validation fold when the
     /// run finished (PVT³ only). A rule of another form (an earlier pvt3's) reads as none: such a
     /// run exports without one, and `pvt3 eval --anytime` calibrates it afresh.
@@ -45,7 +45,7 @@ fn current_or_none<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Resul
 /// A baked model with everything the exporter needs: what `pvt3 bake` writes.
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct BakedFile {
-    pub baked: pvt3_models::baked::BakedPvt3,
+    pub baked: pvt3_spec::baked::BakedPvt3,
     pub normalization: Normalization,
     pub classes: Vec<String>,
     pub provenance: Provenance,
@@ -55,7 +55,7 @@ impl BakedFile {
     /// Bakes the checkpoint at `path` (a run or checkpoint directory).
     pub fn from_checkpoint(path: &Path) -> Result<Self> {
         let (meta, _, varmap) = load(path)?;
-        let baked = pvt3_models::bake::bake(&meta.config, &pvt3_models::weights::varmap_tensors(&varmap)?)?;
+        let baked = pvt3_spec::bake::bake(&meta.config, &pvt3_models::weights::varmap_tensors(&varmap)?)?;
         Ok(Self { baked, normalization: meta.normalization, classes: meta.classes, provenance: meta.provenance })
     }
 

@@ -5,6 +5,8 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     #[error(transparent)]
+    Spec(#[from] pvt3_spec::Error),
+    #[error(transparent)]
     Model(#[from] pvt3_models::Error),
     #[error(transparent)]
     Candle(#[from] candle_core::Error),

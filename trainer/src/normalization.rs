@@ -1,7 +1,7 @@
 //! Fitting the per-channel normalisation on the training split only (the plain
 //! [`Normalization`] data lives in the models crate, beside the model it feeds).
 
-pub use pvt3_models::normalization::Normalization;
+pub use pvt3_spec::normalization::Normalization;
 
 use crate::data::Dataset;
 

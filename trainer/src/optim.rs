@@ -15,10 +15,10 @@ use candle_nn::VarMap;
 
 use crate::Result;
 
-/// A linear layer's weight matrix ([`pvt3_models::prune::is_weight_matrix`]): what weight decay
+/// A linear layer's weight matrix ([`pvt3_spec::prune::is_weight_matrix`]): what weight decay
 /// and random pruning apply to.
 pub fn is_weight_matrix(name: &str, var: &Var) -> bool {
-    pvt3_models::prune::is_weight_matrix(name, var.rank())
+    pvt3_spec::prune::is_weight_matrix(name, var.rank())
 }
 
 pub struct AdamW {

@@ -5,8 +5,8 @@
 use std::path::Path;
 
 use indicatif::ProgressBar;
-use pvt3_models::prune::{self, PruneSpec};
 use pvt3_models::weights::varmap_tensors;
+use pvt3_spec::prune::{self, PruneSpec};
 
 use crate::checkpoint;
 use crate::data::Dataset;

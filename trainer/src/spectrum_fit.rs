@@ -28,7 +28,9 @@ pub fn fit(model: &Classifier, varmap: &VarMap, train: &Samples) -> Result<()> {
     let shift = (mean.neg()? * &scale)?;
     let vars = varmap.data().lock().expect("the variable map's lock");
     for (name, value) in [("spectral.scale", scale), ("spectral.shift", shift)] {
-        let var = vars.get(name).ok_or_else(|| pvt3_models::Error::Config(format!("a spectral head without {name}")))?;
+        let var = vars
+            .get(name)
+            .ok_or_else(|| pvt3_spec::Error::MissingTensor { task: "fit the spectral standardisation", name: name.into() })?;
         var.set(&value.to_dtype(candle_core::DType::F32)?.to_device(&Device::Cpu)?)?;
     }
     Ok(())

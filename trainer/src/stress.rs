@@ -5,8 +5,9 @@
 
 use std::path::Path;
 
-use pvt3_models::baked::BakedPvt3;
-use pvt3_models::{reference, Rng};
+use pvt3_models::Rng;
+use pvt3_spec::baked::BakedPvt3;
+use pvt3_spec::reference;
 use serde::Serialize;
 
 use crate::checkpoint::BakedFile;

@@ -14,9 +14,9 @@ use std::time::Instant;
 use candle_core::{DType, Device, Tensor, Var, D};
 use candle_nn::VarMap;
 use indicatif::ProgressBar;
-use pvt3_models::bake::Tensors;
-use pvt3_models::prune::PruneSpec;
 use pvt3_models::{Classifier, Config, Rng};
+use pvt3_spec::prune::PruneSpec;
+use pvt3_spec::weights::Tensors;
 use serde::{Deserialize, Serialize};
 
 use crate::average::WeightAverage;

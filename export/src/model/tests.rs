@@ -4,10 +4,10 @@ use std::path::PathBuf;
 
 use ndarray::{Array2, Array4};
 use ndarray_npy::read_npy;
-use pvt3_models::bake::bake;
-use pvt3_models::reference;
-use pvt3_models::weights::read_tensors;
 use pvt3_models::Config;
+use pvt3_spec::bake::bake;
+use pvt3_spec::reference;
+use pvt3_spec::weights::read_tensors;
 
 use super::*;
 

@@ -64,7 +64,7 @@ fn wrong_input_shape_is_a_clear_error() {
     let (model, _) = Pvt3::init(&Config::icub20(), 0).unwrap();
     let x = Tensor::zeros((2, 19, 1, 400), candle_core::DType::F32, &Device::Cpu).unwrap();
     match model.forward(&x, None) {
-        Err(Error::InputShape { got, expected }) => {
+        Err(Error::Spec(pvt3_spec::Error::InputShape { got, expected })) => {
             assert_eq!(got, vec![2, 19, 1, 400]);
             assert_eq!(expected, "6, 10, 75");
         }

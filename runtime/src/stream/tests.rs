@@ -92,7 +92,7 @@ fn a_peek_reads_the_touch_so_far_and_leaves_it_going() {
 fn a_file_without_the_key_bias_gives_no_provisional_answer() {
     use prost::Message;
     let bytes = std::fs::read(golden("model.onnx")).unwrap();
-    let mut model = crate::onnx::Model::decode(&bytes[..]).unwrap();
+    let mut model = pvt3_format::onnx::ModelProto::decode(&bytes[..]).unwrap();
     for node in &mut model.graph.as_mut().unwrap().node {
         for name in node.input.iter_mut().chain(node.output.iter_mut()) {
             if name == TOKEN_BIAS {
@@ -100,9 +100,7 @@ fn a_file_without_the_key_bias_gives_no_provisional_answer() {
             }
         }
     }
-    model.metadata_props.retain(|e| e.key != pvt3_format::keys::DIGEST);
-    let digest = pvt3_format::digest(&model.encode_to_vec()).unwrap();
-    model.metadata_props.push(crate::onnx::Entry { key: pvt3_format::keys::DIGEST.into(), value: digest });
+    model.sign();
     let old = Classifier::from_bytes(&model.encode_to_vec(), "old.onnx").unwrap();
     let (_, x) = read_npy(&golden("input.npy")).unwrap();
     let mut s = old.session().unwrap();
@@ -112,4 +110,31 @@ fn a_file_without_the_key_bias_gives_no_provisional_answer() {
     assert!(matches!(s.peek(), Err(Error::NoPrefixes)));
     let expected = Classifier::load(golden("model.onnx")).unwrap().classify(&x[..4500]).unwrap();
     assert_eq!(s.finish().unwrap().probabilities, expected.probabilities);
+}
+
+/// A file with a spectral head (here the golden graph with a node writing `spectral_logits`,
+/// signed again) loads where the runtime has the `spectral` feature, and is not streamed; the
+/// small robot build, without it, refuses it at load, by name.
+#[test]
+fn a_spectral_file_needs_the_spectral_feature() {
+    use prost::Message;
+    use pvt3_format::onnx::{ModelProto, NodeProto, Op};
+    let bytes = std::fs::read(golden("model.onnx")).unwrap();
+    let mut model = ModelProto::decode(&bytes[..]).unwrap();
+    model.graph.as_mut().unwrap().node.push(NodeProto {
+        input: vec![pvt3_format::LOGITS.into()],
+        output: vec![pvt3_format::SPECTRAL_LOGITS.into()],
+        name: "spectral".into(),
+        op_type: Op::Identity.name().into(),
+        ..Default::default()
+    });
+    model.sign();
+    let loaded = Classifier::from_bytes(&model.encode_to_vec(), "spectral.onnx");
+    if cfg!(feature = "spectral") {
+        let c = loaded.unwrap();
+        assert!(!c.streams() && matches!(c.session(), Err(Error::WholeWindowOnly)));
+    } else {
+        let err = loaded.err().expect("refused without the spectral feature");
+        assert!(matches!(&err, Error::NoSpectral { path } if path == "spectral.onnx"), "{err}");
+    }
 }

@@ -2,10 +2,10 @@
 
 use std::path::Path;
 
-use pvt3_models::bake::bake;
-use pvt3_models::normalization::Normalization;
-use pvt3_models::weights::read_tensors;
 use pvt3_models::Config;
+use pvt3_spec::bake::bake;
+use pvt3_spec::normalization::Normalization;
+use pvt3_spec::weights::read_tensors;
 
 use super::*;
 use crate::checkpoint::Provenance;

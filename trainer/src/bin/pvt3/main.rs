@@ -101,7 +101,7 @@ mod tests {
         assert_eq!(a.model.architecture, Some(pvt3_models::Architecture::Vit));
         assert_eq!(a.seeds, [0, 1, 2]);
         let stage = a.prune.stage().unwrap();
-        assert_eq!((stage.spec.frames, stage.spec.channels, stage.spec.scope), (50.0, 0.0, pvt3_models::prune::Scope::Global));
+        assert_eq!((stage.spec.frames, stage.spec.channels, stage.spec.scope), (50.0, 0.0, pvt3_spec::prune::Scope::Global));
         let cli = Cli::try_parse_from(["pvt3", "--threads", "1", "train", "--prefix-training", "0.5", "--fold", "2"]).unwrap();
         let Command::Train(a) = cli.command else { panic!("not train") };
         assert_eq!((cli.threads, a.fold, a.model.options.prefix_training, a.prune.stage().is_none()), (Some(1), 2, 0.5, true));

@@ -89,7 +89,7 @@ pub fn prepare(args: &ModelArgs) -> Result<Prepared> {
     let mut cfg = match (&args.preset, &args.config) {
         (Some(p), _) => preset(p)?,
         (None, Some(path)) => resolve_config(&path.display().to_string())?,
-        (None, None) => match pvt3_models::config::PRESETS
+        (None, None) => match pvt3_spec::config::PRESETS
             .iter()
             .map(|p| preset(p).expect("known preset"))
             .find(|c| c.sample_shape() == data.sample_shape)

@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use anyhow::Result;
-use pvt3_models::prune::{PruneSpec, Scope};
+use pvt3_spec::prune::{PruneSpec, Scope};
 use pvt3_trainer::checkpoint::BakedFile;
 use pvt3_trainer::prune::PruneStage;
 use pvt3_trainer::train::RunResult;

@@ -15,14 +15,10 @@
 //! The result, [`BakedPvt3`] (`crate::baked`), is plain data (no candle types), so the exporter
 //! can depend on it alone.
 
-use std::collections::HashMap;
-
 use crate::baked::{BakedAttention, BakedBlock, BakedFeedForward, BakedPvt3, BakedSpectrum, BakedTransformer, Dense, Norm};
 use crate::reference;
+use crate::weights::Tensors;
 use crate::{Config, Error, Result};
-
-/// Named tensors: shape and row-major values, as read from a checkpoint.
-pub type Tensors = HashMap<String, (Vec<usize>, Vec<f32>)>;
 
 struct Source<'a> {
     tensors: &'a Tensors,
@@ -30,9 +26,9 @@ struct Source<'a> {
 
 impl Source<'_> {
     fn get(&self, name: &str, shape: &[usize]) -> Result<&[f32]> {
-        let (s, v) = self.tensors.get(name).ok_or_else(|| Error::Config(format!("cannot bake: tensor `{name}` is missing")))?;
+        let (s, v) = self.tensors.get(name).ok_or_else(|| Error::MissingTensor { task: "bake", name: name.into() })?;
         if s.iter().product::<usize>() != shape.iter().product::<usize>() {
-            return Err(Error::Config(format!("cannot bake: `{name}` has shape {s:?}, expected {shape:?}")));
+            return Err(Error::TensorShape { task: "bake", name: name.into(), got: s.clone(), expected: shape.to_vec() });
         }
         Ok(v)
     }
@@ -185,6 +181,3 @@ fn bake_spectrum(src: &Source, cfg: &Config) -> Result<Option<BakedSpectrum>> {
         linear: src.dense("spectral.linear", cfg.classes, f, true)?,
     }))
 }
-
-#[cfg(test)]
-mod tests;

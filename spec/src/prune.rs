@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
-use crate::bake::Tensors;
+use crate::weights::Tensors;
 use crate::{Config, Error, Result};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
@@ -105,7 +105,7 @@ pub fn plan(cfg: &Config, tensors: &Tensors, spec: &PruneSpec) -> Result<Plan> {
         check_percent(what, p)?;
     }
     let get = |name: &str| -> Result<&Vec<f32>> {
-        tensors.get(name).map(|(_, v)| v).ok_or_else(|| Error::Config(format!("cannot prune: no mask `{name}`")))
+        tensors.get(name).map(|(_, v)| v).ok_or_else(|| Error::MissingTensor { task: "prune", name: name.into() })
     };
     let mut plan = Plan::new();
     let masks = channel_masks(cfg);

@@ -449,9 +449,9 @@ impl Config {
         self.heads * self.dim_head
     }
 
-    /// Checks that `x` is a batch of samples of [`Self::sample_shape`]; returns the batch size.
-    pub fn check_input(&self, x: &candle_core::Tensor) -> Result<usize> {
-        let dims = x.dims();
+    /// Checks that `dims` are those of a batch of samples of [`Self::sample_shape`]; returns the
+    /// batch size.
+    pub fn check_input(&self, dims: &[usize]) -> Result<usize> {
         let expected = self.sample_shape();
         if dims.len() != expected.len() + 1 || dims[1..] != expected[..] {
             let expected = expected.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(", ");

@@ -1,4 +1,4 @@
-//! Where the runtime spends its time: `cargo run --release -p pvt3-runtime --example profile --
+//! Where the runtime spends its time: `cargo run --release -p pvt3-bench-tools --bin profile --
 //! MODEL.onnx [BATCH [RUNS]]` times every node of the optimised tract plan over RUNS runs on
 //! synthetic input and prints the time per operator kind, largest first (docs/benchmarks.md),
 //! then the plan's median time without the per-node timing. It first says what building the plan

@@ -1,4 +1,4 @@
-//! What one of tract's kernel calls costs: `cargo run --release -p pvt3-runtime --example
+//! What one of tract's kernel calls costs: `cargo run --release -p pvt3-bench-tools --bin
 //! tile_cost` times tract's f32 kernels on `384 × k × 48` products with packed operands, for k
 //! from 1 to 160, and prints the time per tile of outputs (docs/benchmarks.md, step 17). A
 //! straight line through these gives the fixed cost of a tile and the cost of one step of k.

@@ -6,9 +6,11 @@ use candle_core::{Device, Tensor};
 use ndarray::{Array2, Array4};
 use ndarray_npy::read_npy;
 
-use super::*;
-use crate::weights::{read_tensors, varmap_tensors};
-use crate::{Pvt3, Rng};
+use pvt3_models::weights::varmap_tensors;
+use pvt3_models::{Config, Pvt3, Rng};
+use pvt3_spec::bake::bake;
+use pvt3_spec::reference;
+use pvt3_spec::weights::read_tensors;
 
 fn golden(file: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/golden/icub20").join(file)

@@ -1,0 +1,350 @@
+//! The part of ONNX's protobuf schema (`onnx.proto`, opset 17) that `pvt3 export` writes and the
+//! runtime reads, as prost messages, and [`Op`], the operators a pvt3 file may hold. The exporter
+//! builds these messages and the runtime decodes them: one definition, so that a field or an
+//! operator cannot be written without being read. Fields left out here (sparse tensors,
+//! functions, training information) are skipped by the decoder and never written.
+
+/// `ModelProto`: the file.
+#[derive(Clone, PartialEq, prost::Message)]
+pub struct ModelProto {
+    #[prost(int64, tag = "1")]
+    pub ir_version: i64,
+    #[prost(message, repeated, tag = "8")]
+    pub opset_import: Vec<OperatorSetIdProto>,
+    #[prost(string, tag = "2")]
+    pub producer_name: String,
+    #[prost(string, tag = "3")]
+    pub producer_version: String,
+    #[prost(message, optional, tag = "7")]
+    pub graph: Option<GraphProto>,
+    #[prost(message, repeated, tag = "14")]
+    pub metadata_props: Vec<StringStringEntryProto>,
+}
+
+#[derive(Clone, PartialEq, prost::Message)]
+pub struct OperatorSetIdProto {
+    #[prost(string, tag = "1")]
+    pub domain: String,
+    #[prost(int64, tag = "2")]
+    pub version: i64,
+}
+
+/// One metadata property.
+#[derive(Clone, PartialEq, prost::Message)]
+pub struct StringStringEntryProto {
+    #[prost(string, tag = "1")]
+    pub key: String,
+    #[prost(string, tag = "2")]
+    pub value: String,
+}
+
+#[derive(Clone, PartialEq, prost::Message)]
+pub struct GraphProto {
+    #[prost(message, repeated, tag = "1")]
+    pub node: Vec<NodeProto>,
+    #[prost(string, tag = "2")]
+    pub name: String,
+    #[prost(message, repeated, tag = "5")]
+    pub initializer: Vec<TensorProto>,
+    #[prost(message, repeated, tag = "11")]
+    pub input: Vec<ValueInfoProto>,
+    #[prost(message, repeated, tag = "12")]
+    pub output: Vec<ValueInfoProto>,
+}
+
+#[derive(Clone, PartialEq, prost::Message)]
+pub struct NodeProto {
+    #[prost(string, repeated, tag = "1")]
+    pub input: Vec<String>,
+    #[prost(string, repeated, tag = "2")]
+    pub output: Vec<String>,
+    #[prost(string, tag = "3")]
+    pub name: String,
+    /// An [`Op`]'s name.
+    #[prost(string, tag = "4")]
+    pub op_type: String,
+    #[prost(message, repeated, tag = "5")]
+    pub attribute: Vec<AttributeProto>,
+    #[prost(string, tag = "7")]
+    pub domain: String,
+}
+
+/// `AttributeProto.AttributeType`: the kinds of attribute the exporter writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(i32)]
+pub enum AttributeType {
+    Float = 1,
+    Int = 2,
+    Ints = 7,
+}
+
+#[derive(Clone, PartialEq, prost::Message)]
+pub struct AttributeProto {
+    #[prost(string, tag = "1")]
+    pub name: String,
+    /// An [`AttributeType`].
+    #[prost(int32, tag = "20")]
+    pub r#type: i32,
+    #[prost(float, tag = "2")]
+    pub f: f32,
+    #[prost(int64, tag = "3")]
+    pub i: i64,
+    #[prost(int64, repeated, tag = "8")]
+    pub ints: Vec<i64>,
+}
+
+/// An integer attribute.
+pub fn int(name: &str, v: i64) -> AttributeProto {
+    AttributeProto { name: name.into(), r#type: AttributeType::Int as i32, i: v, ..Default::default() }
+}
+
+/// An attribute of integers.
+pub fn ints(name: &str, v: &[i64]) -> AttributeProto {
+    AttributeProto { name: name.into(), r#type: AttributeType::Ints as i32, ints: v.to_vec(), ..Default::default() }
+}
+
+/// A float attribute.
+pub fn float(name: &str, v: f32) -> AttributeProto {
+    AttributeProto { name: name.into(), r#type: AttributeType::Float as i32, f: v, ..Default::default() }
+}
+
+/// `TensorProto.DataType`: the element types the exporter writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[repr(i32)]
+pub enum DataType {
+    Float = 1,
+    Int64 = 7,
+}
+
+#[derive(Clone, PartialEq, prost::Message)]
+pub struct TensorProto {
+    #[prost(int64, repeated, tag = "1")]
+    pub dims: Vec<i64>,
+    /// A [`DataType`].
+    #[prost(int32, tag = "2")]
+    pub data_type: i32,
+    #[prost(float, repeated, tag = "4")]
+    pub float_data: Vec<f32>,
+    #[prost(int64, repeated, tag = "7")]
+    pub int64_data: Vec<i64>,
+    #[prost(string, tag = "8")]
+    pub name: String,
+    #[prost(bytes = "vec", tag = "9")]
+    pub raw_data: Vec<u8>,
+}
+
+/// A graph input or output: its name and a float tensor type.
+#[derive(Clone, PartialEq, prost::Message)]
+pub struct ValueInfoProto {
+    #[prost(string, tag = "1")]
+    pub name: String,
+    #[prost(message, optional, tag = "2")]
+    pub r#type: Option<TypeProto>,
+}
+
+#[derive(Clone, PartialEq, prost::Message)]
+pub struct TypeProto {
+    #[prost(message, optional, tag = "1")]
+    pub tensor_type: Option<TensorTypeProto>,
+}
+
+/// `TypeProto.Tensor`.
+#[derive(Clone, PartialEq, prost::Message)]
+pub struct TensorTypeProto {
+    /// A [`DataType`].
+    #[prost(int32, tag = "1")]
+    pub elem_type: i32,
+    #[prost(message, optional, tag = "2")]
+    pub shape: Option<TensorShapeProto>,
+}
+
+#[derive(Clone, PartialEq, prost::Message)]
+pub struct TensorShapeProto {
+    #[prost(message, repeated, tag = "1")]
+    pub dim: Vec<Dimension>,
+}
+
+/// `TensorShapeProto.Dimension`: a fixed size or a named one (the batch).
+#[derive(Clone, PartialEq, prost::Message)]
+pub struct Dimension {
+    #[prost(oneof = "DimensionValue", tags = "1, 2")]
+    pub value: Option<DimensionValue>,
+}
+
+#[derive(Clone, PartialEq, prost::Oneof)]
+pub enum DimensionValue {
+    #[prost(int64, tag = "1")]
+    DimValue(i64),
+    #[prost(string, tag = "2")]
+    DimParam(String),
+}
+
+impl ModelProto {
+    /// Signs the model: the integrity digest of everything else ([`crate::digest`]) as its last
+    /// metadata property, in place of any earlier one. What the exporter does last, and what a
+    /// test does after changing a file on purpose.
+    pub fn sign(&mut self) {
+        use prost::Message;
+        self.metadata_props.retain(|e| e.key != crate::keys::DIGEST);
+        let digest = crate::digest(&self.encode_to_vec()).expect("prost writes well-formed messages");
+        self.metadata_props.push(StringStringEntryProto { key: crate::keys::DIGEST.into(), value: digest });
+    }
+}
+
+impl NodeProto {
+    pub fn attribute(&self, name: &str) -> Option<&AttributeProto> {
+        self.attribute.iter().find(|a| a.name == name)
+    }
+
+    /// Whether the node has attribute `name`, of any type.
+    pub fn has(&self, name: &str) -> bool {
+        self.attribute(name).is_some()
+    }
+
+    /// Integer attribute `name`, or `default` when absent.
+    pub fn int(&self, name: &str, default: i64) -> i64 {
+        self.attribute(name).map_or(default, |a| a.i)
+    }
+
+    /// Float attribute `name`, or `default` when absent.
+    pub fn float(&self, name: &str, default: f32) -> f32 {
+        self.attribute(name).map_or(default, |a| a.f)
+    }
+
+    pub fn ints(&self, name: &str) -> Option<&[i64]> {
+        self.attribute(name).map(|a| a.ints.as_slice())
+    }
+
+    /// The node's operator, if pvt3 writes it.
+    pub fn op(&self) -> Option<Op> {
+        Op::from_name(&self.op_type)
+    }
+}
+
+macro_rules! ops {
+    ($($(#[$doc:meta])* $op:ident = $name:literal,)*) => {
+        /// The ONNX operators (opset 17, default domain) a pvt3 file holds: the exporter writes
+        /// nothing else and the runtime wires each of them, matching this enum exhaustively.
+        #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+        pub enum Op {
+            $($(#[$doc])* $op,)*
+        }
+
+        impl Op {
+            pub const ALL: &'static [Op] = &[$(Op::$op,)*];
+
+            /// The operator's ONNX name (`NodeProto.op_type`).
+            pub fn name(self) -> &'static str {
+                match self {
+                    $(Op::$op => $name,)*
+                }
+            }
+
+            pub fn from_name(name: &str) -> Option<Self> {
+                match name {
+                    $($name => Some(Op::$op),)*
+                    _ => None,
+                }
+            }
+        }
+    };
+}
+
+ops! {
+    Add = "Add",
+    Concat = "Concat",
+    /// The spectral head's transform (a forward, two-sided transform of a real signal).
+    Dft = "DFT",
+    Div = "Div",
+    Erf = "Erf",
+    Exp = "Exp",
+    Expand = "Expand",
+    Gather = "Gather",
+    Identity = "Identity",
+    LayerNormalization = "LayerNormalization",
+    Log = "Log",
+    MatMul = "MatMul",
+    Max = "Max",
+    Mul = "Mul",
+    ReduceMean = "ReduceMean",
+    ReduceSum = "ReduceSum",
+    Reshape = "Reshape",
+    Shape = "Shape",
+    Slice = "Slice",
+    Softmax = "Softmax",
+    Sqrt = "Sqrt",
+    Sub = "Sub",
+    Transpose = "Transpose",
+}
+
+impl std::fmt::Display for Op {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use prost::Message;
+
+    #[test]
+    fn every_operator_reads_back_by_its_name() {
+        assert_eq!(Op::ALL.len(), 23);
+        for op in Op::ALL {
+            assert_eq!(Op::from_name(op.name()), Some(*op));
+        }
+        assert_eq!(Op::from_name("Conv"), None);
+    }
+
+    #[test]
+    fn a_model_round_trips_through_its_bytes() {
+        let node = NodeProto {
+            input: vec!["x".into()],
+            output: vec!["y".into()],
+            name: "Softmax_0".into(),
+            op_type: Op::Softmax.name().into(),
+            attribute: vec![int("axis", -1), ints("perm", &[1, 0]), float("epsilon", 1e-5)],
+            domain: String::new(),
+        };
+        let dim = |v| Dimension { value: Some(v) };
+        let info = ValueInfoProto {
+            name: "x".into(),
+            r#type: Some(TypeProto {
+                tensor_type: Some(TensorTypeProto {
+                    elem_type: DataType::Float as i32,
+                    shape: Some(TensorShapeProto {
+                        dim: vec![dim(DimensionValue::DimParam("batch".into())), dim(DimensionValue::DimValue(3))],
+                    }),
+                }),
+            }),
+        };
+        let model = ModelProto {
+            ir_version: 8,
+            opset_import: vec![OperatorSetIdProto { domain: String::new(), version: 17 }],
+            producer_name: "pvt3".into(),
+            producer_version: "0".into(),
+            graph: Some(GraphProto {
+                node: vec![node],
+                name: "g".into(),
+                initializer: vec![TensorProto {
+                    dims: vec![2],
+                    data_type: DataType::Int64 as i32,
+                    int64_data: vec![4, 5],
+                    ..Default::default()
+                }],
+                input: vec![info.clone()],
+                output: vec![info],
+            }),
+            metadata_props: vec![StringStringEntryProto { key: "k".into(), value: "v".into() }],
+        };
+        let back = ModelProto::decode(&model.encode_to_vec()[..]).unwrap();
+        assert_eq!(back, model);
+        let node = &back.graph.unwrap().node[0];
+        assert_eq!(
+            (node.op(), node.int("axis", 0), node.ints("perm"), node.float("epsilon", 0.0)),
+            (Some(Op::Softmax), -1, Some(&[1, 0][..]), 1e-5)
+        );
+        assert!(!node.has("keepdims"));
+    }
+}
