@@ -8,6 +8,8 @@
 use candle_core::{Result, Tensor, D};
 use candle_nn::{linear, Init, Linear, Module, VarBuilder};
 
+use pvt3_spec::names;
+
 use crate::Config;
 
 #[derive(Clone, Debug)]
@@ -25,9 +27,9 @@ impl Attention {
     pub fn new(cfg: &Config, vb: VarBuilder) -> Result<Self> {
         let inner = cfg.inner_dim();
         Ok(Self {
-            qkv: vb.pp("qkv").get_with_hints((3 * inner, cfg.dim), "weight", candle_nn::init::DEFAULT_KAIMING_NORMAL)?,
-            out: linear(inner, cfg.dim, vb.pp("out"))?,
-            channel_mask: vb.get_with_hints(inner, "channel_mask", Init::Const(1.0))?,
+            qkv: vb.pp(names::QKV).get_with_hints((3 * inner, cfg.dim), names::WEIGHT, candle_nn::init::DEFAULT_KAIMING_NORMAL)?,
+            out: linear(inner, cfg.dim, vb.pp(names::OUT))?,
+            channel_mask: vb.get_with_hints(inner, names::CHANNEL_MASK, Init::Const(1.0))?,
             heads: cfg.heads,
             dim_head: cfg.dim_head,
             scale: (cfg.dim_head as f64).powf(-0.5),

@@ -5,6 +5,8 @@
 use candle_core::{Result, Tensor};
 use candle_nn::{linear, Init, Linear, Module, VarBuilder};
 
+use pvt3_spec::names;
+
 use crate::Config;
 
 #[derive(Clone, Debug)]
@@ -17,12 +19,12 @@ pub struct FeedForward {
 
 impl FeedForward {
     pub fn new(cfg: &Config, vb: VarBuilder) -> Result<Self> {
-        let fc2 = linear(cfg.mlp_dim, cfg.dim, vb.pp("fc2"))?;
+        let fc2 = linear(cfg.mlp_dim, cfg.dim, vb.pp(names::FC2))?;
         Ok(Self {
-            fc1: linear(cfg.dim, cfg.mlp_dim, vb.pp("fc1"))?,
+            fc1: linear(cfg.dim, cfg.mlp_dim, vb.pp(names::FC1))?,
             fc2_weight: fc2.weight().clone(),
             fc2_bias: fc2.bias().expect("linear has a bias").clone(),
-            channel_mask: vb.get_with_hints(cfg.mlp_dim, "channel_mask", Init::Const(1.0))?,
+            channel_mask: vb.get_with_hints(cfg.mlp_dim, names::CHANNEL_MASK, Init::Const(1.0))?,
         })
     }
 

@@ -5,6 +5,8 @@ use candle_core::{Result, Tensor};
 use candle_nn::{linear, Linear, Module, VarBuilder};
 
 use crate::layer_norm::LayerNorm;
+use pvt3_spec::names;
+
 use crate::Config;
 
 #[derive(Clone, Debug)]
@@ -17,8 +19,8 @@ impl Head {
     /// `vb` is the model's root: the head's variables sit beside the model's own.
     pub fn new(cfg: &Config, vb: VarBuilder) -> Result<Self> {
         Ok(Self {
-            norm: LayerNorm::new(cfg.dim, cfg.layer_norm_eps, vb.pp("head_norm"))?,
-            linear: linear(cfg.dim, cfg.classes, vb.pp("head"))?,
+            norm: LayerNorm::new(cfg.dim, cfg.layer_norm_eps, vb.pp(names::HEAD_NORM))?,
+            linear: linear(cfg.dim, cfg.classes, vb.pp(names::HEAD))?,
         })
     }
 

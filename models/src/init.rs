@@ -7,6 +7,8 @@
 use candle_core::{DType, Device, Result, Tensor};
 use candle_nn::{VarBuilder, VarMap};
 
+use pvt3_spec::names::{self, Role};
+
 use crate::{Config, Rng};
 
 /// A model built by `new` on the CPU with its variables in a new [`VarMap`], seeded by `seed`.
@@ -27,27 +29,22 @@ pub fn init_weights(varmap: &VarMap, seed: u64) -> Result<()> {
         let var = &vars[name];
         let shape = var.shape().clone();
         let n = shape.elem_count();
-        let values: Vec<f32> = if name.ends_with("mask") || is_norm(name, "weight") || name == "spectral.scale" {
-            vec![1.0; n]
-        } else if is_norm(name, "bias") || name == "spectral.shift" {
-            vec![0.0; n]
-        } else if name == "pos_embed" || name.ends_with("cls") {
-            (0..n).map(|_| 0.02 * rng.normal()).collect()
-        } else {
-            let (layer, leaf) = name.rsplit_once('.').unwrap_or(("", name));
-            let fan_in = if leaf.ends_with("_l0") {
-                vars[&format!("{layer}.weight_hh_l0")].dims()[1]
-            } else {
-                vars[&format!("{layer}.weight")].dims()[1..].iter().product()
-            };
-            let bound = 1.0 / (fan_in as f32).sqrt();
-            (0..n).map(|_| bound * (2.0 * rng.uniform() - 1.0)).collect()
+        let values: Vec<f32> = match Role::of(name, shape.rank()) {
+            Role::Mask | Role::NormScale | Role::StandardScale => vec![1.0; n],
+            Role::NormShift | Role::StandardShift => vec![0.0; n],
+            Role::Embedding => (0..n).map(|_| 0.02 * rng.normal()).collect(),
+            Role::Matrix | Role::Layer => {
+                let (layer, leaf) = name.rsplit_once('.').unwrap_or(("", name));
+                let fan_in = if names::LSTM.contains(&leaf) {
+                    vars[&names::join(&[layer, names::WEIGHT_HH])].dims()[1]
+                } else {
+                    vars[&names::join(&[layer, names::WEIGHT])].dims()[1..].iter().product()
+                };
+                let bound = 1.0 / (fan_in as f32).sqrt();
+                (0..n).map(|_| bound * (2.0 * rng.uniform() - 1.0)).collect()
+            }
         };
         var.set(&Tensor::from_vec(values, shape, var.device())?)?;
     }
     Ok(())
-}
-
-fn is_norm(name: &str, leaf: &str) -> bool {
-    name.strip_suffix(leaf).is_some_and(|layer| layer.ends_with("norm."))
 }

@@ -3,6 +3,7 @@
 
 use candle_core::{Result, Tensor, D};
 use candle_nn::{Init, VarBuilder};
+use pvt3_spec::names;
 
 #[derive(Clone, Debug)]
 pub struct LayerNorm {
@@ -13,8 +14,8 @@ pub struct LayerNorm {
 
 impl LayerNorm {
     pub fn new(dim: usize, eps: f64, vb: VarBuilder) -> Result<Self> {
-        let weight = vb.get_with_hints(dim, "weight", Init::Const(1.0))?;
-        let bias = vb.get_with_hints(dim, "bias", Init::Const(0.0))?;
+        let weight = vb.get_with_hints(dim, names::WEIGHT, Init::Const(1.0))?;
+        let bias = vb.get_with_hints(dim, names::BIAS, Init::Const(0.0))?;
         Ok(Self { weight, bias, eps })
     }
 

@@ -5,6 +5,7 @@
 
 use candle_core::{Result, Tensor, D};
 use candle_nn::VarBuilder;
+use pvt3_spec::names;
 
 #[derive(Clone, Debug)]
 pub struct Lstm {
@@ -18,10 +19,10 @@ pub struct Lstm {
 impl Lstm {
     pub fn new(input: usize, hidden: usize, vb: VarBuilder) -> Result<Self> {
         let init = candle_nn::init::DEFAULT_KAIMING_UNIFORM;
-        let w_ih = vb.get_with_hints((4 * hidden, input), "weight_ih_l0", init)?;
-        let w_hh = vb.get_with_hints((4 * hidden, hidden), "weight_hh_l0", init)?;
-        let b_ih = vb.get_with_hints(4 * hidden, "bias_ih_l0", init)?;
-        let b_hh = vb.get_with_hints(4 * hidden, "bias_hh_l0", init)?;
+        let w_ih = vb.get_with_hints((4 * hidden, input), names::WEIGHT_IH, init)?;
+        let w_hh = vb.get_with_hints((4 * hidden, hidden), names::WEIGHT_HH, init)?;
+        let b_ih = vb.get_with_hints(4 * hidden, names::BIAS_IH, init)?;
+        let b_hh = vb.get_with_hints(4 * hidden, names::BIAS_HH, init)?;
         Ok(Self { w_ih, w_hh, b_ih, b_hh, hidden })
     }
 

@@ -9,6 +9,8 @@
 use candle_core::{Tensor, D};
 use candle_nn::{linear, Init, Linear, Module, VarBuilder, VarMap};
 
+use pvt3_spec::names;
+
 use crate::dropout::Dropout;
 use crate::fused_block::pack;
 use crate::fused_embed::{EmbedDims, EmbedOp};
@@ -43,13 +45,13 @@ impl Pvt3 {
         let (t, n, d) = (cfg.time_tokens(), cfg.num_patches(), cfg.dim);
         let small = Init::Randn { mean: 0.0, stdev: 0.02 };
         Ok(Self {
-            patch_embed: linear(cfg.patch_dim(), d, vb.pp("patch_embed"))?,
-            frame_mask: vb.get_with_hints(t, "frame_mask", Init::Const(1.0))?,
-            pos_embed: vb.get_with_hints((1, t, n + 1, d), "pos_embed", small)?,
-            space_cls: vb.get_with_hints((1, 1, d), "space_cls", small)?,
-            temporal_cls: vb.get_with_hints((1, 1, d), "temporal_cls", small)?,
-            space: Transformer::new(cfg, cfg.space_depth, vb.pp("space"))?,
-            temporal: Transformer::new(cfg, cfg.time_depth, vb.pp("temporal"))?,
+            patch_embed: linear(cfg.patch_dim(), d, vb.pp(names::PATCH_EMBED))?,
+            frame_mask: vb.get_with_hints(t, names::FRAME_MASK, Init::Const(1.0))?,
+            pos_embed: vb.get_with_hints((1, t, n + 1, d), names::POS_EMBED, small)?,
+            space_cls: vb.get_with_hints((1, 1, d), names::SPACE_CLS, small)?,
+            temporal_cls: vb.get_with_hints((1, 1, d), names::TEMPORAL_CLS, small)?,
+            space: Transformer::new(cfg, cfg.space_depth, vb.pp(names::SPACE))?,
+            temporal: Transformer::new(cfg, cfg.time_depth, vb.pp(names::TEMPORAL))?,
             head: Head::new(cfg, vb.clone())?,
             spectrum: if cfg.spectral_bands > 0 { Some(Spectrum::new(cfg, vb.clone())?) } else { None },
             dropout: Dropout::new(cfg.dropout),

@@ -9,6 +9,7 @@
 
 use candle_core::{Module, Tensor};
 use candle_nn::{linear, Linear, VarBuilder, VarMap};
+use pvt3_spec::names;
 
 use crate::dropout::Dropout;
 use crate::lstm::Lstm;
@@ -39,7 +40,7 @@ impl Raec {
         let (h, l) = (cfg.rnn_hidden, cfg.latent);
         let init = candle_nn::init::DEFAULT_KAIMING_UNIFORM;
         let kernel = |vb: VarBuilder, shape: (usize, usize, usize, usize), bias: usize| -> Result<(Tensor, Tensor)> {
-            Ok((vb.get_with_hints(shape, "weight", init)?, vb.get_with_hints(bias, "bias", init)?))
+            Ok((vb.get_with_hints(shape, names::WEIGHT, init)?, vb.get_with_hints(bias, names::BIAS, init)?))
         };
         let (k, c) = ((cfg.patch_height, cfg.patch_width), cfg.channels);
         let conv =

@@ -12,6 +12,7 @@
 
 use candle_core::{DType, Device, Tensor, D};
 use candle_nn::{linear, Init, Linear, Module, VarBuilder};
+use pvt3_spec::names;
 use pvt3_spec::spectrum::{band_matrix, bins, dft_matrix, POWER_FLOOR};
 
 use crate::Config;
@@ -35,13 +36,13 @@ impl Spectrum {
     pub fn new(cfg: &Config, vb: VarBuilder) -> candle_core::Result<Self> {
         let (t, b, f) = (cfg.frames, cfg.spectral_bands, cfg.spectral_features());
         let constant = |v: Vec<f64>, shape: (usize, usize)| Tensor::from_vec(v, shape, &Device::Cpu)?.to_dtype(DType::F32);
-        let vb = vb.pp("spectral");
+        let vb = vb.pp(names::SPECTRAL);
         Ok(Self {
             dft: constant(dft_matrix(t), (t, 2 * bins(t)))?,
             bands: constant(band_matrix(t, b), (2 * bins(t), b))?,
-            scale: vb.get_with_hints(f, "scale", Init::Const(1.0))?,
-            shift: vb.get_with_hints(f, "shift", Init::Const(0.0))?,
-            linear: linear(f, cfg.classes, vb.pp("linear"))?,
+            scale: vb.get_with_hints(f, names::SCALE, Init::Const(1.0))?,
+            shift: vb.get_with_hints(f, names::SHIFT, Init::Const(0.0))?,
+            linear: linear(f, cfg.classes, vb.pp(names::LINEAR))?,
             channels: cfg.sensor_channels(),
             frames: t,
         })

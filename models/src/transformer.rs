@@ -9,6 +9,8 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use candle_core::{Result, Tensor};
 use candle_nn::VarBuilder;
 
+use pvt3_spec::names;
+
 use crate::attention::Attention;
 use crate::dropout::Dropout;
 use crate::feed_forward::FeedForward;
@@ -43,11 +45,13 @@ pub struct Block {
 
 impl Block {
     pub fn new(cfg: &Config, vb: VarBuilder) -> Result<Self> {
-        let (attn_norm, attn) = (LayerNorm::new(cfg.dim, cfg.layer_norm_eps, vb.pp("attn_norm"))?, Attention::new(cfg, vb.pp("attn"))?);
-        let (ffn_norm, ffn) = (LayerNorm::new(cfg.dim, cfg.layer_norm_eps, vb.pp("ffn_norm"))?, FeedForward::new(cfg, vb.pp("ffn"))?);
+        let (attn_norm, attn) =
+            (LayerNorm::new(cfg.dim, cfg.layer_norm_eps, vb.pp(names::ATTN_NORM))?, Attention::new(cfg, vb.pp(names::ATTN))?);
+        let (ffn_norm, ffn) =
+            (LayerNorm::new(cfg.dim, cfg.layer_norm_eps, vb.pp(names::FFN_NORM))?, FeedForward::new(cfg, vb.pp(names::FFN))?);
         let dims = BlockDims::new(cfg);
         // The modules above created the variables; these are the same ones, by name.
-        let packed = dims.parameters().into_iter().map(|(name, shape)| vb.get(shape, name)).collect::<Result<_>>()?;
+        let packed = dims.parameters().into_iter().map(|(name, shape)| vb.get(shape, &name)).collect::<Result<_>>()?;
         Ok(Self { attn_norm, attn, ffn_norm, ffn, packed, dims, dropout: Dropout::new(cfg.dropout) })
     }
 
@@ -107,8 +111,8 @@ pub struct Transformer {
 
 impl Transformer {
     pub fn new(cfg: &Config, depth: usize, vb: VarBuilder) -> Result<Self> {
-        let layers = (0..depth).map(|i| Block::new(cfg, vb.pp(format!("layers.{i}")))).collect::<Result<_>>()?;
-        let norm = LayerNorm::new(cfg.dim, cfg.layer_norm_eps, vb.pp("norm"))?;
+        let layers = (0..depth).map(|i| Block::new(cfg, vb.pp(names::LAYERS).pp(i))).collect::<Result<_>>()?;
+        let norm = LayerNorm::new(cfg.dim, cfg.layer_norm_eps, vb.pp(names::NORM))?;
         Ok(Self { layers, norm })
     }
 

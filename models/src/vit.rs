@@ -6,6 +6,8 @@
 use candle_core::Tensor;
 use candle_nn::{linear, Init, Linear, Module, VarBuilder, VarMap};
 
+use pvt3_spec::names;
+
 use crate::dropout::Dropout;
 use crate::head::Head;
 use crate::transformer::Transformer;
@@ -28,10 +30,10 @@ impl Vit {
         let (n, d) = (cfg.num_patches(), cfg.dim);
         let small = Init::Randn { mean: 0.0, stdev: 0.02 };
         Ok(Self {
-            patch_embed: linear(cfg.patch_dim(), d, vb.pp("patch_embed"))?,
-            cls: vb.get_with_hints((1, 1, d), "cls", small)?,
-            pos_embed: vb.get_with_hints((1, n + 1, d), "pos_embed", small)?,
-            transformer: Transformer::new(cfg, cfg.space_depth + cfg.time_depth, vb.pp("transformer"))?,
+            patch_embed: linear(cfg.patch_dim(), d, vb.pp(names::PATCH_EMBED))?,
+            cls: vb.get_with_hints((1, 1, d), names::CLS, small)?,
+            pos_embed: vb.get_with_hints((1, n + 1, d), names::POS_EMBED, small)?,
+            transformer: Transformer::new(cfg, cfg.space_depth + cfg.time_depth, vb.pp(names::TRANSFORMER))?,
             head: Head::new(cfg, vb.clone())?,
             dropout: Dropout::new(cfg.dropout),
             cfg: cfg.clone(),

@@ -16,6 +16,10 @@
 //! can depend on it alone.
 
 use crate::baked::{BakedAttention, BakedBlock, BakedFeedForward, BakedPvt3, BakedSpectrum, BakedTransformer, Dense, Norm};
+use crate::names::{
+    join, layer, spectral, ATTN, ATTN_NORM, BIAS, CHANNEL_MASK, FC1, FC2, FFN, FFN_NORM, FRAME_MASK, HEAD, HEAD_NORM, LINEAR, NORM, OUT,
+    PATCH_EMBED, POS_EMBED, QKV, SCALE, SHIFT, SPACE, SPACE_CLS, TEMPORAL, TEMPORAL_CLS, WEIGHT,
+};
 use crate::reference;
 use crate::weights::Tensors;
 use crate::{Config, Error, Result};
@@ -34,18 +38,15 @@ impl Source<'_> {
     }
 
     fn norm(&self, prefix: &str, dim: usize) -> Result<Norm> {
-        Ok(Norm {
-            weight: self.get(&format!("{prefix}.weight"), &[dim])?.to_vec(),
-            bias: self.get(&format!("{prefix}.bias"), &[dim])?.to_vec(),
-        })
+        Ok(Norm { weight: self.get(&join(&[prefix, WEIGHT]), &[dim])?.to_vec(), bias: self.get(&join(&[prefix, BIAS]), &[dim])?.to_vec() })
     }
 
     fn dense(&self, prefix: &str, rows: usize, cols: usize, bias: bool) -> Result<Dense> {
         Ok(Dense {
             rows,
             cols,
-            weight: self.get(&format!("{prefix}.weight"), &[rows, cols])?.to_vec(),
-            bias: if bias { Some(self.get(&format!("{prefix}.bias"), &[rows])?.to_vec()) } else { None },
+            weight: self.get(&join(&[prefix, WEIGHT]), &[rows, cols])?.to_vec(),
+            bias: if bias { Some(self.get(&join(&[prefix, BIAS]), &[rows])?.to_vec()) } else { None },
         })
     }
 }
@@ -64,8 +65,8 @@ fn take_cols(w: &[f32], rows: usize, cols: usize, keep: &[usize], scale: impl Fn
 fn bake_attention(src: &Source, p: &str, cfg: &Config) -> Result<BakedAttention> {
     let (d, h, dh) = (cfg.dim, cfg.heads, cfg.dim_head);
     let inner = h * dh;
-    let mask = src.get(&format!("{p}.channel_mask"), &[inner])?;
-    let qkv = src.get(&format!("{p}.qkv.weight"), &[3 * inner, d])?;
+    let mask = src.get(&join(&[p, CHANNEL_MASK]), &[inner])?;
+    let qkv = src.get(&join(&[p, QKV, WEIGHT]), &[3 * inner, d])?;
     // The same number of channels per head: the non-zero ones, topped up with zero ones.
     let per_head: Vec<Vec<usize>> = (0..h).map(|head| (head * dh..(head + 1) * dh).filter(|&c| mask[c] != 0.0).collect()).collect();
     let head_dim = per_head.iter().map(Vec::len).max().unwrap_or(0);
@@ -83,7 +84,7 @@ fn bake_attention(src: &Source, p: &str, cfg: &Config) -> Result<BakedAttention>
         weight: take_rows(&qkv[i * inner * d..(i + 1) * inner * d], d, &keep, |c| mask[c]),
         bias: None,
     };
-    let out_w = src.get(&format!("{p}.out.weight"), &[d, inner])?;
+    let out_w = src.get(&join(&[p, OUT, WEIGHT]), &[d, inner])?;
     Ok(BakedAttention {
         heads: h,
         head_dim,
@@ -95,17 +96,17 @@ fn bake_attention(src: &Source, p: &str, cfg: &Config) -> Result<BakedAttention>
             rows: d,
             cols: keep.len(),
             weight: take_cols(out_w, d, inner, &keep, |_| 1.0),
-            bias: Some(src.get(&format!("{p}.out.bias"), &[d])?.to_vec()),
+            bias: Some(src.get(&join(&[p, OUT, BIAS]), &[d])?.to_vec()),
         },
     })
 }
 
 fn bake_feed_forward(src: &Source, p: &str, cfg: &Config) -> Result<BakedFeedForward> {
     let (d, m) = (cfg.dim, cfg.mlp_dim);
-    let mask = src.get(&format!("{p}.channel_mask"), &[m])?;
+    let mask = src.get(&join(&[p, CHANNEL_MASK]), &[m])?;
     let keep: Vec<usize> = (0..m).filter(|&u| mask[u] != 0.0).collect();
-    let fc1 = src.dense(&format!("{p}.fc1"), m, d, true)?;
-    let fc2 = src.dense(&format!("{p}.fc2"), d, m, true)?;
+    let fc1 = src.dense(&join(&[p, FC1]), m, d, true)?;
+    let fc2 = src.dense(&join(&[p, FC2]), d, m, true)?;
     let fc1_bias = fc1.bias.as_deref().expect("fc1 has a bias");
     Ok(BakedFeedForward {
         fc1: Dense {
@@ -121,16 +122,16 @@ fn bake_feed_forward(src: &Source, p: &str, cfg: &Config) -> Result<BakedFeedFor
 fn bake_transformer(src: &Source, p: &str, depth: usize, cfg: &Config) -> Result<BakedTransformer> {
     let layers = (0..depth)
         .map(|i| {
-            let l = format!("{p}.layers.{i}");
+            let l = layer(p, i);
             Ok(BakedBlock {
-                attn_norm: src.norm(&format!("{l}.attn_norm"), cfg.dim)?,
-                attn: bake_attention(src, &format!("{l}.attn"), cfg)?,
-                ffn_norm: src.norm(&format!("{l}.ffn_norm"), cfg.dim)?,
-                ffn: bake_feed_forward(src, &format!("{l}.ffn"), cfg)?,
+                attn_norm: src.norm(&join(&[&l, ATTN_NORM]), cfg.dim)?,
+                attn: bake_attention(src, &join(&[&l, ATTN]), cfg)?,
+                ffn_norm: src.norm(&join(&[&l, FFN_NORM]), cfg.dim)?,
+                ffn: bake_feed_forward(src, &join(&[&l, FFN]), cfg)?,
             })
         })
         .collect::<Result<_>>()?;
-    Ok(BakedTransformer { layers, norm: src.norm(&format!("{p}.norm"), cfg.dim)? })
+    Ok(BakedTransformer { layers, norm: src.norm(&join(&[p, NORM]), cfg.dim)? })
 }
 
 /// Bakes the masked model `cfg` with weights `tensors` (the checkpoint names).
@@ -139,12 +140,12 @@ pub fn bake(cfg: &Config, tensors: &Tensors) -> Result<BakedPvt3> {
     cfg.require_pvt3("baking (and so ONNX export)")?;
     let src = Source { tensors };
     let (t, n, d) = (cfg.time_tokens(), cfg.num_patches(), cfg.dim);
-    let frame_mask = src.get("frame_mask", &[t])?;
+    let frame_mask = src.get(FRAME_MASK, &[t])?;
     let kept_tokens: Vec<usize> = (0..t).filter(|&k| frame_mask[k] != 0.0).collect();
-    let pos = src.get("pos_embed", &[1, t, n + 1, d])?;
+    let pos = src.get(POS_EMBED, &[1, t, n + 1, d])?;
     let row = (n + 1) * d;
-    let space_cls = src.get("space_cls", &[1, 1, d])?.to_vec();
-    let space = bake_transformer(&src, "space", cfg.space_depth, cfg)?;
+    let space_cls = src.get(SPACE_CLS, &[1, 1, d])?.to_vec();
+    let space = bake_transformer(&src, SPACE, cfg.space_depth, cfg)?;
     // A pruned token's spatial input is the CLS token and the position embedding alone.
     let mut pruned_encodings = vec![0f32; t * d];
     for k in (0..t).filter(|k| frame_mask[*k] == 0.0) {
@@ -155,17 +156,17 @@ pub fn bake(cfg: &Config, tensors: &Tensors) -> Result<BakedPvt3> {
     }
     Ok(BakedPvt3 {
         config: cfg.clone(),
-        patch_embed: src.dense("patch_embed", d, cfg.patch_dim(), true)?,
+        patch_embed: src.dense(PATCH_EMBED, d, cfg.patch_dim(), true)?,
         token_scale: kept_tokens.iter().map(|&k| frame_mask[k]).collect(),
         pos_embed: kept_tokens.iter().flat_map(|&k| pos[k * row..(k + 1) * row].iter().copied()).collect(),
         kept_tokens,
         space_cls,
-        temporal_cls: src.get("temporal_cls", &[1, 1, d])?.to_vec(),
+        temporal_cls: src.get(TEMPORAL_CLS, &[1, 1, d])?.to_vec(),
         pruned_encodings,
         space,
-        temporal: bake_transformer(&src, "temporal", cfg.time_depth, cfg)?,
-        head_norm: src.norm("head_norm", d)?,
-        head: src.dense("head", cfg.classes, d, true)?,
+        temporal: bake_transformer(&src, TEMPORAL, cfg.time_depth, cfg)?,
+        head_norm: src.norm(HEAD_NORM, d)?,
+        head: src.dense(HEAD, cfg.classes, d, true)?,
         spectrum: bake_spectrum(&src, cfg)?,
     })
 }
@@ -176,8 +177,8 @@ fn bake_spectrum(src: &Source, cfg: &Config) -> Result<Option<BakedSpectrum>> {
         return Ok(None);
     }
     Ok(Some(BakedSpectrum {
-        scale: src.get("spectral.scale", &[f])?.to_vec(),
-        shift: src.get("spectral.shift", &[f])?.to_vec(),
-        linear: src.dense("spectral.linear", cfg.classes, f, true)?,
+        scale: src.get(&spectral(SCALE), &[f])?.to_vec(),
+        shift: src.get(&spectral(SHIFT), &[f])?.to_vec(),
+        linear: src.dense(&spectral(LINEAR), cfg.classes, f, true)?,
     }))
 }

@@ -9,6 +9,7 @@ pub mod bake;
 pub mod baked;
 pub mod config;
 pub mod error;
+pub mod names;
 pub mod normalization;
 pub mod prune;
 pub mod reference;

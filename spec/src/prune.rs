@@ -9,6 +9,7 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 
+use crate::names::{self, Role};
 use crate::weights::Tensors;
 use crate::{Config, Error, Result};
 
@@ -37,20 +38,14 @@ pub struct PruneSpec {
     pub weights: f64,
 }
 
-/// A linear layer's weight matrix, by its variable's name and rank: what weight decay and
-/// random pruning apply to.
-pub fn is_weight_matrix(name: &str, rank: usize) -> bool {
-    name.ends_with(".weight") && rank == 2
-}
-
-/// Zeroes `percent` % of the entries of every weight matrix in `tensors` ([`is_weight_matrix`]),
+/// Zeroes `percent` % of the entries of every weight matrix in `tensors` ([`Role::Matrix`]),
 /// chosen at random by `seed`: the exact count in each matrix, as PyTorch's `random_unstructured`
 /// does.
 pub fn random_weights(tensors: &mut Tensors, percent: f64, seed: u64) -> Result<()> {
     check_percent("weights", percent)?;
     let mut rng = crate::Rng::new(seed);
     for (name, (shape, values)) in tensors.iter_mut() {
-        if !is_weight_matrix(name, shape.len()) {
+        if Role::of(name, shape.len()) != Role::Matrix {
             continue;
         }
         let mut order: Vec<usize> = (0..values.len()).collect();
@@ -76,10 +71,11 @@ pub type Plan = BTreeMap<String, Vec<bool>>;
 /// The channel masks of a configuration: (name, groups), a group being one head or one FFN.
 fn channel_masks(cfg: &Config) -> Vec<(String, usize)> {
     let mut masks = Vec::new();
-    for (prefix, depth) in [("space", cfg.space_depth), ("temporal", cfg.time_depth)] {
+    for (stage, depth) in names::stages(cfg) {
         for i in 0..depth {
-            masks.push((format!("{prefix}.layers.{i}.attn.channel_mask"), cfg.heads));
-            masks.push((format!("{prefix}.layers.{i}.ffn.channel_mask"), 1));
+            let layer = names::layer(stage, i);
+            masks.push((names::join(&[&layer, names::ATTN, names::CHANNEL_MASK]), cfg.heads));
+            masks.push((names::join(&[&layer, names::FFN, names::CHANNEL_MASK]), 1));
         }
     }
     masks
@@ -134,8 +130,8 @@ pub fn plan(cfg: &Config, tensors: &Tensors, spec: &PruneSpec) -> Result<Plan> {
             }
         }
     }
-    let frames = get("frame_mask")?;
-    plan.insert("frame_mask".into(), keep_largest(frames, share(frames.len(), spec.frames)));
+    let frames = get(names::FRAME_MASK)?;
+    plan.insert(names::FRAME_MASK.into(), keep_largest(frames, share(frames.len(), spec.frames)));
     Ok(plan)
 }
 

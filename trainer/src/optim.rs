@@ -12,13 +12,14 @@ use std::path::Path;
 use candle_core::backprop::GradStore;
 use candle_core::{Device, Tensor, Var};
 use candle_nn::VarMap;
+use pvt3_spec::names::Role;
 
 use crate::Result;
 
-/// A linear layer's weight matrix ([`pvt3_spec::prune::is_weight_matrix`]): what weight decay
-/// and random pruning apply to.
+/// A linear layer's weight matrix ([`Role::Matrix`]): what weight decay and random pruning
+/// apply to.
 pub fn is_weight_matrix(name: &str, var: &Var) -> bool {
-    pvt3_spec::prune::is_weight_matrix(name, var.rank())
+    Role::of(name, var.rank()) == Role::Matrix
 }
 
 pub struct AdamW {

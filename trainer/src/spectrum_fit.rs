@@ -5,6 +5,7 @@
 use candle_core::{Device, Tensor};
 use candle_nn::VarMap;
 use pvt3_models::Classifier;
+use pvt3_spec::names;
 
 use crate::evaluate::Samples;
 use crate::Result;
@@ -27,10 +28,8 @@ pub fn fit(model: &Classifier, varmap: &VarMap, train: &Samples) -> Result<()> {
     let scale = (std + 1e-6)?.recip()?;
     let shift = (mean.neg()? * &scale)?;
     let vars = varmap.data().lock().expect("the variable map's lock");
-    for (name, value) in [("spectral.scale", scale), ("spectral.shift", shift)] {
-        let var = vars
-            .get(name)
-            .ok_or_else(|| pvt3_spec::Error::MissingTensor { task: "fit the spectral standardisation", name: name.into() })?;
+    for (name, value) in [(names::spectral(names::SCALE), scale), (names::spectral(names::SHIFT), shift)] {
+        let var = vars.get(&name).ok_or_else(|| pvt3_spec::Error::MissingTensor { task: "fit the spectral standardisation", name })?;
         var.set(&value.to_dtype(candle_core::DType::F32)?.to_device(&Device::Cpu)?)?;
     }
     Ok(())

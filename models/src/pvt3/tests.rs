@@ -80,3 +80,25 @@ fn gelsight_preset_runs_on_rgb_video() {
     assert_eq!(model.forward(&x, None).unwrap().dims(), &[1, 5]);
     assert_eq!(model.patchify(&x).unwrap().dims(), &[1, 25, 48, 4800]);
 }
+
+/// A fresh PVT³ (several heads and tubelets, a spectral head) has exactly the variables of the
+/// table of names (`pvt3_spec::names::pvt3_variables`), with its shapes: the modules, baking,
+/// pruning and the fused pack all name them from there.
+#[test]
+fn a_fresh_model_has_exactly_the_variables_of_the_table() {
+    let configs = [
+        Config::icub20(),
+        Config { heads: 2, dim_head: 8, tubelet: 3, ..Config::icub20() },
+        Config { spectral_bands: 16, ..Config::biotac20() },
+    ];
+    for cfg in configs {
+        let (_, varmap) = Pvt3::init(&cfg, 1).unwrap();
+        let mut got: Vec<(String, Vec<usize>)> =
+            varmap.data().lock().unwrap().iter().map(|(n, v)| (n.clone(), v.dims().to_vec())).collect();
+        let mut table: Vec<(String, Vec<usize>)> = pvt3_spec::names::pvt3_variables(&cfg).into_iter().map(|v| (v.name, v.shape)).collect();
+        got.sort();
+        table.sort();
+        assert!(!table.is_empty());
+        assert_eq!(got, table, "{cfg:?}");
+    }
+}

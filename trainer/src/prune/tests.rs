@@ -60,7 +60,7 @@ fn randomly_pruned_weights_stay_zero_through_fine_tuning() {
     let mut matrices = 0;
     for (name, (shape, values)) in &after {
         let zeros = values.iter().filter(|v| **v == 0.0).count();
-        if pvt3_spec::prune::is_weight_matrix(name, shape.len()) {
+        if pvt3_spec::names::Role::of(name, shape.len()) == pvt3_spec::names::Role::Matrix {
             matrices += 1;
             assert_eq!(zeros, (values.len() as f64 * 0.25).round() as usize, "{name}");
             let moved = values.iter().zip(&before[name].1).filter(|(a, b)| **a != 0.0 && a != b).count();
