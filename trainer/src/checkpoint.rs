@@ -1,5 +1,6 @@
-//! Checkpoints are directories: `config.json`, `weights.safetensors`, `normalization.json`,
-//! `classes.json` and `provenance.json`. A directory is written under a temporary name and swapped
+//! Checkpoints are directories of files named in [`crate::run_dir::Checkpoint`]: configuration,
+//! weights, normalisation, class names and provenance (and in a run's `last/`, what resuming
+//! needs besides). A directory is written under a temporary name and swapped
 //! in by renames, so a crash never leaves a half-written checkpoint; if it strikes between the two
 //! renames, the previous version is still found under `NAME.old`.
 
@@ -13,6 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::normalization::Normalization;
 use crate::options::TrainOptions;
+use crate::run_dir::{Checkpoint, Run};
 use crate::{Error, Result};
 
 /// Where a trained model came from.
@@ -153,11 +155,12 @@ pub fn existing_dir(target: &Path) -> Option<PathBuf> {
 
 /// Writes the checkpoint files into an existing directory.
 pub fn write_files(dir: &Path, varmap: &VarMap, meta: &Meta) -> Result<()> {
-    write_json(&dir.join("config.json"), &meta.config)?;
-    write_json(&dir.join("normalization.json"), &meta.normalization)?;
-    write_json(&dir.join("classes.json"), &meta.classes)?;
-    write_json(&dir.join("provenance.json"), &meta.provenance)?;
-    save_weights(varmap, &dir.join("weights.safetensors"))?;
+    let files = Checkpoint(dir);
+    write_json(&files.config(), &meta.config)?;
+    write_json(&files.normalization(), &meta.normalization)?;
+    write_json(&files.classes(), &meta.classes)?;
+    write_json(&files.provenance(), &meta.provenance)?;
+    save_weights(varmap, &files.weights())?;
     Ok(())
 }
 
@@ -169,11 +172,12 @@ pub fn save(dir: &Path, varmap: &VarMap, meta: &Meta) -> Result<()> {
 /// Reads the metadata of a checkpoint directory (a run directory is read through its `model/`).
 pub fn load_meta(path: &Path) -> Result<(PathBuf, Meta)> {
     let dir = resolve(path)?;
-    let config: Config = read_json(&dir.join("config.json"))?;
+    let files = Checkpoint(&dir);
+    let config: Config = read_json(&files.config())?;
     config.validate().map_err(|e| checkpoint_error(&dir, e.to_string()))?;
-    let normalization: Normalization = read_json(&dir.join("normalization.json"))?;
-    let classes: Vec<String> = read_json(&dir.join("classes.json"))?;
-    let provenance: Provenance = read_json(&dir.join("provenance.json"))?;
+    let normalization: Normalization = read_json(&files.normalization())?;
+    let classes: Vec<String> = read_json(&files.classes())?;
+    let provenance: Provenance = read_json(&files.provenance())?;
     let channels = config.sample_shape().iter().product::<usize>() / config.frames;
     if normalization.mean.len() != channels || normalization.std.len() != channels || normalization.frames != config.frames {
         return Err(checkpoint_error(
@@ -194,16 +198,16 @@ pub fn load_meta(path: &Path) -> Result<(PathBuf, Meta)> {
 pub fn load(path: &Path) -> Result<(Meta, Classifier, VarMap)> {
     let (dir, meta) = load_meta(path)?;
     let (model, varmap) = Classifier::init(&meta.config, 0)?;
-    load_weights(&varmap, &dir.join("weights.safetensors"))?;
+    load_weights(&varmap, &Checkpoint(&dir).weights())?;
     Ok((meta, model, varmap))
 }
 
 fn resolve(path: &Path) -> Result<PathBuf> {
-    let candidates = [path.to_path_buf(), path.join("model")];
+    let candidates = [path.to_path_buf(), Run(path).model()];
     candidates
         .iter()
         .filter_map(|c| existing_dir(c))
-        .find(|d| d.join("config.json").exists())
+        .find(|d| Checkpoint(d).config().exists())
         .ok_or_else(|| checkpoint_error(path, "not a checkpoint directory (no config.json in it or in its model/)"))
 }
 

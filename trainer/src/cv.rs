@@ -17,6 +17,7 @@ use crate::anytime::Stopping;
 use crate::checkpoint::{read_json, write_json_atomically};
 use crate::data::TEST_FOLD;
 use crate::prune::{prune_and_fine_tune, PruneStage};
+use crate::run_dir::{Run, CV_SUMMARY};
 use crate::train::{train, RunResult, RunSpec};
 use crate::{Error, Result};
 
@@ -74,14 +75,14 @@ fn run_fold(spec: &RunSpec, stage: Option<&PruneStage>, dir: &Path, resume: bool
     if stage.is_some() {
         // The pruned half's directory exists from the start, so that `report` sees a run whose
         // dense half has finished as unfinished, not as a run trained without pruning.
-        let pruned = dir.join("pruned");
+        let pruned = Run(dir).pruned();
         std::fs::create_dir_all(&pruned).map_err(Error::io(&pruned))?;
     }
     let Some(dense) = train(spec, dir, resume, bar)? else {
         return Ok(None);
     };
     let pruned = match stage {
-        Some(stage) => match prune_and_fine_tune(dir, spec.data, stage, &dir.join("pruned"), resume, bar)? {
+        Some(stage) => match prune_and_fine_tune(dir, spec.data, stage, &Run(dir).pruned(), resume, bar)? {
             Some(p) => Some(p),
             None => return Ok(None),
         },
@@ -183,7 +184,7 @@ pub fn cross_validate(
     let seeds: Vec<u64> = work.iter().map(|w| w.0).collect::<std::collections::BTreeSet<_>>().into_iter().collect();
     let mut summary = summarize(spec.data.path.display().to_string(), &seeds, runs, pruned_runs, stage.cloned());
     calibrate_stopping(&mut summary, &dirs)?;
-    write_json_atomically(&out.join("cv.json"), &summary)?;
+    write_json_atomically(&out.join(CV_SUMMARY), &summary)?;
     Ok(Some(summary))
 }
 
@@ -200,7 +201,7 @@ fn calibrate_stopping(summary: &mut CvSummary, dirs: &[std::path::PathBuf]) -> R
     }
     summary.stopping = crate::cv_stopping::calibrate_together(dirs)?;
     if !summary.pruned_runs.is_empty() {
-        let pruned: Vec<_> = dirs.iter().map(|d| d.join("pruned")).collect();
+        let pruned: Vec<_> = dirs.iter().map(|d| Run(d).pruned()).collect();
         summary.pruned_stopping = crate::cv_stopping::calibrate_together(&pruned)?;
     }
     Ok(())
@@ -278,22 +279,22 @@ pub fn report(out: &Path) -> Result<CvSummary> {
     for (seed, seed_dir) in entries(out, "seed")? {
         for (fold, dir) in entries(&seed_dir, "fold")? {
             let damaged = |e: Error| refuse(format!("{} is damaged or half written ({e})", dir.display()));
-            if !dir.join("result.json").exists() {
+            if !Run(&dir).result().exists() {
                 unfinished.push(dir.display().to_string());
                 continue;
             }
-            let run: RunResult = read_json(&dir.join("result.json")).map_err(damaged)?;
+            let run: RunResult = read_json(&Run(&dir).result()).map_err(damaged)?;
             if (run.seed, run.val_fold as u64) != (seed, fold) {
                 return Err(refuse(format!("{} holds the run of seed {} fold {}", dir.display(), run.seed, run.val_fold)));
             }
-            let (_, meta) = crate::checkpoint::load_meta(&dir.join("model")).map_err(damaged)?;
-            let pruned = dir.join("pruned");
-            let (pruned_run, pruning) = match pruned.join("result.json").exists() {
+            let (_, meta) = crate::checkpoint::load_meta(&Run(&dir).model()).map_err(damaged)?;
+            let pruned = Run(&dir).pruned();
+            let (pruned_run, pruning) = match Run(&pruned).result().exists() {
                 true => {
                     let (_, pmeta) = crate::checkpoint::load_meta(&pruned).map_err(damaged)?;
                     let o = &pmeta.provenance.options;
                     let stage = pmeta.provenance.pruning.map(|spec| PruneStage { spec, epochs: o.epochs, lr: o.lr });
-                    (Some(read_json::<RunResult>(&pruned.join("result.json")).map_err(damaged)?), stage)
+                    (Some(read_json::<RunResult>(&Run(&pruned).result()).map_err(damaged)?), stage)
                 }
                 false if pruned.exists() => {
                     unfinished.push(pruned.display().to_string());
@@ -326,7 +327,7 @@ pub fn report(out: &Path) -> Result<CvSummary> {
     let mut summary = summarize(setup.data, &seeds, runs, pruned_runs, setup.pruning);
     summary.unfinished = unfinished;
     calibrate_stopping(&mut summary, &dirs)?;
-    write_json_atomically(&out.join("cv.json"), &summary)?;
+    write_json_atomically(&out.join(CV_SUMMARY), &summary)?;
     Ok(summary)
 }
 
@@ -348,7 +349,7 @@ mod tests {
             lr: 1e-3,
         };
         assert!(run_fold(&spec, Some(&stage), &dir, false, &ProgressBar::hidden()).unwrap().is_none(), "paused");
-        assert!(dir.join("pruned").is_dir());
+        assert!(Run(&dir).pruned().is_dir());
         // The dense half finished (as a job in the window would leave it): still unfinished.
         let finished = RunSpec { pause_after: None, ..spec };
         train(&finished, &dir, true, &ProgressBar::hidden()).unwrap().unwrap();

@@ -10,6 +10,7 @@ use crate::anytime::{Prefixes, Stopping};
 use crate::checkpoint::{self, write_json_atomically};
 use crate::data::Dataset;
 use crate::evaluate::Samples;
+use crate::run_dir::Checkpoint;
 use crate::Result;
 
 /// Calibrates one rule ([`Prefixes::calibrate_pooled`]) on the validation answers of the runs in
@@ -39,7 +40,7 @@ pub fn calibrate_together(dirs: &[PathBuf]) -> Result<Option<Stopping>> {
     for dir in dirs {
         let (checkpoint_dir, mut meta) = checkpoint::load_meta(dir)?;
         meta.provenance.stopping = Some(rule.clone());
-        write_json_atomically(&checkpoint_dir.join("provenance.json"), &meta.provenance)?;
+        write_json_atomically(&Checkpoint(&checkpoint_dir).provenance(), &meta.provenance)?;
     }
     Ok(Some(rule))
 }

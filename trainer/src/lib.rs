@@ -16,6 +16,7 @@ pub mod normalization;
 pub mod optim;
 pub mod options;
 pub mod prune;
+pub mod run_dir;
 pub mod schedule;
 pub mod spectrum_fit;
 pub mod stress;

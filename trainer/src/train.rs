@@ -15,6 +15,7 @@ use candle_core::{DType, Device, Tensor, Var, D};
 use candle_nn::VarMap;
 use indicatif::ProgressBar;
 use pvt3_models::{Classifier, Config, Rng};
+use pvt3_spec::names::Role;
 use pvt3_spec::prune::PruneSpec;
 use pvt3_spec::weights::Tensors;
 use serde::{Deserialize, Serialize};
@@ -25,11 +26,11 @@ use crate::data::{Dataset, Split};
 use crate::evaluate::{evaluate, Samples};
 use crate::optim::{is_weight_matrix, AdamW};
 use crate::options::TrainOptions;
+use crate::run_dir::{Checkpoint, Run};
 use crate::schedule::Schedule;
 use crate::{Error, Result};
 
 /// The weight average's state in `last/` (with `--ema`).
-const AVERAGE_FILE: &str = "average.safetensors";
 
 /// The outcome of a finished run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -185,8 +186,8 @@ impl Learner {
 }
 
 /// A selection mask (channel or frame).
-fn is_mask(name: &str, _: &Var) -> bool {
-    name.ends_with("mask")
+fn is_mask(name: &str, var: &Var) -> bool {
+    Role::of(name, var.rank()) == Role::Mask
 }
 
 /// The variables `keep` selects, in name order.
@@ -219,8 +220,9 @@ fn augment(sample: &mut [f32], frames: usize, opts: &TrainOptions, rng: &mut Rng
 /// Trains one split into `out`; with `resume`, continues the run found there. `None` means the
 /// run paused (see [`RunSpec::pause_after`]) and can be resumed.
 pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Result<Option<RunResult>> {
-    let result_path = out.join("result.json");
-    let last = out.join("last");
+    let run_dir = Run(out);
+    let result_path = run_dir.result();
+    let last = run_dir.last();
     let resumable = checkpoint::existing_dir(&last);
     if resume && result_path.exists() {
         return read_json(&result_path).map(Some);
@@ -238,7 +240,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
         let (_, meta) = checkpoint::load_meta(dir)?;
         config = meta.config;
         spec_options = meta.provenance.options;
-        state = Some((dir.clone(), read_json::<RunState>(&dir.join("state.json"))?));
+        state = Some((dir.clone(), read_json::<RunState>(&Checkpoint(dir).state())?));
     }
     let opts = &spec_options;
     config.dropout = opts.dropout;
@@ -261,19 +263,19 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
     };
     let mut run = match state {
         Some((dir, st)) => {
-            pvt3_models::weights::load_weights(&learner.varmap, &dir.join("weights.safetensors"))?;
-            learner.optimizer.load(&dir.join("optimizer.safetensors"), st.step)?;
+            pvt3_models::weights::load_weights(&learner.varmap, &Checkpoint(&dir).weights())?;
+            learner.optimizer.load(&Checkpoint(&dir).optimizer(), st.step)?;
             if let Some(average) = &mut average {
-                average.load(&dir.join(AVERAGE_FILE))?;
+                average.load(&Checkpoint(&dir).average())?;
             }
-            truncate_metrics(&out.join("metrics.jsonl"), st.epochs_done)?;
+            truncate_metrics(&run_dir.metrics(), st.epochs_done)?;
             st
         }
         None => {
             if spec.start.is_none() {
                 crate::spectrum_fit::fit(&learner.model, &learner.varmap, &train_set)?;
             }
-            let _ = std::fs::remove_file(out.join("metrics.jsonl"));
+            let _ = std::fs::remove_file(run_dir.metrics());
             RunState { epochs_done: 0, step: 0, rng: Rng::new(opts.seed.wrapping_add(1)), best: None, wall_seconds: 0.0 }
         }
     };
@@ -304,7 +306,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
     }
     bar.set_length((opts.epochs * steps_per_epoch) as u64);
     bar.set_position((run.epochs_done * steps_per_epoch) as u64);
-    let mut log = std::fs::OpenOptions::new().create(true).append(true).open(out.join("metrics.jsonl")).map_err(Error::io(out))?;
+    let mut log = std::fs::OpenOptions::new().create(true).append(true).open(run_dir.metrics()).map_err(Error::io(out))?;
     let first_epoch = run.epochs_done + 1;
     for epoch in first_epoch..=opts.epochs {
         if spec.pause_after.is_some_and(|p| epoch - first_epoch >= p) {
@@ -340,7 +342,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
         if improved {
             let test = if test_set.is_empty() { None } else { Some(evaluate(&learner.model, &test_set)?.accuracy) };
             test_accuracy = test;
-            checkpoint::save(&out.join("model"), &learner.varmap, &meta_for(epoch, val.accuracy, test))?;
+            checkpoint::save(&run_dir.model(), &learner.varmap, &meta_for(epoch, val.accuracy, test))?;
             run.best = Some(Best { epoch, val_accuracy: val.accuracy, val_loss: val.loss, test_accuracy: test.unwrap_or(f64::NAN) });
         }
         if let Some(average) = &mut average {
@@ -362,11 +364,12 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
         };
         checkpoint::replace_dir(&last, |dir| {
             checkpoint::write_files(dir, &learner.varmap, &meta_for(epoch, val.accuracy, None))?;
-            learner.optimizer.save(&dir.join("optimizer.safetensors"))?;
+            let files = Checkpoint(dir);
+            learner.optimizer.save(&files.optimizer())?;
             if let Some(average) = &average {
-                average.save(&dir.join(AVERAGE_FILE))?;
+                average.save(&files.average())?;
             }
-            write_json(&dir.join("state.json"), &run)
+            write_json(&files.state(), &run)
         })?;
         writeln!(log, "{}", serde_json::to_string(&line).expect("plain data")).map_err(Error::io(out))?;
         let best = run.best.as_ref().expect("set after the first epoch");
@@ -376,7 +379,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
         ));
     }
     let best = run.best.clone().ok_or_else(|| Error::Usage("no epoch was trained (epochs = 0)".into()))?;
-    calibrate_stopping(&out.join("model"), &val_set)?;
+    calibrate_stopping(&run_dir.model(), &val_set)?;
     let result = RunResult {
         val_fold: spec.val_fold,
         seed: opts.seed,
@@ -397,7 +400,7 @@ fn calibrate_stopping(dir: &Path, val_set: &Samples) -> Result<()> {
     let (mut meta, model, _) = checkpoint::load(dir)?;
     let Some(pvt3) = crate::anytime::answering(&model) else { return Ok(()) };
     meta.provenance.stopping = Some(crate::anytime::prefixes(pvt3, val_set)?.calibrate());
-    write_json_atomically(&dir.join("provenance.json"), &meta.provenance)
+    write_json_atomically(&Checkpoint(dir).provenance(), &meta.provenance)
 }
 
 /// Keeps the first `epochs` lines of a metrics log (a crash may have left one more).

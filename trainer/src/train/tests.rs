@@ -186,7 +186,7 @@ fn prefix_training_resumes_exactly_and_calibrates_a_stopping_rule() {
 fn weight_averaging_resumes_exactly_and_checkpoints_the_average() {
     let data = tiny_data();
     let a = resumes_exactly("ema", &data, TrainOptions { ema: 0.9, ..options(5) });
-    assert!(a.join("last").join(super::AVERAGE_FILE).exists());
+    assert!(Checkpoint(&Run(&a).last()).average().exists());
     let raw = out_dir("ema-raw");
     train(&spec(&data, 5, None), &raw, false, &ProgressBar::hidden()).unwrap().unwrap();
     let weights = |d: &PathBuf, w: &str| std::fs::read(d.join(w).join("weights.safetensors")).unwrap();

@@ -8,6 +8,7 @@ use anyhow::Result;
 use indicatif::MultiProgress;
 use pvt3_trainer::cv::{self, cross_validate, CvSummary};
 use pvt3_trainer::data::TEST_FOLD;
+use pvt3_trainer::run_dir;
 
 use crate::model_args::{prepare, ModelArgs};
 use crate::progress;
@@ -72,7 +73,7 @@ pub fn run(a: CvArgs) -> Result<()> {
             (s, a.out)
         }
     };
-    print_summary(&s, started.elapsed().as_secs_f64(), &out.join("cv.json"));
+    print_summary(&s, started.elapsed().as_secs_f64(), &out.join(run_dir::CV_SUMMARY));
     Ok(())
 }
 

@@ -20,7 +20,7 @@ pub struct EvalArgs {
     pub data: Option<PathBuf>,
     /// Which samples: a fold number, or `all`.
     #[arg(long, default_value = "4")]
-    pub fold: String,
+    pub fold: Folds,
     /// Provisional answers (PVT³): accuracy from the first 10 %, 20 % … of each touch, and
     /// what the checkpoint's stopping rule (calibrated on its validation fold, or by `pvt3 cv`
     /// on all its runs' validation answers) does here.
@@ -36,18 +36,43 @@ pub struct EvalArgs {
     pub answers: Option<PathBuf>,
 }
 
+/// The samples `pvt3 eval` reads: one fold's, or all.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Folds {
+    One(usize),
+    All,
+}
+
+impl std::str::FromStr for Folds {
+    type Err = String;
+
+    fn from_str(s: &str) -> std::result::Result<Self, String> {
+        match s {
+            "all" => Ok(Folds::All),
+            _ => s.parse().map(Folds::One).map_err(|_| format!("`{s}` is neither a fold number nor `all`")),
+        }
+    }
+}
+
+impl std::fmt::Display for Folds {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Folds::One(k) => write!(f, "{k}"),
+            Folds::All => f.write_str("all"),
+        }
+    }
+}
+
 pub fn run(a: EvalArgs) -> Result<()> {
-    let (checkpoint_path, fold) = (a.checkpoint.as_path(), a.fold.as_str());
+    let (checkpoint_path, fold) = (a.checkpoint.as_path(), a.fold);
     let (meta, model, _) = checkpoint::load(checkpoint_path)?;
     let own = PathBuf::from(&meta.provenance.data);
     let data_path = a.data.as_deref().unwrap_or(&own);
     let data = Dataset::load(data_path, meta.provenance.seed).with_context(|| format!("loading {}", data_path.display()))?;
     data.check_fits(&meta.config)?;
-    let indices: Vec<usize> = if fold == "all" {
-        (0..data.len()).collect()
-    } else {
-        let k: usize = fold.parse().with_context(|| format!("--fold {fold}: expected a fold number or `all`"))?;
-        (0..data.len()).filter(|&i| data.folds[i] == k).collect()
+    let indices: Vec<usize> = match fold {
+        Folds::All => (0..data.len()).collect(),
+        Folds::One(k) => (0..data.len()).filter(|&i| data.folds[i] == k).collect(),
     };
     if indices.is_empty() {
         bail!("fold {fold} of {} holds no samples", data_path.display());
@@ -58,7 +83,7 @@ pub fn run(a: EvalArgs) -> Result<()> {
     }
     let e = evaluate(&model, &samples)?;
     println!("{} samples (fold {fold}): accuracy {:.4}, loss {:.4}", samples.len(), e.accuracy, e.loss);
-    if let (true, Some(test)) = (fold.parse::<usize>().ok() == Some(TEST_FOLD), meta.provenance.test_accuracy) {
+    if let (true, Some(test)) = (fold == Folds::One(TEST_FOLD), meta.provenance.test_accuracy) {
         println!("(the checkpoint's own record: test accuracy {test:.4})");
     }
     println!("{:<24} {:>8} {:>8}", "class", "samples", "accuracy");
@@ -81,7 +106,7 @@ pub fn describe(s: &Stopping) -> String {
 /// `pvt3 eval --anytime`: accuracy against the share of the touch, and the stopping rule
 /// the checkpoint records, as the exported file carries it (calibrated on its own validation
 /// fold, or by `pvt3 cv` on all its runs' validation answers), applied to `samples`.
-fn anytime_report(meta: &checkpoint::Meta, model: &Classifier, data: &Dataset, samples: &Samples, fold: &str, a: &EvalArgs) -> Result<()> {
+fn anytime_report(meta: &checkpoint::Meta, model: &Classifier, data: &Dataset, samples: &Samples, fold: Folds, a: &EvalArgs) -> Result<()> {
     let pvt3 = model.pvt3("pvt3 eval --anytime")?;
     let answers = anytime::answers(pvt3, samples)?;
     if let Some(path) = &a.answers {
@@ -107,7 +132,7 @@ fn anytime_report(meta: &checkpoint::Meta, model: &Classifier, data: &Dataset, s
     if a.json {
         let curve: Vec<_> = curve.iter().map(|(share, k, acc)| serde_json::json!({"share": share, "tokens": k, "accuracy": acc})).collect();
         let out = serde_json::json!({
-            "samples": samples.len(), "fold": fold, "tokens": t, "curve": curve,
+            "samples": samples.len(), "fold": fold.to_string(), "tokens": t, "curve": curve,
             "calibrated": calibrated, "stopping": here,
         });
         println!("{out}");
@@ -138,4 +163,18 @@ fn anytime_report(meta: &checkpoint::Meta, model: &Classifier, data: &Dataset, s
         here.mean_share * 100.0
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Folds;
+
+    #[test]
+    fn folds_parse_a_number_or_all_and_name_anything_else() {
+        assert_eq!("3".parse(), Ok(Folds::One(3)));
+        assert_eq!("all".parse(), Ok(Folds::All));
+        assert_eq!(Folds::One(4).to_string(), "4");
+        let err = "four".parse::<Folds>().unwrap_err();
+        assert!(err.contains("`four` is neither a fold number nor `all`"), "{err}");
+    }
 }

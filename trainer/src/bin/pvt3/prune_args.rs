@@ -6,6 +6,7 @@ use anyhow::Result;
 use pvt3_spec::prune::{PruneSpec, Scope};
 use pvt3_trainer::checkpoint::BakedFile;
 use pvt3_trainer::prune::PruneStage;
+use pvt3_trainer::run_dir::Run;
 use pvt3_trainer::train::RunResult;
 
 /// Pruning after training (the paper's schedule: train, prune, fine-tune).
@@ -60,7 +61,7 @@ pub fn report_pruned(r: &RunResult, out: &Path) -> Result<()> {
         r.val_accuracy,
         r.test_accuracy,
         baked.size_summary(),
-        out.join("model").display()
+        Run(out).model().display()
     );
     Ok(())
 }

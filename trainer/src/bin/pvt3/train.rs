@@ -5,6 +5,7 @@ use std::time::Instant;
 
 use anyhow::Result;
 use pvt3_trainer::prune::prune_and_fine_tune;
+use pvt3_trainer::run_dir::Run;
 use pvt3_trainer::train::train;
 
 use crate::export::export_onnx;
@@ -55,12 +56,12 @@ pub fn run(a: TrainArgs) -> Result<()> {
         r.val_accuracy,
         r.test_accuracy,
         started.elapsed().as_secs_f64(),
-        a.out.join("model").display()
+        Run(&a.out).model().display()
     );
     let mut last = a.out.clone();
     if let Some(stage) = stage {
         let bar = progress::bar("fine-tune");
-        last = a.out.join("pruned");
+        last = Run(&a.out).pruned();
         let Some(p) = prune_and_fine_tune(&a.out, &prepared.data, &stage, &last, a.resume, &bar)? else {
             println!("paused; continue with the same command and --resume");
             return Ok(());
