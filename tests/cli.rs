@@ -351,3 +351,43 @@ fn train_prune_fine_tune_and_bake_make_a_smaller_model() {
     assert!(err.contains("neither a checkpoint directory nor a baked model"), "{err}");
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let entry = entry.unwrap();
+        let target = to.join(entry.file_name());
+        if entry.file_type().unwrap().is_dir() {
+            copy_dir(&entry.path(), &target);
+        } else {
+            std::fs::copy(entry.path(), target).unwrap();
+        }
+    }
+}
+
+/// A run directory written by pvt3 before the model crate was split and the run directory typed
+/// (commit 9809af1: a tiny model paused after one of three epochs,
+/// `tests/fixtures/run-9809af1-paused`) still evaluates, resumes and exports; resumed, it ends
+/// with the very weights an uninterrupted run of today's pvt3 gives.
+#[test]
+fn a_run_written_before_the_house_change_resumes_bit_for_bit() {
+    let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/run-9809af1-paused");
+    let dir = scratch("old-run");
+    let (old, fresh) = (dir.join("old"), dir.join("fresh"));
+    copy_dir(&fixture, &old);
+    let (old_s, fresh_s) = (old.to_str().unwrap(), fresh.to_str().unwrap());
+    let eval = ok(&["eval", old_s]);
+    assert!(eval.contains("samples (fold 4): accuracy"), "{eval}");
+    let tiny =
+        ["--epochs", "3", "--set", "dim=8", "--set", "dim_head=8", "--set", "mlp_dim=8", "--set", "space_depth=1", "--set", "time_depth=1"];
+    ok(&[&["train", "--resume", "--out", old_s][..], &tiny].concat());
+    ok(&[&["train", "--out", fresh_s][..], &tiny].concat());
+    for file in ["model/weights.safetensors", "last/weights.safetensors", "last/optimizer.safetensors"] {
+        assert!(std::fs::read(old.join(file)).unwrap() == std::fs::read(fresh.join(file)).unwrap(), "{file} differs");
+    }
+    assert_eq!(std::fs::read_to_string(old.join("metrics.jsonl")).unwrap().lines().count(), 3);
+    let onnx = dir.join("old.onnx");
+    ok(&["export", old_s, "-o", onnx.to_str().unwrap()]);
+    assert!(pvt3_runtime::Classifier::load(&onnx).is_ok());
+    std::fs::remove_dir_all(dir).unwrap();
+}
