@@ -366,10 +366,16 @@ impl Config {
         Err(Error::Config(format!("{what}: PVT³ models only, and this is a {} model", self.model)))
     }
 
-    /// Fails, naming `what`, if the model has a spectral head: its features are the whole
-    /// window's, so it has no answer from a part of it.
-    pub fn require_whole_window(&self, what: &str) -> Result<()> {
-        if self.spectral_bands == 0 {
+    /// Whether the model answers from a part of a window: streamed frame by frame, provisional
+    /// answers, a stopping rule. Not with a spectral head, whose features are the whole
+    /// window's. (The runtime reads the same from a file: its `spectral_logits` seam.)
+    pub fn streams(&self) -> bool {
+        self.spectral_bands == 0
+    }
+
+    /// Fails, naming `what`, if the model does not [`Self::streams`].
+    pub fn require_streams(&self, what: &str) -> Result<()> {
+        if self.streams() {
             return Ok(());
         }
         Err(Error::Config(format!(

@@ -133,7 +133,7 @@ pub fn forward(m: &BakedPvt3, x: &[f32], batch: usize) -> Result<Vec<Vec<f64>>> 
 /// touch so far, pruned tokens included as their constants): the temporal transformer runs over
 /// the CLS token and those. Not for a model with a spectral head, which reads the whole window.
 pub fn forward_prefix(m: &BakedPvt3, x: &[f32], batch: usize, tokens: usize) -> Result<Vec<Vec<f64>>> {
-    m.config.require_whole_window("provisional answers from a prefix of the touch")?;
+    m.config.require_streams("provisional answers from a prefix of the touch")?;
     transformer_logits(m, x, batch, tokens)
 }
 

@@ -98,7 +98,7 @@ impl Pvt3 {
     /// touch so far, as the runtime's `Session::peek` answers it (the f64 reference's
     /// `forward_prefix`). The temporal transformer runs over the CLS token and those.
     pub fn forward_prefix(&self, x: &Tensor, tokens: usize, mut rng: Option<&mut Rng>) -> Result<Tensor> {
-        self.cfg.require_whole_window("provisional answers from a prefix of the touch")?;
+        self.cfg.require_streams("provisional answers from a prefix of the touch")?;
         let sequence = self.sequence(x, rng.as_deref_mut())?;
         self.classify_sequence(&self.prefix(&sequence, tokens)?, rng)
     }

@@ -79,13 +79,13 @@ pub struct Answers {
 /// The PVT³ network of `model` if it gives provisional answers: not another network, nor a PVT³
 /// with a spectral head, which reads the whole window.
 pub fn answering(model: &pvt3_models::Classifier) -> Option<&Pvt3> {
-    model.pvt3("provisional answers").ok().filter(|m| m.spectrum().is_none())
+    model.pvt3("provisional answers").ok().filter(|m| m.config().streams())
 }
 
 /// The provisional answers of `model` on `samples`: the spatial stage once per window, the
 /// temporal one per prefix (as `Session::peek` runs it).
 pub fn answers(model: &Pvt3, samples: &Samples) -> Result<Answers> {
-    model.config().require_whole_window("provisional answers")?;
+    model.config().require_streams("provisional answers")?;
     let tokens = model.config().time_tokens();
     let mut probabilities = vec![Vec::with_capacity(tokens); samples.len()];
     let rows: Vec<usize> = (0..samples.len()).collect();
