@@ -10,7 +10,8 @@
 #      rayon, no `spectral`: docs/deploy.md), so both supported feature sets are tested: all of
 #      them on the host, the small one on aarch64;
 #   4. the small robot library's size: built as docs/deploy.md says (in the background, from
-#      the start), it must stay within 8 MiB.
+#      the start) whenever the runtime, the format, the manifests or the compiler changed since
+#      it was last measured (tests/robot-small.size), it must stay within 8 MiB.
 # It installs what it needs (rustup's aarch64 target and clippy; Debian's gcc-aarch64-linux-gnu,
 # libc6-dev-arm64-cross and qemu-user, with apt-get as root) or says exactly what is missing.
 # Times under qemu mean nothing; outputs do.
@@ -37,6 +38,31 @@ if [ "$(uname -m)" = x86_64 ] && [ -z "${PVT3_TEST_ISAS:-}" ]; then
   [[ $PVT3_TEST_ISAS == *avx512* ]] || echo "note: this machine has no AVX-512, so the runtime's AVX-512 kernels are not tested here (PVT3_TEST_ISAS=$PVT3_TEST_ISAS)"
 fi
 
+# The small robot library, built exactly as docs/deploy.md says (the shared library alone: the
+# static one is not what a robot loads, and its link-time optimisation would double the work), in
+# a target directory of its own and in the background: its single-threaded phases (one codegen
+# unit, fat LTO) then overlap the other steps. Its size is checked at the end (at most 8 MiB).
+# It is built whenever what decides it changed (the runtime's and the format's files, the
+# workspace manifest and lock file, the compiler): tests/robot-small.size records the size
+# measured last and the digest of those inputs, and is rewritten by each measurement (commit it).
+size_record=tests/robot-small.size
+size_inputs=$({ rustc -V; git ls-files -z runtime format Cargo.toml Cargo.lock | xargs -0 sha256sum; } | sha256sum | cut -c1-64)
+small_log=target/robot-small-size.log small_pid=
+mkdir -p target
+if ! grep -qx "inputs $size_inputs" "$size_record" 2>/dev/null; then
+  RUSTFLAGS="-C llvm-args=-inline-threshold=60" CARGO_TARGET_DIR=target/size-check \
+    cargo rustc --profile robot-small -p pvt3-runtime --no-default-features --lib --crate-type cdylib >"$small_log" 2>&1 &
+  small_pid=$!
+fi
+trap '[ -z "$small_pid" ] || kill "$small_pid" 2>/dev/null || true; rm -f "$log"' EXIT
+
+step "host: cargo test --release --workspace"
+cargo_test --release --workspace
+
+step "runtime lints: cargo clippy -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings"
+cargo clippy --version >/dev/null 2>&1 || rustup component add clippy || missing "clippy (rustup component add clippy)"
+cargo clippy --release -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings
+
 step "aarch64: the cross toolchain and qemu"
 target=aarch64-unknown-linux-gnu
 sysroot=/usr/aarch64-linux-gnu
@@ -54,53 +80,32 @@ if [ ${#need[@]} -gt 0 ]; then
   fi
 fi
 rustup target list --installed | grep -qx "$target" || rustup target add "$target" || missing "the Rust target $target (rustup target add $target)"
+
+step "aarch64: cargo test --release --target $target -p pvt3-runtime -p pvt3-format --no-default-features (under qemu)"
 export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc
 export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER="qemu-aarch64 -L $sysroot"
 # The tests run the C example and pvt3-run through the same emulator, built by the same compiler.
 export PVT3_TARGET_RUNNER="$CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER"
 export TARGET_CC=aarch64-linux-gnu-gcc
-# Code compiled only off x86-64 gets no clippy below: at least no warning may pass here.
+# Code compiled only off x86-64 gets no clippy above: at least no warning may pass here.
 export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUSTFLAGS="-D warnings"
-cross=(--release --target "$target" -p pvt3-runtime -p pvt3-format --no-default-features)
-
-# Two builds run in the background from here, each in a target directory of its own, so that
-# their single-threaded phases (a large crate compiling alone, fat LTO) overlap the host's:
-# - the aarch64 tests, run under qemu after the host's;
-# - the small robot library, built exactly as docs/deploy.md says (the shared library alone: the
-#   static one is not what a robot loads, and its link-time optimisation would double the work),
-#   whose size is checked last (at most 8 MiB).
-mkdir -p target
-cross_log=target/aarch64-build.log small_log=target/robot-small-size.log
-CARGO_TARGET_DIR=target/cross cargo test "${cross[@]}" --no-run >"$cross_log" 2>&1 &
-cross_pid=$!
-RUSTFLAGS="-C llvm-args=-inline-threshold=60" CARGO_TARGET_DIR=target/size-check \
-  cargo rustc --profile robot-small -p pvt3-runtime --no-default-features --lib --crate-type cdylib >"$small_log" 2>&1 &
-small_pid=$!
-trap 'kill "$cross_pid" "$small_pid" 2>/dev/null || true; rm -f "$log"' EXIT
-# Waits for background build `pid`, showing its log `file` if it failed.
-built() {
-  wait "$1" && return 0
-  cat "$2" >&2
-  echo "tests/run.sh: $3 did not build (log above, $2)" >&2
-  exit 1
-}
-
-step "host: cargo test --release --workspace"
-cargo_test --release --workspace
-
-step "runtime lints: cargo clippy -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings"
-cargo clippy --version >/dev/null 2>&1 || rustup component add clippy || missing "clippy (rustup component add clippy)"
-cargo clippy --release -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings
-
-step "aarch64: cargo test ${cross[*]} (under qemu)"
-built "$cross_pid" "$cross_log" "the aarch64 tests"
-CARGO_TARGET_DIR=target/cross cargo_test "${cross[@]}"
+cargo_test --release --target "$target" -p pvt3-runtime -p pvt3-format --no-default-features
 
 step "the small robot library: at most 8 MiB (docs/deploy.md)"
-built "$small_pid" "$small_log" "the small robot library"
 limit=$((8 * 1024 * 1024))
-size=$(stat -c %s target/size-check/robot-small/libpvt3_runtime.so)
-echo "target/size-check/robot-small/libpvt3_runtime.so: $size bytes (limit $limit)"
+if [ -z "$small_pid" ]; then
+  size=$(awk '$1 == "bytes" { print $2 }' "$size_record")
+  echo "unchanged since it was measured ($size_record: the runtime, the format, the manifests and the compiler are as they were): $size bytes (limit $limit)"
+else
+  if ! wait "$small_pid"; then
+    cat "$small_log" >&2
+    echo "tests/run.sh: the small robot library did not build" >&2
+    exit 1
+  fi
+  size=$(stat -c %s target/size-check/robot-small/libpvt3_runtime.so)
+  echo "target/size-check/robot-small/libpvt3_runtime.so: $size bytes (limit $limit)"
+  printf '# The small robot library measured by tests/run.sh: the digest of its inputs, its bytes.\ninputs %s\nbytes %s\n' "$size_inputs" "$size" >"$size_record"
+fi
 if [ "$size" -gt "$limit" ]; then
   echo "tests/run.sh: the small robot library has outgrown 8 MiB: see docs/deploy.md for what it holds (bench/deploy.sh sizes it by crate)" >&2
   exit 1
