@@ -89,7 +89,7 @@ impl Role {
     /// The role of variable `name` of `rank` axes.
     pub fn of(name: &str, rank: usize) -> Role {
         let (parent, leaf) = name.rsplit_once('.').unwrap_or(("", name));
-        let is_norm = parent == HEAD_NORM || parent.ends_with(NORM);
+        let is_norm = parent.ends_with(NORM);
         match leaf {
             _ if leaf == FRAME_MASK || leaf == CHANNEL_MASK => Role::Mask,
             WEIGHT if is_norm => Role::NormScale,

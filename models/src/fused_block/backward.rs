@@ -87,10 +87,10 @@ impl BlockOp {
     }
 }
 
-/// The backward of [`norm_rows`]: adds the input's gradient into `dx`, and the weight's and
+/// The backward of `forward::norm_rows`: adds the input's gradient into `dx`, and the weight's and
 /// bias's into `dwb` (weight, then bias).
 #[inline(always)]
-pub(super) fn norm_rows_backward(dy: &[f32], xhat: &[f32], rstd: &[f32], w: &[f32], dwb: &mut [f32], dx: &mut [f32]) {
+fn norm_rows_backward(dy: &[f32], xhat: &[f32], rstd: &[f32], w: &[f32], dwb: &mut [f32], dx: &mut [f32]) {
     let d = w.len();
     let (dw, db) = dwb.split_at_mut(d);
     let mut dxhat = vec![0f32; d];
@@ -112,15 +112,15 @@ pub(super) fn norm_rows_backward(dy: &[f32], xhat: &[f32], rstd: &[f32], w: &[f3
 
 /// GELU's derivative at `x`, `Φ(x) + x · φ(x)`, from `Φ(x)` kept by the forward pass.
 #[inline(always)]
-pub(super) fn gelu_derivative(x: f32, cdf: f32) -> f32 {
+fn gelu_derivative(x: f32, cdf: f32) -> f32 {
     const INV_SQRT_2PI: f32 = 0.398_942_3;
     cdf + x * INV_SQRT_2PI * (-0.5 * x * x).exp()
 }
 
-/// The backward of [`attend`]: from the mixed values' gradient `dheads`, writes q's, k's and v's
+/// The backward of `forward::attend`: from the mixed values' gradient `dheads`, writes q's, k's and v's
 /// into `dqkv` (which starts at zero).
 #[inline(always)]
-pub(super) fn attend_backward(d: &BlockDims, tokens: usize, queries: usize, qkv: &[f32], probs: &[f32], dheads: &[f32], dqkv: &mut [f32]) {
+fn attend_backward(d: &BlockDims, tokens: usize, queries: usize, qkv: &[f32], probs: &[f32], dheads: &[f32], dqkv: &mut [f32]) {
     let (inner, dh, l) = (d.inner(), d.dim_head, tokens);
     let mut ds = vec![0f32; if l >= GEMM_TOKENS { queries * l } else { l }];
     for (sh, p) in probs.chunks_exact(queries * l).enumerate() {

@@ -86,7 +86,7 @@ impl BlockOp {
 
 /// Layer normalisation of each `w.len()`-long row of `x`: `y = x̂ · w + b`, keeping `x̂` and `1/σ`.
 #[inline(always)]
-pub(super) fn norm_rows(x: &[f32], w: &[f32], b: &[f32], eps: f32, xhat: &mut [f32], y: &mut [f32], rstd: &mut [f32]) {
+fn norm_rows(x: &[f32], w: &[f32], b: &[f32], eps: f32, xhat: &mut [f32], y: &mut [f32], rstd: &mut [f32]) {
     let d = w.len();
     for (((xr, hr), yr), r) in x.chunks_exact(d).zip(xhat.chunks_exact_mut(d)).zip(y.chunks_exact_mut(d)).zip(rstd.iter_mut()) {
         let mean = xr.iter().sum::<f32>() / d as f32;
@@ -101,7 +101,7 @@ pub(super) fn norm_rows(x: &[f32], w: &[f32], b: &[f32], eps: f32, xhat: &mut [f
 
 /// `y = x + (y + b) · mask`, row by row: a linear layer's bias, dropout and the residual.
 #[inline(always)]
-pub(super) fn add_bias_dropout_residual(y: &mut [f32], b: &[f32], mask: Option<&[f32]>, x: &[f32]) {
+fn add_bias_dropout_residual(y: &mut [f32], b: &[f32], mask: Option<&[f32]>, x: &[f32]) {
     let d = b.len();
     let rows = y.chunks_exact_mut(d).zip(x.chunks_exact(d));
     match mask {
@@ -124,7 +124,7 @@ pub(super) fn add_bias_dropout_residual(y: &mut [f32], b: &[f32], mask: Option<&
 
 /// `Φ(x)`, so that GELU (erf form) is `x · Φ(x)`.
 #[inline(always)]
-pub(super) fn normal_cdf(x: f32) -> f32 {
+fn normal_cdf(x: f32) -> f32 {
     (libm::erff(x * std::f32::consts::FRAC_1_SQRT_2) + 1.0) * 0.5
 }
 
@@ -133,7 +133,7 @@ pub(super) fn normal_cdf(x: f32) -> f32 {
 /// the scale already in q): the probabilities `[sequences, heads, queries, tokens]` and the mixed
 /// values `[sequences · queries, inner]`.
 #[inline(always)]
-pub(super) fn attend(d: &BlockDims, tokens: usize, queries: usize, qkv: &[f32], probs: &mut [f32], heads: &mut [f32]) {
+fn attend(d: &BlockDims, tokens: usize, queries: usize, qkv: &[f32], probs: &mut [f32], heads: &mut [f32]) {
     let (inner, dh, l) = (d.inner(), d.dim_head, tokens);
     for (sh, p) in probs.chunks_exact_mut(queries * l).enumerate() {
         let (q, k, v, out) = head_offsets(d, tokens, queries, sh);
@@ -160,7 +160,7 @@ pub(super) fn attend(d: &BlockDims, tokens: usize, queries: usize, qkv: &[f32], 
 }
 
 #[inline(always)]
-pub(super) fn softmax(row: &mut [f32]) {
+fn softmax(row: &mut [f32]) {
     let max = row.iter().copied().fold(f32::NEG_INFINITY, f32::max);
     row.iter_mut().for_each(|v| *v = (*v - max).exp());
     let sum: f32 = row.iter().sum();
