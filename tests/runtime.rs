@@ -52,6 +52,17 @@ fn tract_onnx_agrees(path: &Path, c: &Classifier, x: &[f32], batch: usize) {
     assert!(worst <= 1e-5, "{}: the runtime's reader against tract-onnx's: {worst:e}", path.display());
 }
 
+/// A file exported before configurations were split by network (09687eb: its `pvt3.config`
+/// holds every network's fields) loads and gives today's file's logits, bit for bit.
+#[test]
+fn a_file_exported_before_the_configuration_split_runs_as_today_s() {
+    let (path, x, _) = golden_onnx();
+    let old = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/model-09687eb.onnx");
+    let (before, _) = Classifier::load(&old).unwrap().run(&x, 8).unwrap();
+    let (today, _) = Classifier::load(&path).unwrap().run(&x, 8).unwrap();
+    assert_eq!(before, today);
+}
+
 #[test]
 fn golden_logits_from_tract_match_the_golden_and_the_f64_reference() {
     let (path, x, baked) = golden_onnx();

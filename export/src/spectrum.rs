@@ -18,7 +18,7 @@ use crate::layers::linear;
 /// The spectral head's logits `[batch, classes]`, named [`SPECTRAL_LOGITS`].
 pub(crate) fn spectral_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, norm: &Normalization) -> String {
     let c = &m.config;
-    let (channels, frames, bands) = (c.sensor_channels(), c.frames, c.spectral_bands);
+    let (channels, frames, bands) = (c.sensor_channels(), c.frames, c.spectral_bands());
     let k = bins(frames);
     let rows = g.i64s("spectral_rows", &[3], vec![-1, channels as i64, frames as i64]);
     let x = g.op(Op::Reshape, &[INPUT, &rows]);

@@ -17,6 +17,6 @@ pub mod rng;
 pub mod spectrum;
 pub mod weights;
 
-pub use config::{Architecture, Config};
+pub use config::{Architecture, Config, Network, Pvt3Config, RaecConfig, VitConfig};
 pub use error::{Error, Result};
 pub use rng::Rng;

@@ -207,7 +207,7 @@ pub fn pvt3_variables(cfg: &Config) -> Vec<Variable> {
     }
     vars.extend(norm(HEAD_NORM));
     vars.extend(linear(HEAD, cfg.classes, d));
-    if cfg.spectral_bands > 0 {
+    if cfg.spectral_bands() > 0 {
         let f = cfg.spectral_features();
         vars.push(Variable::new(spectral(SCALE), vec![f]));
         vars.push(Variable::new(spectral(SHIFT), vec![f]));

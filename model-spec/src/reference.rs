@@ -123,7 +123,7 @@ pub fn forward(m: &BakedPvt3, x: &[f32], batch: usize) -> Result<Vec<Vec<f64>>> 
     if let Some(s) = &m.spectrum {
         let sample_len = x.len() / batch;
         for (l, sample) in logits.iter_mut().zip(x.chunks(sample_len)) {
-            l.iter_mut().zip(spectral_logits(s, sample, c.frames, c.spectral_bands)).for_each(|(l, s)| *l += s);
+            l.iter_mut().zip(spectral_logits(s, sample, c.frames, c.spectral_bands())).for_each(|(l, s)| *l += s);
         }
     }
     Ok(logits)

@@ -1,4 +1,4 @@
-//! The band maths of PVT³'s spectral head (`Config::spectral_bands > 0`): which frequencies
+//! The band maths of PVT³'s spectral head (`Config::spectral_bands() > 0`): which frequencies
 //! each band sums, the real transform as a matrix, and the band sums as a matrix. The trainer's
 //! candle head (`pvt3_models::spectrum`), the f64 reference and the exporter all read them here.
 

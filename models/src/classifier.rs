@@ -1,5 +1,5 @@
 //! Every network the trainer can fit, behind one type: PVT³ and the paper's two baselines (ViT
-//! and RAEC), chosen by [`Config::model`]. Pruning, baking and export are PVT³'s alone.
+//! and RAEC), chosen by [`Config::network`]. Pruning, baking and export are PVT³'s alone.
 
 use candle_core::Tensor;
 use candle_nn::{VarBuilder, VarMap};
@@ -17,7 +17,7 @@ pub enum Classifier {
 
 impl Classifier {
     pub fn new(cfg: &Config, vb: VarBuilder) -> Result<Self> {
-        Ok(match cfg.model {
+        Ok(match cfg.architecture() {
             Architecture::Pvt3 => Self::Pvt3(Pvt3::new(cfg, vb)?),
             Architecture::Vit => Self::Vit(Vit::new(cfg, vb)?),
             Architecture::Raec => Self::Raec(Raec::new(cfg, vb)?),
@@ -59,7 +59,7 @@ mod tests {
     use candle_core::{Device, Tensor};
 
     use super::Classifier;
-    use crate::{Config, Rng};
+    use crate::{Config, Pvt3Config, Rng};
 
     /// Gradients reach every parameter (masks included) of every network, through the full
     /// training loss: no op without a backward pass on the way.
@@ -68,7 +68,7 @@ mod tests {
         let configs = [
             Config::icub20(),
             Config { heads: 2, dim_head: 8, tubelet: 3, dropout: 0.1, ..Config::icub20() },
-            Config { spectral_bands: 4, ..Config::icub20() },
+            Config { network: Pvt3Config { spectral_bands: 4 }.into(), ..Config::icub20() },
             Config { dropout: 0.1, ..Config::preset("vit-icub20").unwrap() },
             Config { dropout: 0.1, ..Config::preset("raec-icub20").unwrap() },
             Config { frames: 40, ..Config::preset("raec-biotac20").unwrap() },
@@ -88,10 +88,10 @@ mod tests {
             }
             let grads = loss.backward().unwrap();
             for (name, var) in varmap.data().lock().unwrap().iter() {
-                let g = grads.get(var).unwrap_or_else(|| panic!("{:?} {name} has no gradient", cfg.model));
+                let g = grads.get(var).unwrap_or_else(|| panic!("{:?} {name} has no gradient", cfg.architecture()));
                 let g: Vec<f32> = g.flatten_all().unwrap().to_vec1().unwrap();
-                assert!(g.iter().all(|v| v.is_finite()), "{:?} {name} has a non-finite gradient", cfg.model);
-                assert!(g.iter().any(|v| *v != 0.0), "{:?} {name} has an all-zero gradient", cfg.model);
+                assert!(g.iter().all(|v| v.is_finite()), "{:?} {name} has a non-finite gradient", cfg.architecture());
+                assert!(g.iter().any(|v| *v != 0.0), "{:?} {name} has an all-zero gradient", cfg.architecture());
             }
         }
     }

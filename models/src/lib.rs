@@ -34,4 +34,4 @@ pub mod weights;
 pub use classifier::Classifier;
 pub use error::{Error, Result};
 pub use pvt3::Pvt3;
-pub use pvt3_spec::{Architecture, Config, Rng};
+pub use pvt3_spec::{Architecture, Config, Network, Pvt3Config, RaecConfig, Rng, VitConfig};

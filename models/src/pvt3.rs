@@ -53,7 +53,7 @@ impl Pvt3 {
             space: Transformer::new(cfg, cfg.space_depth, vb.pp(names::SPACE))?,
             temporal: Transformer::new(cfg, cfg.time_depth, vb.pp(names::TEMPORAL))?,
             head: Head::new(cfg, vb.clone())?,
-            spectrum: if cfg.spectral_bands > 0 { Some(Spectrum::new(cfg, vb.clone())?) } else { None },
+            spectrum: if cfg.spectral_bands() > 0 { Some(Spectrum::new(cfg, vb.clone())?) } else { None },
             dropout: Dropout::new(cfg.dropout),
             cfg: cfg.clone(),
         })

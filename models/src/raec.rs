@@ -13,7 +13,7 @@ use pvt3_spec::names;
 
 use crate::dropout::Dropout;
 use crate::lstm::Lstm;
-use crate::{Config, Result, Rng};
+use crate::{Config, RaecConfig, Result, Rng};
 
 #[derive(Clone, Debug)]
 pub struct Raec {
@@ -28,36 +28,40 @@ pub struct Raec {
     to_decoder_state: Option<Linear>,
     reconstruct: Linear,
     /// The published decoder's transposed convolution, `[conv_channels, channels, patch_height,
-    /// patch_width]`, and its bias (`Config::decoder_mirrors_conv`).
+    /// patch_width]`, and its bias (`RaecConfig::decoder_mirrors_conv`).
     deconv: Option<(Tensor, Tensor)>,
     dropout: Dropout,
     cfg: Config,
+    raec: RaecConfig,
 }
 
 impl Raec {
     pub fn new(cfg: &Config, vb: VarBuilder) -> Result<Self> {
         cfg.validate()?;
-        let (h, l) = (cfg.rnn_hidden, cfg.latent);
+        let Some(&r) = cfg.raec() else {
+            return Err(pvt3_spec::Error::Config(format!("the RAEC network: this is a {} model", cfg.architecture())).into());
+        };
+        let (h, l) = (r.rnn_hidden, r.latent);
         let init = candle_nn::init::DEFAULT_KAIMING_UNIFORM;
         let kernel = |vb: VarBuilder, shape: (usize, usize, usize, usize), bias: usize| -> Result<(Tensor, Tensor)> {
             Ok((vb.get_with_hints(shape, names::WEIGHT, init)?, vb.get_with_hints(bias, names::BIAS, init)?))
         };
         let (k, c) = ((cfg.patch_height, cfg.patch_width), cfg.channels);
-        let conv =
-            if cfg.conv_channels == 0 { None } else { Some(kernel(vb.pp("conv"), (cfg.conv_channels, c, k.0, k.1), cfg.conv_channels)?) };
+        let conv = if r.conv_channels == 0 { None } else { Some(kernel(vb.pp("conv"), (r.conv_channels, c, k.0, k.1), r.conv_channels)?) };
         // PyTorch's ConvTranspose2d weight: [in, out, kh, kw].
-        let deconv = if cfg.decoder_mirrors_conv() { Some(kernel(vb.pp("deconv"), (cfg.conv_channels, c, k.0, k.1), c)?) } else { None };
+        let deconv = if r.decoder_mirrors_conv() { Some(kernel(vb.pp("deconv"), (r.conv_channels, c, k.0, k.1), c)?) } else { None };
         Ok(Self {
             conv,
-            encoder: Lstm::new(cfg.rnn_input(), h, vb.pp("encoder"))?,
+            encoder: Lstm::new(r.rnn_input(cfg), h, vb.pp("encoder"))?,
             to_latent: linear(h, l, vb.pp("to_latent"))?,
             classifier: linear(l, cfg.classes, vb.pp("classifier"))?,
-            decoder: Lstm::new(if cfg.decoder_from_state { 1 } else { l }, h, vb.pp("decoder"))?,
-            to_decoder_state: if cfg.decoder_from_state { Some(linear(l, h, vb.pp("to_decoder_state"))?) } else { None },
-            reconstruct: linear(h, cfg.decoder_output(), vb.pp("reconstruct"))?,
+            decoder: Lstm::new(if r.decoder_from_state { 1 } else { l }, h, vb.pp("decoder"))?,
+            to_decoder_state: if r.decoder_from_state { Some(linear(l, h, vb.pp("to_decoder_state"))?) } else { None },
+            reconstruct: linear(h, r.decoder_output(cfg), vb.pp("reconstruct"))?,
             deconv,
             dropout: Dropout::new(cfg.dropout),
             cfg: cfg.clone(),
+            raec: r,
         })
     }
 
@@ -96,7 +100,7 @@ impl Raec {
         } else {
             None
         };
-        Ok((pooled.reshape((b, t, c.rnn_input()))?, last_frame))
+        Ok((pooled.reshape((b, t, self.raec.rnn_input(c)))?, last_frame))
     }
 
     /// The published decoder's frames from its linear output `[b · t, rnn_input]`: un-pooled to
@@ -124,7 +128,7 @@ impl Raec {
         let latent = self.to_latent.forward(&self.encoder.last_hidden(&sequence)?)?;
         let training = rng.is_some();
         let logits = self.classifier.forward(&self.dropout.forward(&latent, rng)?)?;
-        if !training || self.cfg.reconstruction_weight == 0.0 {
+        if !training || self.raec.reconstruction_weight == 0.0 {
             return Ok((logits, None));
         }
         let (b, t, f) = frames.dims3()?;
@@ -132,12 +136,12 @@ impl Raec {
             Some(to_state) => self.decoder.from_state(&to_state.forward(&latent)?, t)?,
             None => self.decoder.repeat_input(&latent, t)?,
         };
-        let mut rebuilt = self.reconstruct.forward(&states.reshape((b * t, self.cfg.rnn_hidden))?)?;
+        let mut rebuilt = self.reconstruct.forward(&states.reshape((b * t, self.raec.rnn_hidden))?)?;
         if let Some(last_frame) = &last_frame {
             rebuilt = self.mirror_conv(&rebuilt, last_frame, t)?;
         }
         let error = (rebuilt - frames.reshape((b * t, f))?)?.sqr()?.mean_all()?;
-        Ok((logits, Some((error * self.cfg.reconstruction_weight)?)))
+        Ok((logits, Some((error * self.raec.reconstruction_weight)?)))
     }
 
     /// Logits `[b, classes]`.
@@ -157,21 +161,29 @@ fn unpool(x: &Tensor) -> Result<Tensor> {
 mod tests {
     use candle_core::{Device, Tensor};
 
-    use crate::{Config, Rng};
+    use crate::{Config, RaecConfig, Rng};
+
+    /// `cfg` (a RAEC) with the decoder as Gao et al. published it.
+    fn published(cfg: Config) -> Config {
+        let r = RaecConfig { decoder_from_state: true, ..*cfg.raec().unwrap() };
+        Config { network: r.into(), ..cfg }
+    }
 
     #[test]
     fn presets_take_gao_et_al_sizes_and_count_their_parameters() {
         let icub = Config::preset("raec-icub20").unwrap();
-        assert_eq!((icub.conv_channels, icub.patch_height, icub.patch_width), (3, 3, 5));
+        let r = *icub.raec().unwrap();
+        assert_eq!((r.conv_channels, icub.patch_height, icub.patch_width), (3, 3, 5));
         // 6 × 10 → 4 × 6 after the 3 × 5 convolution → 2 × 3 after pooling, 3 channels.
-        assert_eq!(icub.rnn_input(), 18);
+        assert_eq!(r.rnn_input(&icub), 18);
         let biotac = Config::preset("raec-biotac20").unwrap();
-        assert_eq!((biotac.conv_channels, biotac.time_tokens(), biotac.rnn_input()), (0, 40, 190));
-        let published = Config { decoder_from_state: true, ..biotac.clone() };
+        let rb = *biotac.raec().unwrap();
+        assert_eq!((rb.conv_channels, biotac.time_tokens(), rb.rnn_input(&biotac)), (0, 40, 190));
+        let published = published(biotac.clone());
         assert_ne!(published.parameter_count(), biotac.parameter_count());
         // Gao et al.'s iCub decoder: 18 values a step, un-pooled and transposed back to 6 × 10.
-        let published_icub = Config { decoder_from_state: true, ..icub.clone() };
-        assert_eq!(published_icub.decoder_output(), 18);
+        let published_icub = super::tests::published(icub.clone());
+        assert_eq!(published_icub.raec().unwrap().decoder_output(&published_icub), 18);
         for cfg in [icub, biotac, published, published_icub] {
             let (_, varmap) = super::Raec::init(&cfg, 0).unwrap();
             let counted: usize = varmap.all_vars().iter().map(|v| v.elem_count()).sum();
@@ -196,7 +208,7 @@ mod tests {
     /// convolution): the reconstruction loss trains the state map and the transposed convolution.
     #[test]
     fn the_published_decoder_trains_its_state_map() {
-        let cfg = Config { frames: 8, decoder_from_state: true, ..Config::preset("raec-icub20").unwrap() };
+        let cfg = published(Config { frames: 8, ..Config::preset("raec-icub20").unwrap() });
         let (raec, varmap) = super::Raec::init(&cfg, 1).unwrap();
         // A positive bias keeps the final ReLU open (this seed's draw, −0.14, closes it for
         // every output, and no gradient passes: a decoder that, like Gao et al.'s, can start dead).

@@ -1,4 +1,4 @@
-//! The spectral head of PVT³ (`Config::spectral_bands > 0`): what a texture's vibration says,
+//! The spectral head of PVT³ (`Config::spectral_bands() > 0`): what a texture's vibration says,
 //! given to the network directly. For each sensor channel of the window, its mean level and the
 //! log power of `spectral_bands` frequency bands (geometrically spaced) of its detrended signal;
 //! the features are standardised (a scale and a shift per feature, fitted to the training set by
@@ -34,7 +34,7 @@ pub struct Spectrum {
 impl Spectrum {
     /// `vb` is the model's root; the head's variables are `spectral.{scale, shift, linear.*}`.
     pub fn new(cfg: &Config, vb: VarBuilder) -> candle_core::Result<Self> {
-        let (t, b, f) = (cfg.frames, cfg.spectral_bands, cfg.spectral_features());
+        let (t, b, f) = (cfg.frames, cfg.spectral_bands(), cfg.spectral_features());
         let constant = |v: Vec<f64>, shape: (usize, usize)| Tensor::from_vec(v, shape, &Device::Cpu)?.to_dtype(DType::F32);
         let vb = vb.pp(names::SPECTRAL);
         Ok(Self {
@@ -70,6 +70,7 @@ impl Spectrum {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Pvt3Config;
     use pvt3_spec::spectrum::band_edges;
 
     /// The features are what their definition says: a sine of frequency 5 and amplitude 2
@@ -77,7 +78,15 @@ mod tests {
     /// elsewhere.
     #[test]
     fn a_sine_lands_in_its_band() {
-        let cfg = Config { frames: 40, spectral_bands: 4, height: 1, width: 1, patch_height: 1, patch_width: 1, ..Config::icub20() };
+        let cfg = Config {
+            frames: 40,
+            height: 1,
+            width: 1,
+            patch_height: 1,
+            patch_width: 1,
+            network: Pvt3Config { spectral_bands: 4 }.into(),
+            ..Config::icub20()
+        };
         let vb = VarBuilder::zeros(DType::F32, &Device::Cpu);
         let head = Spectrum::new(&cfg, vb).unwrap();
         let wave: Vec<f32> = (0..40).map(|n| 3.0 + 2.0 * (2.0 * std::f32::consts::PI * 5.0 * n as f32 / 40.0).sin()).collect();

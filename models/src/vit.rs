@@ -1,5 +1,5 @@
 //! The paper's ViT baseline: every frame of a window tiled into one large frame (row-major in
-//! time, `tile_rows` frames high), cut into patches, and one transformer over all of them, with a
+//! time, `VitConfig::tile_rows` frames high), cut into patches, and one transformer over all of them, with a
 //! CLS token and one learned position embedding per patch. It sees the same data as PVT³ without
 //! the factorisation into space and time, and without frame selection.
 
@@ -49,7 +49,8 @@ impl Vit {
     pub fn patchify(&self, x: &Tensor) -> Result<Tensor> {
         let c = &self.cfg;
         let b = c.check_input(x.dims())?;
-        let (rows, cols) = (c.tile_rows, c.frames / c.tile_rows);
+        let rows = c.tiled_size().0 / c.height;
+        let cols = c.frames / rows;
         let frames = x.reshape(vec![b, c.height, c.width, c.channels, rows, cols])?;
         // → [b, rows, h, cols, w, c]: the tiled frame, (rows · h) × (cols · w) × c.
         let tiled = frames.permute(vec![0, 4, 1, 5, 2, 3])?.contiguous()?;

@@ -7,7 +7,7 @@ use ndarray::{Array2, Array4};
 use ndarray_npy::read_npy;
 
 use pvt3_models::weights::varmap_tensors;
-use pvt3_models::{Config, Pvt3, Rng};
+use pvt3_models::{Config, Pvt3, Pvt3Config, Rng};
 use pvt3_spec::bake::bake;
 use pvt3_spec::reference;
 use pvt3_spec::weights::read_tensors;
@@ -73,7 +73,7 @@ fn check_against_parent(cfg: Config, prune_channels: bool, prune_frames: bool) {
         }
     }
     set_mask(&varmap, "frame_mask", &mut rng, |t| prune_frames && t % 4 != 0);
-    if cfg.spectral_bands > 0 {
+    if cfg.spectral_bands() > 0 {
         // A standardisation of the spectral features other than the identity.
         set_mask(&varmap, "spectral.scale", &mut rng, |_| false);
         set_mask(&varmap, "spectral.shift", &mut rng, |_| false);
@@ -93,7 +93,7 @@ fn check_against_parent(cfg: Config, prune_channels: bool, prune_frames: bool) {
     let err = worst(&got, expected.iter().map(|v| *v as f64));
     assert!(err <= 1e-5, "{cfg:?} channels {prune_channels} frames {prune_frames}: worst {err:e}");
     let t = cfg.time_tokens();
-    if cfg.spectral_bands > 0 {
+    if cfg.spectral_bands() > 0 {
         assert!(baked.spectrum.is_some());
         // The spectral head reads the whole window: no answer from a part of it.
         assert!(parent.forward_prefix(&input, t / 3, None).is_err() && reference::forward_prefix(&baked, &x, b, t / 3).is_err());
@@ -126,7 +126,7 @@ fn baked_equals_masked_parent_with_several_heads_and_tubelets() {
 
 #[test]
 fn baked_equals_masked_parent_with_a_spectral_head() {
-    let cfg = Config { spectral_bands: 8, ..Config::icub20() };
+    let cfg = Config { network: Pvt3Config { spectral_bands: 8 }.into(), ..Config::icub20() };
     check_against_parent(cfg.clone(), true, true);
     let (parent, varmap) = Pvt3::init(&cfg, 9).unwrap();
     let baked = bake(&cfg, &varmap_tensors(&varmap).unwrap()).unwrap();

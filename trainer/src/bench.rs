@@ -23,8 +23,7 @@ pub struct TrainSpeed {
 
 /// Times `steps` optimiser steps after `warmup` untimed ones.
 pub fn train_speed(cfg: &Config, opts: &TrainOptions, warmup: usize, steps: usize) -> Result<TrainSpeed> {
-    let cfg = Config { dropout: opts.dropout, ..cfg.clone() };
-    let mut learner = Learner::new(&cfg, opts, None)?;
+    let mut learner = Learner::new(cfg, opts, None)?;
     let mut rng = Rng::new(opts.seed);
     let mut shape = vec![opts.batch_size];
     shape.extend(cfg.sample_shape());

@@ -3,7 +3,7 @@
 
 use std::fmt::Write;
 
-use pvt3_models::{Architecture, Classifier, Config};
+use pvt3_models::{Classifier, Config, Network};
 
 use crate::Result;
 
@@ -16,9 +16,9 @@ pub fn report(cfg: &Config) -> Result<String> {
     let mut s = String::new();
     let w = &mut s;
     let _ = writeln!(w, "input         [batch, {}]", cfg.sample_shape().iter().map(|v| v.to_string()).collect::<Vec<_>>().join(", "));
-    let _ = writeln!(w, "model         {}", cfg.model);
-    let _ = match cfg.model {
-        Architecture::Pvt3 => writeln!(
+    let _ = writeln!(w, "model         {}", cfg.architecture());
+    let _ = match &cfg.network {
+        Network::Pvt3(_) => writeln!(
             w,
             "tokens        {} temporal × {} spatial (+1 CLS each), patch dim {}\nparameters    {} trainable + {} frame-mask entries",
             cfg.time_tokens(),
@@ -27,7 +27,7 @@ pub fn report(cfg: &Config) -> Result<String> {
             cfg.parameter_count(),
             cfg.time_tokens()
         ),
-        Architecture::Vit => {
+        Network::Vit(_) => {
             let (h, w2) = cfg.tiled_size();
             writeln!(
                 w,
@@ -37,13 +37,13 @@ pub fn report(cfg: &Config) -> Result<String> {
                 cfg.parameter_count()
             )
         }
-        Architecture::Raec => writeln!(
+        Network::Raec(r) => writeln!(
             w,
             "sequence      {} steps of {} values, LSTM hidden {}, latent {}\nparameters    {} trainable",
             cfg.time_tokens(),
-            cfg.rnn_input(),
-            cfg.rnn_hidden,
-            cfg.latent,
+            r.rnn_input(cfg),
+            r.rnn_hidden,
+            r.latent,
             cfg.parameter_count()
         ),
     };

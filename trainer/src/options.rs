@@ -24,9 +24,6 @@ pub struct TrainOptions {
     /// Decoupled weight decay on weight matrices.
     #[arg(long, default_value_t = 0.05)]
     pub weight_decay: f64,
-    /// Dropout on embeddings, attention outputs and feed-forward layers.
-    #[arg(long, default_value_t = 0.1)]
-    pub dropout: f64,
     #[arg(long, default_value_t = 0.1)]
     pub label_smoothing: f64,
     /// Clip the global gradient norm to this (0: no clipping).

@@ -29,7 +29,7 @@ pub fn fit(model: &Classifier, varmap: &VarMap, train: &Samples) -> Result<()> {
     let shift = (mean.neg()? * &scale)?;
     let vars = varmap.data().lock().expect("the variable map's lock");
     for (name, value) in [(names::spectral(names::SCALE), scale), (names::spectral(names::SHIFT), shift)] {
-        let var = vars.get(&name).ok_or_else(|| pvt3_spec::Error::MissingTensor { task: "fit the spectral standardisation", name })?;
+        let var = vars.get(&name).ok_or(pvt3_spec::Error::MissingTensor { task: "fit the spectral standardisation", name })?;
         var.set(&value.to_dtype(candle_core::DType::F32)?.to_device(&Device::Cpu)?)?;
     }
     Ok(())
@@ -45,7 +45,7 @@ mod tests {
     /// standard deviation 1, feature by feature.
     #[test]
     fn standardises_the_training_features() {
-        let cfg = Config { spectral_bands: 6, ..Config::icub20() };
+        let cfg = Config { network: pvt3_models::Pvt3Config { spectral_bands: 6 }.into(), ..Config::icub20() };
         let (model, varmap) = Classifier::init(&cfg, 3).unwrap();
         let mut rng = Rng::new(4);
         let n = 40;

@@ -30,8 +30,6 @@ use crate::run_dir::{Checkpoint, Run};
 use crate::schedule::Schedule;
 use crate::{Error, Result};
 
-/// The weight average's state in `last/` (with `--ema`).
-
 /// The outcome of a finished run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RunResult {
@@ -243,7 +241,6 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
         state = Some((dir.clone(), read_json::<RunState>(&Checkpoint(dir).state())?));
     }
     let opts = &spec_options;
-    config.dropout = opts.dropout;
     spec.data.check_fits(&config)?;
     let split: Split = spec.data.split(spec.val_fold)?;
     let normalization = crate::normalization::fit(spec.data, &split.train);

@@ -62,7 +62,6 @@ fn options(epochs: usize) -> TrainOptions {
         lr_floor: 0.01,
         warmup_epochs: 1,
         weight_decay: 0.01,
-        dropout: 0.1,
         label_smoothing: 0.1,
         clip_grad: 1.0,
         aug_gain: 0.1,

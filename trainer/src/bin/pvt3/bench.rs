@@ -22,6 +22,9 @@ pub enum Bench {
         /// the embedding), to measure what the fusion gains (the same function).
         #[arg(long)]
         composed: bool,
+        /// Dropout (default: the preset's, 0.1).
+        #[arg(long)]
+        dropout: Option<f64>,
         #[command(flatten)]
         options: TrainOptions,
     },
@@ -38,9 +41,11 @@ pub enum Bench {
 
 pub fn run(b: Bench) -> Result<()> {
     match b {
-        Bench::Train { preset, steps, composed, options } => {
+        Bench::Train { preset, steps, composed, dropout, options } => {
             pvt3_models::transformer::use_composed_ops(composed);
-            let mut speed = train_speed(&Config::preset(&preset)?, &options, 2, steps)?;
+            let cfg = Config::preset(&preset)?;
+            let cfg = Config { dropout: dropout.unwrap_or(cfg.dropout), ..cfg };
+            let mut speed = train_speed(&cfg, &options, 2, steps)?;
             if composed {
                 speed.framework = "candle, composed ops";
             }

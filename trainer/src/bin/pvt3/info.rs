@@ -24,7 +24,7 @@ pub struct InfoArgs {
 pub fn run(a: InfoArgs) -> Result<()> {
     // A PVT³ checkpoint is read once: its configuration, and its size after baking.
     let cfg = resolve_config(&a.model)?;
-    let baked = match Path::new(&a.model).is_dir() && cfg.model == Architecture::Pvt3 {
+    let baked = match Path::new(&a.model).is_dir() && cfg.architecture() == Architecture::Pvt3 {
         true => Some(BakedFile::from_checkpoint(Path::new(&a.model))?.baked),
         false => None,
     };

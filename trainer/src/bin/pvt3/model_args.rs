@@ -32,6 +32,10 @@ pub struct ModelArgs {
     /// Override one configuration field, e.g. `--set tubelet=5 --set dim=32` (repeatable).
     #[arg(long = "set", value_name = "FIELD=VALUE")]
     pub overrides: Vec<String>,
+    /// Dropout while training (embeddings, attention outputs, feed-forward layers): the
+    /// configuration's `dropout` field, 0.1 in every preset.
+    #[arg(long)]
+    pub dropout: Option<f64>,
     /// Class names, one per line (default: class_0, class_1, …).
     #[arg(long)]
     pub class_names: Option<PathBuf>,
@@ -111,6 +115,7 @@ pub fn prepare(args: &ModelArgs) -> Result<Prepared> {
     };
     cfg.classes = data.classes();
     cfg = apply_overrides(cfg, &args.overrides)?;
+    cfg.dropout = args.dropout.unwrap_or(cfg.dropout);
     cfg.validate()?;
     let prefix = args.options.prefix_training;
     if !(0.0..=1.0).contains(&prefix) {
@@ -145,10 +150,10 @@ fn apply_overrides(cfg: Config, overrides: &[String]) -> Result<Config> {
     for o in overrides {
         let (key, raw) = o.split_once('=').with_context(|| format!("--set {o}: expected FIELD=VALUE"))?;
         let fields = value.as_object_mut().expect("a config is a JSON object");
-        if !fields.contains_key(key) && !Config::OPTIONAL_FIELDS.contains(&key) {
-            let mut known: Vec<&str> = fields.keys().map(String::as_str).chain(Config::OPTIONAL_FIELDS.iter().copied()).collect();
+        if !fields.contains_key(key) {
+            let mut known: Vec<&str> = fields.keys().map(String::as_str).collect();
             known.sort_unstable();
-            bail!("--set {o}: unknown field `{key}`; the fields are {known:?}");
+            bail!("--set {o}: unknown field `{key}`; a {} model's fields are {known:?}", cfg.architecture());
         }
         let parsed = serde_json::from_str(raw).with_context(|| format!("--set {o}: `{raw}` is not a number, true or false"))?;
         fields.insert(key.to_string(), parsed);
@@ -161,20 +166,19 @@ mod tests {
     use pvt3_models::Config;
 
     #[test]
-    fn set_reaches_fields_written_only_when_set_and_names_the_unknown() {
+    fn set_reaches_the_network_s_own_fields_and_names_the_unknown() {
         let raec = Config::preset("raec-biotac20").unwrap();
-        assert!(!serde_json::to_value(&raec).unwrap().as_object().unwrap().contains_key("decoder_from_state"));
         let set = super::apply_overrides(raec.clone(), &["decoder_from_state=true".into(), "latent=20".into()]).unwrap();
-        assert!(set.decoder_from_state);
-        assert_eq!(set.latent, 20);
+        let r = set.raec().unwrap();
+        assert!(r.decoder_from_state);
+        assert_eq!(r.latent, 20);
         let err = super::apply_overrides(raec, &["decoder=true".into()]).unwrap_err().to_string();
         assert!(err.contains("unknown field `decoder`") && err.contains("decoder_from_state"), "{err}");
-        // Every field written only when set is reachable.
+        // PVT³'s own field, and not RAEC's.
         let biotac = Config::preset("biotac20").unwrap();
-        for field in Config::OPTIONAL_FIELDS {
-            assert!(!serde_json::to_value(&biotac).unwrap().as_object().unwrap().contains_key(*field), "{field}");
-        }
-        let set = super::apply_overrides(biotac, &["spectral_bands=16".into()]).unwrap();
-        assert_eq!(set.spectral_bands, 16);
+        let set = super::apply_overrides(biotac.clone(), &["spectral_bands=16".into()]).unwrap();
+        assert_eq!(set.spectral_bands(), 16);
+        let err = super::apply_overrides(biotac, &["latent=20".into()]).unwrap_err().to_string();
+        assert!(err.contains("unknown field `latent`; a pvt3 model's fields"), "{err}");
     }
 }

@@ -1,0 +1,186 @@
+//! A configuration as JSON (a checkpoint's `config.json`, an `.onnx` file's `pvt3.config`): one
+//! flat object, `model` naming the network, the shared fields, then the network's own.
+//!
+//! Files written before configurations were split by network hold every network's fields, the
+//! foreign ones at their defaults; they still read. A foreign field set to anything else (a
+//! `--set tile_rows=5` on a PVT³ model) is refused, naming it.
+
+use std::fmt::Debug;
+
+use serde::{Deserialize, Serialize};
+
+use super::network::{Architecture, Network, Pvt3Config, RaecConfig, VitConfig};
+use super::Config;
+use crate::Error;
+
+#[derive(Clone, Serialize, Deserialize)]
+pub(super) struct ConfigFile {
+    #[serde(default)]
+    model: Architecture,
+    height: usize,
+    width: usize,
+    channels: usize,
+    frames: usize,
+    patch_height: usize,
+    patch_width: usize,
+    tubelet: usize,
+    dim: usize,
+    space_depth: usize,
+    time_depth: usize,
+    heads: usize,
+    dim_head: usize,
+    mlp_dim: usize,
+    classes: usize,
+    #[serde(default = "super::default_dropout")]
+    dropout: f64,
+    #[serde(default = "super::default_eps")]
+    layer_norm_eps: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    tile_rows: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    rnn_hidden: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    latent: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    conv_channels: Option<usize>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    reconstruction_weight: Option<f64>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    decoder_from_state: Option<bool>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    spectral_bands: Option<usize>,
+}
+
+/// Fails if a field of another network than `model` holds other than that network's default.
+fn foreign<T: PartialEq + Debug>(model: Architecture, name: &str, value: Option<T>, default: T) -> Result<(), Error> {
+    match value {
+        Some(v) if v != default => Err(Error::Config(format!("{name} = {v:?}: not a field of a {model} model"))),
+        _ => Ok(()),
+    }
+}
+
+impl TryFrom<ConfigFile> for Config {
+    type Error = Error;
+
+    fn try_from(f: ConfigFile) -> Result<Self, Error> {
+        let (m, pvt3, vit, raec) = (f.model, Pvt3Config::default(), VitConfig::default(), RaecConfig::default());
+        if m != Architecture::Pvt3 {
+            foreign(m, "spectral_bands", f.spectral_bands, pvt3.spectral_bands)?;
+        }
+        if m != Architecture::Vit {
+            foreign(m, "tile_rows", f.tile_rows, vit.tile_rows)?;
+        }
+        if m != Architecture::Raec {
+            foreign(m, "rnn_hidden", f.rnn_hidden, raec.rnn_hidden)?;
+            foreign(m, "latent", f.latent, raec.latent)?;
+            foreign(m, "conv_channels", f.conv_channels, raec.conv_channels)?;
+            foreign(m, "reconstruction_weight", f.reconstruction_weight, raec.reconstruction_weight)?;
+            foreign(m, "decoder_from_state", f.decoder_from_state, raec.decoder_from_state)?;
+        }
+        let network = match m {
+            Architecture::Pvt3 => Pvt3Config { spectral_bands: f.spectral_bands.unwrap_or(pvt3.spectral_bands) }.into(),
+            Architecture::Vit => VitConfig { tile_rows: f.tile_rows.unwrap_or(vit.tile_rows) }.into(),
+            Architecture::Raec => RaecConfig {
+                rnn_hidden: f.rnn_hidden.unwrap_or(raec.rnn_hidden),
+                latent: f.latent.unwrap_or(raec.latent),
+                conv_channels: f.conv_channels.unwrap_or(raec.conv_channels),
+                reconstruction_weight: f.reconstruction_weight.unwrap_or(raec.reconstruction_weight),
+                decoder_from_state: f.decoder_from_state.unwrap_or(raec.decoder_from_state),
+            }
+            .into(),
+        };
+        Ok(Config {
+            height: f.height,
+            width: f.width,
+            channels: f.channels,
+            frames: f.frames,
+            patch_height: f.patch_height,
+            patch_width: f.patch_width,
+            tubelet: f.tubelet,
+            dim: f.dim,
+            space_depth: f.space_depth,
+            time_depth: f.time_depth,
+            heads: f.heads,
+            dim_head: f.dim_head,
+            mlp_dim: f.mlp_dim,
+            classes: f.classes,
+            dropout: f.dropout,
+            layer_norm_eps: f.layer_norm_eps,
+            network,
+        })
+    }
+}
+
+impl From<Config> for ConfigFile {
+    fn from(c: Config) -> Self {
+        let mut f = Self {
+            model: c.architecture(),
+            height: c.height,
+            width: c.width,
+            channels: c.channels,
+            frames: c.frames,
+            patch_height: c.patch_height,
+            patch_width: c.patch_width,
+            tubelet: c.tubelet,
+            dim: c.dim,
+            space_depth: c.space_depth,
+            time_depth: c.time_depth,
+            heads: c.heads,
+            dim_head: c.dim_head,
+            mlp_dim: c.mlp_dim,
+            classes: c.classes,
+            dropout: c.dropout,
+            layer_norm_eps: c.layer_norm_eps,
+            tile_rows: None,
+            rnn_hidden: None,
+            latent: None,
+            conv_channels: None,
+            reconstruction_weight: None,
+            decoder_from_state: None,
+            spectral_bands: None,
+        };
+        match c.network {
+            Network::Pvt3(p) => f.spectral_bands = Some(p.spectral_bands),
+            Network::Vit(v) => f.tile_rows = Some(v.tile_rows),
+            Network::Raec(r) => {
+                f.rnn_hidden = Some(r.rnn_hidden);
+                f.latent = Some(r.latent);
+                f.conv_channels = Some(r.conv_channels);
+                f.reconstruction_weight = Some(r.reconstruction_weight);
+                f.decoder_from_state = Some(r.decoder_from_state);
+            }
+        }
+        f
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A PVT³ configuration as checkpoints and `.onnx` files held it before the split: every
+    /// network's fields, the foreign ones at their defaults (tests/fixtures/run-9809af1-paused).
+    const BEFORE_THE_SPLIT: &str = r#"{"model":"pvt3","height":6,"width":10,"channels":1,"frames":75,"patch_height":3,"patch_width":5,"tubelet":1,"dim":20,"space_depth":4,"time_depth":4,"heads":1,"dim_head":64,"mlp_dim":40,"classes":20,"dropout":0.1,"layer_norm_eps":1e-5,"tile_rows":1,"rnn_hidden":90,"latent":40,"conv_channels":0,"reconstruction_weight":0.01}"#;
+
+    #[test]
+    fn a_file_from_before_the_split_reads_as_its_network_alone() {
+        let cfg: Config = serde_json::from_str(BEFORE_THE_SPLIT).unwrap();
+        assert_eq!(cfg, Config::icub20());
+        let written = serde_json::to_value(&cfg).unwrap();
+        let fields: Vec<&str> = written.as_object().unwrap().keys().map(String::as_str).collect();
+        assert!(fields.contains(&"spectral_bands") && !fields.contains(&"rnn_hidden") && !fields.contains(&"tile_rows"), "{fields:?}");
+        // The RAEC preset round-trips with its own fields.
+        let raec = Config::preset("raec-icub20").unwrap();
+        assert_eq!(serde_json::from_value::<Config>(serde_json::to_value(&raec).unwrap()).unwrap(), raec);
+    }
+
+    #[test]
+    fn a_foreign_field_set_is_refused_by_name() {
+        let set = BEFORE_THE_SPLIT.replace(r#""tile_rows":1"#, r#""tile_rows":5"#);
+        let msg = serde_json::from_str::<Config>(&set).unwrap_err().to_string();
+        assert!(msg.contains("tile_rows = 5: not a field of a pvt3 model"), "{msg}");
+        let vit = BEFORE_THE_SPLIT.replace(r#""model":"pvt3""#, r#""model":"vit""#).replace('}', r#","spectral_bands":4}"#);
+        let msg = serde_json::from_str::<Config>(&vit).unwrap_err().to_string();
+        assert!(msg.contains("spectral_bands = 4: not a field of a vit model"), "{msg}");
+    }
+}
