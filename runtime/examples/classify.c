@@ -4,9 +4,10 @@
  *
  * FRAMES.f32 holds BATCH windows of raw float32 values (little-endian, the model's input layout).
  * Classifies them as one batch, then streams each window frame by frame through a session, as a
- * robot would during a touch, with a provisional answer halfway. Prints, per window and way
- * ("batch", "peek" or "stream"), the window, the class index, its name and probability, then all
- * probabilities. */
+ * robot would during a touch, with a provisional answer halfway, then all windows back to back as
+ * one continuous stream, as a robot that keeps sliding, answering once a window. Prints, per
+ * window and way ("batch", "peek", "stream" or "slide"), the window, the class index, its name and
+ * probability, then all probabilities. */
 #include <stdio.h>
 #include <stdlib.h>
 
@@ -79,6 +80,25 @@ int main(int argc, char **argv) {
         if (pvt3_session_finish(session, probs, classes, &class) != PVT3_OK) return fail("finish");
         print("stream", model, i, class, probs, classes);
     }
+    /* The windows back to back as one stream that never ends: an answer for the latest window
+     * once a window is in, then every `tokens` temporal tokens (here: once a window, so the
+     * answers are the windows' own). */
+    size_t tubelet = 0;
+    if (pvt3_classifier_tubelet(model, &tubelet) != PVT3_OK) return fail("tubelet");
+    pvt3_continuous *slide = NULL;
+    if (pvt3_continuous_new(model, frames_per_window / tubelet, &slide) != PVT3_OK) return fail("continuous_new");
+    for (size_t i = 0; i < batch; i++) {
+        const float *window = frames + i * sample_len;
+        for (size_t t = 0; t < frames_per_window; t++) {
+            for (size_t j = 0; j < frame_len; j++) frame[j] = window[j * frames_per_window + t];
+            size_t class = 0;
+            int answered = 0;
+            if (pvt3_continuous_push_frame(slide, frame, frame_len, probs, classes, &class, &answered) != PVT3_OK)
+                return fail("continuous_push_frame");
+            if (answered) print("slide", model, i, class, probs, classes);
+        }
+    }
+    pvt3_continuous_free(slide);
     free(frame);
     pvt3_session_free(session);
     free(frames);

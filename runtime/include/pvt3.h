@@ -7,9 +7,10 @@
  * at load (integrity digest).
  *
  * Threads: a classifier may be used from several threads at once (pvt3_classify,
- * pvt3_classifier_prepare, pvt3_session_new and the getters; the Rust API's test checks every
- * answer against one thread's), but pvt3_classifier_set_kernels and pvt3_classifier_free must not run alongside
- * any other call on it. A session belongs to one thread at a time. pvt3_last_error() is per
+ * pvt3_classifier_prepare, pvt3_session_new, pvt3_continuous_new and the getters; the Rust API's
+ * test checks every answer against one thread's), but pvt3_classifier_set_kernels and
+ * pvt3_classifier_free must not run alongside any other call on it. A session or a continuous
+ * stream belongs to one thread at a time. pvt3_last_error() is per
  * thread. */
 #ifndef PVT3_H
 #define PVT3_H
@@ -34,6 +35,7 @@ extern "C" {
 
 typedef struct Pvt3Classifier pvt3_classifier;
 typedef struct Pvt3Session pvt3_session;
+typedef struct Pvt3Continuous pvt3_continuous;
 
 /* Loads an .onnx written by `pvt3 export`; *out owns a handle to free with pvt3_classifier_free.
  * The file's integrity digest is checked first: a file altered or damaged after export is
@@ -57,6 +59,8 @@ int pvt3_classifier_sample_len(const pvt3_classifier *c, size_t *out);
 int pvt3_classifier_frames(const pvt3_classifier *c, size_t *out);
 /* Number of classes. */
 int pvt3_classifier_num_classes(const pvt3_classifier *c, size_t *out);
+/* Frames per temporal token: sessions answer, and continuous streams count `every`, in tokens. */
+int pvt3_classifier_tubelet(const pvt3_classifier *c, size_t *out);
 /* Name of class `index`, NUL-terminated, valid as long as the handle; unless len is NULL, its
  * length in bytes (without the NUL) is written to *len. */
 int pvt3_classifier_class_name(const pvt3_classifier *c, size_t index, const char **out, size_t *len);
@@ -84,6 +88,21 @@ int pvt3_session_finish(pvt3_session *s, float *probabilities, size_t probabilit
  * a file exported before format 1.1. */
 int pvt3_session_peek(pvt3_session *s, float *probabilities, size_t probabilities_len, size_t *class_out,
                       size_t *frames_out, int *stop_out);
+/* Continuous classification of a stream longer than the window (a robot that keeps sliding):
+ * frames go in one by one, without end; once a whole window is in, and then after every `every`
+ * temporal tokens, the answer for the window ending at the latest frame comes out. Each answer
+ * is pvt3_classify on that window (the same plan, the same bits) and costs one window's
+ * classification. Works for every file. PVT3_ERR_INPUT for every = 0. */
+int pvt3_continuous_new(const pvt3_classifier *c, size_t every, pvt3_continuous **out);
+/* Frees a stream (NULL is ignored); it may outlive its classifier. */
+void pvt3_continuous_free(pvt3_continuous *s);
+/* Takes the next frame (frame_len = height x width x channels). When an answer is due, writes the
+ * probabilities and, unless NULL, the most probable class, and sets *answered_out to 1; else
+ * *answered_out = 0 and nothing else is written. probabilities must have room either way. */
+int pvt3_continuous_push_frame(pvt3_continuous *s, const float *frame, size_t frame_len, float *probabilities,
+                               size_t probabilities_len, size_t *class_out, int *answered_out);
+/* Forgets the stream: the next answer comes after a whole new window. */
+int pvt3_continuous_reset(pvt3_continuous *s);
 /* The library's version and the file format it reads, e.g. "0.1.0 (format 1.0)"; a static string.
  * The runtime reads every file of its format's major version and refuses others (PVT3_ERR_MODEL). */
 const char *pvt3_version(void);

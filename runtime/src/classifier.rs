@@ -203,7 +203,7 @@ impl Classifier {
     }
 
     /// The optimised plan for `batch` windows, built on first use.
-    fn plan(&self, batch: usize) -> Result<Arc<Plan>> {
+    pub(crate) fn plan(&self, batch: usize) -> Result<Arc<Plan>> {
         let mut plans = self.plans.lock().unwrap_or_else(|p| p.into_inner());
         if let Some(p) = plans.get(&batch) {
             return Ok(p.clone());

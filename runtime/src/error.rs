@@ -32,6 +32,8 @@ pub enum Error {
     WholeWindowOnly,
     #[error("batch size must be at least 1")]
     EmptyBatch,
+    #[error("a continuous classification answers every 1 or more temporal tokens, not every 0")]
+    NoStride,
     #[error("a batch of {batch} windows has more values than memory can address")]
     BatchTooLarge { batch: usize },
     #[error("{asked} threads asked for, but this build runs one thread per plan (built without the `threads` feature)")]

@@ -7,7 +7,7 @@ use std::ffi::{c_char, c_int, CStr, CString};
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::sync::OnceLock;
 
-use crate::{Classifier, Error, Kernels, Prediction, Session};
+use crate::{Classifier, Continuous, Error, Kernels, Prediction, Session};
 
 pub const PVT3_OK: c_int = 0;
 pub const PVT3_ERR_NULL: c_int = 1;
@@ -31,6 +31,12 @@ pub struct Pvt3Session {
     names: usize,
 }
 
+/// What C holds for a continuous stream.
+pub struct Pvt3Continuous {
+    continuous: Continuous,
+    names: usize,
+}
+
 thread_local! {
     static LAST_ERROR: RefCell<CString> = RefCell::new(CString::default());
 }
@@ -47,6 +53,7 @@ fn status(e: &Error) -> c_int {
         Error::InputLength { .. }
         | Error::NonFinite { .. }
         | Error::EmptyBatch
+        | Error::NoStride
         | Error::BatchTooLarge { .. }
         | Error::NoThreads { .. }
         | Error::Npy { .. }
@@ -191,6 +198,16 @@ pub unsafe extern "C" fn pvt3_classifier_sample_len(c: *const Pvt3Classifier, ou
 #[no_mangle]
 pub unsafe extern "C" fn pvt3_classifier_frames(c: *const Pvt3Classifier, out: *mut usize) -> c_int {
     write_size(c, out, |c| *c.classifier.sample_shape().last().expect("a window has a frame axis"))
+}
+
+/// Frames per temporal token: a session answers, and a continuous stream counts its `every`, in
+/// whole tokens.
+///
+/// # Safety
+/// `c` is a live handle or null; `out` is writable or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_classifier_tubelet(c: *const Pvt3Classifier, out: *mut usize) -> c_int {
+    write_size(c, out, |c| c.classifier.tubelet())
 }
 
 /// Number of classes.
@@ -377,6 +394,79 @@ pub unsafe extern "C" fn pvt3_session_peek(
         if let Some(stop) = stop_out.as_mut() {
             *stop = c_int::from(p.stop);
         }
+        Ok(())
+    })
+}
+
+/// Starts a continuous classification of an unbounded stream of frames, answering for the latest
+/// window after every `every` temporal tokens once a whole window is in; `*out` owns a handle to
+/// free with `pvt3_continuous_free`. It may outlive the classifier.
+///
+/// # Safety
+/// `c` is a live handle or null; `out` is writable or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_continuous_new(c: *const Pvt3Classifier, every: usize, out: *mut *mut Pvt3Continuous) -> c_int {
+    guard(|| {
+        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
+        let out = out.as_mut().ok_or_else(|| null("out"))?;
+        let continuous = c.classifier.continuous(every).map_err(fail)?;
+        *out = Box::into_raw(Box::new(Pvt3Continuous { continuous, names: c.names.len() }));
+        Ok(())
+    })
+}
+
+/// Frees a continuous stream (null is ignored).
+///
+/// # Safety
+/// `s` came from `pvt3_continuous_new` and is not used afterwards.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_continuous_free(s: *mut Pvt3Continuous) {
+    free_handle(s);
+}
+
+/// Takes the stream's next frame. When an answer is due, writes the class probabilities of the
+/// window ending at this frame (room for `probabilities_len` values) and, unless null, its most
+/// probable class, and sets `*answered_out` (unless null) to 1; otherwise to 0, writing nothing
+/// else.
+///
+/// # Safety
+/// `s` is a live stream or null; `frame` is null or valid for `frame_len` values; the other
+/// pointers are null or valid for the lengths given.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_continuous_push_frame(
+    s: *mut Pvt3Continuous,
+    frame: *const f32,
+    frame_len: usize,
+    probabilities: *mut f32,
+    probabilities_len: usize,
+    class_out: *mut usize,
+    answered_out: *mut c_int,
+) -> c_int {
+    guard(|| {
+        let s = s.as_mut().ok_or_else(|| null("stream"))?;
+        if frame.is_null() {
+            return Err(null("frame"));
+        }
+        room(probabilities, probabilities_len, s.names)?;
+        let answer = s.continuous.push_frame(std::slice::from_raw_parts(frame, frame_len)).map_err(fail)?;
+        if let Some(p) = &answer {
+            write_prediction(p, probabilities, class_out);
+        }
+        if let Some(answered) = answered_out.as_mut() {
+            *answered = c_int::from(answer.is_some());
+        }
+        Ok(())
+    })
+}
+
+/// Forgets the stream: the next answer comes after a whole new window.
+///
+/// # Safety
+/// `s` is a live stream or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_continuous_reset(s: *mut Pvt3Continuous) -> c_int {
+    guard(|| {
+        s.as_mut().ok_or_else(|| null("stream"))?.continuous.reset();
         Ok(())
     })
 }

@@ -18,6 +18,7 @@
 #![deny(clippy::undocumented_unsafe_blocks)]
 
 mod classifier;
+mod continuous;
 mod error;
 pub mod ffi;
 mod heap;
@@ -32,6 +33,7 @@ mod stream;
 mod wire;
 
 pub use classifier::{Classifier, Prediction};
+pub use continuous::Continuous;
 pub use error::{Error, Result};
 pub use heap::keep_freed_memory;
 pub use kernels::{tune as tune_kernels, Kernels};

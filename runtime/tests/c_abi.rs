@@ -5,7 +5,7 @@
 mod support;
 
 use std::collections::BTreeMap;
-use std::ffi::{CStr, CString};
+use std::ffi::{c_int, CStr, CString};
 use std::ptr::{null, null_mut};
 
 use pvt3_runtime::ffi::*;
@@ -46,6 +46,7 @@ fn c_type(rust: &str) -> String {
         "c_char" => "char",
         "Pvt3Classifier" => "pvt3_classifier",
         "Pvt3Session" => "pvt3_session",
+        "Pvt3Continuous" => "pvt3_continuous",
         "" | "()" => "void",
         other => panic!("a Rust type the ABI test does not map to C: {other}"),
     }
@@ -88,7 +89,7 @@ fn the_header_declares_exactly_what_the_code_exports() {
         .collect();
     let code_fns: BTreeMap<_, _> = code.split("extern \"C\" fn ").skip(1).filter_map(rust_signature).collect();
     assert_eq!(header_fns, code_fns, "functions, their return and parameter types");
-    assert_eq!(code_fns.len(), 16);
+    assert_eq!(code_fns.len(), 21);
     assert_eq!(code_fns["pvt3_classify"].1[6], "size_t *", "the types are read");
     let mut header_consts: Vec<(String, String)> = header
         .split("#define ")
@@ -148,8 +149,10 @@ fn the_c_example_gives_the_rust_result() {
         })
         .collect();
     let stdout = String::from_utf8(out.stdout).unwrap();
-    assert_eq!(stdout.lines().count(), 24);
-    for (way, expected) in [("batch", &rust), ("stream", &rust), ("peek", &halfway)] {
+    assert_eq!(stdout.lines().count(), 32);
+    // Sliding on over the eight windows back to back, answering once a window: the windows' own.
+    for (way, expected) in [("batch", &rust), ("stream", &rust), ("peek", &halfway), ("slide", &rust)] {
+        assert_eq!(stdout.lines().filter(|l| l.starts_with(way)).count(), 8, "{way}");
         for (line, p) in stdout.lines().filter(|l| l.starts_with(way)).zip(expected) {
             let fields: Vec<&str> = line.split('\t').collect();
             assert_eq!(fields[2].parse::<usize>().unwrap(), p.class);
@@ -190,11 +193,41 @@ fn every_entry_point_reports_instead_of_crashing() {
         assert_eq!(pvt3_session_peek(null_mut(), probs.as_mut_ptr(), 40, null_mut(), null_mut(), null_mut()), PVT3_ERR_NULL);
         pvt3_session_free(null_mut());
         pvt3_classifier_free(null_mut());
+        let mut k = null_mut();
+        let mut answered = 7;
+        assert_eq!(pvt3_classifier_tubelet(null(), &mut n), PVT3_ERR_NULL);
+        assert_eq!(pvt3_continuous_new(null(), 1, &mut k), PVT3_ERR_NULL);
+        assert_eq!(
+            pvt3_continuous_push_frame(null_mut(), probs.as_ptr(), 60, probs.as_mut_ptr(), 40, null_mut(), &mut answered),
+            PVT3_ERR_NULL
+        );
+        assert_eq!(pvt3_continuous_reset(null_mut()), PVT3_ERR_NULL);
+        pvt3_continuous_free(null_mut());
 
         assert_eq!(pvt3_classifier_set_kernels(null_mut(), PVT3_KERNELS_TRACT), PVT3_ERR_NULL);
         assert_eq!(pvt3_classifier_prepare(null(), 1, 1), PVT3_ERR_NULL);
 
         assert_eq!(pvt3_classifier_load(model.as_ptr(), &mut c), PVT3_OK);
+        assert_eq!(pvt3_classifier_tubelet(c, &mut n), PVT3_OK);
+        assert_eq!(n, 1);
+        // A continuous stream: every 0 tokens refused; a frame answers nothing until a window is in.
+        assert_eq!(pvt3_continuous_new(c, 0, &mut k), PVT3_ERR_INPUT);
+        assert!(last_error().contains("not every 0"), "{}", last_error());
+        assert_eq!(pvt3_continuous_new(c, 1, &mut k), PVT3_OK);
+        let frame = vec![0.5f32; 60];
+        assert_eq!(pvt3_continuous_push_frame(k, frame.as_ptr(), 59, probs.as_mut_ptr(), 40, null_mut(), &mut answered), PVT3_ERR_INPUT);
+        assert_eq!(pvt3_continuous_push_frame(k, frame.as_ptr(), 60, probs.as_mut_ptr(), 19, null_mut(), &mut answered), PVT3_ERR_INPUT);
+        assert_eq!(pvt3_continuous_push_frame(k, null(), 60, probs.as_mut_ptr(), 40, null_mut(), &mut answered), PVT3_ERR_NULL);
+        for t in 0..76 {
+            let mut class = 99usize;
+            assert_eq!(pvt3_continuous_push_frame(k, frame.as_ptr(), 60, probs.as_mut_ptr(), 40, &mut class, &mut answered), PVT3_OK);
+            assert_eq!(answered, c_int::from(t >= 74), "frame {t}");
+            assert_eq!(class == 99, t < 74, "frame {t}: a class only with an answer");
+        }
+        assert_eq!(pvt3_continuous_reset(k), PVT3_OK);
+        assert_eq!(pvt3_continuous_push_frame(k, frame.as_ptr(), 60, probs.as_mut_ptr(), 40, null_mut(), &mut answered), PVT3_OK);
+        assert_eq!(answered, 0, "a reset stream waits for a whole window");
+        pvt3_continuous_free(k);
         assert_eq!(pvt3_classifier_set_kernels(c, 7), PVT3_ERR_INPUT);
         assert!(last_error().contains("kernel choice 7"), "{}", last_error());
         for kernels in [PVT3_KERNELS_TRACT, PVT3_KERNELS_MEASURED, PVT3_KERNELS_FIXED] {

@@ -1,7 +1,8 @@
 //! `pvt3-run --bench MODEL.onnx`: latency on this machine, measured the way a robot runs the
 //! model. Whole windows at batch 1 (median and p99) and batch 32 (windows per second), and a
 //! streamed touch: each kept frame's spatial encoding, each pruned frame's drop, and the
-//! end-of-touch temporal stage. Inputs are synthetic (latency does not depend on the values).
+//! end-of-touch temporal stage; and a continuous stream answering after every token (the cost
+//! of one answer, and per token). Inputs are synthetic (latency does not depend on the values).
 //! Also the load (read, digest check, parse), the digest check alone, `Classifier::prepare` for
 //! batch 1 and streaming, and the first call after it.
 //! The classifier chooses its kernels by the default fixed rule; batch 1 is also measured with
@@ -86,6 +87,30 @@ pub fn bench(path: &str, threads: usize, seconds: f64) -> Result<serde_json::Val
     let b32_windows_per_second = 32.0 * b32.len() as f64 / b32.iter().sum::<f64>();
 
     let frames = *c.sample_shape().last().expect("a frame axis");
+    let frame_len = len / frames;
+    let touch: Vec<Vec<f32>> = (0..frames).map(|t| (0..frame_len).map(|j| one[j * frames + t]).collect()).collect();
+    // A continuous stream answering after every token (`Classifier::continuous`): the frames of
+    // the window over and over, timed once a whole window is in.
+    let mut continuous = c.continuous(1)?;
+    for frame in &touch {
+        continuous.push_frame(frame)?;
+    }
+    let (mut answers, mut spent) = (Vec::new(), 0.0);
+    let start = Instant::now();
+    for frame in touch.iter().cycle() {
+        if answers.len() >= 20 && start.elapsed() >= budget {
+            break;
+        }
+        let s = Instant::now();
+        let answered = continuous.push_frame(frame)?.is_some();
+        let e = s.elapsed().as_secs_f64();
+        spent += e;
+        if answered {
+            answers.push(e);
+        }
+    }
+    let continuous_per_token_us = spent / answers.len() as f64 * 1e6;
+    let (continuous_answer_median, _) = quantiles(answers);
     let whole = json!({
         "model": path,
         "threads": threads,
@@ -102,14 +127,14 @@ pub fn bench(path: &str, threads: usize, seconds: f64) -> Result<serde_json::Val
         "prepare_ms": prepare_ms,
         "batch1_first_call_after_prepare_ms": prepared_first_ms,
         "batch32_windows_per_second": b32_windows_per_second,
+        "continuous_answer_median_us": continuous_answer_median,
+        "continuous_per_token_us": continuous_per_token_us,
     });
     if !c.streams() {
         // A spectral head reads the whole window: the file is not streamed.
         return Ok(whole);
     }
-    // A streamed touch: frame t of the window is every `frames`-th value.
-    let frame_len = len / frames;
-    let touch: Vec<Vec<f32>> = (0..frames).map(|t| (0..frame_len).map(|j| one[j * frames + t]).collect()).collect();
+    // A streamed touch.
     let mut session = c.session()?;
     let (mut kept, mut dropped, mut finish) = (Vec::new(), Vec::new(), Vec::new());
     let kept_frames = c.kept_frames().to_vec();
