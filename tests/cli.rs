@@ -8,6 +8,8 @@ use ndarray::{Array1, ArrayD, IxDyn};
 use ndarray_npy::NpzWriter;
 use pvt3_trainer::data::Dataset;
 
+#[path = "support/csv_tree.rs"]
+mod csv_tree;
 #[path = "support/onnx_check.rs"]
 mod onnx_check;
 
@@ -389,5 +391,42 @@ fn a_run_written_before_the_house_change_resumes_bit_for_bit() {
     let onnx = dir.join("old.onnx");
     ok(&["export", old_s, "-o", onnx.to_str().unwrap()]);
     assert!(pvt3_runtime::Classifier::load(&onnx).is_ok());
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// A folder of CSV touches of unequal length (three classes, an extra time-stamp column and a
+/// constant one) to an exported model in three commands, leaving its pictures on the way.
+#[test]
+fn csv_touches_of_any_length_import_cross_validate_and_export() {
+    let dir = scratch("csv");
+    let csvs = dir.join("csvs");
+    csv_tree::write(&csvs, 3, 10, 40, 64);
+    let (data, out, onnx) = (dir.join("set.npz"), dir.join("cv"), dir.join("model.onnx"));
+    let (d, o) = (data.to_str().unwrap(), out.to_str().unwrap());
+    let imported = ok(&["import", csvs.to_str().unwrap(), "--out", d]);
+    assert!(imported.contains("30 touches of 3 classes") && imported.contains("left out: time (a time stamp by its name)"), "{imported}");
+    let mut args = vec!["cv", "--data", d, "--out", o, "--epochs", "12", "--jobs", "2", "--set", "frames=32", "--set", "tubelet=4"];
+    args.extend(SMALL);
+    let cv = pvt3(&args);
+    let stderr = String::from_utf8_lossy(&cv.stderr);
+    assert!(cv.status.success(), "{stderr}");
+    assert!(stderr.contains("touches of 4") && stderr.contains("reads windows of"), "{stderr}");
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("cv.json")).unwrap()).unwrap();
+    let accuracy = summary["mean_test_accuracy"].as_f64().unwrap();
+    assert!(accuracy >= 0.8, "the classes differ in level and frequency, and are learnt: {accuracy}");
+    for fold in 0..4 {
+        assert!(out.join(format!("seed0/fold{fold}/curves.svg")).exists(), "fold {fold}");
+    }
+    assert!(out.join("cv-curves.svg").exists());
+    let run = out.join("seed0/fold0");
+    let eval = ok(&["eval", run.to_str().unwrap()]);
+    assert!(eval.contains("material_2") && eval.contains("confusion matrix") && run.join("confusion-fold4.svg").exists(), "{eval}");
+    std::fs::remove_file(run.join("curves.svg")).unwrap();
+    ok(&["plot", o]);
+    assert!(run.join("curves.svg").exists(), "plot draws again");
+    ok(&["export", run.to_str().unwrap(), "-o", onnx.to_str().unwrap()]);
+    let c = pvt3_runtime::Classifier::load(&onnx).unwrap();
+    assert_eq!(c.sample_shape(), &[4, 1, 32]);
+    assert_eq!(c.classes(), &["material_0", "material_1", "material_2"]);
     std::fs::remove_dir_all(dir).unwrap();
 }

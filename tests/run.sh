@@ -10,16 +10,28 @@
 #      rayon, no `spectral`: docs/deploy.md), so both supported feature sets are tested: all of
 #      them on the host, the small one on aarch64;
 #   4. the small robot library's size: built as docs/deploy.md says (in the background, from
-#      the start) whenever the runtime, the format, the manifests or the compiler changed since
-#      it was last measured (tests/robot-small.size), it must stay within 8 MiB.
-# It installs what it needs (rustup's aarch64 target and clippy; Debian's gcc-aarch64-linux-gnu,
-# libc6-dev-arm64-cross and qemu-user, with apt-get as root) or says exactly what is missing.
+#      the start) whenever the runtime, the format, its dependency tree, the build profiles or
+#      the compiler changed since it was last measured (tests/robot-small.size), it must stay within 8 MiB.
+# It installs what it needs (rustup's aarch64 target and clippy; Debian's librsvg2-bin for the
+# picture tests, gcc-aarch64-linux-gnu, libc6-dev-arm64-cross and qemu-user, with apt-get as root)
+# or says exactly what is missing.
 # Times under qemu mean nothing; outputs do.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 step() { printf '\n== %s\n' "$*"; }
 missing() { echo "tests/run.sh: missing $1" >&2; exit 1; }
+# Installs the Debian packages named (apt-get, as root), or says exactly what is missing.
+install_debian() {
+  [ $# -gt 0 ] || return 0
+  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
+    echo "installing $*"
+    apt-get update -qq
+    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "$@" >/dev/null
+  else
+    missing "the Debian packages $*: as root, apt-get install $*"
+  fi
+}
 # Every test run's output goes here too, for the summary at the end.
 log=$(mktemp)
 trap 'rm -f "$log"' EXIT
@@ -43,10 +55,17 @@ fi
 # a target directory of its own and in the background: its single-threaded phases (one codegen
 # unit, fat LTO) then overlap the other steps. Its size is checked at the end (at most 8 MiB).
 # It is built whenever what decides it changed (the runtime's and the format's files, the
-# workspace manifest and lock file, the compiler): tests/robot-small.size records the size
-# measured last and the digest of those inputs, and is rewritten by each measurement (commit it).
+# crates and features of the runtime's dependency tree as the lock file pins them, the build
+# profiles, the compiler): tests/robot-small.size records the size measured last and the digest
+# of those inputs, and is rewritten by each measurement (commit it). A crate the trainer alone
+# uses changes none of them.
 size_record=tests/robot-small.size
-size_inputs=$({ rustc -V; git ls-files -z runtime format Cargo.toml Cargo.lock | xargs -0 sha256sum; } | sha256sum | cut -c1-64)
+size_inputs=$({
+  rustc -V
+  git ls-files -z runtime format | xargs -0 sha256sum
+  cargo tree -q --locked -p pvt3-runtime --no-default-features -e normal,features --prefix none | sort -u
+  awk '/^\[/ { p = /^\[profile/ } p' Cargo.toml
+} | sha256sum | cut -c1-64)
 small_log=target/robot-small-size.log small_pid=
 mkdir -p target
 if ! grep -qx "inputs $size_inputs" "$size_record" 2>/dev/null; then
@@ -55,6 +74,9 @@ if ! grep -qx "inputs $size_inputs" "$size_record" 2>/dev/null; then
   small_pid=$!
 fi
 trap '[ -z "$small_pid" ] || kill "$small_pid" 2>/dev/null || true; rm -f "$log"' EXIT
+
+# The picture tests render the SVG files they draw with librsvg and look at the pixels.
+command -v rsvg-convert >/dev/null || install_debian librsvg2-bin
 
 step "host: cargo test --release --workspace"
 cargo_test --release --workspace
@@ -70,15 +92,7 @@ need=()
 command -v aarch64-linux-gnu-gcc >/dev/null || need+=(gcc-aarch64-linux-gnu)
 [ -e "$sysroot/lib/crt1.o" ] || need+=(libc6-dev-arm64-cross) # the arm64 libc to link against (and its loader, for qemu)
 command -v qemu-aarch64 >/dev/null || need+=(qemu-user)
-if [ ${#need[@]} -gt 0 ]; then
-  if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
-    echo "installing ${need[*]}"
-    apt-get update -qq
-    DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "${need[@]}" >/dev/null
-  else
-    missing "the Debian packages ${need[*]}: as root, apt-get install ${need[*]}"
-  fi
-fi
+install_debian ${need[@]+"${need[@]}"}
 rustup target list --installed | grep -qx "$target" || rustup target add "$target" || missing "the Rust target $target (rustup target add $target)"
 
 step "aarch64: cargo test --release --target $target -p pvt3-runtime -p pvt3-format --no-default-features (under qemu)"
@@ -95,7 +109,7 @@ step "the small robot library: at most 8 MiB (docs/deploy.md)"
 limit=$((8 * 1024 * 1024))
 if [ -z "$small_pid" ]; then
   size=$(awk '$1 == "bytes" { print $2 }' "$size_record")
-  echo "unchanged since it was measured ($size_record: the runtime, the format, the manifests and the compiler are as they were): $size bytes (limit $limit)"
+  echo "unchanged since it was measured ($size_record: the runtime, the format, its dependency tree, the profiles and the compiler are as they were): $size bytes (limit $limit)"
 else
   if ! wait "$small_pid"; then
     cat "$small_log" >&2

@@ -185,7 +185,19 @@ pub fn cross_validate(
     let mut summary = summarize(spec.data.path.display().to_string(), &seeds, runs, pruned_runs, stage.cloned());
     calibrate_stopping(&mut summary, &dirs)?;
     write_json_atomically(&out.join(CV_SUMMARY), &summary)?;
+    write_figure(out, &summary, &dirs)?;
     Ok(Some(summary))
+}
+
+/// The figure of all the runs (`cv-curves.svg`), titled with the summary's accuracy.
+pub fn write_figure(out: &Path, summary: &CvSummary, dirs: &[std::path::PathBuf]) -> Result<()> {
+    let title = format!(
+        "{} runs: test accuracy {:.4} ± {:.4} (mean ± std)",
+        summary.runs.len(),
+        summary.mean_test_accuracy,
+        summary.std_test_accuracy
+    );
+    crate::plot::curves::write_cv(out, dirs, &title).map(|_| ())
 }
 
 /// The directory of the run of `seed` with validation fold `fold`.
@@ -328,6 +340,7 @@ pub fn report(out: &Path) -> Result<CvSummary> {
     summary.unfinished = unfinished;
     calibrate_stopping(&mut summary, &dirs)?;
     write_json_atomically(&out.join(CV_SUMMARY), &summary)?;
+    write_figure(out, &summary, &dirs)?;
     Ok(summary)
 }
 

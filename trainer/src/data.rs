@@ -3,8 +3,14 @@
 //! grid) or `[N, H, W, C, T]`, integer labels `[N]` and an optional fold per sample. Any integer
 //! or float dtype is accepted and converted to f32.
 //!
+//! Touches of unequal length (what `pvt3 import` writes from CSV folders) hold `lengths` `[N]`:
+//! touch `i` is its first `lengths[i]` frames, the rest of `T` padding never read. Optional
+//! `class_names` and `sources` (UTF-8 bytes, one name per line) name the classes and each touch's
+//! file, for errors and reports.
+//!
 //! The published protocol: fold k validates, fold 4 tests, the other folds train. A set without a
-//! fold array gets stratified folds 0..=4 drawn from a seed.
+//! fold array gets stratified folds 0..=4 drawn from a seed. Folds are drawn by touch: the
+//! windows a model reads from one touch are never split between training and test.
 
 use std::fs::File;
 use std::io::{Read, Seek};
@@ -25,8 +31,14 @@ pub const FOLDS: usize = 5;
 pub struct Dataset {
     /// Samples back to back, each in the model layout `[H, W, (C,) T]`.
     pub x: Vec<f32>,
-    /// The layout of one sample: `[H, W, T]` or `[H, W, C, T]`.
+    /// The layout of one sample: `[H, W, T]` or `[H, W, C, T]`; `T` is the longest touch's.
     pub sample_shape: Vec<usize>,
+    /// Each touch's frames (`T` for all unless the file holds `lengths`).
+    pub lengths: Vec<usize>,
+    /// Class names from the file (`class_names`), if it has them.
+    pub class_names: Option<Vec<String>>,
+    /// Where each touch came from (`sources`: the CSV files of `pvt3 import`), if the file says.
+    pub sources: Option<Vec<String>>,
     pub labels: Vec<u32>,
     pub folds: Vec<usize>,
     /// False when the folds were drawn here because the file had none.
@@ -147,6 +159,33 @@ impl Dataset {
         if let Some(i) = x.iter().position(|v| !v.is_finite()) {
             return Err(data_error(path, format!("`x` holds a NaN or infinite value in sample {}", i / sample_len)));
         }
+        let frames = *sample_shape.last().expect("a sample shape has a frame axis");
+        let lengths = if keys.iter().any(|k| k == "lengths") {
+            let l = read_numeric(src, "lengths").map_err(|e| data_error(path, format!("array `lengths`: {e}")))?;
+            let lengths = integers(path, "lengths", &l, n)?;
+            if let Some(i) = lengths.iter().position(|l| *l == 0 || *l as usize > frames) {
+                return Err(data_error(path, format!("`lengths`[{i}] = {} is not in 1..={frames}", lengths[i])));
+            }
+            lengths.into_iter().map(|l| l as usize).collect()
+        } else {
+            vec![frames; n]
+        };
+        let mut lines = |key: &str, count: usize| -> Result<Option<Vec<String>>> {
+            if !keys.iter().any(|k| k == key) {
+                return Ok(None);
+            }
+            let bytes = src.read::<u8>(key).map_err(|e| data_error(path, format!("array `{key}` (UTF-8 bytes): {e}")))?;
+            let text = String::from_utf8(bytes.iter().copied().collect())
+                .map_err(|_| data_error(path, format!("array `{key}` is not UTF-8 text")))?;
+            let names: Vec<String> = text.lines().map(String::from).collect();
+            if names.len() != count {
+                return Err(data_error(path, format!("array `{key}` names {} lines; expected {count}", names.len())));
+            }
+            Ok(Some(names))
+        };
+        let classes = labels.iter().max().map_or(0, |m| *m as usize + 1);
+        let class_names = lines("class_names", classes)?;
+        let sources = lines("sources", n)?;
         let (folds, folds_from_file) = match fold {
             Some(f) => {
                 let folds = integers(path, "fold", &f, n)?;
@@ -157,7 +196,17 @@ impl Dataset {
             }
             None => (stratified_folds(&labels, seed), false),
         };
-        Ok(Self { x, sample_shape, labels: labels.to_vec(), folds, folds_from_file, path: path.to_path_buf() })
+        Ok(Self {
+            x,
+            sample_shape,
+            lengths,
+            class_names,
+            sources,
+            labels: labels.to_vec(),
+            folds,
+            folds_from_file,
+            path: path.to_path_buf(),
+        })
     }
 
     pub fn len(&self) -> usize {
@@ -175,6 +224,40 @@ impl Dataset {
     pub fn sample(&self, i: usize) -> &[f32] {
         let l = self.sample_len();
         &self.x[i * l..(i + 1) * l]
+    }
+
+    /// Frames of the longest touch (the file's `T`).
+    pub fn max_frames(&self) -> usize {
+        *self.sample_shape.last().expect("a sample shape has a frame axis")
+    }
+
+    /// The layout of the longest window every touch holds: `sample_shape` with the shortest
+    /// touch's length.
+    pub fn window_shape(&self) -> Vec<usize> {
+        let mut shape = self.sample_shape.clone();
+        *shape.last_mut().expect("a frame axis") = self.lengths.iter().copied().min().unwrap_or(0);
+        shape
+    }
+
+    /// Whether every touch fills the file's `T` frames.
+    pub fn equal_lengths(&self) -> bool {
+        self.lengths.iter().all(|l| *l == self.max_frames())
+    }
+
+    /// Appends frames `start..start + frames` of touch `i` to `out`, in the sample layout.
+    pub fn window_into(&self, i: usize, start: usize, frames: usize, out: &mut Vec<f32>) {
+        debug_assert!(start + frames <= self.lengths[i]);
+        for row in self.sample(i).chunks(self.max_frames()) {
+            out.extend_from_slice(&row[start..start + frames]);
+        }
+    }
+
+    /// How touch `i` is named in errors: its source file, or its index.
+    pub fn touch_name(&self, i: usize) -> String {
+        match &self.sources {
+            Some(s) => format!("touch {i} ({})", s[i]),
+            None => format!("touch {i}"),
+        }
     }
 
     /// Number of classes: the largest label + 1.
@@ -196,15 +279,25 @@ impl Dataset {
         Ok(split)
     }
 
-    /// Checks that the samples fit a model configuration.
+    /// Checks that the samples fit a model configuration: the same frame layout, and every touch
+    /// at least the model's window long (a longer touch is read a window at a time).
     pub fn check_fits(&self, cfg: &pvt3_models::Config) -> Result<()> {
-        if self.sample_shape != cfg.sample_shape() {
+        let expected = cfg.sample_shape();
+        let (frame, model_frame) = (&self.sample_shape[..self.sample_shape.len() - 1], &expected[..expected.len() - 1]);
+        if frame != model_frame || (self.equal_lengths() && self.max_frames() < cfg.frames) {
+            return Err(data_error(
+                &self.path,
+                format!("samples are {:?} but the model expects {:?} ([height, width, (channels,) frames])", self.sample_shape, expected),
+            ));
+        }
+        if let Some(i) = (0..self.len()).find(|&i| self.lengths[i] < cfg.frames) {
             return Err(data_error(
                 &self.path,
                 format!(
-                    "samples are {:?} but the model expects {:?} ([height, width, (channels,) frames])",
-                    self.sample_shape,
-                    cfg.sample_shape()
+                    "{} has {} frames, fewer than the model's window of {}: leave it out, or train a shorter window (--set frames=N)",
+                    self.touch_name(i),
+                    self.lengths[i],
+                    cfg.frames
                 ),
             ));
         }

@@ -1,29 +1,81 @@
-//! Evaluation: loss, accuracy and predictions of a model on normalised samples, in batches.
+//! Evaluation: loss, accuracy and predictions of a model on normalised windows, in batches.
+//!
+//! A touch longer than the model's window is read as windows (see [`window_starts`]); its answer
+//! is the mean of their probabilities. Training instead draws one window at random from each
+//! touch every epoch ([`Samples::cropped`]), an augmentation of where the touch is read.
 
-use candle_core::{Device, Tensor, D};
-use pvt3_models::Classifier;
+use candle_core::{Device, Tensor};
+use pvt3_models::{Classifier, Rng};
 
 use crate::data::Dataset;
 use crate::normalization::Normalization;
 use crate::Result;
 
-/// Normalised samples of one split, ready to batch.
+/// Normalised windows of one split, ready to batch.
 #[derive(Clone, Debug)]
 pub struct Samples {
     pub x: Vec<f32>,
+    /// Each window's label.
     pub labels: Vec<u32>,
     pub sample_shape: Vec<usize>,
+    /// Each window's touch, numbered from 0 in the order of the split (rising, a touch's
+    /// windows together).
+    pub touches: Vec<usize>,
+}
+
+/// Where the windows of `frames` frames that evaluate a touch of `len` frames start: every half
+/// window from the first frame, and one more that ends at the touch's last frame; one window
+/// for a touch of exactly `frames`.
+pub fn window_starts(len: usize, frames: usize) -> Vec<usize> {
+    let stride = (frames / 2).max(1);
+    let last = len - frames;
+    let mut starts: Vec<usize> = (0..=last).step_by(stride).collect();
+    if starts.last() != Some(&last) {
+        starts.push(last);
+    }
+    starts
 }
 
 impl Samples {
-    /// The `indices` samples of `data`, normalised.
+    /// The `indices` touches of `data`, each read as its evaluation windows ([`window_starts`])
+    /// of the `norm.frames` frames the model reads, normalised.
     pub fn new(data: &Dataset, indices: &[usize], norm: &Normalization) -> Self {
-        let mut x = Vec::with_capacity(indices.len() * data.sample_len());
-        for &i in indices {
-            norm.apply_into(data.sample(i), &mut x);
+        let picks = indices.iter().flat_map(|&i| window_starts(data.lengths[i], norm.frames).into_iter().map(move |s| (i, s)));
+        Self::from_windows(data, picks, norm)
+    }
+
+    /// One window of each of the `indices` touches, where `rng` draws it (the whole touch, and
+    /// no draw, when it is exactly one window long).
+    pub fn cropped(data: &Dataset, indices: &[usize], norm: &Normalization, rng: &mut Rng) -> Self {
+        let picks: Vec<(usize, usize)> = indices
+            .iter()
+            .map(|&i| {
+                let spare = data.lengths[i] - norm.frames;
+                (i, if spare == 0 { 0 } else { rng.below(spare + 1) })
+            })
+            .collect();
+        Self::from_windows(data, picks, norm)
+    }
+
+    fn from_windows(data: &Dataset, picks: impl IntoIterator<Item = (usize, usize)>, norm: &Normalization) -> Self {
+        let mut sample_shape = data.sample_shape.clone();
+        *sample_shape.last_mut().expect("a frame axis") = norm.frames;
+        let (mut x, mut raw, mut labels, mut touches) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let mut previous = None;
+        for (i, start) in picks {
+            raw.clear();
+            data.window_into(i, start, norm.frames, &mut raw);
+            norm.apply_into(&raw, &mut x);
+            labels.push(data.labels[i]);
+            let touch = match previous {
+                Some((p, t)) if p == i => t,
+                Some((_, t)) => t + 1,
+                None => 0,
+            };
+            previous = Some((i, touch));
+            touches.push(touch);
         }
-        let labels = indices.iter().map(|&i| data.labels[i]).collect();
-        Self { x, labels, sample_shape: data.sample_shape.clone() }
+        Self { x, labels, sample_shape, touches }
     }
 
     pub fn len(&self) -> usize {
@@ -53,27 +105,82 @@ impl Samples {
     }
 }
 
-/// What a model did on a set of samples.
+/// What a model did on a set of touches.
 #[derive(Clone, Debug)]
 pub struct Evaluation {
+    /// Mean cross-entropy over the windows.
     pub loss: f64,
+    /// Share of touches whose answer is their label.
     pub accuracy: f64,
+    /// Each touch's answer: the class of its window's largest logit, or of its windows' mean
+    /// probabilities.
     pub predictions: Vec<u32>,
+    /// Each touch's label.
+    pub labels: Vec<u32>,
 }
 
 pub const EVAL_BATCH: usize = 100;
 
 pub fn evaluate(model: &Classifier, samples: &Samples) -> Result<Evaluation> {
     let mut loss_sum = 0.0;
-    let mut predictions = Vec::with_capacity(samples.len());
+    let mut logits = Vec::with_capacity(samples.len());
     let rows: Vec<usize> = (0..samples.len()).collect();
     for chunk in rows.chunks(EVAL_BATCH) {
         let (x, y) = samples.batch(chunk, |_| {})?;
-        let logits = model.forward(&x, None)?;
-        loss_sum += candle_nn::loss::cross_entropy(&logits, &y)?.to_scalar::<f32>()? as f64 * chunk.len() as f64;
-        predictions.extend(logits.argmax(D::Minus1)?.to_vec1::<u32>()?);
+        let l = model.forward(&x, None)?;
+        loss_sum += candle_nn::loss::cross_entropy(&l, &y)?.to_scalar::<f32>()? as f64 * chunk.len() as f64;
+        logits.extend(l.to_vec2::<f32>()?);
     }
-    let correct = predictions.iter().zip(&samples.labels).filter(|(p, l)| p == l).count();
-    let n = samples.len().max(1) as f64;
-    Ok(Evaluation { loss: loss_sum / n, accuracy: correct as f64 / n, predictions })
+    let (mut predictions, mut labels) = (Vec::new(), Vec::new());
+    let mut w = 0;
+    while w < logits.len() {
+        let end = (w..logits.len()).find(|&v| samples.touches[v] != samples.touches[w]).unwrap_or(logits.len());
+        predictions.push(touch_answer(&logits[w..end]));
+        labels.push(samples.labels[w]);
+        w = end;
+    }
+    let correct = predictions.iter().zip(&labels).filter(|(p, l)| p == l).count();
+    Ok(Evaluation {
+        loss: loss_sum / samples.len().max(1) as f64,
+        accuracy: correct as f64 / labels.len().max(1) as f64,
+        predictions,
+        labels,
+    })
+}
+
+/// A touch's class from its windows' logits: the largest logit's for one window, the largest
+/// mean probability's for several.
+fn touch_answer(windows: &[Vec<f32>]) -> u32 {
+    let argmax = |v: &[f64]| v.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).map_or(0, |(k, _)| k as u32);
+    if let [one] = windows {
+        return argmax(&one.iter().map(|v| *v as f64).collect::<Vec<_>>());
+    }
+    let mut mean = vec![0f64; windows[0].len()];
+    for l in windows {
+        let top = l.iter().copied().fold(f32::NEG_INFINITY, f32::max) as f64;
+        let e: Vec<f64> = l.iter().map(|v| (*v as f64 - top).exp()).collect();
+        let z: f64 = e.iter().sum();
+        mean.iter_mut().zip(&e).for_each(|(m, e)| *m += e / z);
+    }
+    argmax(&mean)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn windows_cover_the_touch_every_half_window_and_end_at_its_end() {
+        assert_eq!(window_starts(75, 75), vec![0]);
+        assert_eq!(window_starts(10, 4), vec![0, 2, 4, 6]);
+        assert_eq!(window_starts(11, 4), vec![0, 2, 4, 6, 7]);
+        assert_eq!(window_starts(5, 1), vec![0, 1, 2, 3, 4]);
+    }
+
+    #[test]
+    fn a_touch_answers_with_its_windows_mean_probability() {
+        // Two windows: one sure of class 0, one mildly for class 1; the mean favours class 0.
+        assert_eq!(touch_answer(&[vec![5.0, 0.0], vec![0.0, 0.5]]), 0);
+        assert_eq!(touch_answer(&[vec![0.0, 0.2]]), 1);
+    }
 }

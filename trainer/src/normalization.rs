@@ -8,19 +8,23 @@ use crate::data::Dataset;
 /// A channel whose training values barely vary (an idle taxel) keeps unit scale.
 const MIN_STD: f64 = 1e-6;
 
-/// Mean and standard deviation per channel over the `indices` samples and all their frames.
-pub fn fit(data: &Dataset, indices: &[usize]) -> Normalization {
-    let frames = *data.sample_shape.last().expect("a sample has at least one dimension");
+/// Mean and standard deviation per channel over the `indices` touches and all their frames, for
+/// a model reading windows of `window` frames.
+pub fn fit(data: &Dataset, indices: &[usize], window: usize) -> Normalization {
+    let frames = data.max_frames();
     let channels = data.sample_len() / frames;
     let mut sum = vec![0f64; channels];
     let mut sq = vec![0f64; channels];
+    let mut count = 0;
     for &i in indices {
+        let len = data.lengths[i];
         for (c, row) in data.sample(i).chunks(frames).enumerate() {
-            sum[c] += row.iter().map(|v| *v as f64).sum::<f64>();
-            sq[c] += row.iter().map(|v| (*v as f64).powi(2)).sum::<f64>();
+            sum[c] += row[..len].iter().map(|v| *v as f64).sum::<f64>();
+            sq[c] += row[..len].iter().map(|v| (*v as f64).powi(2)).sum::<f64>();
         }
+        count += len;
     }
-    let count = (indices.len() * frames).max(1) as f64;
+    let count = count.max(1) as f64;
     let mean: Vec<f64> = sum.iter().map(|s| s / count).collect();
     let std = sq
         .iter()
@@ -34,7 +38,7 @@ pub fn fit(data: &Dataset, indices: &[usize]) -> Normalization {
             }
         })
         .collect();
-    Normalization { mean: mean.into_iter().map(|m| m as f32).collect(), std, frames }
+    Normalization { mean: mean.into_iter().map(|m| m as f32).collect(), std, frames: window }
 }
 
 #[cfg(test)]
@@ -48,12 +52,15 @@ mod tests {
         let data = Dataset {
             x: vec![1., 2., 3., 0., 0., 0., 3., 4., 5., 0., 0., 0., 100., 100., 100., 9., 9., 9.],
             sample_shape: vec![2, 1, 3],
+            lengths: vec![3; 3],
+            class_names: None,
+            sources: None,
             labels: vec![0, 1, 0],
             folds: vec![0, 1, 4],
             folds_from_file: true,
             path: PathBuf::from("mem"),
         };
-        let norm = fit(&data, &[0, 1]);
+        let norm = fit(&data, &[0, 1], 3);
         assert_eq!(norm.mean, vec![3.0, 0.0]);
         assert!((norm.std[0] - (10.0f32 / 6.0).sqrt()).abs() < 1e-6);
         assert_eq!(norm.std[1], 1.0, "a constant channel keeps unit scale");

@@ -5,14 +5,19 @@
 //! - `last/`, the checkpoint of the last finished epoch, with what resuming needs besides: the
 //!   optimiser's state, the run's state and, when averaging, the weight average;
 //! - `metrics.jsonl`, one line per epoch, and `result.json` once the run has finished;
+//! - `curves.svg`, the training curves, redrawn after every epoch;
 //! - `pruned/`, a run directory of its own: the pruned and fine-tuned model.
 //!
-//! `pvt3 cv --out DIR` writes one run directory per seed and fold, and [`CV_SUMMARY`].
+//! `pvt3 cv --out DIR` writes one run directory per seed and fold, [`CV_SUMMARY`] and
+//! [`CV_CURVES`].
 
 use std::path::{Path, PathBuf};
 
 /// The summary of a cross-validation, in its directory.
 pub const CV_SUMMARY: &str = "cv.json";
+
+/// The figure of a cross-validation's runs, in its directory.
+pub const CV_CURVES: &str = "cv-curves.svg";
 
 /// A run directory.
 #[derive(Clone, Copy, Debug)]
@@ -31,6 +36,11 @@ impl Run<'_> {
 
     pub fn metrics(self) -> PathBuf {
         self.0.join("metrics.jsonl")
+    }
+
+    /// The training curves (`crate::plot::curves`).
+    pub fn curves(self) -> PathBuf {
+        self.0.join("curves.svg")
     }
 
     /// Written when the run has finished: a finished run is one with this file.

@@ -24,6 +24,7 @@ use crate::average::WeightAverage;
 use crate::checkpoint::{self, read_json, write_json, write_json_atomically, Meta, Provenance};
 use crate::data::{Dataset, Split};
 use crate::evaluate::{evaluate, Samples};
+use crate::metrics::EpochMetrics;
 use crate::optim::{is_weight_matrix, AdamW};
 use crate::options::TrainOptions;
 use crate::run_dir::{Checkpoint, Run};
@@ -58,19 +59,6 @@ struct Best {
     val_accuracy: f64,
     val_loss: f64,
     test_accuracy: f64,
-}
-
-/// One line of `metrics.jsonl`.
-#[derive(Serialize, Deserialize)]
-struct EpochMetrics {
-    epoch: usize,
-    lr: f64,
-    train_loss: f64,
-    train_accuracy: f64,
-    val_loss: f64,
-    val_accuracy: f64,
-    test_accuracy: Option<f64>,
-    seconds: f64,
 }
 
 /// Everything a run needs besides its output directory.
@@ -243,15 +231,19 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
     let opts = &spec_options;
     spec.data.check_fits(&config)?;
     let split: Split = spec.data.split(spec.val_fold)?;
-    let normalization = crate::normalization::fit(spec.data, &split.train);
+    let normalization = crate::normalization::fit(spec.data, &split.train, config.frames);
+    // Every training touch read as its evaluation windows: what fits the spectral head's
+    // standardisation, and each epoch's batches when every touch is one window long. A longer
+    // touch gives each epoch one window drawn at random (`Samples::cropped`).
     let train_set = Samples::new(spec.data, &split.train, &normalization);
+    let crops = split.train.iter().any(|&i| spec.data.lengths[i] > config.frames);
     let val_set = Samples::new(spec.data, &split.val, &normalization);
     let test_set = Samples::new(spec.data, &split.test, &normalization);
 
     std::fs::create_dir_all(out).map_err(Error::io(out))?;
     let mut learner = Learner::new(&config, opts, spec.start.as_ref())?;
     let mut average = if opts.ema > 0.0 { Some(WeightAverage::new(&learner.varmap, opts.ema)?) } else { None };
-    let steps_per_epoch = train_set.len().div_ceil(opts.batch_size);
+    let steps_per_epoch = split.train.len().div_ceil(opts.batch_size);
     let schedule = Schedule {
         peak: opts.lr,
         floor: opts.lr * opts.lr_floor,
@@ -310,6 +302,8 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
             return Ok(None);
         }
         let started = Instant::now();
+        let cropped = crops.then(|| Samples::cropped(spec.data, &split.train, &normalization, &mut run.rng));
+        let train_set = cropped.as_ref().unwrap_or(&train_set);
         let mut order: Vec<usize> = (0..train_set.len()).collect();
         run.rng.shuffle(&mut order);
         let (mut loss_sum, mut correct) = (0.0, 0usize);
@@ -369,6 +363,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
             write_json(&files.state(), &run)
         })?;
         writeln!(log, "{}", serde_json::to_string(&line).expect("plain data")).map_err(Error::io(out))?;
+        crate::plot::curves::write_run(out)?;
         let best = run.best.as_ref().expect("set after the first epoch");
         bar.set_message(format!(
             "epoch {epoch}/{} loss {:.3} train {:.3} val {:.3} (best {:.3} @ {})",

@@ -47,6 +47,9 @@ pub(crate) fn tiny_data() -> Dataset {
     Dataset {
         x,
         sample_shape: vec![2, 2, 8],
+        lengths: vec![8; n],
+        class_names: None,
+        sources: None,
         labels,
         folds: (0..n).map(|i| (i / 2) % 5).collect(),
         folds_from_file: true,
@@ -122,7 +125,7 @@ fn learns_a_separable_problem_and_writes_a_checkpoint() {
     assert_eq!(meta.classes, vec!["up", "down"]);
     assert_eq!(meta.provenance.epoch, r.best_epoch);
     let split = data.split(0).unwrap();
-    assert_eq!(meta.normalization, crate::normalization::fit(&data, &split.train), "fitted on the training split only");
+    assert_eq!(meta.normalization, crate::normalization::fit(&data, &split.train, 8), "fitted on the training split only");
     let again = train(&spec(&data, 30, None), &dir, false, &ProgressBar::hidden()).unwrap_err().to_string();
     assert!(again.contains("already holds a run; pass --resume"), "{again}");
     std::fs::remove_dir_all(dir).unwrap();

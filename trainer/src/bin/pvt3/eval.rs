@@ -1,5 +1,6 @@
 //! `pvt3 eval`: a checkpoint's accuracy on a fold (by default its own data's test fold), per
-//! class, or with `--anytime` against the share of each touch it has seen.
+//! class and as a confusion matrix (printed, and drawn as SVG), or with `--anytime` against the
+//! share of each touch it has seen.
 
 use std::path::PathBuf;
 
@@ -9,6 +10,7 @@ use pvt3_trainer::anytime::{self, CalibratedOn, Stopping};
 use pvt3_trainer::checkpoint;
 use pvt3_trainer::data::{Dataset, TEST_FOLD};
 use pvt3_trainer::evaluate::{evaluate, Samples};
+use pvt3_trainer::plot::{self, confusion};
 
 /// Accuracy of a checkpoint on a data set (by default its test fold, or all samples).
 #[derive(clap::Args)]
@@ -26,6 +28,10 @@ pub struct EvalArgs {
     /// on all its runs' validation answers) does here.
     #[arg(long)]
     pub anytime: bool,
+    /// Where to draw the confusion matrix (default: confusion-fold<K>.svg, or
+    /// confusion-all.svg, in the checkpoint's directory).
+    #[arg(long, value_name = "FILE.svg", conflicts_with = "anytime")]
+    pub confusion: Option<PathBuf>,
     /// With --anytime: print one JSON object instead of the table.
     #[arg(long, requires = "anytime")]
     pub json: bool,
@@ -82,19 +88,26 @@ pub fn run(a: EvalArgs) -> Result<()> {
         return anytime_report(&meta, &model, &data, &samples, fold, &a);
     }
     let e = evaluate(&model, &samples)?;
-    println!("{} samples (fold {fold}): accuracy {:.4}, loss {:.4}", samples.len(), e.accuracy, e.loss);
+    let windows = if samples.len() > indices.len() { format!(", {} windows", samples.len()) } else { String::new() };
+    println!("{} samples (fold {fold}{windows}): accuracy {:.4}, loss {:.4}", indices.len(), e.accuracy, e.loss);
     if let (true, Some(test)) = (fold == Folds::One(TEST_FOLD), meta.provenance.test_accuracy) {
         println!("(the checkpoint's own record: test accuracy {test:.4})");
     }
     println!("{:<24} {:>8} {:>8}", "class", "samples", "accuracy");
     for (c, name) in meta.classes.iter().enumerate() {
-        let rows: Vec<usize> = (0..samples.len()).filter(|&r| samples.labels[r] as usize == c).collect();
+        let rows: Vec<usize> = (0..e.labels.len()).filter(|&r| e.labels[r] as usize == c).collect();
         if rows.is_empty() {
             continue;
         }
         let ok = rows.iter().filter(|&&r| e.predictions[r] as usize == c).count();
         println!("{:<24} {:>8} {:>8.3}", name, rows.len(), ok as f64 / rows.len() as f64);
     }
+    let m = confusion::matrix(&e.labels, &e.predictions, meta.classes.len());
+    println!("\nconfusion matrix (rows: true class, columns: answer)\n{}", confusion::text(&m, &meta.classes));
+    let path = a.confusion.clone().unwrap_or_else(|| a.checkpoint.join(format!("confusion-fold{fold}.svg")));
+    let title = format!("{}: fold {fold}, {} touches, accuracy {:.4}", a.checkpoint.display(), e.labels.len(), e.accuracy);
+    plot::write(&path, &confusion::svg(&m, &meta.classes, &title)).with_context(|| format!("drawing {}", path.display()))?;
+    println!("drew {}", path.display());
     Ok(())
 }
 

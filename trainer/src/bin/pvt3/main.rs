@@ -5,8 +5,10 @@ mod bench;
 mod cv;
 mod eval;
 mod export;
+mod import;
 mod info;
 mod model_args;
+mod plot;
 mod progress;
 mod prune;
 mod prune_args;
@@ -16,7 +18,7 @@ use anyhow::Result;
 use clap::{Parser, Subcommand};
 
 #[derive(Parser)]
-#[command(name = "pvt3", version, about = "PVT³ tactile texture classification: train, cross-validate, evaluate, inspect")]
+#[command(name = "pvt3", version, about = "PVT³ tactile texture classification: import, train, cross-validate, evaluate, export, inspect")]
 struct Cli {
     /// CPU threads for training and evaluation (default: all cores). One run splits each batch's
     /// sequences over them (two threads: 1.5-1.7x one); `cv --jobs N` uses the cores best, one
@@ -29,12 +31,14 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    Import(import::ImportArgs),
     Train(train::TrainArgs),
     Cv(cv::CvArgs),
     Prune(prune::PruneCommand),
     Export(export::ExportArgs),
     Bake(export::BakeArgs),
     Eval(eval::EvalArgs),
+    Plot(plot::PlotArgs),
     /// Benchmarks (see docs/training-speed.md).
     #[command(subcommand)]
     Bench(bench::Bench),
@@ -68,12 +72,14 @@ fn main() -> Result<()> {
         std::env::set_var("RAYON_NUM_THREADS", t.to_string());
     }
     match cli.command {
+        Command::Import(a) => import::run(a),
         Command::Train(a) => train::run(a),
         Command::Cv(a) => cv::run(a),
         Command::Prune(a) => prune::run(a),
         Command::Export(a) => export::export_onnx(&a.model, &a.out),
         Command::Bake(a) => export::bake(a),
         Command::Eval(a) => eval::run(a),
+        Command::Plot(a) => plot::run(a),
         Command::Bench(b) => bench::run(b),
         Command::Info(a) => info::run(a),
     }

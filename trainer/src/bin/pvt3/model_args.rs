@@ -36,7 +36,8 @@ pub struct ModelArgs {
     /// configuration's `dropout` field, 0.1 in every preset.
     #[arg(long)]
     pub dropout: Option<f64>,
-    /// Class names, one per line (default: class_0, class_1, …).
+    /// Class names, one per line (default: the data's own, as `pvt3 import` writes them, else
+    /// class_0, class_1, …).
     #[arg(long)]
     pub class_names: Option<PathBuf>,
     /// Stop after this many epochs (per run), leaving the work to be continued with --resume.
@@ -86,6 +87,14 @@ pub fn prepare(args: &ModelArgs) -> Result<Prepared> {
     let data = Dataset::load(&args.data, args.options.seed)?;
     // `--model vit` turns preset `icub20` into `vit-icub20`.
     let architecture = args.architecture.unwrap_or_default();
+    // Touches of unequal length: by default the model reads windows of the shortest.
+    let window = data.window_shape();
+    if !data.equal_lengths() {
+        let (shortest, longest) = (window.last().copied().unwrap_or(0), data.max_frames());
+        eprintln!(
+            "touches of {shortest} to {longest} frames: unless the configuration says otherwise (--set frames=N), the model reads windows of {shortest} frames, one drawn at random from each touch every epoch, and answers for a touch with the mean probabilities of windows every half window"
+        );
+    }
     let preset = |name: &str| match architecture {
         Architecture::Pvt3 => Config::preset(name),
         model => Config::preset(&format!("{}-{name}", model.name())),
@@ -93,25 +102,23 @@ pub fn prepare(args: &ModelArgs) -> Result<Prepared> {
     let mut cfg = match (&args.preset, &args.config) {
         (Some(p), _) => preset(p)?,
         (None, Some(path)) => resolve_config(&path.display().to_string())?,
-        (None, None) => match pvt3_spec::config::PRESETS
-            .iter()
-            .map(|p| preset(p).expect("known preset"))
-            .find(|c| c.sample_shape() == data.sample_shape)
-        {
-            Some(cfg) => cfg,
-            None => {
-                let shape = data.sample_shape.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(" × ");
-                let derived = Config::for_sensor(&data.sample_shape)
-                    .with_context(|| format!("samples of shape {shape}: expected [height, width, (channels,) frames]"))?;
-                eprintln!(
+        (None, None) => {
+            match pvt3_spec::config::PRESETS.iter().map(|p| preset(p).expect("known preset")).find(|c| c.sample_shape() == window) {
+                Some(cfg) => cfg,
+                None => {
+                    let shape = window.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(" × ");
+                    let derived = Config::for_sensor(&window)
+                        .with_context(|| format!("samples of shape {shape}: expected [height, width, (channels,) frames]"))?;
+                    eprintln!(
                     "no preset takes samples of {shape}: derived the BioTac layout, one token per {} frames of all {} values of a frame ({} temporal tokens); `pvt3 info --json` and --config FILE to choose otherwise",
                     derived.tubelet,
                     derived.height * derived.width * derived.channels,
                     derived.time_tokens()
                 );
-                derived.for_model(architecture)
+                    derived.for_model(architecture)
+                }
             }
-        },
+        }
     };
     cfg.classes = data.classes();
     cfg = apply_overrides(cfg, &args.overrides)?;
@@ -137,7 +144,10 @@ pub fn prepare(args: &ModelArgs) -> Result<Prepared> {
             }
             names
         }
-        None => (0..cfg.classes).map(|k| format!("class_{k}")).collect(),
+        None => match &data.class_names {
+            Some(names) if names.len() == cfg.classes => names.clone(),
+            _ => (0..cfg.classes).map(|k| format!("class_{k}")).collect(),
+        },
     };
     if !data.folds_from_file {
         eprintln!("note: {} has no fold array; stratified folds were drawn with seed {}", data.path.display(), args.options.seed);

@@ -1,0 +1,56 @@
+//! `pvt3 plot`: draws again the pictures `train` and `cv` leave, for a run or a whole
+//! cross-validation (e.g. one trained before they drew them).
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context, Result};
+use pvt3_trainer::checkpoint::read_json;
+use pvt3_trainer::cv::{self, CvSummary};
+use pvt3_trainer::plot::curves;
+use pvt3_trainer::run_dir::{Run, CV_SUMMARY};
+
+/// Draw the training curves of a run (DIR/curves.svg), or of every run of a cross-validation
+/// and the figure of all of them (DIR/cv-curves.svg). The confusion matrix is `pvt3 eval`'s.
+#[derive(clap::Args)]
+pub struct PlotArgs {
+    /// A run directory (with metrics.jsonl) or a cross-validation's (with cv.json).
+    pub dir: PathBuf,
+}
+
+/// The run directories of the cross-validation in `out`, `seed*/fold*` with metrics.
+fn cv_runs(out: &Path) -> Result<Vec<PathBuf>> {
+    let mut dirs = Vec::new();
+    for seed in std::fs::read_dir(out).with_context(|| format!("reading {}", out.display()))? {
+        let seed = seed?.path();
+        if !seed.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with("seed")) || !seed.is_dir() {
+            continue;
+        }
+        for fold in std::fs::read_dir(&seed)? {
+            let fold = fold?.path();
+            if Run(&fold).metrics().exists() {
+                dirs.push(fold);
+            }
+        }
+    }
+    dirs.sort();
+    Ok(dirs)
+}
+
+pub fn run(a: PlotArgs) -> Result<()> {
+    let dir = &a.dir;
+    if Run(dir).metrics().exists() {
+        println!("drew {}", curves::write_run(dir)?.display());
+        return Ok(());
+    }
+    if !dir.join(CV_SUMMARY).exists() {
+        bail!("{} holds neither a run (metrics.jsonl) nor a cross-validation ({CV_SUMMARY})", dir.display());
+    }
+    let summary: CvSummary = read_json(&dir.join(CV_SUMMARY))?;
+    let dirs = cv_runs(dir)?;
+    for run in &dirs {
+        curves::write_run(run)?;
+    }
+    cv::write_figure(dir, &summary, &dirs)?;
+    println!("drew the curves of {} runs and {}", dirs.len(), dir.join(pvt3_trainer::run_dir::CV_CURVES).display());
+    Ok(())
+}

@@ -1,0 +1,33 @@
+//! A run's `metrics.jsonl`: one line per finished epoch.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::{Error, Result};
+
+/// One line of `metrics.jsonl`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EpochMetrics {
+    pub epoch: usize,
+    pub lr: f64,
+    pub train_loss: f64,
+    pub train_accuracy: f64,
+    pub val_loss: f64,
+    pub val_accuracy: f64,
+    /// Measured only at the epochs that improved on validation (the candidates).
+    pub test_accuracy: Option<f64>,
+    pub seconds: f64,
+}
+
+/// Every epoch of the log at `path`, in order; a malformed line is an error naming it.
+pub fn read(path: &Path) -> Result<Vec<EpochMetrics>> {
+    let text = std::fs::read_to_string(path).map_err(Error::io(path))?;
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .map(|(i, l)| {
+            serde_json::from_str(l).map_err(|e| Error::Checkpoint { path: path.to_path_buf(), reason: format!("line {}: {e}", i + 1) })
+        })
+        .collect()
+}

@@ -1,0 +1,27 @@
+//! Pictures of runs, as SVG files a browser or any viewer shows: a run's training curves
+//! ([`curves::run_figure`]), a cross-validation's runs side by side ([`curves::cv_figure`]) and a
+//! confusion matrix ([`confusion`]). Written by hand (a few hundred lines of SVG text) rather than
+//! through a plotting crate, which would bring a font stack into the trainer.
+
+pub mod chart;
+pub mod confusion;
+pub mod curves;
+
+use std::path::Path;
+
+use crate::{Error, Result};
+
+/// `text` with the characters XML reserves escaped.
+pub fn escape(text: &str) -> String {
+    text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+}
+
+/// Writes `svg` to `path` through a temporary file, so that a viewer never sees half a picture.
+pub fn write(path: &Path, svg: &str) -> Result<()> {
+    let tmp = path.with_extension(format!("svg.{}.tmp", std::process::id()));
+    std::fs::write(&tmp, svg).map_err(Error::io(&tmp))?;
+    std::fs::rename(&tmp, path).map_err(Error::io(path))
+}
+
+#[cfg(test)]
+mod tests;

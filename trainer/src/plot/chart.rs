@@ -1,0 +1,153 @@
+//! Line charts: panels side by side, each with axes, ticks, a legend, its series and an optional
+//! marked x (the selected epoch).
+
+use std::fmt::Write;
+
+use super::escape;
+
+/// One line (or, with `dots`, points) of a panel.
+#[derive(Clone, Debug)]
+pub struct Series {
+    pub name: String,
+    pub color: &'static str,
+    pub points: Vec<(f64, f64)>,
+    pub dots: bool,
+    /// Thin and without a legend entry: one of many runs.
+    pub faint: bool,
+}
+
+impl Series {
+    pub fn line(name: &str, color: &'static str, points: Vec<(f64, f64)>) -> Self {
+        Self { name: name.into(), color, points, dots: false, faint: false }
+    }
+}
+
+#[derive(Clone, Debug, Default)]
+pub struct Panel {
+    pub title: String,
+    pub x_label: String,
+    pub series: Vec<Series>,
+    /// The y axis's range; by default the data's, with a margin.
+    pub y_range: Option<(f64, f64)>,
+    /// A vertical line at this x, labelled.
+    pub marker: Option<(f64, String)>,
+}
+
+/// Colours that stay apart for people with the common colour-vision deficiencies (Okabe & Ito).
+pub const COLORS: [&str; 7] = ["#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000"];
+
+const PANEL_W: f64 = 420.0;
+const PANEL_H: f64 = 300.0;
+const MARGIN: (f64, f64, f64, f64) = (56.0, 16.0, 36.0, 44.0); // left, right, top, bottom
+
+/// About five round ticks (1, 2 or 5 × 10^k apart) covering `lo..hi`.
+pub fn ticks(lo: f64, hi: f64) -> Vec<f64> {
+    if hi.partial_cmp(&lo) != Some(std::cmp::Ordering::Greater) {
+        return vec![lo];
+    }
+    let raw = (hi - lo) / 5.0;
+    let magnitude = 10f64.powf(raw.log10().floor());
+    let step = [1.0, 2.0, 5.0, 10.0].iter().map(|m| m * magnitude).find(|s| *s >= raw).unwrap_or(10.0 * magnitude);
+    let first = (lo / step).ceil() as i64;
+    let last = (hi / step).floor() as i64;
+    (first..=last).map(|k| k as f64 * step).collect()
+}
+
+fn label(v: f64) -> String {
+    if v != 0.0 && (v.abs() < 1e-3 || v.abs() >= 1e5) {
+        format!("{v:.0e}")
+    } else {
+        let s = format!("{v:.4}");
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    }
+}
+
+/// The range of a panel's y values, with a margin; `(0, 1)` if it has none.
+fn data_range(panel: &Panel) -> (f64, f64) {
+    let ys = panel.series.iter().flat_map(|s| s.points.iter().map(|p| p.1)).filter(|y| y.is_finite());
+    let (lo, hi) = ys.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), y| (lo.min(y), hi.max(y)));
+    if !lo.is_finite() {
+        return (0.0, 1.0);
+    }
+    let pad = ((hi - lo) * 0.05).max(hi.abs() * 1e-3).max(1e-12);
+    (lo - pad, hi + pad)
+}
+
+/// The panels side by side under `title`, as an SVG document.
+pub fn figure(title: &str, panels: &[Panel]) -> String {
+    let width = PANEL_W * panels.len().max(1) as f64;
+    let height = PANEL_H + 30.0;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width}" height="{height}" viewBox="0 0 {width} {height}" font-family="sans-serif" font-size="11">"#
+    );
+    let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
+    let _ = writeln!(s, r#"<text x="{}" y="20" text-anchor="middle" font-size="14">{}</text>"#, width / 2.0, escape(title));
+    for (k, panel) in panels.iter().enumerate() {
+        draw_panel(&mut s, panel, k as f64 * PANEL_W, 30.0);
+    }
+    s.push_str("</svg>\n");
+    s
+}
+
+fn draw_panel(s: &mut String, panel: &Panel, ox: f64, oy: f64) {
+    let (left, right, top, bottom) = MARGIN;
+    let (x0, x1, y0, y1) = (ox + left, ox + PANEL_W - right, oy + top, oy + PANEL_H - bottom);
+    let xs = panel.series.iter().flat_map(|s| s.points.iter().map(|p| p.0));
+    let (xlo, xhi) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)));
+    let (xlo, xhi) = if xlo.is_finite() { (xlo, if xhi > xlo { xhi } else { xlo + 1.0 }) } else { (0.0, 1.0) };
+    let (ylo, yhi) = panel.y_range.unwrap_or_else(|| data_range(panel));
+    let px = |x: f64| x0 + (x - xlo) / (xhi - xlo) * (x1 - x0);
+    let py = |y: f64| y1 - (y.clamp(ylo, yhi) - ylo) / (yhi - ylo) * (y1 - y0);
+    let _ = writeln!(
+        s,
+        r#"<text x="{}" y="{}" text-anchor="middle" font-size="12">{}</text>"#,
+        (x0 + x1) / 2.0,
+        oy + 16.0,
+        escape(&panel.title)
+    );
+    for t in ticks(ylo, yhi) {
+        let y = py(t);
+        let _ = writeln!(s, r##"<line x1="{x0}" y1="{y:.1}" x2="{x1}" y2="{y:.1}" stroke="#e4e4e4"/>"##);
+        let _ = writeln!(s, r#"<text x="{}" y="{:.1}" text-anchor="end">{}</text>"#, x0 - 4.0, y + 4.0, label(t));
+    }
+    for t in ticks(xlo, xhi).into_iter().filter(|t| t.fract() == 0.0 || xhi - xlo < 5.0) {
+        let x = px(t);
+        let _ = writeln!(s, r#"<line x1="{x:.1}" y1="{y1}" x2="{x:.1}" y2="{}" stroke="black"/>"#, y1 + 4.0);
+        let _ = writeln!(s, r#"<text x="{x:.1}" y="{}" text-anchor="middle">{}</text>"#, y1 + 16.0, label(t));
+    }
+    let _ = writeln!(s, r#"<rect x="{x0}" y="{y0}" width="{}" height="{}" fill="none" stroke="black"/>"#, x1 - x0, y1 - y0);
+    let _ = writeln!(s, r#"<text x="{}" y="{}" text-anchor="middle">{}</text>"#, (x0 + x1) / 2.0, y1 + 32.0, escape(&panel.x_label));
+    if let Some((x, text)) = &panel.marker {
+        let x = px(*x);
+        let _ = writeln!(s, r##"<line x1="{x:.1}" y1="{y0}" x2="{x:.1}" y2="{y1}" stroke="#777" stroke-dasharray="4 3"/>"##);
+        // The label on the side with room: left of a line in the right half.
+        let (tx, anchor) = if x > (x0 + x1) / 2.0 { (x - 3.0, "end") } else { (x + 3.0, "start") };
+        let _ = writeln!(s, r##"<text x="{tx:.1}" y="{}" text-anchor="{anchor}" fill="#555">{}</text>"##, y0 + 12.0, escape(text));
+    }
+    for series in &panel.series {
+        let points: Vec<String> =
+            series.points.iter().filter(|p| p.1.is_finite()).map(|&(x, y)| format!("{:.1},{:.1}", px(x), py(y))).collect();
+        if series.dots {
+            for p in &points {
+                let (x, y) = p.split_once(',').expect("x,y");
+                let _ = writeln!(s, r#"<circle cx="{x}" cy="{y}" r="2.5" fill="{}"/>"#, series.color);
+            }
+        } else if !points.is_empty() {
+            let (width, opacity) = if series.faint { (1.0, 0.45) } else { (1.8, 1.0) };
+            let _ = writeln!(
+                s,
+                r#"<polyline points="{}" fill="none" stroke="{}" stroke-width="{width}" stroke-opacity="{opacity}"/>"#,
+                points.join(" "),
+                series.color
+            );
+        }
+    }
+    let legend: Vec<&Series> = panel.series.iter().filter(|s| !s.faint).collect();
+    for (k, series) in legend.iter().enumerate() {
+        let (lx, ly) = (x0 + 8.0, y0 + 14.0 + 14.0 * k as f64 + if panel.marker.is_some() { 10.0 } else { 0.0 });
+        let _ = writeln!(s, r#"<rect x="{lx}" y="{}" width="12" height="3" fill="{}"/>"#, ly - 4.0, series.color);
+        let _ = writeln!(s, r#"<text x="{}" y="{ly}">{}</text>"#, lx + 16.0, escape(&series.name));
+    }
+}
