@@ -100,6 +100,7 @@ out.append("| model | kept frames | batch 1 median / p99 (µs) | batch 1, small 
 out.append("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
 start = ["", "| model | load: read, digest check, parse (ms) | digest check alone (ms) | first call, fixed kernels (ms) | first call, measured kernels (ms) | `prepare` batch 1 and streaming (ms) | first call after `prepare` (ms) |", "|---|---:|---:|---:|---:|---:|---:|"]
 stream = ["", "| model | per kept frame median / p99 (µs) | per pruned frame (µs) | end of touch median / p99 (µs) | compute per touch (µs) |", "|---|---:|---:|---:|---:|"]
+slide = ["", "| model | continuous, one answer median (µs) | continuous, per token answering after every token (µs) | batch 1 median (µs) |", "|---|---:|---:|---:|"]
 for m in dict.fromkeys(r["model"] for r in rows):
     p = [r for r in rows if r["model"] == m and r["engine"] == "pvt3"]
     o = [r for r in rows if r["model"] == m and r["engine"] == "onnxruntime"]
@@ -109,13 +110,14 @@ for m in dict.fromkeys(r["model"] for r in rows):
                f"{med(o,'batch32_windows_per_second'):.0f} | {med(p,'batch1_median_us') / med(o,'batch1_median_us'):.2f} |")
     start.append(f"| `{m}` | {med(p,'load_ms'):.1f} | {med(p,'digest_check_ms'):.2f} | {med(p,'batch1_first_call_ms'):.0f} | {med(p,'batch1_measured_first_call_ms'):.0f} | "
                  f"{med(p,'prepare_ms'):.0f} | {med(p,'batch1_first_call_after_prepare_ms'):.2f} |")
+    slide.append(f"| `{m}` | {med(p,'continuous_answer_median_us'):.0f} | {med(p,'continuous_per_token_us'):.0f} | {med(p,'batch1_median_us'):.0f} |")
     if "stream_kept_frame_median_us" not in p[0]:
         stream.append(f"| `{m}` | not streamed: a spectral head reads the whole window | | | |")
         continue
     stream.append(f"| `{m}` | {med(p,'stream_kept_frame_median_us'):.0f} / {med(p,'stream_kept_frame_p99_us'):.0f} | "
                   f"{med(p,'stream_pruned_frame_median_us'):.2f} | {med(p,'stream_end_of_touch_median_us'):.0f} / {med(p,'stream_end_of_touch_p99_us'):.0f} | "
                   f"{med(p,'stream_compute_per_touch_us'):.0f} |")
-text = "\n".join(out + start + stream) + "\n"
+text = "\n".join(out + start + stream + slide) + "\n"
 doc = open("docs/deploy.md").read()
 marker = "<!-- figures: bash bench/deploy.sh -->\n"
 open("docs/deploy.md", "w").write(doc.split(marker)[0] + marker + "\n" + text)

@@ -428,5 +428,23 @@ fn csv_touches_of_any_length_import_cross_validate_and_export() {
     let c = pvt3_runtime::Classifier::load(&onnx).unwrap();
     assert_eq!(c.sample_shape(), &[4, 1, 32]);
     assert_eq!(c.classes(), &["material_0", "material_1", "material_2"]);
+    // A whole touch from its CSV file, streamed: a session over its first window equals the
+    // window classified, and a continuous stream over all of it answers for each latest window.
+    let text = std::fs::read_to_string(csvs.join("material_2/touch_03.csv")).unwrap();
+    let frames: Vec<Vec<f32>> = text.lines().skip(1).map(|l| l.split(',').skip(1).take(4).map(|v| v.parse().unwrap()).collect()).collect();
+    let window = |end: usize| -> Vec<f32> { (0..4).flat_map(|e| frames[end - 32..end].iter().map(move |f| f[e])).collect() };
+    let mut session = c.session().unwrap();
+    frames[..32].iter().for_each(|f| session.push_frame(f).unwrap());
+    let (streamed, whole) = (session.finish().unwrap(), c.classify(&window(32)).unwrap());
+    assert!(streamed.probabilities.iter().zip(&whole.probabilities).all(|(a, b)| (a - b).abs() <= 1e-5));
+    let mut slide = c.continuous(1).unwrap();
+    let mut answers = 0;
+    for (t, f) in frames.iter().enumerate() {
+        if let Some(p) = slide.push_frame(f).unwrap() {
+            assert_eq!(p, c.classify(&window(t + 1)).unwrap(), "the window ending at frame {}", t + 1);
+            answers += 1;
+        }
+    }
+    assert_eq!(answers, (frames.len() - 32) / 4 + 1, "after every token of 4 frames once a window is in");
     std::fs::remove_dir_all(dir).unwrap();
 }
