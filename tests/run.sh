@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The tests, exactly as CI runs them (.ci/run):
 #   1. the whole workspace on this machine (cargo test --release --workspace);
-#   2. the runtime's lints: clippy with warnings denied (every unsafe block has a SAFETY note);
+#   2. the C ABI under valgrind (x86-64): the C example's paths and every entry point's error
+#      paths, no invalid read or write, no leak; then the runtime's lints: clippy with warnings
+#      denied (every unsafe block has a SAFETY note);
 #   3. the robot runtime cross-built for aarch64 (64-bit ARM: Jetson Orin, Raspberry Pi 4/5) and
 #      its tests run under qemu: golden logits, bit-identical loads, threads, damaged files,
 #      streaming, every C-ABI error path, and runtime/examples/classify.c built with
@@ -13,8 +15,8 @@
 #      the start) whenever the runtime, the format, its dependency tree, the build profiles or
 #      the compiler changed since it was last measured (tests/robot-small.size), it must stay within 8 MiB.
 # It installs what it needs (rustup's aarch64 target and clippy; Debian's librsvg2-bin for the
-# picture tests, gcc-aarch64-linux-gnu, libc6-dev-arm64-cross and qemu-user, with apt-get as root)
-# or says exactly what is missing.
+# picture tests, valgrind for the C ABI, gcc-aarch64-linux-gnu, libc6-dev-arm64-cross and
+# qemu-user, with apt-get as root) or says exactly what is missing.
 # Times under qemu mean nothing; outputs do.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -75,11 +77,29 @@ if ! grep -qx "inputs $size_inputs" "$size_record" 2>/dev/null; then
 fi
 trap '[ -z "$small_pid" ] || kill "$small_pid" 2>/dev/null || true; rm -f "$log"' EXIT
 
-# The picture tests render the SVG files they draw with librsvg and look at the pixels.
-command -v rsvg-convert >/dev/null || install_debian librsvg2-bin
+# The picture tests render the SVG files they draw with librsvg and look at the pixels; on
+# x86-64 the C example runs under valgrind too (runtime/tests/c_abi.rs, PVT3_VALGRIND).
+need=()
+command -v rsvg-convert >/dev/null || need+=(librsvg2-bin)
+[ "$(uname -m)" != x86_64 ] || command -v valgrind >/dev/null || need+=(valgrind)
+install_debian ${need[@]+"${need[@]}"}
+[ "$(uname -m)" != x86_64 ] || export PVT3_VALGRIND=1
 
 step "host: cargo test --release --workspace"
 cargo_test --release --workspace
+
+if [ -n "${PVT3_VALGRIND:-}" ]; then
+  step "C ABI under valgrind: every entry point's error paths, no invalid access, no leak"
+  c_abi=$(cargo test -q --release -p pvt3-runtime --test c_abi --no-run --message-format=json 2>/dev/null |
+    python3 -c 'import json, sys
+for line in sys.stdin:
+    m = json.loads(line)
+    if m.get("reason") == "compiler-artifact" and m["target"]["name"] == "c_abi" and m.get("executable"):
+        print(m["executable"])')
+  valgrind -q --error-exitcode=99 --leak-check=full --errors-for-leak-kinds=definite,indirect --show-leak-kinds=definite,indirect \
+    "$c_abi" --test-threads 1 every_entry_point_reports_instead_of_crashing 2>&1 | tee -a "$log"
+  unset PVT3_VALGRIND
+fi
 
 step "runtime lints: cargo clippy -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings"
 cargo clippy --version >/dev/null 2>&1 || rustup component add clippy || missing "clippy (rustup component add clippy)"

@@ -13,8 +13,10 @@
 
 #include "pvt3.h"
 
-static int fail(const char *what) {
+/* Reports a failed call; `status` becomes 1, and main frees what it took before returning it. */
+static int fail(const char *what, int *status) {
     fprintf(stderr, "classify: %s: %s\n", what, pvt3_last_error());
+    *status = 1;
     return 1;
 }
 
@@ -33,77 +35,83 @@ int main(int argc, char **argv) {
         return 2;
     }
     size_t batch = (size_t)strtoul(argv[3], NULL, 10);
+    int status = 0;
+    /* Everything taken, freed at `done` whichever way main leaves (free and the pvt3 frees take NULL). */
     pvt3_classifier *model = NULL;
-    if (pvt3_classifier_load(argv[1], &model) != PVT3_OK) return fail("load");
-    size_t sample_len = 0, classes = 0;
-    if (pvt3_classifier_sample_len(model, &sample_len) != PVT3_OK) return fail("sample_len");
-    if (pvt3_classifier_num_classes(model, &classes) != PVT3_OK) return fail("num_classes");
-    size_t frames_per_window = 0;
-    if (pvt3_classifier_frames(model, &frames_per_window) != PVT3_OK) return fail("frames");
+    pvt3_session *session = NULL;
+    pvt3_continuous *slide = NULL;
+    float *frames = NULL, *probs = NULL, *frame = NULL;
+    size_t *best = NULL;
+    size_t sample_len = 0, classes = 0, frames_per_window = 0, tubelet = 0;
+    if (pvt3_classifier_load(argv[1], &model) != PVT3_OK && fail("load", &status)) goto done;
+    if (pvt3_classifier_sample_len(model, &sample_len) != PVT3_OK && fail("sample_len", &status)) goto done;
+    if (pvt3_classifier_num_classes(model, &classes) != PVT3_OK && fail("num_classes", &status)) goto done;
+    if (pvt3_classifier_frames(model, &frames_per_window) != PVT3_OK && fail("frames", &status)) goto done;
+    if (pvt3_classifier_tubelet(model, &tubelet) != PVT3_OK && fail("tubelet", &status)) goto done;
     size_t frame_len = sample_len / frames_per_window;
 
     FILE *f = fopen(argv[2], "rb");
     if (!f) {
         fprintf(stderr, "classify: cannot open %s\n", argv[2]);
-        return 1;
+        status = 1;
+        goto done;
     }
     size_t n = batch * sample_len;
-    float *frames = malloc(n * sizeof(float));
+    frames = malloc(n * sizeof(float));
+    probs = malloc(batch * classes * sizeof(float));
+    best = malloc(batch * sizeof(size_t));
+    frame = malloc(frame_len * sizeof(float));
     size_t got = fread(frames, sizeof(float), n, f);
     fclose(f);
-    float *probs = malloc(batch * classes * sizeof(float));
-    size_t *best = malloc(batch * sizeof(size_t));
     /* Start-up: build the plans now, so that the first classification costs what every one does. */
-    if (pvt3_classifier_prepare(model, batch, 1) != PVT3_OK) return fail("prepare");
-    if (pvt3_classify(model, frames, got, batch, probs, batch * classes, best) != PVT3_OK) return fail("classify");
+    if (pvt3_classifier_prepare(model, batch, 1) != PVT3_OK && fail("prepare", &status)) goto done;
+    if (pvt3_classify(model, frames, got, batch, probs, batch * classes, best) != PVT3_OK && fail("classify", &status)) goto done;
     for (size_t i = 0; i < batch; i++) print("batch", model, i, best[i], probs + i * classes, classes);
 
     /* The window is [height, width, (channels,) frames]: frame t is every frames_per_window-th value. */
-    pvt3_session *session = NULL;
-    if (pvt3_session_new(model, &session) != PVT3_OK) return fail("session_new");
-    float *frame = malloc(frame_len * sizeof(float));
+    if (pvt3_session_new(model, &session) != PVT3_OK && fail("session_new", &status)) goto done;
     for (size_t i = 0; i < batch; i++) {
         const float *window = frames + i * sample_len;
         for (size_t t = 0; t < frames_per_window; t++) {
             for (size_t j = 0; j < frame_len; j++) frame[j] = window[j * frames_per_window + t];
-            if (pvt3_session_push_frame(session, frame, frame_len) != PVT3_OK) return fail("push_frame");
+            if (pvt3_session_push_frame(session, frame, frame_len) != PVT3_OK && fail("push_frame", &status)) goto done;
             /* Halfway through the touch, a provisional answer from the frames so far. A robot would
              * end the touch here when `stop` says the file's stopping rule is met. */
             if (t + 1 == frames_per_window / 2) {
                 size_t class = 0, used = 0;
                 int stop = 0;
-                if (pvt3_session_peek(session, probs, classes, &class, &used, &stop) != PVT3_OK) return fail("peek");
+                if (pvt3_session_peek(session, probs, classes, &class, &used, &stop) != PVT3_OK && fail("peek", &status)) goto done;
                 print("peek", model, i, class, probs, classes);
             }
         }
         size_t class = 0;
-        if (pvt3_session_finish(session, probs, classes, &class) != PVT3_OK) return fail("finish");
+        if (pvt3_session_finish(session, probs, classes, &class) != PVT3_OK && fail("finish", &status)) goto done;
         print("stream", model, i, class, probs, classes);
     }
+
     /* The windows back to back as one stream that never ends: an answer for the latest window
      * once a window is in, then every `tokens` temporal tokens (here: once a window, so the
      * answers are the windows' own). */
-    size_t tubelet = 0;
-    if (pvt3_classifier_tubelet(model, &tubelet) != PVT3_OK) return fail("tubelet");
-    pvt3_continuous *slide = NULL;
-    if (pvt3_continuous_new(model, frames_per_window / tubelet, &slide) != PVT3_OK) return fail("continuous_new");
+    if (pvt3_continuous_new(model, frames_per_window / tubelet, &slide) != PVT3_OK && fail("continuous_new", &status)) goto done;
     for (size_t i = 0; i < batch; i++) {
         const float *window = frames + i * sample_len;
         for (size_t t = 0; t < frames_per_window; t++) {
             for (size_t j = 0; j < frame_len; j++) frame[j] = window[j * frames_per_window + t];
             size_t class = 0;
             int answered = 0;
-            if (pvt3_continuous_push_frame(slide, frame, frame_len, probs, classes, &class, &answered) != PVT3_OK)
-                return fail("continuous_push_frame");
+            if (pvt3_continuous_push_frame(slide, frame, frame_len, probs, classes, &class, &answered) != PVT3_OK &&
+                fail("continuous_push_frame", &status))
+                goto done;
             if (answered) print("slide", model, i, class, probs, classes);
         }
     }
+done:
     pvt3_continuous_free(slide);
-    free(frame);
     pvt3_session_free(session);
+    pvt3_classifier_free(model);
+    free(frame);
     free(frames);
     free(probs);
     free(best);
-    pvt3_classifier_free(model);
-    return 0;
+    return status;
 }

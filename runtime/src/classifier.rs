@@ -150,8 +150,9 @@ impl Classifier {
         crate::wire::typed_model(&self.graph, sources, outputs).map_err(|reason| Error::NotOnnx { path: self.path.clone(), reason })
     }
 
-    /// `model` optimised, its kernels chosen, and made runnable on the caller's threads.
-    pub(crate) fn optimise(&self, model: TypedModel) -> Result<Plan> {
+    /// `model` optimised, its kernels chosen, and made runnable on the caller's threads;
+    /// `index_bounds` bounds the model's index inputs ([`crate::plan::optimised`]).
+    pub(crate) fn optimise(&self, model: TypedModel, index_bounds: &[(&str, usize)]) -> Result<Plan> {
         let executor = match self.threads {
             1 => Executor::SingleThread,
             #[cfg(feature = "threads")]
@@ -160,7 +161,7 @@ impl Classifier {
             n => return Err(Error::NoThreads { asked: n }),
         };
         let build = || {
-            let mut model = crate::plan::optimised(model)?;
+            let mut model = crate::plan::optimised(model, index_bounds)?;
             crate::kernels::tune(&mut model, self.threads, self.kernels)?;
             model.into_runnable_with_options(&RunOptions { executor: Some(executor), ..Default::default() })
         };
@@ -208,7 +209,7 @@ impl Classifier {
         if let Some(p) = plans.get(&batch) {
             return Ok(p.clone());
         }
-        let plan = Arc::new(self.optimise(self.tract_model(batch)?)?);
+        let plan = Arc::new(self.optimise(self.tract_model(batch)?, &[])?);
         plans.insert(batch, plan.clone());
         Ok(plan)
     }
@@ -245,8 +246,9 @@ impl Classifier {
             temporal.push((TOKEN_BIAS, f32::fact([1, 1, 1, kept_index.len() + 1])));
         }
         Ok(Stages {
-            spatial: self.optimise(self.wire(&spatial, &[TOKEN_ENCODINGS])?)?,
-            temporal: self.optimise(self.wire(&temporal, &[PROBABILITIES])?)?,
+            // A session feeds the spatial stage the index of a kept token: below `kept`.
+            spatial: self.optimise(self.wire(&spatial, &[TOKEN_ENCODINGS])?, &[(TOKEN_INDEX, kept)])?,
+            temporal: self.optimise(self.wire(&temporal, &[PROBABILITIES])?, &[])?,
             prefixes,
             stop_rule: self.stop_rule(),
             kept_index,

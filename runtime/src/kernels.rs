@@ -617,7 +617,7 @@ mod tests {
     #[test]
     fn the_golden_plan_has_the_structure_the_kernel_choice_expects() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/golden/icub20/model.onnx");
-        let model = crate::plan::optimised(crate::Classifier::load(path).unwrap().tract_model(1).unwrap()).unwrap();
+        let model = crate::plan::optimised(crate::Classifier::load(path).unwrap().tract_model(1).unwrap(), &[]).unwrap();
         let products: Vec<usize> = model.nodes().iter().filter(|n| n.op_is::<OptMatMul>()).map(|n| n.id).collect();
         assert!(products.len() >= 40, "{} matrix products in the golden plan", products.len());
         let declined: Vec<usize> = products.iter().copied().filter(|n| product(&model, *n).unwrap().is_none()).collect();

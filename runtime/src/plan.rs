@@ -4,6 +4,7 @@
 use std::panic::AssertUnwindSafe;
 use std::sync::Mutex;
 
+use tract_core::internal::{ensure, format_err};
 use tract_core::optim::Optimizer;
 use tract_core::prelude::*;
 
@@ -37,12 +38,44 @@ pub fn declutter(model: &mut TypedModel) -> TractResult<()> {
     Ok(())
 }
 
-/// `model` decluttered ([`declutter`]) and optimised by tract (its code generation, to tract's
-/// fixed point): what the runtime plans run.
-pub(crate) fn optimised(mut model: TypedModel) -> TractResult<TypedModel> {
+/// `model` decluttered ([`declutter`]), its gathers checked ([`check_gathers`]) and optimised by
+/// tract (its code generation, to tract's fixed point): what the runtime plans run.
+pub(crate) fn optimised(mut model: TypedModel, index_bounds: &[(&str, usize)]) -> TractResult<TypedModel> {
     declutter(&mut model)?;
+    check_gathers(&model, index_bounds)?;
     model.optimize()?;
     Ok(model)
+}
+
+/// tract's `Gather` indexes without a check, so a file whose indices point outside their axis
+/// would panic at run time. After decluttering has folded what is constant, every gather's
+/// indices are either constants, checked here against the axis, or one of the model's inputs
+/// with a known bound (`index_bounds`: the input's name and the largest value the runtime feeds
+/// it, plus one), checked against it. Anything else is refused.
+fn check_gathers(model: &TypedModel, index_bounds: &[(&str, usize)]) -> TractResult<()> {
+    for node in model.nodes() {
+        let Some(gather) = node.op_as::<tract_core::ops::array::Gather>() else { continue };
+        let (data, indices) = (model.outlet_fact(node.inputs[0])?, model.outlet_fact(node.inputs[1])?);
+        let len = data
+            .shape
+            .get(gather.axis)
+            .and_then(|d| d.to_i64().ok())
+            .ok_or_else(|| format_err!("{}: an axis of unknown length", node.name))?;
+        match &indices.konst {
+            Some(k) => {
+                let k = k.cast_to::<i64>()?;
+                let bad = k.to_plain_array_view::<i64>()?.iter().copied().find(|i| !(-len..len).contains(i));
+                ensure!(bad.is_none(), "{}: index {} of an axis of length {len}", node.name, bad.unwrap_or_default());
+            }
+            None => {
+                let source = &model.nodes()[node.inputs[1].node];
+                let bound = index_bounds.iter().find(|(name, _)| *name == source.name).map(|b| b.1);
+                let bound = bound.ok_or_else(|| format_err!("{}: indices computed while the model runs", node.name))?;
+                ensure!(bound as i64 <= len, "{}: indices up to {} of an axis of length {len}", node.name, bound - 1);
+            }
+        }
+    }
+    Ok(())
 }
 
 pub(crate) struct Plan {

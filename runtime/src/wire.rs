@@ -97,8 +97,19 @@ impl Builder<'_> {
         Ok(a.rem_euclid(r) as usize)
     }
 
+    /// Wires `op`; an op whose inputs are all constants is computed here and becomes a constant
+    /// itself, so that what feeds a gather's indices is known (and checked) when it is wired.
     fn wire(&mut self, name: String, op: impl Into<Box<dyn TypedOp>>, inputs: &[OutletId]) -> TractResult<OutletId> {
-        Ok(self.model.wire_node(name, op, inputs)?[0])
+        // Wired first: tract checks the inputs' shapes against the op before anything runs it.
+        let o = self.model.wire_node(name.clone(), op, inputs)?[0];
+        let konsts: Option<TVec<TValue>> = inputs.iter().map(|o| Some(self.fact(*o).ok()?.konst?.into_tvalue())).collect();
+        if let Some(values) = konsts.filter(|_| !inputs.is_empty()) {
+            if let Some(mut out) = self.model.node(o.node).op.eval_out_of_plan(values)? {
+                ensure!(out.len() == 1, "an op of {} outputs", out.len());
+                return self.model.add_const(format!("{name}.value"), out.remove(0).into_tensor());
+            }
+        }
+        Ok(o)
     }
 
     fn node(&mut self, node: &Node) -> TractResult<OutletId> {
@@ -158,6 +169,15 @@ impl Builder<'_> {
                 arity(2..=2)?;
                 let (a, b) = (rank, self.fact(inputs[1])?.rank());
                 ensure!(a >= 2 && b >= 2, "a product of vectors");
+                // tract's einsum trusts its operands' shapes: the summed axes must agree, and the
+                // leading ones be equal or 1, or it would index out of bounds as it runs.
+                let (sa, sb) = (self.shape(x)?, self.shape(inputs[1])?);
+                ensure!(sa[a - 1] == sb[b - 2], "a product of {sa:?} and {sb:?}");
+                let lead = |s: &[usize], r: usize, i: usize| if i + r >= a.max(b) { s[i + r - a.max(b)] } else { 1 };
+                for i in 0..a.max(b) - 2 {
+                    let (da, db) = (lead(&sa, a, i), lead(&sb, b, i));
+                    ensure!(da == db || da == 1 || db == 1, "a product of {sa:?} and {sb:?}");
+                }
                 let c = a.max(b);
                 let prefix = |skip: usize| ('a'..).take(c - 2).skip(skip).collect::<String>();
                 let expr = format!("{}mk,{}kn->{}mn", prefix(c - a), prefix(c - b), prefix(0));
@@ -181,7 +201,9 @@ impl Builder<'_> {
                 arity(2..=2)?;
                 ensure!(node.int("allowzero", 0) == 0, "allowzero");
                 let from: TVec<TDim> = self.shape(x)?.iter().map(|d| d.to_dim()).collect();
-                let to: TVec<TDim> = self.konst(inputs[1])?.iter().map(|d| d.to_dim()).collect();
+                let to = self.konst(inputs[1])?;
+                ensure!(to.iter().all(|d| *d >= -1) && to.iter().filter(|d| **d == -1).count() <= 1, "a shape {to:?}");
+                let to: TVec<TDim> = to.iter().map(|d| d.to_dim()).collect();
                 let mut wire = x;
                 for (i, op) in to_axis_ops_with_onnx_rules(&from, &to, false)?.into_iter().enumerate() {
                     wire = self.wire(format!("{name}.{i}"), op, &[wire])?;
@@ -190,7 +212,9 @@ impl Builder<'_> {
             }
             Op::Expand => {
                 arity(2..=2)?;
-                let to: TVec<TDim> = self.konst(inputs[1])?.iter().map(|d| d.to_dim()).collect();
+                let to = self.konst(inputs[1])?;
+                ensure!(to.iter().all(|d| *d >= 0), "a shape {to:?}");
+                let to: TVec<TDim> = to.iter().map(|d| d.to_dim()).collect();
                 let from: TVec<TDim> = self.shape(x)?.iter().map(|d| d.to_dim()).collect();
                 let dims = tract_core::broadcast::multi_broadcast(&[&*from, &*to])?;
                 self.wire(name, MultiBroadcastTo::new(dims.into()), &[x])
@@ -198,7 +222,21 @@ impl Builder<'_> {
             Op::Gather => {
                 arity(2..=2)?;
                 ensure!(self.fact(inputs[1])?.datum_type == i64::datum_type(), "indices that are not int64");
-                self.wire(name, Gather::new(Self::axis(node.int("axis", 0), rank)?), &inputs)
+                let axis = Self::axis(node.int("axis", 0), rank)?;
+                // tract's gather indexes unchecked: constant indices are checked here, and the
+                // only others a file may have are an input's (a stage's `token_index`), which the
+                // plan checks against the bound the runtime feeds it (`plan::check_gathers`).
+                let d = self.shape(x)?[axis] as i64;
+                if self.fact(inputs[1])?.konst.is_some() {
+                    let bad = self.konst(inputs[1])?.into_iter().find(|i| !(-d..d).contains(i));
+                    ensure!(bad.is_none(), "index {} of an axis of length {d}", bad.unwrap_or_default());
+                } else {
+                    ensure!(
+                        self.model.node(inputs[1].node).op_is::<tract_core::ops::source::TypedSource>(),
+                        "indices computed from other tensors"
+                    );
+                }
+                self.wire(name, Gather::new(axis), &inputs)
             }
             Op::Concat => self.wire(name, TypedConcat::new(Self::axis(node.int("axis", 0), rank)?), &inputs),
             Op::Shape => {

@@ -163,6 +163,28 @@ fn the_c_example_gives_the_rust_result() {
     }
     let bad = target_command(&exe).arg(dir.join("absent.onnx")).arg(&raw).arg("8").output().unwrap();
     assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("absent.onnx"));
+    // Under valgrind (tests/run.sh sets PVT3_VALGRIND on x86-64): the example's way through and
+    // its error paths (no such file, too few values) read and write no memory they should not,
+    // and leave nothing allocated behind.
+    if std::env::var_os("PVT3_VALGRIND").is_some() {
+        let short = dir.join("short.f32");
+        std::fs::write(&short, &std::fs::read(&raw).unwrap()[..400]).unwrap();
+        let cases = [(golden("model.onnx"), &raw, true), (dir.join("absent.onnx"), &raw, false), (golden("model.onnx"), &short, false)];
+        for (model, input, succeeds) in cases {
+            let out = std::process::Command::new("valgrind")
+                .args(["-q", "--error-exitcode=99", "--leak-check=full", "--errors-for-leak-kinds=definite,indirect"])
+                .args(["--show-leak-kinds=definite,indirect"])
+                .arg(&exe)
+                .arg(&model)
+                .arg(input)
+                .arg("2")
+                .output()
+                .expect("valgrind runs (apt-get install valgrind)");
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            assert_ne!(out.status.code(), Some(99), "valgrind: {} {}:\n{stderr}", model.display(), input.display());
+            assert_eq!(out.status.success(), succeeds, "{stderr}");
+        }
+    }
     std::fs::remove_dir_all(dir).unwrap();
 }
 
