@@ -56,7 +56,7 @@ fi
 # static one is not what a robot loads, and its link-time optimisation would double the work), in
 # a target directory of its own and in the background: its single-threaded phases (one codegen
 # unit, fat LTO) then overlap the other steps. Its size is checked at the end (at most 8 MiB).
-# It is built whenever what decides it changed (the runtime's and the format's files, the
+# It is built whenever what decides it changed (the runtime's and the format's sources and manifests, the
 # crates and features of the runtime's dependency tree as the lock file pins them, the build
 # profiles, the compiler): tests/robot-small.size records the size measured last and the digest
 # of those inputs, and is rewritten by each measurement (commit it). A crate the trainer alone
@@ -64,7 +64,7 @@ fi
 size_record=tests/robot-small.size
 size_inputs=$({
   rustc -V
-  git ls-files -z runtime format | xargs -0 sha256sum
+  git ls-files -z runtime/src runtime/Cargo.toml format/src format/Cargo.toml | xargs -0 sha256sum
   cargo tree -q --locked -p pvt3-runtime --no-default-features -e normal,features --prefix none | sort -u
   awk '/^\[/ { p = /^\[profile/ } p' Cargo.toml
 } | sha256sum | cut -c1-64)
@@ -90,7 +90,9 @@ cargo_test --release --workspace
 
 if [ -n "${PVT3_VALGRIND:-}" ]; then
   step "C ABI under valgrind: every entry point's error paths, no invalid access, no leak"
-  c_abi=$(cargo test -q --release -p pvt3-runtime --test c_abi --no-run --message-format=json 2>/dev/null |
+  # The test binary the host step built (the same command, so nothing is built again: with
+  # `-p pvt3-runtime` alone its dependencies' features differ, and tract would be rebuilt).
+  c_abi=$(cargo test -q --release --workspace --no-run --message-format=json 2>/dev/null |
     python3 -c 'import json, sys
 for line in sys.stdin:
     m = json.loads(line)

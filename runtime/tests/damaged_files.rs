@@ -7,19 +7,7 @@ mod support;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 
 use pvt3_runtime::{Classifier, Error};
-use support::{golden, golden_vectors};
-
-/// Deterministic pseudo-random numbers below `n`.
-struct Draw(u64);
-
-impl Draw {
-    fn below(&mut self, n: usize) -> usize {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 % n as u64) as usize
-    }
-}
+use support::{golden, golden_vectors, Draw};
 
 /// Mutants of `good`: bit flips, byte overwrites, truncations, splices over and into the file.
 fn mutants(good: &[u8]) -> Vec<(String, Vec<u8>)> {

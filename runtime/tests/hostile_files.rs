@@ -16,20 +16,15 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use prost::Message;
 use pvt3_format::onnx::{ModelProto, Op};
 use pvt3_runtime::{Classifier, Error};
-use support::{golden, golden_vectors, root};
+use support::{golden, golden_vectors, root, Draw};
 
-/// Deterministic pseudo-random numbers (xorshift).
-struct Draw(u64);
+/// What a damaged count or index looks like.
+trait Near {
+    fn near(&mut self, v: i64) -> i64;
+}
 
-impl Draw {
-    fn below(&mut self, n: usize) -> usize {
-        self.0 ^= self.0 << 13;
-        self.0 ^= self.0 >> 7;
-        self.0 ^= self.0 << 17;
-        (self.0 % n.max(1) as u64) as usize
-    }
-
-    /// A value near `v` or a wild one: what a damaged count or index looks like.
+impl Near for Draw {
+    /// A value near `v`, or a wild one.
     fn near(&mut self, v: i64) -> i64 {
         match self.below(8) {
             0 => 0,
@@ -287,7 +282,10 @@ fn re_signed_damaged_models_are_refused_or_run_and_never_panic() {
             report += &format!("  {kind}: {refused} refused, {ran} ran, {panics} panicked\n");
         }
         assert!(panicked.is_empty(), "{report}{}", panicked.join("\n"));
-        assert!(total[0] > cases() / 2 && total[1] > 0, "the damage reaches both outcomes: {report}");
+        // Both outcomes, where the intact file runs in this build (a spectral head needs the
+        // `spectral` feature, which the small build, tested on aarch64, leaves out).
+        let intact = try_file(&std::fs::read(path).unwrap(), &x[..4500]) == Ok(true);
+        assert!(total[0] > cases() / 2 && (total[1] > 0 || !intact), "the damage reaches both outcomes: {report}");
     }
     println!("{report}");
     assert_eq!(PANICS.load(Ordering::SeqCst), 0, "no panic, not even a caught one\n{report}");

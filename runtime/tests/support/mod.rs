@@ -52,3 +52,15 @@ pub fn golden_vectors() -> (Vec<f32>, Vec<f32>) {
     assert_eq!(shape, vec![8, 20]);
     (x, logits)
 }
+
+/// Deterministic pseudo-random numbers below `n` (xorshift), for the damaged-file tests.
+pub struct Draw(pub u64);
+
+impl Draw {
+    pub fn below(&mut self, n: usize) -> usize {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 % n.max(1) as u64) as usize
+    }
+}
