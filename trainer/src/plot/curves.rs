@@ -47,11 +47,16 @@ pub fn run_figure(title: &str, m: &[EpochMetrics], selected: Option<usize>) -> S
     figure(title, &[loss, accuracy, lr])
 }
 
-/// Writes `dir`'s training curves from its `metrics.jsonl` (and, once there is one, the epoch
-/// its `model/` checkpoint holds); the path written.
-pub fn write_run(dir: &Path) -> Result<std::path::PathBuf> {
-    let m = metrics::read(&Run(dir).metrics())?;
+/// The run in `dir`: its epochs (`metrics.jsonl`) and, once it has one, the epoch its `model/`
+/// checkpoint holds.
+fn read_run(dir: &Path) -> Result<(Vec<EpochMetrics>, Option<usize>)> {
     let selected = crate::checkpoint::load_meta(&Run(dir).model()).ok().map(|(_, meta)| meta.provenance.epoch);
+    Ok((metrics::read(&Run(dir).metrics())?, selected))
+}
+
+/// Writes `dir`'s training curves ([`run_figure`] of [`read_run`]); the path written.
+pub fn write_run(dir: &Path) -> Result<std::path::PathBuf> {
+    let (m, selected) = read_run(dir)?;
     let title = format!("{} · {} epochs", dir.display(), m.len());
     let path = Run(dir).curves();
     super::write(&path, &run_figure(&title, &m, selected))?;
@@ -83,8 +88,8 @@ pub fn write_cv(out: &Path, dirs: &[std::path::PathBuf], title: &str) -> Result<
     let mut runs = Vec::new();
     for dir in dirs {
         let name = dir.strip_prefix(out).unwrap_or(dir).display().to_string();
-        let selected = crate::checkpoint::load_meta(&Run(dir).model()).ok().map(|(_, meta)| meta.provenance.epoch);
-        runs.push((name, metrics::read(&Run(dir).metrics())?, selected));
+        let (m, selected) = read_run(dir)?;
+        runs.push((name, m, selected));
     }
     let path = out.join(CV_CURVES);
     super::write(&path, &cv_figure(title, &runs))?;
