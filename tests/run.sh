@@ -11,9 +11,10 @@
 #      It is built without default features, as the small robot build is (no `threads`, no
 #      rayon, no `spectral`: docs/deploy.md), so both supported feature sets are tested: all of
 #      them on the host, the small one on aarch64;
-#   4. the small robot library's size: built as docs/deploy.md says (in the background, from
-#      the start) whenever the runtime, the format, its dependency tree, the build profiles or
-#      the compiler changed since it was last measured (tests/robot-small.size), it must stay within 8 MiB.
+#   4. the small robot library's size (tests/robot-small.sh, in the background from the start):
+#      built as docs/deploy.md says whenever the runtime, the format, its dependency tree, the
+#      build profiles or the compiler changed since it was last measured (tests/robot-small.size),
+#      it must stay within 8 MiB.
 # It installs what it needs (rustup's aarch64 target and clippy; Debian's librsvg2-bin for the
 # picture tests, valgrind for the C ABI, gcc-aarch64-linux-gnu, libc6-dev-arm64-cross and
 # qemu-user, with apt-get as root) or says exactly what is missing.
@@ -52,30 +53,14 @@ if [ "$(uname -m)" = x86_64 ] && [ -z "${PVT3_TEST_ISAS:-}" ]; then
   [[ $PVT3_TEST_ISAS == *avx512* ]] || echo "note: this machine has no AVX-512, so the runtime's AVX-512 kernels are not tested here (PVT3_TEST_ISAS=$PVT3_TEST_ISAS)"
 fi
 
-# The small robot library, built exactly as docs/deploy.md says (the shared library alone: the
-# static one is not what a robot loads, and its link-time optimisation would double the work), in
-# a target directory of its own and in the background: its single-threaded phases (one codegen
-# unit, fat LTO) then overlap the other steps. Its size is checked at the end (at most 8 MiB).
-# It is built whenever what decides it changed (the runtime's and the format's sources and manifests, the
-# crates and features of the runtime's dependency tree as the lock file pins them, the build
-# profiles, the compiler): tests/robot-small.size records the size measured last and the digest
-# of those inputs, and is rewritten by each measurement (commit it). A crate the trainer alone
-# uses changes none of them.
-size_record=tests/robot-small.size
-size_inputs=$({
-  rustc -V
-  git ls-files -z runtime/src runtime/Cargo.toml format/src format/Cargo.toml | xargs -0 sha256sum
-  cargo tree -q --locked -p pvt3-runtime --no-default-features -e normal,features --prefix none | sort -u
-  awk '/^\[/ { p = /^\[profile/ } p' Cargo.toml
-} | sha256sum | cut -c1-64)
-small_log=target/robot-small-size.log small_pid=
+# The small robot library's size (tests/robot-small.sh), in the background from the start: when
+# what decides it changed, it is built, and its single-threaded phases (one codegen unit, fat
+# LTO) then overlap the other steps; otherwise its record is read. Checked at the end.
 mkdir -p target
-if ! grep -qx "inputs $size_inputs" "$size_record" 2>/dev/null; then
-  RUSTFLAGS="-C llvm-args=-inline-threshold=60" CARGO_TARGET_DIR=target/size-check \
-    cargo rustc --profile robot-small -p pvt3-runtime --no-default-features --lib --crate-type cdylib >"$small_log" 2>&1 &
-  small_pid=$!
-fi
-trap '[ -z "$small_pid" ] || kill "$small_pid" 2>/dev/null || true; rm -f "$log"' EXIT
+small_log=target/robot-small-size.log
+bash tests/robot-small.sh check >"$small_log" 2>&1 &
+small_pid=$!
+trap 'kill "$small_pid" 2>/dev/null || true; rm -f "$log"' EXIT
 
 # The picture tests render the SVG files they draw with librsvg and look at the pixels; on
 # x86-64 the C example runs under valgrind too (runtime/tests/c_abi.rs, PVT3_VALGRIND).
@@ -128,24 +113,12 @@ export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUSTFLAGS="-D warnings"
 cargo_test --release --target "$target" -p pvt3-runtime -p pvt3-format --no-default-features
 
 step "the small robot library: at most 8 MiB (docs/deploy.md)"
-limit=$((8 * 1024 * 1024))
-if [ -z "$small_pid" ]; then
-  size=$(awk '$1 == "bytes" { print $2 }' "$size_record")
-  echo "unchanged since it was measured ($size_record: the runtime, the format, its dependency tree, the profiles and the compiler are as they were): $size bytes (limit $limit)"
-else
-  if ! wait "$small_pid"; then
-    cat "$small_log" >&2
-    echo "tests/run.sh: the small robot library did not build" >&2
-    exit 1
-  fi
-  size=$(stat -c %s target/size-check/robot-small/libpvt3_runtime.so)
-  echo "target/size-check/robot-small/libpvt3_runtime.so: $size bytes (limit $limit)"
-  printf '# The small robot library measured by tests/run.sh: the digest of its inputs, its bytes.\ninputs %s\nbytes %s\n' "$size_inputs" "$size" >"$size_record"
-fi
-if [ "$size" -gt "$limit" ]; then
-  echo "tests/run.sh: the small robot library has outgrown 8 MiB: see docs/deploy.md for what it holds (bench/deploy.sh sizes it by crate)" >&2
+if ! wait "$small_pid"; then
+  cat "$small_log" >&2
+  echo "tests/run.sh: the small robot library's size check failed (bash tests/robot-small.sh measure)" >&2
   exit 1
 fi
+cat "$small_log"
 
 # One closing line for all harnesses, host and aarch64 (cargo's own runs end with doc-test
 # harnesses that hold no test).
