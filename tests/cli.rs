@@ -448,3 +448,74 @@ fn csv_touches_of_any_length_import_cross_validate_and_export() {
     assert_eq!(answers, (frames.len() - 32) / 4 + 1, "after every token of 4 frames once a window is in");
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// Touches whose file names say their class, force and speed (as FabricSlide names them): imported
+/// with their conditions, cross-validated with one force held out as the test set (augmented in
+/// speed and pressure), and evaluated on exactly the held-out touches again from the run alone.
+#[test]
+fn conditions_from_file_names_hold_out_a_force() {
+    let dir = scratch("hold-out");
+    let (tree, flat) = (dir.join("tree"), dir.join("flat"));
+    csv_tree::write(&tree, 3, 12, 40, 64);
+    csv_tree::flatten(&tree, &flat, 3, 12);
+    let (data, out) = (dir.join("set.npz"), dir.join("cv"));
+    let (d, o) = (data.to_str().unwrap(), out.to_str().unwrap());
+    let imported = ok(&["import", flat.to_str().unwrap(), "--name", "{class}_F{force}_V{speed}mmps_*", "--out", d]);
+    assert!(imported.contains("36 touches of 3 classes") && imported.contains("condition force: 120, 150, 210"), "{imported}");
+    let mut args = vec!["cv", "--data", d, "--out", o, "--epochs", "12", "--jobs", "2", "--set", "frames=32", "--set", "tubelet=4"];
+    args.extend(["--hold-out", "force=210", "--aug-stretch", "0.2", "--aug-scale", "0.05"]);
+    args.extend(SMALL);
+    let cv = pvt3(&args);
+    let (stdout, stderr) = (String::from_utf8_lossy(&cv.stdout), String::from_utf8_lossy(&cv.stderr));
+    assert!(cv.status.success(), "{stderr}");
+    assert!(stderr.contains("held out force=210: 12 touches test, the other 24 train and validate"), "{stderr}");
+    assert!(stdout.contains("the test set of every run: the touches of force=210"), "{stdout}");
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("cv.json")).unwrap()).unwrap();
+    assert_eq!(summary["held_out"]["levels"], serde_json::json!(["210"]));
+    let accuracy = summary["mean_test_accuracy"].as_f64().unwrap();
+    assert!(accuracy >= 0.8, "the classes differ in level and frequency at every force: {accuracy}");
+    // The run remembers what it held out: its test fold is the 12 touches pressed at 210.
+    let eval = ok(&["eval", out.join("seed0/fold1").to_str().unwrap()]);
+    assert!(eval.contains("12 samples (fold 4"), "{eval}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// What a robot knows, used: touches imported by distance travelled and scaled to one force
+/// (`--per-distance`, `--per-force`); the exported file says so, and the runtime brings a touch
+/// straight from its CSV file, with its speed and force, to the very frames the training read.
+#[test]
+fn a_robot_reads_a_touch_by_its_speed_and_force_as_the_import_did() {
+    let dir = scratch("reading");
+    let (tree, flat) = (dir.join("tree"), dir.join("flat"));
+    csv_tree::write(&tree, 3, 6, 40, 64);
+    csv_tree::flatten(&tree, &flat, 3, 6);
+    let (data, run, onnx) = (dir.join("set.npz"), dir.join("run"), dir.join("model.onnx"));
+    let d = data.to_str().unwrap();
+    let mut args = vec!["import", flat.to_str().unwrap(), "--name", "{class}_F{force}_V{speed}mmps_*", "--out", d];
+    args.extend(["--per-distance", "speed=10", "--per-force", "force=150"]);
+    let imported = ok(&args);
+    assert!(imported.contains("resampled from time to distance") && imported.contains("scaled to force 150"), "{imported}");
+    let mut args = vec!["train", "--data", d, "--out", run.to_str().unwrap(), "--epochs", "2", "--set", "frames=32", "--set", "tubelet=4"];
+    args.extend(SMALL);
+    args.extend(["--export", onnx.to_str().unwrap()]);
+    ok(&args);
+    let c = pvt3_runtime::Classifier::load(&onnx).unwrap();
+    assert_eq!(c.reading(), Some(pvt3_runtime::Reading { speed: Some(10.0), force: Some(150.0) }));
+    // A touch at 50 mm/s pressed at 210, from its file: five times the frames, 150/210 of each value.
+    let name = "Fabric1_F210_V50mmps_5.csv";
+    let text = std::fs::read_to_string(flat.join(name)).unwrap();
+    let rows: Vec<Vec<f32>> = text.lines().skip(1).map(|l| l.split(',').skip(1).take(4).map(|v| v.parse().unwrap()).collect()).collect();
+    let frames: Vec<f32> = (0..4).flat_map(|e| rows.iter().map(move |r| r[e])).collect();
+    let read = c.read_touch(&frames, pvt3_runtime::Touch { speed: Some(50.0), force: Some(210.0) }).unwrap();
+    assert_eq!(read.len(), 4 * rows.len() * 5);
+    let set = Dataset::load(&data, 0).unwrap();
+    let i = set.sources.as_ref().unwrap().iter().position(|s| s == name).unwrap();
+    let n = set.lengths[i];
+    let imported: Vec<f32> = set.sample(i).chunks(set.max_frames()).flat_map(|row| row[..n].to_vec()).collect();
+    assert_eq!(read, imported, "the robot reads the touch as the training's import did, bit for bit");
+    let window: Vec<f32> = read.chunks(n).flat_map(|row| row[..32].to_vec()).collect();
+    assert!(c.classify(&window).is_ok());
+    let err = c.read_touch(&frames, pvt3_runtime::Touch { speed: Some(50.0), force: None }).unwrap_err().to_string();
+    assert!(err.contains("give the touch's force"), "{err}");
+    std::fs::remove_dir_all(dir).unwrap();
+}

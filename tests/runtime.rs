@@ -116,6 +116,7 @@ fn streaming_equals_the_whole_window_with_heads_tubelets_and_pruned_tokens() {
         classes: (0..20).map(|k| format!("c{k}")).collect(),
         provenance: serde_json::json!({}),
         stop_rule: Some(StopRule { top_probability: 0.095, agreeing: 3 }),
+        reading: None,
     };
     for (bad, says) in
         [((0.0, 3), "is not in (0, 1]"), ((1.5, 3), "is not in (0, 1]"), ((f32::NAN, 3), "is not in (0, 1]"), ((0.5, 0), "agreeing = 0")]
@@ -239,6 +240,7 @@ fn a_spectral_head_runs_in_tract_as_the_reference_and_is_not_streamed() {
         classes: (0..20).map(|k| format!("c{k}")).collect(),
         provenance: serde_json::json!({"data": "synthetic"}),
         stop_rule: None,
+        reading: None,
     };
     let dir = scratch("spectral");
     let path = dir.join("spectral.onnx");

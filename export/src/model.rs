@@ -27,6 +27,9 @@ pub struct Metadata {
     pub provenance: serde_json::Value,
     /// The stopping rule of provisional answers (`pvt3.stop_rule`).
     pub stop_rule: Option<pvt3_format::StopRule>,
+    /// How the model reads a touch (`pvt3.reading`), if its training touches were brought to one
+    /// speed and force.
+    pub reading: Option<pvt3_format::Reading>,
 }
 
 /// One pre-norm block on the (centred) stream `x`: `[rows, dim]` out, or with `cls_only` the
@@ -233,7 +236,7 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
         output: vec![value_info(LOGITS, &[None, Some(c.classes)]), value_info(PROBABILITIES, &[None, Some(c.classes)])],
     };
     let dims = Dims { height: h, width: w, channels: ch, frames: c.frames, tubelet: tt, dim: d };
-    let header = Header { classes: meta.classes.clone(), kept_frames, dims, stop_rule: meta.stop_rule };
+    let header = Header { classes: meta.classes.clone(), kept_frames, dims, stop_rule: meta.stop_rule, reading: meta.reading };
     let config = serde_json::to_value(c).expect("the configuration serialises");
     let mut props = header.entries(&config);
     props.push((keys::PROVENANCE, meta.provenance.to_string()));

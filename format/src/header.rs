@@ -46,6 +46,31 @@ pub struct Header {
     pub dims: Dims,
     /// The stopping rule of provisional answers ([`keys::STOP_RULE`]); `None` when the file has none.
     pub stop_rule: Option<StopRule>,
+    /// How the model reads a touch ([`keys::READING`]); `None`: as the sensor records it.
+    pub reading: Option<Reading>,
+}
+
+/// How a model reads a touch when its training touches were brought to one sliding speed and one
+/// pressing force (`pvt3 import --per-distance`, `--per-force`): a robot, which knows the speed and
+/// force it commands, brings its frames to them before it classifies (the runtime's `read_touch`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Reading {
+    /// Touches resampled from time to distance travelled: a touch of `n` frames at speed `v` is
+    /// read as the `n · |v| / speed` frames it would have at this speed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub speed: Option<f64>,
+    /// Readings scaled to this force: times `force / f` for a touch pressed at `f`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub force: Option<f64>,
+}
+
+impl Reading {
+    /// Why the reading cannot be a file's, if it cannot: a speed or force that is not above 0.
+    pub fn problem(&self) -> Option<String> {
+        [("speed", self.speed), ("force", self.force)]
+            .into_iter()
+            .find_map(|(what, v)| v.filter(|v| !(v.is_finite() && *v > 0.0)).map(|v| format!("{what} {v} is not above 0")))
+    }
 }
 
 /// When a touch may end early: at the first whole temporal token whose provisional answer's top
@@ -105,6 +130,9 @@ impl Header {
         if let Some(rule) = self.stop_rule {
             entries.push((keys::STOP_RULE, serde_json::to_string(&rule).expect("plain data serialises")));
         }
+        if let Some(reading) = self.reading {
+            entries.push((keys::READING, serde_json::to_string(&reading).expect("plain data serialises")));
+        }
         entries
     }
 
@@ -134,6 +162,7 @@ impl Header {
             kept_frames: json(keys::KEPT_FRAMES, get(keys::KEPT_FRAMES)?)?,
             dims: json(keys::CONFIG, get(keys::CONFIG)?)?,
             stop_rule: get(keys::STOP_RULE).ok().map(|t| json(keys::STOP_RULE, t)).transpose()?,
+            reading: get(keys::READING).ok().map(|t| json(keys::READING, t)).transpose()?,
         };
         header.check()?;
         Ok(header)
@@ -158,6 +187,9 @@ impl Header {
         if let Some(problem) = self.stop_rule.and_then(|r| r.problem()) {
             return bad(keys::STOP_RULE, &problem);
         }
+        if let Some(problem) = self.reading.and_then(|r| r.problem()) {
+            return bad(keys::READING, &problem);
+        }
         Ok(())
     }
 }
@@ -173,6 +205,7 @@ mod tests {
             kept_frames: (10..20).chain(40..45).collect(),
             dims,
             stop_rule: Some(StopRule { top_probability: 0.875, agreeing: 3 }),
+            reading: None,
         }
     }
 
@@ -204,6 +237,12 @@ mod tests {
         let entries = h.entries(&config(&h));
         assert!(entries.iter().all(|(k, _)| *k != keys::STOP_RULE));
         assert_eq!(parse(&entries).unwrap(), h);
+        // How a touch is read is optional too, each part of it.
+        for reading in [Reading { speed: Some(150.0), force: Some(120.0) }, Reading { speed: None, force: Some(2.5) }] {
+            let h = Header { reading: Some(reading), ..h.clone() };
+            assert_eq!(parse(&h.entries(&config(&h))).unwrap(), h);
+        }
+        assert!(entries.iter().all(|(k, _)| *k != keys::READING));
     }
 
     #[test]
@@ -223,7 +262,10 @@ mod tests {
     #[test]
     fn inconsistent_metadata_is_refused() {
         let h = header();
-        let broken: [fn(&mut Header); 12] = [
+        let broken: [fn(&mut Header); 15] = [
+            |h| h.reading = Some(Reading { speed: Some(0.0), force: None }),
+            |h| h.reading = Some(Reading { speed: Some(150.0), force: Some(-3.0) }),
+            |h| h.reading = Some(Reading { speed: None, force: Some(0.0) }),
             |h| h.stop_rule = Some(StopRule { top_probability: 0.0, agreeing: 1 }),
             |h| h.stop_rule = Some(StopRule { top_probability: 1.5, agreeing: 1 }),
             |h| h.stop_rule = Some(StopRule { top_probability: f32::NAN, agreeing: 1 }),

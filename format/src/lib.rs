@@ -9,7 +9,7 @@ mod header;
 pub mod onnx;
 
 pub use digest::{digest, verify, Integrity};
-pub use header::{top_class, Dims, Header, HeaderError, StopRule, FORMAT_VERSION};
+pub use header::{top_class, Dims, Header, HeaderError, Reading, StopRule, FORMAT_VERSION};
 
 /// Input: raw sensor frames `[batch, height, width, (channels,) frames]`.
 pub const INPUT: &str = "frames";
@@ -52,6 +52,11 @@ pub mod keys {
     /// [`crate::StopRule`]: `{"top_probability": 0.93, "agreeing": 3}`. The trainer calibrates
     /// it on the validation fold.
     pub const STOP_RULE: &str = "pvt3.stop_rule";
+    /// How the model reads a touch (optional), a JSON [`crate::Reading`]: `{"speed": 150.0,
+    /// "force": 150.0}` for a model trained on touches resampled to 150 mm/s and scaled to a
+    /// force of 150. Absent: the model reads frames as the sensor records them. A runtime that
+    /// does not know it classifies frames already read so alike.
+    pub const READING: &str = "pvt3.reading";
     /// The integrity digest: `sha256:` and the hex SHA-256 of everything else in the file
     /// ([`crate::digest`]).
     pub const DIGEST: &str = "pvt3.digest";

@@ -68,6 +68,15 @@ int pvt3_classifier_class_name(const pvt3_classifier *c, size_t index, const cha
  * probabilities, and the most probable class of each window unless classes_out is NULL. */
 int pvt3_classify(const pvt3_classifier *c, const float *frames, size_t frames_len, size_t batch,
                   float *probabilities, size_t probabilities_len, size_t *classes_out);
+/* A touch as the robot recorded it (frames_len raw values in the window's layout, with any
+ * number of frames), slid at `speed` and pressed at `force` (0: not known), brought to the frames
+ * the model reads: for a model trained on touches read by distance and scaled to one force
+ * (pvt3 import --per-distance, --per-force), resampled to its speed and scaled to its force, as its
+ * training read them; other models get the frames as they are. Writes them to `out` (room for
+ * out_len values) and their count to *written, also when out is too small (PVT3_ERR_INPUT): ask
+ * again with room enough. PVT3_ERR_INPUT for a speed or force the model needs and was not given. */
+int pvt3_read_touch(const pvt3_classifier *c, const float *frames, size_t frames_len, double speed, double force,
+                    float *out, size_t out_len, size_t *written);
 /* Streaming: a session takes a touch frame by frame (frame_len = height x width x channels raw
  * values, in time order). Pruned frames are dropped on arrival, each kept frame is encoded when it
  * arrives, and finishing runs only the temporal stage; the result equals pvt3_classify on the

@@ -130,6 +130,22 @@ impl Classifier {
         self.header.stop_rule
     }
 
+    /// How the model reads a touch (resampled to one speed, scaled to one force), if its training
+    /// touches were brought to it; `None`: frames as the sensor records them.
+    pub fn reading(&self) -> Option<crate::Reading> {
+        self.header.reading
+    }
+
+    /// A touch as the robot recorded it, in the sample layout (`[height, width, (channels,) n]`,
+    /// any number `n` of frames), at the speed and force it commanded: the frames this model
+    /// reads ([`crate::read_touch`], as the training's import read its touches). Windows of them
+    /// are then classified, or streamed into a session, as any frames. A model without a
+    /// reading returns the frames as they are.
+    pub fn read_touch(&self, frames: &[f32], touch: crate::Touch) -> Result<Vec<f32>> {
+        let frames_per_window = *self.sample_shape.last().expect("a frame axis");
+        crate::read_touch(frames, self.sample_len() / frames_per_window, &self.header.reading.unwrap_or_default(), touch)
+    }
+
     /// The frames of a window the model reads; the others were pruned.
     pub fn kept_frames(&self) -> &[usize] {
         &self.header.kept_frames

@@ -40,6 +40,9 @@ pub enum Error {
     NoThreads { asked: usize },
     #[error("{path} has a spectral head, and this runtime was built without the `spectral` feature (build it with `--features spectral`)")]
     NoSpectral { path: String },
+    /// A touch could not be brought to how the model reads touches ([`crate::read_touch`]).
+    #[error("reading the touch: {0}")]
+    Touch(String),
     /// tract failed (or panicked, caught) on a file that passed every check.
     #[error("tract: {0}")]
     Tract(String),

@@ -60,7 +60,8 @@ fn status(e: &Error) -> c_int {
         | Error::FrameLength { .. }
         | Error::TooManyFrames { .. }
         | Error::Incomplete { .. }
-        | Error::NoTokenYet { .. } => PVT3_ERR_INPUT,
+        | Error::NoTokenYet { .. }
+        | Error::Touch(_) => PVT3_ERR_INPUT,
         Error::NoPrefixes | Error::WholeWindowOnly | Error::NoSpectral { .. } => PVT3_ERR_MODEL,
         Error::Tract(_) => PVT3_ERR_INTERNAL,
     }
@@ -280,6 +281,48 @@ pub unsafe extern "C" fn pvt3_classify(
                 *classes_out.add(i) = p.class;
             }
         }
+        Ok(())
+    })
+}
+
+/// A touch as the robot recorded it (`frames_len` raw values in the sample layout, any number
+/// of frames), slid at `speed` and pressed at `force` (0: not known), brought to the frames the
+/// model reads (`Classifier::read_touch`: resampled to its speed, scaled to its force, as its
+/// training read touches) into `out`, which has room for `out_len` values. `*written` gets how
+/// many values they are, also when `out` is too small (PVT3_ERR_INPUT), so that the caller can
+/// ask again with room enough.
+///
+/// # Safety
+/// `c` is a live handle or null; `frames` holds `frames_len` floats or is null; `out` has room
+/// for `out_len` floats or is null; `written` is writable or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_read_touch(
+    c: *const Pvt3Classifier,
+    frames: *const f32,
+    frames_len: usize,
+    speed: f64,
+    force: f64,
+    out: *mut f32,
+    out_len: usize,
+    written: *mut usize,
+) -> c_int {
+    guard(|| {
+        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
+        if frames.is_null() {
+            return Err(null("frames"));
+        }
+        if out.is_null() {
+            return Err(null("out"));
+        }
+        let written = written.as_mut().ok_or_else(|| null("written"))?;
+        let known = |v: f64| (v != 0.0).then_some(v);
+        let touch = crate::Touch { speed: known(speed), force: known(force) };
+        let read = c.classifier.read_touch(std::slice::from_raw_parts(frames, frames_len), touch).map_err(fail)?;
+        *written = read.len();
+        if out_len < read.len() {
+            return Err((PVT3_ERR_INPUT, format!("out has room for {out_len} values; the touch reads as {}", read.len())));
+        }
+        std::slice::from_raw_parts_mut(out, read.len()).copy_from_slice(&read);
         Ok(())
     })
 }

@@ -26,6 +26,8 @@ mod kernels;
 mod npy;
 mod onnx;
 mod plan;
+mod reading;
+pub mod resample;
 #[cfg(target_arch = "x86_64")]
 mod small_products;
 mod stages;
@@ -40,4 +42,5 @@ pub use kernels::{tune as tune_kernels, Kernels};
 pub use npy::read_npy;
 pub use plan::declutter;
 pub use pvt3_format::StopRule;
+pub use reading::{read_touch, Reading, Touch};
 pub use stream::{Peek, Session};

@@ -43,6 +43,7 @@ fn c_type(rust: &str) -> String {
         "c_int" => "int",
         "usize" => "size_t",
         "f32" => "float",
+        "f64" => "double",
         "c_char" => "char",
         "Pvt3Classifier" => "pvt3_classifier",
         "Pvt3Session" => "pvt3_session",
@@ -89,7 +90,7 @@ fn the_header_declares_exactly_what_the_code_exports() {
         .collect();
     let code_fns: BTreeMap<_, _> = code.split("extern \"C\" fn ").skip(1).filter_map(rust_signature).collect();
     assert_eq!(header_fns, code_fns, "functions, their return and parameter types");
-    assert_eq!(code_fns.len(), 21);
+    assert_eq!(code_fns.len(), 22);
     assert_eq!(code_fns["pvt3_classify"].1[6], "size_t *", "the types are read");
     let mut header_consts: Vec<(String, String)> = header
         .split("#define ")
@@ -228,6 +229,8 @@ fn every_entry_point_reports_instead_of_crashing() {
 
         assert_eq!(pvt3_classifier_set_kernels(null_mut(), PVT3_KERNELS_TRACT), PVT3_ERR_NULL);
         assert_eq!(pvt3_classifier_prepare(null(), 1, 1), PVT3_ERR_NULL);
+        let mut written = 0usize;
+        assert_eq!(pvt3_read_touch(null(), probs.as_ptr(), 40, 1.0, 1.0, probs.as_mut_ptr(), 40, &mut written), PVT3_ERR_NULL);
 
         assert_eq!(pvt3_classifier_load(model.as_ptr(), &mut c), PVT3_OK);
         assert_eq!(pvt3_classifier_tubelet(c, &mut n), PVT3_OK);
@@ -269,6 +272,20 @@ fn every_entry_point_reports_instead_of_crashing() {
         let version = CStr::from_ptr(pvt3_version()).to_str().unwrap();
         let (major, minor) = pvt3_format::FORMAT_VERSION;
         assert_eq!(version, format!("{} (format {major}.{minor})", env!("CARGO_PKG_VERSION")));
+        // A touch of 80 frames: this model reads frames as recorded, so they come back as they are;
+        // too little room says how much is needed.
+        let touch: Vec<f32> = (0..60 * 80).map(|v| v as f32).collect();
+        let mut read = vec![0f32; touch.len()];
+        let mut written = 0usize;
+        assert_eq!(pvt3_read_touch(c, null(), 4800, 10.0, 0.0, read.as_mut_ptr(), 4800, &mut written), PVT3_ERR_NULL);
+        assert_eq!(pvt3_read_touch(c, touch.as_ptr(), 4800, 10.0, 0.0, null_mut(), 4800, &mut written), PVT3_ERR_NULL);
+        assert_eq!(pvt3_read_touch(c, touch.as_ptr(), 4800, 10.0, 0.0, read.as_mut_ptr(), 4800, null_mut()), PVT3_ERR_NULL);
+        assert_eq!(pvt3_read_touch(c, touch.as_ptr(), 4799, 10.0, 0.0, read.as_mut_ptr(), 4800, &mut written), PVT3_ERR_INPUT);
+        assert!(last_error().contains("4799 values are not 60 rows"), "{}", last_error());
+        assert_eq!(pvt3_read_touch(c, touch.as_ptr(), 4800, 10.0, 0.0, read.as_mut_ptr(), 4000, &mut written), PVT3_ERR_INPUT);
+        assert_eq!(written, 4800, "how much room the touch needs");
+        assert_eq!(pvt3_read_touch(c, touch.as_ptr(), 4800, 10.0, 0.0, read.as_mut_ptr(), 4800, &mut written), PVT3_OK);
+        assert_eq!((written, &read), (4800, &touch));
         let frames = vec![0.5f32; 2 * 4500];
         assert_eq!(pvt3_classify(c, null(), 4500, 1, probs.as_mut_ptr(), 40, null_mut()), PVT3_ERR_NULL);
         assert_eq!(pvt3_classify(c, frames.as_ptr(), 4500, 1, null_mut(), 40, null_mut()), PVT3_ERR_NULL);

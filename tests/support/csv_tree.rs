@@ -31,3 +31,17 @@ pub fn write(dir: &Path, classes: usize, touches: usize, min_len: usize, max_len
         }
     }
 }
+
+/// The touches of a tree `write` made (`touches` a class, at least 6), side by side in `flat` and
+/// named as FabricSlide names its files, `Fabric{k}_F{force}_V{speed}mmps_{n}.csv`: the forces 120,
+/// 150 and 210 in turn, the first half of each class's touches at -10 mm/s, the rest at 50.
+pub fn flatten(dir: &Path, flat: &Path, classes: usize, touches: usize) {
+    std::fs::create_dir_all(flat).unwrap();
+    for k in 0..classes {
+        for n in 0..touches {
+            let (force, speed) = ([120, 150, 210][n % 3], if n < touches / 2 { -10 } else { 50 });
+            let from = dir.join(format!("material_{k}/touch_{n:02}.csv"));
+            std::fs::copy(from, flat.join(format!("Fabric{k}_F{force}_V{speed}mmps_{n}.csv"))).unwrap();
+        }
+    }
+}

@@ -32,6 +32,13 @@ pub struct Provenance {
     /// The pruning applied before fine-tuning, if any.
     #[serde(default)]
     pub pruning: Option<pvt3_spec::prune::PruneSpec>,
+    /// The condition's levels held out as the test set (`--hold-out`), if any.
+    #[serde(default)]
+    pub held_out: Option<crate::data::HoldOut>,
+    /// How the data set read its touches (`pvt3 import --per-distance`, `--per-force`): the
+    /// exported file asks a robot for the same.
+    #[serde(default)]
+    pub reading: Option<pvt3_format::Reading>,
     /// The stopping rule of provisional answers, calibrated on the validation fold when the
     /// run finished (PVT³ only). A rule of another form (an earlier pvt3's) reads as none: such a
     /// run exports without one, and `pvt3 eval --anytime` calibrates it afresh.
@@ -77,6 +84,7 @@ impl BakedFile {
             classes: self.classes.clone(),
             provenance: serde_json::to_value(&self.provenance).expect("plain data serialises"),
             stop_rule: self.provenance.stopping.as_ref().map(|s| s.rule),
+            reading: self.provenance.reading,
         }
     }
 }
@@ -228,6 +236,8 @@ mod tests {
             test_accuracy: None,
             options: TrainOptions::default(),
             pruning: None,
+            held_out: None,
+            reading: None,
             stopping: None,
         };
         let mut json = serde_json::to_value(&p).unwrap();

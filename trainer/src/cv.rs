@@ -24,6 +24,9 @@ use crate::{Error, Result};
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct CvSummary {
     pub data: String,
+    /// The condition's levels held out as every run's test set (`--hold-out`), if any.
+    #[serde(default)]
+    pub held_out: Option<crate::data::HoldOut>,
     pub seeds: Vec<u64>,
     pub runs: Vec<RunResult>,
     pub mean_test_accuracy: f64,
@@ -183,6 +186,7 @@ pub fn cross_validate(
     }
     let seeds: Vec<u64> = work.iter().map(|w| w.0).collect::<std::collections::BTreeSet<_>>().into_iter().collect();
     let mut summary = summarize(spec.data.path.display().to_string(), &seeds, runs, pruned_runs, stage.cloned());
+    summary.held_out = spec.data.held_out.clone();
     calibrate_stopping(&mut summary, &dirs)?;
     write_json_atomically(&out.join(CV_SUMMARY), &summary)?;
     write_figure(out, &summary, &dirs)?;
@@ -242,6 +246,7 @@ fn summarize(data: String, seeds: &[u64], runs: Vec<RunResult>, pruned_runs: Vec
         ci95_test_accuracy: ci95(&seed_means),
         seed_means,
         data,
+        held_out: None,
         seeds: seeds.to_vec(),
         mean_test_accuracy,
         std_test_accuracy,
@@ -263,6 +268,7 @@ fn summarize(data: String, seeds: &[u64], runs: Vec<RunResult>, pruned_runs: Vec
 struct Setup {
     config: pvt3_models::Config,
     data: String,
+    held_out: Option<crate::data::HoldOut>,
     options: crate::options::TrainOptions,
     pruning: Option<PruneStage>,
 }
@@ -315,12 +321,12 @@ pub fn report(out: &Path) -> Result<CvSummary> {
                 false => (None, None),
             };
             let options = crate::options::TrainOptions { seed: 0, ..meta.provenance.options };
-            let this = Setup { config: meta.config, data: meta.provenance.data, options, pruning };
+            let this = Setup { config: meta.config, data: meta.provenance.data, held_out: meta.provenance.held_out, options, pruning };
             match &setup {
                 None => setup = Some((this, dir.clone())),
                 Some((first, first_dir)) if *first != this => {
                     return Err(refuse(format!(
-                        "{} and {} were trained differently (data, configuration, options or pruning)",
+                        "{} and {} were trained differently (data, held-out levels, configuration, options or pruning)",
                         first_dir.display(),
                         dir.display()
                     )))
@@ -337,6 +343,7 @@ pub fn report(out: &Path) -> Result<CvSummary> {
     };
     let seeds: Vec<u64> = runs.iter().map(|r| r.seed).collect::<std::collections::BTreeSet<_>>().into_iter().collect();
     let mut summary = summarize(setup.data, &seeds, runs, pruned_runs, setup.pruning);
+    summary.held_out = setup.held_out;
     summary.unfinished = unfinished;
     calibrate_stopping(&mut summary, &dirs)?;
     write_json_atomically(&out.join(CV_SUMMARY), &summary)?;

@@ -6,7 +6,9 @@
 //! Touches of unequal length (what `pvt3 import` writes from CSV folders) hold `lengths` `[N]`:
 //! touch `i` is its first `lengths[i]` frames, the rest of `T` padding never read. Optional
 //! `class_names` and `sources` (UTF-8 bytes, one name per line) name the classes and each touch's
-//! file, for errors and reports.
+//! file, for errors and reports. Conditions (`conditions`, then `condition_NAME` per condition:
+//! the speed, force or direction of each touch, read by `pvt3 import --name` from file names)
+//! let `--hold-out` test on whole levels of a condition the training never saw.
 //!
 //! The published protocol: fold k validates, fold 4 tests, the other folds train. A set without a
 //! fold array gets stratified folds 0..=4 drawn from a seed. Folds are drawn by touch: the
@@ -21,6 +23,62 @@ use ndarray_npy::{NpzReader, ReadNpyExt, ReadableElement};
 use pvt3_models::Rng;
 
 use crate::{Error, Result};
+
+/// The arrays of a data set file, as `pvt3 import` writes them and [`Dataset::load`] reads them.
+pub mod key {
+    pub const X: &str = "x";
+    pub const Y: &str = "y";
+    pub const FOLD: &str = "fold";
+    pub const LENGTHS: &str = "lengths";
+    pub const CLASS_NAMES: &str = "class_names";
+    pub const SOURCES: &str = "sources";
+    pub const CHANNELS: &str = "channels";
+    /// The names of the touches' conditions, one a line.
+    pub const CONDITIONS: &str = "conditions";
+    /// How the touches were read (resampled to one speed, scaled to one force), a JSON
+    /// `pvt3_format::Reading`, UTF-8.
+    pub const READING: &str = "reading";
+
+    /// The array of one condition's level for every touch, one a line.
+    pub fn condition(name: &str) -> String {
+        format!("condition_{name}")
+    }
+}
+
+/// A condition of the touches (a speed, a force): its name and each touch's level, as text.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Condition {
+    pub name: String,
+    pub levels: Vec<String>,
+}
+
+impl Condition {
+    /// Its distinct levels, in numeric order where every level is a number, else in text order.
+    pub fn distinct(&self) -> Vec<&str> {
+        let mut all: Vec<&str> = self.levels.iter().map(String::as_str).collect();
+        all.sort_unstable();
+        all.dedup();
+        if all.iter().all(|l| l.parse::<f64>().is_ok()) {
+            all.sort_by(|a, b| a.parse::<f64>().unwrap_or(0.0).total_cmp(&b.parse::<f64>().unwrap_or(0.0)));
+        }
+        all
+    }
+}
+
+/// Touches held out by a condition's levels, the test set of a run ([`Dataset::hold_out`]); the
+/// other touches are dealt into the training and validation folds with `seed`.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct HoldOut {
+    pub condition: String,
+    pub levels: Vec<String>,
+    pub seed: u64,
+}
+
+impl std::fmt::Display for HoldOut {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}={}", self.condition, self.levels.join(","))
+    }
+}
 
 /// The fold that holds the test set in the published protocol.
 pub const TEST_FOLD: usize = 4;
@@ -39,6 +97,12 @@ pub struct Dataset {
     pub class_names: Option<Vec<String>>,
     /// Where each touch came from (`sources`: the CSV files of `pvt3 import`), if the file says.
     pub sources: Option<Vec<String>>,
+    /// The touches' conditions, if the file records them.
+    pub conditions: Vec<Condition>,
+    /// The levels held out as the test set, if any ([`Dataset::hold_out`]).
+    pub held_out: Option<HoldOut>,
+    /// How the touches were read, if they were brought to one speed or force (`pvt3 import`).
+    pub reading: Option<pvt3_format::Reading>,
     pub labels: Vec<u32>,
     pub folds: Vec<usize>,
     /// False when the folds were drawn here because the file had none.
@@ -133,16 +197,15 @@ impl Dataset {
     fn from_source(path: &Path, src: &mut impl ArraySource, seed: u64) -> Result<Self> {
         let keys = src.keys();
         let missing = |k: &str| data_error(path, format!("no array `{k}` (found: {})", keys.join(", ")));
-        if !keys.iter().any(|k| k == "x") {
-            return Err(missing("x"));
+        for k in [key::X, key::Y] {
+            if !keys.iter().any(|have| have == k) {
+                return Err(missing(k));
+            }
         }
-        if !keys.iter().any(|k| k == "y") {
-            return Err(missing("y"));
-        }
-        let x = read_numeric(src, "x").map_err(|e| data_error(path, format!("array `x`: {e}")))?;
-        let y = read_numeric(src, "y").map_err(|e| data_error(path, format!("array `y`: {e}")))?;
-        let fold = if keys.iter().any(|k| k == "fold") {
-            Some(read_numeric(src, "fold").map_err(|e| data_error(path, format!("array `fold`: {e}")))?)
+        let x = read_numeric(src, key::X).map_err(|e| data_error(path, format!("array `x`: {e}")))?;
+        let y = read_numeric(src, key::Y).map_err(|e| data_error(path, format!("array `y`: {e}")))?;
+        let fold = if keys.iter().any(|k| k == key::FOLD) {
+            Some(read_numeric(src, key::FOLD).map_err(|e| data_error(path, format!("array `fold`: {e}")))?)
         } else {
             None
         };
@@ -153,16 +216,16 @@ impl Dataset {
             [_, h, w, c, t] => vec![*h, *w, *c, *t],
             s => return Err(data_error(path, format!("`x` has shape {s:?}; expected [N, H, W, T], [N, C, T] or [N, H, W, C, T]"))),
         };
-        let labels = integers(path, "y", &y, n)?;
+        let labels = integers(path, key::Y, &y, n)?;
         let x: Vec<f32> = x.iter().map(|v| *v as f32).collect();
         let sample_len = x.len() / n.max(1);
         if let Some(i) = x.iter().position(|v| !v.is_finite()) {
             return Err(data_error(path, format!("`x` holds a NaN or infinite value in sample {}", i / sample_len)));
         }
         let frames = *sample_shape.last().expect("a sample shape has a frame axis");
-        let lengths = if keys.iter().any(|k| k == "lengths") {
-            let l = read_numeric(src, "lengths").map_err(|e| data_error(path, format!("array `lengths`: {e}")))?;
-            let lengths = integers(path, "lengths", &l, n)?;
+        let lengths = if keys.iter().any(|k| k == key::LENGTHS) {
+            let l = read_numeric(src, key::LENGTHS).map_err(|e| data_error(path, format!("array `lengths`: {e}")))?;
+            let lengths = integers(path, key::LENGTHS, &l, n)?;
             if let Some(i) = lengths.iter().position(|l| *l == 0 || *l as usize > frames) {
                 return Err(data_error(path, format!("`lengths`[{i}] = {} is not in 1..={frames}", lengths[i])));
             }
@@ -170,7 +233,8 @@ impl Dataset {
         } else {
             vec![frames; n]
         };
-        let mut lines = |key: &str, count: usize| -> Result<Option<Vec<String>>> {
+        // The lines of a text array; `count`, how many it must have.
+        let mut lines = |key: &str, count: Option<usize>| -> Result<Option<Vec<String>>> {
             if !keys.iter().any(|k| k == key) {
                 return Ok(None);
             }
@@ -178,23 +242,35 @@ impl Dataset {
             let text = String::from_utf8(bytes.iter().copied().collect())
                 .map_err(|_| data_error(path, format!("array `{key}` is not UTF-8 text")))?;
             let names: Vec<String> = text.lines().map(String::from).collect();
-            if names.len() != count {
+            if let Some(count) = count.filter(|c| *c != names.len()) {
                 return Err(data_error(path, format!("array `{key}` names {} lines; expected {count}", names.len())));
             }
             Ok(Some(names))
         };
         let classes = labels.iter().max().map_or(0, |m| *m as usize + 1);
-        let class_names = lines("class_names", classes)?;
-        let sources = lines("sources", n)?;
+        let class_names = lines(key::CLASS_NAMES, Some(classes))?;
+        let sources = lines(key::SOURCES, Some(n))?;
+        let mut conditions = Vec::new();
+        for name in lines(key::CONDITIONS, None)?.unwrap_or_default() {
+            let levels = lines(&key::condition(&name), Some(n))?.ok_or_else(|| missing(&key::condition(&name)))?;
+            conditions.push(Condition { name, levels });
+        }
+        let reading = match lines(key::READING, Some(1))? {
+            Some(text) => Some(
+                serde_json::from_str::<pvt3_format::Reading>(&text[0])
+                    .map_err(|e| data_error(path, format!("array `reading` is not how touches are read ({e})")))?,
+            ),
+            None => None,
+        };
         let (folds, folds_from_file) = match fold {
             Some(f) => {
-                let folds = integers(path, "fold", &f, n)?;
+                let folds = integers(path, key::FOLD, &f, n)?;
                 if let Some(bad) = folds.iter().find(|f| **f as usize >= FOLDS) {
                     return Err(data_error(path, format!("fold {bad} is outside 0..={}", FOLDS - 1)));
                 }
                 (folds.into_iter().map(|f| f as usize).collect(), true)
             }
-            None => (stratified_folds(&labels, seed), false),
+            None => (stratified_folds(&labels, FOLDS, seed), false),
         };
         Ok(Self {
             x,
@@ -202,6 +278,9 @@ impl Dataset {
             lengths,
             class_names,
             sources,
+            conditions,
+            held_out: None,
+            reading,
             labels: labels.to_vec(),
             folds,
             folds_from_file,
@@ -279,6 +358,60 @@ impl Dataset {
         Ok(split)
     }
 
+    /// Loads a data set as a run was trained on it: `seed` draws folds where the file has none,
+    /// and the run's held-out levels, if any, are held out again.
+    pub fn load_as_trained(path: &Path, seed: u64, held_out: Option<&HoldOut>) -> Result<Self> {
+        let mut data = Self::load(path, seed)?;
+        if let Some(h) = held_out {
+            data.hold_out(h)?;
+        }
+        Ok(data)
+    }
+
+    /// Tests on whole levels of a condition: the touches whose condition has one of the levels
+    /// become the test fold, never trained or validated on; the others are dealt, stratified by
+    /// class with the hold-out's seed, into the folds that train and validate.
+    pub fn hold_out(&mut self, h: &HoldOut) -> Result<()> {
+        let (name, levels, seed) = (h.condition.as_str(), &h.levels, h.seed);
+        let known = || self.conditions.iter().map(|c| c.name.as_str()).collect::<Vec<_>>().join(", ");
+        let condition = self.conditions.iter().find(|c| c.name == name).ok_or_else(|| {
+            if self.conditions.is_empty() {
+                data_error(
+                    &self.path,
+                    format!("--hold-out {name}: the set records no conditions (pvt3 import --name reads them from file names)"),
+                )
+            } else {
+                data_error(&self.path, format!("--hold-out {name}: no such condition; the set records {}", known()))
+            }
+        })?;
+        let all = condition.distinct();
+        if let Some(bad) = levels.iter().find(|l| !all.contains(&l.as_str())) {
+            return Err(data_error(&self.path, format!("--hold-out {name}={bad}: no touch has that level; {name} has {}", all.join(", "))));
+        }
+        let held: Vec<bool> = condition.levels.iter().map(|l| levels.contains(l)).collect();
+        let kept: Vec<usize> = (0..self.len()).filter(|&i| !held[i]).collect();
+        let kept_labels: Vec<u32> = kept.iter().map(|&i| self.labels[i]).collect();
+        for c in 0..self.classes() as u32 {
+            let n = kept_labels.iter().filter(|l| **l == c).count();
+            if n < TEST_FOLD {
+                return Err(data_error(
+                    &self.path,
+                    format!("--hold-out {h}: class {c} keeps {n} touches, too few to train and validate on {TEST_FOLD} folds"),
+                ));
+            }
+        }
+        if held.iter().all(|h| !h) {
+            return Err(data_error(&self.path, format!("--hold-out {h}: holds out no touch")));
+        }
+        let folds = stratified_folds(&kept_labels, TEST_FOLD, seed);
+        for (k, &i) in kept.iter().enumerate() {
+            self.folds[i] = folds[k];
+        }
+        (0..self.len()).filter(|&i| held[i]).for_each(|i| self.folds[i] = TEST_FOLD);
+        self.held_out = Some(h.clone());
+        Ok(())
+    }
+
     /// Checks that the samples fit a model configuration: the same frame layout, and every touch
     /// at least the model's window long (a longer touch is read a window at a time).
     pub fn check_fits(&self, cfg: &pvt3_models::Config) -> Result<()> {
@@ -325,8 +458,8 @@ fn integers(path: &Path, key: &str, a: &ArrayD<f64>, n: usize) -> Result<Vec<u32
         .collect()
 }
 
-/// Deals each class's samples, shuffled by `seed`, round-robin into folds 0..FOLDS.
-fn stratified_folds(labels: &[u32], seed: u64) -> Vec<usize> {
+/// Deals each class's samples, shuffled by `seed`, round-robin into folds 0..folds_count.
+fn stratified_folds(labels: &[u32], folds_count: usize, seed: u64) -> Vec<usize> {
     let mut rng = Rng::new(seed);
     let mut folds = vec![0; labels.len()];
     let classes = labels.iter().max().map_or(0, |m| *m + 1);
@@ -334,7 +467,7 @@ fn stratified_folds(labels: &[u32], seed: u64) -> Vec<usize> {
         let mut members: Vec<usize> = (0..labels.len()).filter(|&i| labels[i] == c).collect();
         rng.shuffle(&mut members);
         for (k, i) in members.into_iter().enumerate() {
-            folds[i] = k % FOLDS;
+            folds[i] = k % folds_count;
         }
     }
     folds

@@ -45,8 +45,30 @@ impl Samples {
     }
 
     /// One window of each of the `indices` touches, where `rng` draws it (the whole touch, and
-    /// no draw, when it is exactly one window long).
-    pub fn cropped(data: &Dataset, indices: &[usize], norm: &Normalization, rng: &mut Rng) -> Self {
+    /// no draw, when it is exactly one window long). With `stretch` > 0 each window is also read
+    /// at a random speed, as if the touch had been made faster or slower: it spans `r` times the
+    /// model's frames of the touch, `r` log-uniform in [1 / (1 + stretch), 1 + stretch] (at most
+    /// the whole touch), resampled to the model's frames ([`pvt3_runtime::resample`]).
+    pub fn cropped(data: &Dataset, indices: &[usize], norm: &Normalization, stretch: f64, rng: &mut Rng) -> Self {
+        if stretch > 0.0 {
+            let (mut x, mut labels, mut touches) = (Vec::new(), Vec::new(), Vec::new());
+            let mut raw = vec![0.0; data.sample_len() / data.max_frames() * norm.frames];
+            for (k, &i) in indices.iter().enumerate() {
+                let len = data.lengths[i];
+                let r = ((1.0 + stretch).ln() * (2.0 * rng.uniform() as f64 - 1.0)).exp().min(len as f64 / norm.frames as f64);
+                let span = r * norm.frames as f64;
+                let start = rng.uniform() as f64 * (len as f64 - span);
+                for (row, out) in data.sample(i).chunks(data.max_frames()).zip(raw.chunks_mut(norm.frames)) {
+                    pvt3_runtime::resample::resample_into(&row[..len], start, r, out);
+                }
+                norm.apply_into(&raw, &mut x);
+                labels.push(data.labels[i]);
+                touches.push(k);
+            }
+            let mut sample_shape = data.sample_shape.clone();
+            *sample_shape.last_mut().expect("a frame axis") = norm.frames;
+            return Self { x, labels, sample_shape, touches };
+        }
         let picks: Vec<(usize, usize)> = indices
             .iter()
             .map(|&i| {

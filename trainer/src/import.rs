@@ -1,10 +1,12 @@
 //! `pvt3 import`: a folder of CSV recordings → a data set (`.npz`) the trainer reads.
 //!
 //! The folder holds one folder per class (its name is the class's), each with one CSV file per
-//! touch: a header row, then one row per frame. Which columns are sensor channels is chosen by
-//! name or pattern, or by default every numeric column that varies, time-stamp-like columns
-//! left out (and said so). Touches may differ in length; the set records each touch's
-//! (`lengths`), its file (`sources`) and the class names (`class_names`), see [`crate::data`].
+//! touch: a header row, then one row per frame. Or, with a file name pattern that names the
+//! class (`{class}_F{force}_V{speed}_*`), the CSV files side by side in one folder. Which columns
+//! are sensor channels is chosen by name or pattern, or by default every numeric column that
+//! varies, time-stamp-like columns left out (and said so). Touches may differ in length; the set
+//! records each touch's (`lengths`), its file (`sources`), the class names (`class_names`) and
+//! the conditions the pattern reads from the names (speed, force, …), see [`crate::data::key`].
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -12,7 +14,9 @@ use std::path::{Path, PathBuf};
 use ndarray::{Array1, ArrayD, IxDyn};
 use ndarray_npy::NpzWriter;
 
-use crate::data::FOLDS;
+use pvt3_runtime::{read_touch, Reading, Touch};
+
+use crate::data::{key, Condition, FOLDS};
 use crate::{Error, Result};
 
 /// What to import and how.
@@ -24,11 +28,116 @@ pub struct ImportOptions {
     /// The sensor's grid, rows × columns of the chosen channels (row-major); `None`: one column of
     /// channels (`[N, channels, frames]`, read as a channels × 1 grid).
     pub grid: Option<(usize, usize)>,
+    /// What each file's name says: its class and the conditions of the touch.
+    pub name: Option<NamePattern>,
+    /// Each touch read by distance travelled rather than by time: the condition that holds its
+    /// sliding speed, and the speed every touch is resampled to (a touch of `n` frames at speed
+    /// `v` becomes `n · |v| / speed` frames, [`crate::resample`]), so that a texture's ridges lie
+    /// as many frames apart at every speed.
+    pub per_distance: Option<(String, f64)>,
+    /// Each touch's readings scaled to one pressing force: the condition that holds its force,
+    /// and the force every touch is scaled to (readings times `force / f`, for a touch pressed
+    /// at `f`): a capacitive sensor's readings grow about in proportion to the force.
+    pub per_force: Option<(String, f64)>,
 }
 
-/// One touch as read: its class, its file, its frames `[frames][columns]` (every column of the
+/// A file name pattern (the name without `.csv`): `{field}` reads a non-empty run of characters
+/// as that field's value, `*` matches any run, every other character itself. The field `class`
+/// names the touch's class; every other field is a condition of the touch (a speed, a force, a
+/// direction) that `pvt3 cv --hold-out` can hold out.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NamePattern {
+    text: String,
+    parts: Vec<Part>,
+}
+
+#[derive(Clone, Debug, PartialEq)]
+enum Part {
+    Char(char),
+    Any,
+    Field(String),
+}
+
+/// The field of a [`NamePattern`] that names the class.
+pub const CLASS_FIELD: &str = "class";
+
+impl std::str::FromStr for NamePattern {
+    type Err = String;
+
+    fn from_str(text: &str) -> std::result::Result<Self, String> {
+        let mut parts = Vec::new();
+        let mut chars = text.chars();
+        while let Some(c) = chars.next() {
+            parts.push(match c {
+                '*' => Part::Any,
+                '{' => {
+                    let mut field = String::new();
+                    let closed = chars.by_ref().any(|c| {
+                        c == '}' || {
+                            field.push(c);
+                            false
+                        }
+                    });
+                    if !closed || field.is_empty() || !field.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
+                        return Err(format!("`{text}`: `{{{field}` is not a field; write {{name}} with letters, digits or _"));
+                    }
+                    if parts.iter().any(|p| *p == Part::Field(field.clone())) {
+                        return Err(format!("`{text}`: the field {{{field}}} appears twice"));
+                    }
+                    Part::Field(field)
+                }
+                '}' => return Err(format!("`{text}`: a `}}` without its `{{`")),
+                c => Part::Char(c),
+            });
+        }
+        if parts.windows(2).any(|w| !matches!(w[0], Part::Char(_)) && !matches!(w[1], Part::Char(_))) {
+            return Err(format!("`{text}`: two fields or wildcards side by side cannot be told apart; put a separator between them"));
+        }
+        Ok(Self { text: text.to_string(), parts })
+    }
+}
+
+impl NamePattern {
+    /// The fields, in the pattern's order.
+    pub fn fields(&self) -> Vec<&str> {
+        self.parts.iter().filter_map(|p| if let Part::Field(f) = p { Some(f.as_str()) } else { None }).collect()
+    }
+
+    /// The conditions: every field but the class.
+    pub fn conditions(&self) -> Vec<&str> {
+        self.fields().into_iter().filter(|f| *f != CLASS_FIELD).collect()
+    }
+
+    /// Each field's value in `name`, in the pattern's order, or `None` where it does not match.
+    pub fn read(&self, name: &str) -> Option<Vec<String>> {
+        fn go(parts: &[Part], name: &[char], values: &mut Vec<String>) -> bool {
+            match parts.split_first() {
+                None => name.is_empty(),
+                Some((Part::Char(c), rest)) => name.first() == Some(c) && go(rest, &name[1..], values),
+                Some((Part::Any, rest)) => (0..=name.len()).any(|k| go(rest, &name[k..], values)),
+                Some((Part::Field(_), rest)) => (1..=name.len()).any(|k| {
+                    values.push(name[..k].iter().collect());
+                    go(rest, &name[k..], values) || {
+                        values.pop();
+                        false
+                    }
+                }),
+            }
+        }
+        let mut values = Vec::new();
+        go(&self.parts, &name.chars().collect::<Vec<_>>(), &mut values).then_some(values)
+    }
+}
+
+impl std::fmt::Display for NamePattern {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.text)
+    }
+}
+
+/// One touch as its file holds it: its class, its file, its frames `[frames][columns]` (every column of the
 /// header; non-numeric cells are `None`).
-struct Touch {
+struct TouchFile {
     class: usize,
     path: PathBuf,
     rows: Vec<Vec<Option<f64>>>,
@@ -49,6 +158,10 @@ pub struct Imported {
     /// Columns left out, each with why.
     pub left_out: LeftOut,
     pub grid: Option<(usize, usize)>,
+    /// The conditions the file name pattern read, each with its value for every touch.
+    pub conditions: Vec<Condition>,
+    /// How the touches were read, if they were brought to one speed or force.
+    pub reading: Option<Reading>,
 }
 
 /// Columns left out of an import, each with why.
@@ -92,46 +205,99 @@ pub fn read_folder(dir: &Path, opts: &ImportOptions) -> Result<Imported> {
         v.sort();
         Ok(v)
     };
-    let class_dirs: Vec<PathBuf> = entries(dir)?.into_iter().filter(|p| p.is_dir()).collect();
-    if class_dirs.is_empty() {
-        return Err(import_error(dir, None, "holds no class folder (expected one folder per class, each with one CSV file per touch)"));
+    let csvs = |d: &Path| -> Result<Vec<PathBuf>> {
+        Ok(entries(d)?.into_iter().filter(|p| p.is_file() && p.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"))).collect())
+    };
+    // Every touch's file, class name and condition values.
+    let mut files: Vec<(PathBuf, String, Vec<String>)> = Vec::new();
+    let read_name = |path: &Path, pattern: &NamePattern| -> Result<Vec<String>> {
+        let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        pattern.read(&stem).ok_or_else(|| import_error(path, None, format!("its name `{stem}` does not match --name {pattern}")))
+    };
+    match &opts.name {
+        Some(pattern) if pattern.fields().contains(&CLASS_FIELD) => {
+            let found = csvs(dir)?;
+            if found.is_empty() {
+                return Err(import_error(
+                    dir,
+                    None,
+                    format!("holds no .csv file (--name {pattern} names the class, so the touches lie side by side in this folder)"),
+                ));
+            }
+            for path in found {
+                let mut values = read_name(&path, pattern)?;
+                let class = values.remove(pattern.fields().iter().position(|f| *f == CLASS_FIELD).expect("the class field"));
+                files.push((path, class, values));
+            }
+        }
+        _ => {
+            let class_dirs: Vec<PathBuf> = entries(dir)?.into_iter().filter(|p| p.is_dir()).collect();
+            if class_dirs.is_empty() {
+                return Err(import_error(
+                    dir,
+                    None,
+                    "holds no class folder (expected one folder per class, each with one CSV file per touch, or --name with a {class} field)",
+                ));
+            }
+            for class_dir in class_dirs {
+                let found = csvs(&class_dir)?;
+                if found.is_empty() {
+                    return Err(import_error(&class_dir, None, "an empty class: this folder holds no .csv file"));
+                }
+                let class = class_dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+                for path in found {
+                    let values = match &opts.name {
+                        Some(pattern) => read_name(&path, pattern)?,
+                        None => Vec::new(),
+                    };
+                    files.push((path, class.clone(), values));
+                }
+            }
+        }
+    }
+    let classes: Vec<String> = files.iter().map(|(_, c, _)| c.clone()).collect::<std::collections::BTreeSet<_>>().into_iter().collect();
+    let flat = opts.name.as_ref().is_some_and(|p| p.fields().contains(&CLASS_FIELD));
+    for class in &classes {
+        let count = files.iter().filter(|(_, c, _)| c == class).count();
+        if count < FOLDS {
+            let too_few = format!(
+                "{count} touches, too few to split: each of the {FOLDS} folds (training, validation, test) needs one of every class"
+            );
+            return Err(if flat {
+                import_error(dir, None, format!("class `{class}`: {too_few}"))
+            } else {
+                import_error(&dir.join(class), None, too_few)
+            });
+        }
     }
     let mut header: Option<(PathBuf, Vec<String>)> = None;
     let mut touches = Vec::new();
-    let mut classes = Vec::new();
-    for (class, class_dir) in class_dirs.iter().enumerate() {
-        let files: Vec<PathBuf> =
-            entries(class_dir)?.into_iter().filter(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"))).collect();
-        if files.is_empty() {
-            return Err(import_error(class_dir, None, "an empty class: this folder holds no .csv file"));
-        }
-        if files.len() < FOLDS {
-            return Err(import_error(
-                class_dir,
-                None,
-                format!(
-                    "{} touches, too few to split: each of the {FOLDS} folds (training, validation, test) needs one of every class",
-                    files.len()
-                ),
-            ));
-        }
-        classes.push(class_dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default());
-        for path in files {
-            let (names, touch) = read_touch(&path, class)?;
-            match &header {
-                None => header = Some((path.clone(), names)),
-                Some((first, h)) if *h != names => {
-                    return Err(import_error(
-                        &path,
-                        Some(1),
-                        format!("its header differs from {}'s: {:?} against {:?}", first.display(), names, h),
-                    ));
-                }
-                Some(_) => {}
+    let mut condition_values = Vec::new();
+    for (path, class, values) in files {
+        let (names, touch) = read_file(&path, classes.binary_search(&class).expect("a known class"))?;
+        match &header {
+            None => header = Some((path.clone(), names)),
+            Some((first, h)) if *h != names => {
+                return Err(import_error(
+                    &path,
+                    Some(1),
+                    format!("its header differs from {}'s: {:?} against {:?}", first.display(), names, h),
+                ));
             }
-            touches.push(touch);
+            Some(_) => {}
         }
+        touches.push(touch);
+        condition_values.push(values);
     }
+    let conditions = match &opts.name {
+        Some(pattern) => pattern
+            .conditions()
+            .iter()
+            .enumerate()
+            .map(|(k, name)| Condition { name: name.to_string(), levels: condition_values.iter().map(|v| v[k].clone()).collect() })
+            .collect(),
+        None => Vec::new(),
+    };
     let (_, names) = header.expect("at least one touch was read");
     let (chosen, left_out) = choose_columns(&names, &touches, opts)?;
     let channels: Vec<String> = chosen.iter().map(|&c| names[c].clone()).collect();
@@ -144,14 +310,57 @@ pub fn read_folder(dir: &Path, opts: &ImportOptions) -> Result<Imported> {
             )));
         }
     }
-    let mut out = Imported { touches: Vec::new(), labels: Vec::new(), classes, sources: Vec::new(), channels, left_out, grid: opts.grid };
-    for t in touches {
+    let reading = (opts.per_distance.is_some() || opts.per_force.is_some())
+        .then(|| Reading { speed: opts.per_distance.as_ref().map(|p| p.1), force: opts.per_force.as_ref().map(|p| p.1) });
+    if let Some(problem) = reading.and_then(|r| r.problem()) {
+        return Err(Error::Usage(format!("--per-distance/--per-force: {problem}")));
+    }
+    // Each touch's value of a condition, as a number (what the robot would know of the touch).
+    let known = |option: &str, given: &Option<(String, f64)>| -> Result<Vec<Option<f64>>> {
+        let Some((name, _)) = given else { return Ok(vec![None; touches.len()]) };
+        let condition = conditions.iter().find(|c| c.name == *name).ok_or_else(|| {
+            let known: Vec<&String> = conditions.iter().map(|c| &c.name).collect();
+            Error::Usage(format!("{option} {name}: no such condition; --name records {known:?}"))
+        })?;
+        condition
+            .levels
+            .iter()
+            .zip(&touches)
+            .map(|(v, t)| {
+                v.parse::<f64>()
+                    .map(Some)
+                    .map_err(|_| import_error(&t.path, None, format!("{option} {name}: its {name} `{v}` is not a number")))
+            })
+            .collect()
+    };
+    let speeds = known("--per-distance", &opts.per_distance)?;
+    let forces = known("--per-force", &opts.per_force)?;
+    let mut out = Imported {
+        touches: Vec::new(),
+        labels: Vec::new(),
+        classes,
+        sources: Vec::new(),
+        channels,
+        left_out,
+        grid: opts.grid,
+        conditions,
+        reading,
+    };
+    for (n, t) in touches.into_iter().enumerate() {
         let mut frames = vec![Vec::with_capacity(t.rows.len()); chosen.len()];
         for (row, line) in t.rows.iter().zip(&t.lines) {
             for (k, &c) in chosen.iter().enumerate() {
                 let v = row[c].ok_or_else(|| import_error(&t.path, Some(*line), format!("column `{}` is not a number here", names[c])))?;
                 frames[k].push(v as f32);
             }
+        }
+        if let Some(reading) = &reading {
+            // Read as the robot will read its touches: the runtime's own function.
+            let touch = Touch { speed: speeds[n], force: forces[n] };
+            let read =
+                read_touch(&frames.concat(), frames.len(), reading, touch).map_err(|e| import_error(&t.path, None, e.to_string()))?;
+            let len = read.len() / frames.len();
+            frames = read.chunks(len).map(<[f32]>::to_vec).collect();
         }
         out.touches.push(frames);
         out.labels.push(t.class as u32);
@@ -161,7 +370,7 @@ pub fn read_folder(dir: &Path, opts: &ImportOptions) -> Result<Imported> {
 }
 
 /// One CSV touch: its header and rows; a ragged row is an error naming its line.
-fn read_touch(path: &Path, class: usize) -> Result<(Vec<String>, Touch)> {
+fn read_file(path: &Path, class: usize) -> Result<(Vec<String>, TouchFile)> {
     let mut reader = csv::ReaderBuilder::new()
         .flexible(true)
         .trim(csv::Trim::All)
@@ -181,11 +390,11 @@ fn read_touch(path: &Path, class: usize) -> Result<(Vec<String>, Touch)> {
     if rows.is_empty() {
         return Err(import_error(path, None, "holds a header and no frame"));
     }
-    Ok((names, Touch { class, path: path.to_path_buf(), rows, lines }))
+    Ok((names, TouchFile { class, path: path.to_path_buf(), rows, lines }))
 }
 
 /// The columns to import (indices into the header) and those left out, with why.
-fn choose_columns(names: &[String], touches: &[Touch], opts: &ImportOptions) -> Result<(Vec<usize>, LeftOut)> {
+fn choose_columns(names: &[String], touches: &[TouchFile], opts: &ImportOptions) -> Result<(Vec<usize>, LeftOut)> {
     // The first cell of a column that is not a number, if any.
     let text_at =
         |c: usize| touches.iter().find_map(|t| t.rows.iter().zip(&t.lines).find(|(r, _)| r[c].is_none()).map(|(_, l)| (&t.path, *l)));
@@ -245,7 +454,7 @@ impl Imported {
 
     /// Writes the set as `.npz`: `x` (float32, `[N, channels, T]` or `[N, rows, cols, T]`, `T`
     /// the longest touch, shorter touches zero-padded), `y`, `lengths`, and the names as UTF-8
-    /// lines (`class_names`, `sources`, `channels`).
+    /// lines (`class_names`, `sources`, `channels`, the conditions: [`key`]).
     pub fn write_npz(&self, path: &Path) -> Result<()> {
         let (_, longest) = self.length_range();
         let n = self.touches.len();
@@ -265,12 +474,24 @@ impl Imported {
         let file = std::fs::File::create(path).map_err(Error::io(path))?;
         let mut npz = NpzWriter::new(std::io::BufWriter::new(file));
         let lines = |v: &[String]| Array1::from(v.join("\n").into_bytes());
-        npz.add_array("x", &ArrayD::from_shape_vec(IxDyn(&shape), x).map_err(|e| bad(&e))?).map_err(|e| bad(&e))?;
-        npz.add_array("y", &Array1::from(self.labels.iter().map(|l| *l as i64).collect::<Vec<_>>())).map_err(|e| bad(&e))?;
-        npz.add_array("lengths", &Array1::from(self.touches.iter().map(|t| t[0].len() as i64).collect::<Vec<_>>())).map_err(|e| bad(&e))?;
-        npz.add_array("class_names", &lines(&self.classes)).map_err(|e| bad(&e))?;
-        npz.add_array("sources", &lines(&self.sources)).map_err(|e| bad(&e))?;
-        npz.add_array("channels", &lines(&self.channels)).map_err(|e| bad(&e))?;
+        npz.add_array(key::X, &ArrayD::from_shape_vec(IxDyn(&shape), x).map_err(|e| bad(&e))?).map_err(|e| bad(&e))?;
+        npz.add_array(key::Y, &Array1::from(self.labels.iter().map(|l| *l as i64).collect::<Vec<_>>())).map_err(|e| bad(&e))?;
+        npz.add_array(key::LENGTHS, &Array1::from(self.touches.iter().map(|t| t[0].len() as i64).collect::<Vec<_>>()))
+            .map_err(|e| bad(&e))?;
+        npz.add_array(key::CLASS_NAMES, &lines(&self.classes)).map_err(|e| bad(&e))?;
+        npz.add_array(key::SOURCES, &lines(&self.sources)).map_err(|e| bad(&e))?;
+        npz.add_array(key::CHANNELS, &lines(&self.channels)).map_err(|e| bad(&e))?;
+        if let Some(reading) = &self.reading {
+            let text = serde_json::to_string(reading).expect("plain data serialises");
+            npz.add_array(key::READING, &Array1::from(text.into_bytes())).map_err(|e| bad(&e))?;
+        }
+        if !self.conditions.is_empty() {
+            let names: Vec<String> = self.conditions.iter().map(|c| c.name.clone()).collect();
+            npz.add_array(key::CONDITIONS, &lines(&names)).map_err(|e| bad(&e))?;
+            for c in &self.conditions {
+                npz.add_array(key::condition(&c.name).as_str(), &lines(&c.levels)).map_err(|e| bad(&e))?;
+            }
+        }
         npz.finish().map_err(|e| bad(&e))?;
         Ok(())
     }

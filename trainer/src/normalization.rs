@@ -58,6 +58,9 @@ mod tests {
             labels: vec![0, 1, 0],
             folds: vec![0, 1, 4],
             folds_from_file: true,
+            conditions: Vec::new(),
+            held_out: None,
+            reading: None,
             path: PathBuf::from("mem"),
         };
         let norm = fit(&data, &[0, 1], 3);

@@ -40,6 +40,20 @@ pub struct TrainOptions {
     #[arg(long, default_value_t = 0)]
     #[serde(default)]
     pub aug_shift: usize,
+    /// Augmentation: multiply each training window's raw readings by a random factor,
+    /// log-uniform in [1 / (1 + S), 1 + S], as a lighter or firmer press would (a capacitive
+    /// sensor's readings grow about in proportion to the force: docs/robustness.md). E.g. 0.5.
+    /// 0 turns it off.
+    #[arg(long, default_value_t = 0.0)]
+    #[serde(default)]
+    pub aug_scale: f64,
+    /// Augmentation: read each training window at a random speed, as if the touch had been made
+    /// up to 1 + S times faster or slower (log-uniform; resampled, the touch's own frames beyond
+    /// the window read where it has them), so that a model meets speeds it was not trained at.
+    /// E.g. 1 (half to twice the speed). 0 turns it off.
+    #[arg(long, default_value_t = 0.0)]
+    #[serde(default)]
+    pub aug_stretch: f64,
     /// Mixup: blend each training batch with a shuffled copy of itself, λ ~ Beta(α, α) per batch,
     /// and the two labels' losses alike; this is α (e.g. 0.2). 0 turns it off.
     #[arg(long, default_value_t = 0.0)]

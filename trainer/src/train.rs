@@ -25,6 +25,7 @@ use crate::checkpoint::{self, read_json, write_json, write_json_atomically, Meta
 use crate::data::{Dataset, Split};
 use crate::evaluate::{evaluate, Samples};
 use crate::metrics::EpochMetrics;
+use crate::normalization::Normalization;
 use crate::optim::{is_weight_matrix, AdamW};
 use crate::options::TrainOptions;
 use crate::run_dir::{Checkpoint, Run};
@@ -184,7 +185,16 @@ fn vars_where(varmap: &VarMap, keep: fn(&str, &Var) -> bool) -> Vec<Var> {
     names.into_iter().map(|n| vars[n].clone()).collect()
 }
 
-fn augment(sample: &mut [f32], frames: usize, opts: &TrainOptions, rng: &mut Rng) {
+fn augment(sample: &mut [f32], norm: &Normalization, opts: &TrainOptions, rng: &mut Rng) {
+    let frames = norm.frames;
+    if opts.aug_scale > 0.0 {
+        // The raw readings times k, in normalised units: k z + (k - 1) mean / std, per channel.
+        let k = ((1.0 + opts.aug_scale).ln() * (2.0 * rng.uniform() as f64 - 1.0)).exp() as f32;
+        for (row, (m, s)) in sample.chunks_mut(frames).zip(norm.mean.iter().zip(&norm.std)) {
+            let lift = (k - 1.0) * m / s;
+            row.iter_mut().for_each(|v| *v = k * *v + lift);
+        }
+    }
     if opts.aug_shift > 0 {
         let span = 2 * opts.aug_shift + 1;
         let shift = rng.below(span) as isize - opts.aug_shift as isize;
@@ -236,7 +246,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
     // standardisation, and each epoch's batches when every touch is one window long. A longer
     // touch gives each epoch one window drawn at random (`Samples::cropped`).
     let train_set = Samples::new(spec.data, &split.train, &normalization);
-    let crops = split.train.iter().any(|&i| spec.data.lengths[i] > config.frames);
+    let crops = opts.aug_stretch > 0.0 || split.train.iter().any(|&i| spec.data.lengths[i] > config.frames);
     let val_set = Samples::new(spec.data, &split.val, &normalization);
     let test_set = Samples::new(spec.data, &split.test, &normalization);
 
@@ -283,6 +293,8 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
             test_accuracy,
             options: opts.clone(),
             pruning: spec.pruning.clone(),
+            held_out: spec.data.held_out.clone(),
+            reading: spec.data.reading,
             stopping: None,
         },
     };
@@ -302,7 +314,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
             return Ok(None);
         }
         let started = Instant::now();
-        let cropped = crops.then(|| Samples::cropped(spec.data, &split.train, &normalization, &mut run.rng));
+        let cropped = crops.then(|| Samples::cropped(spec.data, &split.train, &normalization, opts.aug_stretch, &mut run.rng));
         let train_set = cropped.as_ref().unwrap_or(&train_set);
         let mut order: Vec<usize> = (0..train_set.len()).collect();
         run.rng.shuffle(&mut order);
@@ -310,7 +322,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
         let mut lr = schedule.at(run.step);
         for rows in order.chunks(opts.batch_size) {
             let rng = &mut run.rng;
-            let (x, y) = train_set.batch(rows, |s| augment(s, config.frames, opts, rng))?;
+            let (x, y) = train_set.batch(rows, |s| augment(s, &normalization, opts, rng))?;
             lr = schedule.at(run.step);
             let (loss, logits) = learner.step(&x, &y, opts, lr, &mut run.rng)?;
             run.step += 1;

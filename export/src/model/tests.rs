@@ -30,6 +30,7 @@ fn meta(classes: usize) -> Metadata {
         classes: (0..classes).map(|k| format!("class_{k}")).collect(),
         provenance: serde_json::json!({"data": "golden"}),
         stop_rule: None,
+        reading: None,
     }
 }
 
@@ -145,8 +146,12 @@ fn committed_golden_onnx_is_what_the_exporter_writes() {
     let cfg = Config::icub20();
     let baked = bake(&cfg, &read_tensors(&golden("weights.safetensors")).unwrap()).unwrap();
     let classes = (0..20).map(|k| format!("material_{}", k + 1)).collect();
-    let meta =
-        Metadata { classes, provenance: serde_json::json!({"data": "tests/golden/icub20 (independent implementation)"}), stop_rule: None };
+    let meta = Metadata {
+        classes,
+        provenance: serde_json::json!({"data": "tests/golden/icub20 (independent implementation)"}),
+        stop_rule: None,
+        reading: None,
+    };
     let model = export(&baked, &identity_normalization(&cfg), &meta).unwrap();
     let graph = model.graph.as_ref().unwrap();
     let small: Vec<_> =

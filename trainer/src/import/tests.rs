@@ -38,11 +38,12 @@ fn a_csv_tree_imports_with_its_lengths_names_and_channels() {
     let e2: f32 = text.lines().nth(1).unwrap().split(',').nth(2).unwrap().parse().unwrap();
     assert_eq!(data.sample(0)[longest], e2);
     // Chosen by pattern, laid out on a grid.
-    let opts = ImportOptions { columns: vec!["e?".into()], grid: Some((2, 2)) };
+    let opts = ImportOptions { columns: vec!["e?".into()], grid: Some((2, 2)), ..Default::default() };
     let set = read_folder(&dir, &opts).unwrap();
     set.write_npz(&out).unwrap();
     assert_eq!(Dataset::load(&out, 0).unwrap().sample_shape, vec![2, 2, longest]);
-    let err = read_folder(&dir, &ImportOptions { columns: vec!["e?".into()], grid: Some((3, 2)) }).unwrap_err().to_string();
+    let err =
+        read_folder(&dir, &ImportOptions { columns: vec!["e?".into()], grid: Some((3, 2)), ..Default::default() }).unwrap_err().to_string();
     assert!(err.contains("--grid 3x2 holds 6 channels, and 4 columns were chosen"), "{err}");
     std::fs::remove_dir_all(dir).unwrap();
 }
@@ -62,14 +63,14 @@ fn bad_files_are_named_with_their_line() {
 
     lines[5] = good.lines().nth(5).unwrap().replacen(",1", ",oops", 1);
     std::fs::write(&touch, lines.join("\n")).unwrap();
-    let msg = err(&dir, &ImportOptions { columns: vec!["e*".into()], grid: None });
+    let msg = err(&dir, &ImportOptions { columns: vec!["e*".into()], ..Default::default() });
     assert!(msg.contains("touch_03.csv:6: column `e1` holds text, not a number"), "{msg}");
     // By default a column with text is left out, said so.
     let set = read_folder(&dir, &ImportOptions::default()).unwrap();
     assert!(set.left_out.contains(&("e1".into(), "not numeric")), "{:?}", set.left_out);
     std::fs::write(&touch, &good).unwrap();
 
-    let msg = err(&dir, &ImportOptions { columns: vec!["force".into()], grid: None });
+    let msg = err(&dir, &ImportOptions { columns: vec!["force".into()], ..Default::default() });
     assert!(msg.contains("--columns force: no column of the header matches"), "{msg}");
 
     std::fs::create_dir_all(dir.join("material_9")).unwrap();
@@ -92,4 +93,105 @@ fn bad_files_are_named_with_their_line() {
 fn patterns_match_whole_names() {
     assert!(matches("ff_e*", "ff_e12") && matches("e?", "e1") && matches("*", ""));
     assert!(!matches("e?", "e12") && !matches("ff_e*", "ff_pdc") && !matches("e1", "e12"));
+}
+
+#[test]
+fn name_patterns_read_fields_and_refuse_what_cannot_be_told_apart() {
+    let p: NamePattern = "{class}_F{force}_V{speed}mmps_*".parse().unwrap();
+    assert_eq!(p.fields(), ["class", "force", "speed"]);
+    assert_eq!(p.conditions(), ["force", "speed"]);
+    assert_eq!(p.read("DenimFlex_F210_V-150mmps_3").unwrap(), ["DenimFlex", "210", "-150"]);
+    assert_eq!(p.read("Linen_F120_V10mmps_0").unwrap(), ["Linen", "120", "10"]);
+    assert_eq!(p.read("Linen_F120_V10mm_0"), None);
+    assert_eq!(p.read("_F120_V10mmps_0"), None, "a field reads at least one character");
+    // Fields take the shortest run that lets the rest match.
+    let p: NamePattern = "{a}_{b}".parse().unwrap();
+    assert_eq!(p.read("x_y_z").unwrap(), ["x", "y_z"]);
+    for (bad, why) in [
+        ("{a}{b}", "side by side"),
+        ("{a}*", "side by side"),
+        ("{a", "not a field"),
+        ("{}", "not a field"),
+        ("a}", "without its"),
+        ("{a}_{a}", "twice"),
+    ] {
+        let err = bad.parse::<NamePattern>().unwrap_err();
+        assert!(err.contains(why), "{bad}: {err}");
+    }
+}
+
+/// Touches side by side in one folder, their class and conditions in their names, as FabricSlide
+/// names them.
+fn flat_tree(tag: &str) -> PathBuf {
+    let dir = tree(tag);
+    csv_tree::flatten(&dir, &dir.join("flat"), 3, 6);
+    dir.join("flat")
+}
+
+#[test]
+fn a_flat_folder_imports_classes_and_conditions_from_names() {
+    let flat = flat_tree("flat");
+    let name = Some("{class}_F{force}_V{speed}mmps_*".parse().unwrap());
+    let set = read_folder(&flat, &ImportOptions { name, ..Default::default() }).unwrap();
+    assert_eq!(set.classes, ["Fabric0", "Fabric1", "Fabric2"]);
+    assert_eq!(set.per_class(), [6, 6, 6]);
+    let names: Vec<&str> = set.conditions.iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(names, ["force", "speed"]);
+    let out = flat.join("set.npz");
+    set.write_npz(&out).unwrap();
+    let mut data = Dataset::load(&out, 0).unwrap();
+    assert_eq!(data.conditions, set.conditions);
+    let levels = |l: &[&str]| crate::data::Condition { name: "speed".into(), levels: l.iter().map(|v| v.to_string()).collect() };
+    assert_eq!(levels(&["100", "20", "-150", "20"]).distinct(), ["-150", "20", "100"], "numbers in numeric order");
+    assert_eq!(levels(&["b", "a10", "a2"]).distinct(), ["a10", "a2", "b"], "text in text order");
+    let at = data.sources.as_ref().unwrap().iter().position(|s| s == "Fabric1_F210_V50mmps_5.csv").unwrap();
+    assert_eq!((data.labels[at], data.conditions[0].levels[at].as_str(), data.conditions[1].levels[at].as_str()), (1, "210", "50"));
+
+    // Holding out a level: its touches and no other test; the rest fill the other folds.
+    let hold = |condition: &str, level: &str, seed| crate::data::HoldOut { condition: condition.into(), levels: vec![level.into()], seed };
+    data.hold_out(&hold("force", "210", 3)).unwrap();
+    for i in 0..data.len() {
+        assert_eq!(data.folds[i] == crate::data::TEST_FOLD, data.conditions[0].levels[i] == "210", "touch {i}");
+    }
+    assert_eq!(data.held_out.as_ref().unwrap().to_string(), "force=210");
+    let again = Dataset::load_as_trained(&out, 0, data.held_out.as_ref()).unwrap();
+    assert_eq!(again.folds, data.folds, "a run's folds are drawn again as it was trained");
+    let split = data.split(0).unwrap();
+    assert_eq!((split.test.len(), split.val.len() + split.train.len()), (6, 12));
+    let msg = |name: &str, level: &str| data.clone().hold_out(&hold(name, level, 0)).unwrap_err().to_string();
+    assert!(
+        msg("force", "999").contains("--hold-out force=999: no touch has that level; force has 120, 150, 210"),
+        "{}",
+        msg("force", "999")
+    );
+    assert!(msg("pressure", "1").contains("no such condition; the set records force, speed"));
+    assert!(msg("speed", "-10").contains("keeps 3 touches, too few"), "{}", msg("speed", "-10"));
+
+    // Read by distance: a touch at -10 mm/s resampled to speed 50 keeps a fifth of its frames.
+    let name = Some("{class}_F{force}_V{speed}mmps_*".parse().unwrap());
+    let by_distance =
+        read_folder(&flat, &ImportOptions { name, per_distance: Some(("speed".into(), 50.0)), ..Default::default() }).unwrap();
+    for (k, touch) in by_distance.touches.iter().enumerate() {
+        let slow = set.conditions[1].levels[k] == "-10";
+        let expected = if slow { (set.touches[k][0].len() as f64 / 5.0).round() as usize } else { set.touches[k][0].len() };
+        assert_eq!(touch[0].len(), expected, "touch {k}");
+    }
+    // Scaled to one force: a touch pressed at 210 reads 150/210 of its values.
+    let name = Some("{class}_F{force}_V{speed}mmps_*".parse().unwrap());
+    let per_force = read_folder(&flat, &ImportOptions { name, per_force: Some(("force".into(), 150.0)), ..Default::default() }).unwrap();
+    for (k, touch) in per_force.touches.iter().enumerate() {
+        let f: f32 = set.conditions[0].levels[k].parse().unwrap();
+        let expected = set.touches[k][2][7] * (150.0 / f);
+        assert!((touch[2][7] - expected).abs() <= 1e-5 * expected.abs(), "touch {k}: {} against {expected}", touch[2][7]);
+    }
+    let name = Some("{class}_F{force}_V{speed}mmps_*".parse().unwrap());
+    let err = read_folder(&flat, &ImportOptions { name, per_distance: Some(("pace".into(), 50.0)), ..Default::default() }).unwrap_err();
+    assert!(err.to_string().contains("--per-distance pace: no such condition"), "{err}");
+
+    // A name the pattern does not fit is named.
+    std::fs::write(flat.join("stray.csv"), "time,e1\n1,2\n").unwrap();
+    let name = Some("{class}_F{force}_V{speed}mmps_*".parse().unwrap());
+    let err = read_folder(&flat, &ImportOptions { name, ..Default::default() }).unwrap_err().to_string();
+    assert!(err.contains("stray.csv: its name `stray` does not match --name {class}_F{force}_V{speed}mmps_*"), "{err}");
+    std::fs::remove_dir_all(flat.parent().unwrap()).unwrap();
 }

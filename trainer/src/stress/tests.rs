@@ -28,6 +28,8 @@ fn the_runtime_stays_finite_and_close_to_the_f64_reference_on_extreme_inputs() {
             test_accuracy: None,
             options: crate::options::TrainOptions::default(),
             pruning: None,
+            held_out: None,
+            reading: None,
             stopping: None,
         },
     };

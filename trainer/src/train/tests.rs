@@ -53,6 +53,9 @@ pub(crate) fn tiny_data() -> Dataset {
         labels,
         folds: (0..n).map(|i| (i / 2) % 5).collect(),
         folds_from_file: true,
+        conditions: Vec::new(),
+        held_out: None,
+        reading: None,
         path: PathBuf::from("tiny"),
     }
 }
@@ -70,6 +73,8 @@ fn options(epochs: usize) -> TrainOptions {
         aug_gain: 0.1,
         aug_noise: 0.05,
         aug_shift: 0,
+        aug_scale: 0.0,
+        aug_stretch: 0.0,
         mixup: 0.0,
         ema: 0.0,
         seed: 5,
@@ -250,13 +255,37 @@ fn random_pruning_regularises_without_leaving_zeros_behind() {
 }
 
 #[test]
+fn scaling_multiplies_the_raw_readings_of_every_channel_alike() {
+    let opts = TrainOptions { aug_scale: 1.0, aug_gain: 0.0, aug_noise: 0.0, ..TrainOptions::default() };
+    let norm = Normalization { mean: vec![100.0, -4.0], std: vec![10.0, 2.0], frames: 3 };
+    let raw = [90.0, 100.0, 130.0, -6.0, -4.0, 0.0];
+    let mut sample = Vec::new();
+    norm.apply_into(&raw, &mut sample);
+    let mut rng = Rng::new(5);
+    let mut factors = Vec::new();
+    for _ in 0..40 {
+        let mut s = sample.clone();
+        augment(&mut s, &norm, &opts, &mut rng);
+        // Back to raw readings: each is the original times one factor k in [1/2, 2].
+        let back: Vec<f32> = s.iter().enumerate().map(|(i, z)| z * norm.std[i / 3] + norm.mean[i / 3]).collect();
+        let k = back[0] / raw[0];
+        assert!((0.5..=2.0).contains(&k), "{k}");
+        for (b, r) in back.iter().zip(raw) {
+            assert!((b - k * r).abs() < 1e-3, "{back:?} is not {k} × {raw:?}");
+        }
+        factors.push(k);
+    }
+    assert!(factors.iter().any(|k| *k < 0.8) && factors.iter().any(|k| *k > 1.25), "{factors:?}");
+}
+
+#[test]
 fn time_shift_moves_frames_and_repeats_the_edge() {
     let opts = TrainOptions { aug_shift: 2, aug_gain: 0.0, aug_noise: 0.0, ..TrainOptions::default() };
     let mut rng = Rng::new(1);
     let mut seen = std::collections::BTreeSet::new();
     for _ in 0..50 {
         let mut sample: Vec<f32> = (0..10).map(|t| t as f32).collect(); // two channels of 5 frames
-        augment(&mut sample, 5, &opts, &mut rng);
+        augment(&mut sample, &Normalization { mean: vec![0.0; 2], std: vec![1.0; 2], frames: 5 }, &opts, &mut rng);
         let shift = 2 - sample[2] as isize;
         let expected: Vec<f32> = (0..10).map(|i| ((i % 5) as isize - shift).clamp(0, 4) as f32 + (i / 5 * 5) as f32).collect();
         assert_eq!(sample, expected);

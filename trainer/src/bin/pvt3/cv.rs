@@ -94,6 +94,9 @@ fn print_summary(s: &CvSummary, wall: f64, summary: &std::path::Path) {
             s.pruned_ci95_test_accuracy.map_or(String::new(), |[lo, hi]| format!(", 95 % confidence interval [{lo:.4}, {hi:.4}]"));
         println!("pruned and fine-tuned: mean test accuracy {m:.4} ± {sd:.4} over {} runs{interval}", s.pruned_runs.len());
     }
+    if let Some(h) = &s.held_out {
+        println!("the test set of every run: the touches of {h}, held out of training and validation");
+    }
     println!(
         "mean test accuracy {:.4} ± {:.4} over {} runs (wall {wall:.0} s); summary {}",
         s.mean_test_accuracy,

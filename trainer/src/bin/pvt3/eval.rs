@@ -74,7 +74,8 @@ pub fn run(a: EvalArgs) -> Result<()> {
     let (meta, model, _) = checkpoint::load(checkpoint_path)?;
     let own = PathBuf::from(&meta.provenance.data);
     let data_path = a.data.as_deref().unwrap_or(&own);
-    let data = Dataset::load(data_path, meta.provenance.seed).with_context(|| format!("loading {}", data_path.display()))?;
+    let data = Dataset::load_as_trained(data_path, meta.provenance.seed, meta.provenance.held_out.as_ref())
+        .with_context(|| format!("loading {}", data_path.display()))?;
     data.check_fits(&meta.config)?;
     let indices: Vec<usize> = match fold {
         Folds::All => (0..data.len()).collect(),

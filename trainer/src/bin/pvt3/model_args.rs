@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context, Result};
 use pvt3_models::{Architecture, Config};
 use pvt3_trainer::checkpoint;
-use pvt3_trainer::data::Dataset;
+use pvt3_trainer::data::{Dataset, HoldOut};
 use pvt3_trainer::options::TrainOptions;
 use pvt3_trainer::train::RunSpec;
 
@@ -40,11 +40,25 @@ pub struct ModelArgs {
     /// class_0, class_1, …).
     #[arg(long)]
     pub class_names: Option<PathBuf>,
+    /// Test on touches made in a way the training never saw: the touches whose condition NAME
+    /// (as `pvt3 import --name` recorded it) has one of these levels form the test set; the
+    /// others train and validate. E.g. `--hold-out force=210,250` or `--hold-out speed=10,-10`.
+    #[arg(long, value_name = "NAME=LEVEL,…", value_parser = parse_hold_out)]
+    pub hold_out: Option<(String, Vec<String>)>,
     /// Stop after this many epochs (per run), leaving the work to be continued with --resume.
     #[arg(long)]
     pub pause_after: Option<usize>,
     #[command(flatten)]
     pub options: TrainOptions,
+}
+
+fn parse_hold_out(s: &str) -> std::result::Result<(String, Vec<String>), String> {
+    let (name, levels) = s.split_once('=').ok_or_else(|| format!("`{s}`: expected NAME=LEVEL,…, e.g. force=210,250"))?;
+    let levels: Vec<String> = levels.split(',').map(|l| l.trim().to_string()).filter(|l| !l.is_empty()).collect();
+    if name.trim().is_empty() || levels.is_empty() {
+        return Err(format!("`{s}`: expected NAME=LEVEL,…, e.g. force=210,250"));
+    }
+    Ok((name.trim().to_string(), levels))
 }
 
 /// A preset name, a JSON file, or a checkpoint directory.
@@ -84,7 +98,16 @@ impl Prepared {
 
 /// Loads the data set and builds the model configuration for it.
 pub fn prepare(args: &ModelArgs) -> Result<Prepared> {
-    let data = Dataset::load(&args.data, args.options.seed)?;
+    let held_out = args.hold_out.clone().map(|(condition, levels)| HoldOut { condition, levels, seed: args.options.seed });
+    let data = Dataset::load_as_trained(&args.data, args.options.seed, held_out.as_ref())?;
+    if let Some(h) = &held_out {
+        let held = data.folds.iter().filter(|f| **f == pvt3_trainer::data::TEST_FOLD).count();
+        eprintln!(
+            "held out {h}: {held} touches test, the other {} train and validate (stratified folds, seed {})",
+            data.len() - held,
+            h.seed
+        );
+    }
     // `--model vit` turns preset `icub20` into `vit-icub20`.
     let architecture = args.architecture.unwrap_or_default();
     // Touches of unequal length: by default the model reads windows of the shortest.
@@ -149,7 +172,7 @@ pub fn prepare(args: &ModelArgs) -> Result<Prepared> {
             _ => (0..cfg.classes).map(|k| format!("class_{k}")).collect(),
         },
     };
-    if !data.folds_from_file {
+    if !data.folds_from_file && args.hold_out.is_none() {
         eprintln!("note: {} has no fold array; stratified folds were drawn with seed {}", data.path.display(), args.options.seed);
     }
     Ok(Prepared { data, config: cfg, classes })

@@ -30,7 +30,8 @@ pub fn run(a: PruneCommand) -> Result<()> {
     let stage = a.prune.stage().context("give --prune-channels, --prune-frames and/or --prune-weights")?;
     let (_, meta) = checkpoint::load_meta(&a.run)?;
     let data_path = a.data.unwrap_or_else(|| PathBuf::from(&meta.provenance.data));
-    let dataset = Dataset::load(&data_path, meta.provenance.seed).with_context(|| format!("loading {}", data_path.display()))?;
+    let dataset = Dataset::load_as_trained(&data_path, meta.provenance.seed, meta.provenance.held_out.as_ref())
+        .with_context(|| format!("loading {}", data_path.display()))?;
     let bar = progress::bar("fine-tune");
     if let Some(p) = prune_and_fine_tune(&a.run, &dataset, &stage, &a.out, a.resume, &bar)? {
         bar.finish();

@@ -1,0 +1,61 @@
+"""The tables of docs/robustness.md from the runs of `bash bench/robustness.sh`: for every variant
+(a folder under the runs' root, as VARIANT named it) and row (a held-out condition, or `random`),
+the mean ± std test accuracy over all runs (seeds × 4 validation folds) on the held-out touches,
+the 95 % interval of the mean (Student's t over the seeds' means, as `pvt3 cv` computes it), and
+the gap to the variant's random split.
+
+    python3 bench/robustness_report.py [ROOT]          # ROOT: target/robustness by default
+
+A row whose cross-validation has not finished is shown as `–`; one with fewer than three seeds
+says how many it has.
+"""
+import json
+import sys
+from pathlib import Path
+
+ROWS = ["random", "speeds-between", "speeds-beyond", "forces-unseen", "direction-forward", "direction-back"]
+ROWS += [f"speed-{v}" for v in (10, 20, 50, 100, 120, 150)] + [f"force-{f}" for f in (120, 150, 180, 210, 250)]
+
+
+def summary(run_dir):
+    path = run_dir / "cv.json"
+    return json.loads(path.read_text()) if path.exists() else None
+
+
+def cell(s, random_mean):
+    if s is None:
+        return "–"
+    text = f"{s['mean_test_accuracy']:.4f} ± {s['std_test_accuracy']:.4f}"
+    interval = s.get("ci95_test_accuracy")
+    if interval:
+        text += f" [{interval[0]:.3f}, {interval[1]:.3f}]"
+    if len(s["seeds"]) < 3:
+        text += f" ({len(s['seeds'])} seed{'s' if len(s['seeds']) > 1 else ''})"
+    if random_mean is not None and s.get("held_out"):
+        text += f", {100 * (s['mean_test_accuracy'] - random_mean):+.1f} pts"
+    return text
+
+
+def main():
+    root = Path(sys.argv[1] if len(sys.argv) > 1 else "target/robustness")
+    variants = sorted(d for d in root.iterdir() if d.is_dir())
+    if not variants:
+        sys.exit(f"{root}: no runs (bash bench/robustness.sh FABRICSLIDE first)")
+    for variant in variants:
+        found = {row: summary(variant / row) for row in ROWS if (variant / row).is_dir()}
+        if not found:
+            continue
+        random = found.get("random")
+        random_mean = random["mean_test_accuracy"] if random else None
+        print(f"\n### {variant.name}\n")
+        print("| test touches | held out | accuracy, mean ± std [95 % interval], gap to random | runs |")
+        print("|---|---|---|---:|")
+        for row, s in found.items():
+            held = s.get("held_out") if s else None
+            held_text = f"{held['condition']} = {', '.join(held['levels'])}" if held else "nothing (stratified)"
+            runs = len(s["runs"]) if s else 0
+            print(f"| {row} | {held_text} | {cell(s, random_mean)} | {runs} |")
+
+
+if __name__ == "__main__":
+    main()
