@@ -449,15 +449,22 @@ fn csv_touches_of_any_length_import_cross_validate_and_export() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
+/// A scratch folder holding `flat/`: CSV touches of 3 classes, `touches` each, side by side and
+/// named as FabricSlide names its files (`csv_tree::flatten`).
+fn fabric_like(tag: &str, touches: usize) -> (PathBuf, PathBuf) {
+    let dir = scratch(tag);
+    let (tree, flat) = (dir.join("tree"), dir.join("flat"));
+    csv_tree::write(&tree, 3, touches, 40, 64);
+    csv_tree::flatten(&tree, &flat, 3, touches);
+    (dir, flat)
+}
+
 /// Touches whose file names say their class, force and speed (as FabricSlide names them): imported
 /// with their conditions, cross-validated with one force held out as the test set (augmented in
 /// speed and pressure), and evaluated on exactly the held-out touches again from the run alone.
 #[test]
 fn conditions_from_file_names_hold_out_a_force() {
-    let dir = scratch("hold-out");
-    let (tree, flat) = (dir.join("tree"), dir.join("flat"));
-    csv_tree::write(&tree, 3, 12, 40, 64);
-    csv_tree::flatten(&tree, &flat, 3, 12);
+    let (dir, flat) = fabric_like("hold-out", 12);
     let (data, out) = (dir.join("set.npz"), dir.join("cv"));
     let (d, o) = (data.to_str().unwrap(), out.to_str().unwrap());
     let imported = ok(&["import", flat.to_str().unwrap(), "--name", "{class}_F{force}_V{speed}mmps_*", "--out", d]);
@@ -485,10 +492,7 @@ fn conditions_from_file_names_hold_out_a_force() {
 /// straight from its CSV file, with its speed and force, to the very frames the training read.
 #[test]
 fn a_robot_reads_a_touch_by_its_speed_and_force_as_the_import_did() {
-    let dir = scratch("reading");
-    let (tree, flat) = (dir.join("tree"), dir.join("flat"));
-    csv_tree::write(&tree, 3, 6, 40, 64);
-    csv_tree::flatten(&tree, &flat, 3, 6);
+    let (dir, flat) = fabric_like("reading", 6);
     let (data, run, onnx) = (dir.join("set.npz"), dir.join("run"), dir.join("model.onnx"));
     let d = data.to_str().unwrap();
     let mut args = vec!["import", flat.to_str().unwrap(), "--name", "{class}_F{force}_V{speed}mmps_*", "--out", d];
