@@ -205,4 +205,39 @@ mod tests {
         assert_eq!(touch_answer(&[vec![5.0, 0.0], vec![0.0, 0.5]]), 0);
         assert_eq!(touch_answer(&[vec![0.0, 0.2]]), 1);
     }
+
+    #[test]
+    fn stretched_windows_read_the_touch_at_another_speed() {
+        // One touch of two channels, a ramp of 100 frames (the second the ramp's negative); the
+        // model reads 20. A stretched window is a ramp still, its slope the speed it was read at.
+        let ramp: Vec<f32> = (0..100).map(|t| t as f32).chain((0..100).map(|t| -(t as f32))).collect();
+        let data = Dataset {
+            x: ramp,
+            sample_shape: vec![2, 1, 100],
+            lengths: vec![100],
+            class_names: None,
+            sources: None,
+            conditions: Vec::new(),
+            held_out: None,
+            reading: None,
+            labels: vec![0],
+            folds: vec![0],
+            folds_from_file: true,
+            path: "mem".into(),
+        };
+        let norm = Normalization { mean: vec![0.0; 2], std: vec![1.0; 2], frames: 20 };
+        let mut rng = Rng::new(3);
+        let mut slopes = Vec::new();
+        for _ in 0..30 {
+            let s = Samples::cropped(&data, &[0], &norm, 1.0, &mut rng);
+            assert_eq!((s.x.len(), s.sample_shape.as_slice()), (40, &[2, 1, 20][..]));
+            let slope = (s.x[19] - s.x[0]) / 19.0;
+            assert!((0.5 - 1e-4..=2.0 + 1e-4).contains(&slope), "{slope}");
+            assert!(s.x[..20].windows(2).all(|w| (w[1] - w[0] - slope).abs() < 1e-3), "a straight ramp: {:?}", &s.x[..20]);
+            assert!(s.x[..20].iter().all(|v| (0.0..=99.0).contains(v)), "read from within the touch");
+            assert!(s.x[20..].iter().zip(&s.x[..20]).all(|(b, a)| (a + b).abs() < 1e-4), "every channel alike");
+            slopes.push(slope);
+        }
+        assert!(slopes.iter().any(|s| *s < 0.8) && slopes.iter().any(|s| *s > 1.25), "{slopes:?}");
+    }
 }

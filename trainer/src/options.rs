@@ -47,6 +47,13 @@ pub struct TrainOptions {
     #[arg(long, default_value_t = 0.0)]
     #[serde(default)]
     pub aug_scale: f64,
+    /// Augmentation: multiply each training window's variation about its mean (per channel, the
+    /// level kept) by a random factor, log-uniform in [1 / (1 + S), 1 + S]: a firmer press makes
+    /// a texture's vibration grow faster than the level (docs/robustness.md). E.g. 0.5. 0 turns
+    /// it off.
+    #[arg(long, default_value_t = 0.0)]
+    #[serde(default)]
+    pub aug_vibration: f64,
     /// Augmentation: read each training window at a random speed, as if the touch had been made
     /// up to 1 + S times faster or slower (log-uniform; resampled, the touch's own frames beyond
     /// the window read where it has them), so that a model meets speeds it was not trained at.

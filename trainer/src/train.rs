@@ -195,6 +195,14 @@ fn augment(sample: &mut [f32], norm: &Normalization, opts: &TrainOptions, rng: &
             row.iter_mut().for_each(|v| *v = k * *v + lift);
         }
     }
+    if opts.aug_vibration > 0.0 {
+        // Each channel's variation about its mean over the window, times one factor for all.
+        let k = ((1.0 + opts.aug_vibration).ln() * (2.0 * rng.uniform() as f64 - 1.0)).exp() as f32;
+        for row in sample.chunks_mut(frames) {
+            let mean = row.iter().sum::<f32>() / frames as f32;
+            row.iter_mut().for_each(|v| *v = mean + k * (*v - mean));
+        }
+    }
     if opts.aug_shift > 0 {
         let span = 2 * opts.aug_shift + 1;
         let shift = rng.below(span) as isize - opts.aug_shift as isize;

@@ -74,6 +74,7 @@ fn options(epochs: usize) -> TrainOptions {
         aug_noise: 0.05,
         aug_shift: 0,
         aug_scale: 0.0,
+        aug_vibration: 0.0,
         aug_stretch: 0.0,
         mixup: 0.0,
         ema: 0.0,
@@ -272,6 +273,30 @@ fn scaling_multiplies_the_raw_readings_of_every_channel_alike() {
         assert!((0.5..=2.0).contains(&k), "{k}");
         for (b, r) in back.iter().zip(raw) {
             assert!((b - k * r).abs() < 1e-3, "{back:?} is not {k} × {raw:?}");
+        }
+        factors.push(k);
+    }
+    assert!(factors.iter().any(|k| *k < 0.8) && factors.iter().any(|k| *k > 1.25), "{factors:?}");
+}
+
+#[test]
+fn vibration_scales_each_channel_about_its_window_mean_and_keeps_the_level() {
+    let opts = TrainOptions { aug_vibration: 1.0, aug_gain: 0.0, aug_noise: 0.0, ..TrainOptions::default() };
+    let norm = Normalization { mean: vec![0.0; 2], std: vec![1.0; 2], frames: 4 };
+    let sample = [1.0, 3.0, 2.0, 6.0, -1.0, -1.0, 1.0, 5.0];
+    let mut rng = Rng::new(9);
+    let mut factors = Vec::new();
+    for _ in 0..40 {
+        let mut s = sample;
+        augment(&mut s, &norm, &opts, &mut rng);
+        let k = (s[1] - s[0]) / (sample[1] - sample[0]);
+        assert!((0.5..=2.0).contains(&k), "{k}");
+        for (row, original) in s.chunks(4).zip(sample.chunks(4)) {
+            let (mean, was) = (row.iter().sum::<f32>() / 4.0, original.iter().sum::<f32>() / 4.0);
+            assert!((mean - was).abs() < 1e-5, "the level is kept: {mean} against {was}");
+            for (v, o) in row.iter().zip(original) {
+                assert!((v - mean - k * (o - was)).abs() < 1e-5, "{row:?} is not {original:?} about its mean × {k}");
+            }
         }
         factors.push(k);
     }
