@@ -23,6 +23,7 @@
 # each, side by side by JOBS: a quicker look, which the table marks. Rows resume where they stopped.
 # `python3 bench/robustness_report.py target/robustness` prints the tables of docs/robustness.md.
 set -euo pipefail
+set -f # IMPORT and TRAIN hold patterns for pvt3 (--columns channel*), not for the shell
 cd "$(dirname "$0")/.."
 src=${1:?usage: bash bench/robustness.sh FABRICSLIDE [ROW ...]}
 shift

@@ -1,8 +1,9 @@
 """The tables of docs/robustness.md from the runs of `bash bench/robustness.sh`: for every variant
 (a folder under the runs' root, as VARIANT named it) and row (a held-out condition, or `random`),
-the mean ± std test accuracy over all runs (seeds × 4 validation folds) on the held-out touches,
+the mean ± std test accuracy over all runs (seeds × validation folds) on the held-out touches,
 the 95 % interval of the mean (Student's t over the seeds' means, as `pvt3 cv` computes it), and
-the gap to the variant's random split.
+the gap to the random split (the variant's own, else the `plain` variant's); then, for every row
+that several variants ran, one table of them side by side.
 
     python3 bench/robustness_report.py [ROOT]          # ROOT: target/robustness by default
 
@@ -38,23 +39,34 @@ def cell(s, random_mean):
 
 def main():
     root = Path(sys.argv[1] if len(sys.argv) > 1 else "target/robustness")
-    variants = sorted(d for d in root.iterdir() if d.is_dir())
+    variants = sorted((d for d in root.iterdir() if d.is_dir()), key=lambda d: (d.name != "plain", d.name))
     if not variants:
         sys.exit(f"{root}: no runs (bash bench/robustness.sh FABRICSLIDE first)")
-    for variant in variants:
-        found = {row: summary(variant / row) for row in ROWS if (variant / row).is_dir()}
-        if not found:
+    found = {v.name: {row: summary(v / row) for row in ROWS if (v / row).is_dir()} for v in variants}
+    plain_random = (found.get("plain", {}).get("random") or {}).get("mean_test_accuracy")
+    for variant, rows in found.items():
+        if len(rows) < 2:
             continue
-        random = found.get("random")
-        random_mean = random["mean_test_accuracy"] if random else None
-        print(f"\n### {variant.name}\n")
+        random = rows.get("random")
+        random_mean = random["mean_test_accuracy"] if random else plain_random
+        print(f"\n### {variant}\n")
         print("| test touches | held out | accuracy, mean ± std [95 % interval], gap to random | runs |")
         print("|---|---|---|---:|")
-        for row, s in found.items():
+        for row, s in rows.items():
             held = s.get("held_out") if s else None
             held_text = f"{held['condition']} = {', '.join(held['levels'])}" if held else "nothing (stratified)"
-            runs = len(s["runs"]) if s else 0
-            print(f"| {row} | {held_text} | {cell(s, random_mean)} | {runs} |")
+            print(f"| {row} | {held_text} | {cell(s, random_mean)} | {len(s['runs']) if s else 0} |")
+    for row in ROWS:
+        ran = [(variant, rows[row]) for variant, rows in found.items() if row in rows]
+        if len(ran) < 2:
+            continue
+        print(f"\n### {row}, every variant\n")
+        print("| variant | accuracy, mean ± std [95 % interval], gap to random | runs |")
+        print("|---|---|---:|")
+        for variant, s in ran:
+            random = found[variant].get("random")
+            random_mean = random["mean_test_accuracy"] if random else plain_random
+            print(f"| {variant} | {cell(s, random_mean)} | {len(s['runs']) if s else 0} |")
 
 
 if __name__ == "__main__":
