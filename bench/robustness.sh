@@ -52,6 +52,7 @@ hold() {
 
 rows=("$@")
 [ ${#rows[@]} -gt 0 ] || rows=(random speeds-beyond speeds-between forces-unseen)
+failed=()
 for row in "${rows[@]}"; do
   args=$(hold "$row")
   echo "== $variant $row: pvt3 cv $args ${TRAIN:-}"
@@ -59,17 +60,22 @@ for row in "${rows[@]}"; do
   [ ! -d "$out/$row" ] || resume=--resume
   if [ -z "$folds" ]; then
     # shellcheck disable=SC2086
-    "$pvt3" cv --data "$out/fabric.npz" --seeds "$seeds" --jobs "$jobs" --out "$out/$row" $args ${TRAIN:-} $resume | tail -n 4
+    "$pvt3" cv --data "$out/fabric.npz" --seeds "$seeds" --jobs "$jobs" --out "$out/$row" $args ${TRAIN:-} $resume | tail -n 4 || failed+=("$row")
     continue
   fi
   # Some folds of each seed, JOBS at a time; then the report of all of them.
   for seed in ${seeds//,/ }; do
     for fold in ${folds//,/ }; do
-      while [ "$(jobs -rp | wc -l)" -ge "$jobs" ]; do wait -n; done
+      while [ "$(jobs -rp | wc -l)" -ge "$jobs" ]; do wait -n || true; done
       # shellcheck disable=SC2086
-      "$pvt3" cv --data "$out/fabric.npz" --only "seed=$seed,fold=$fold" --out "$out/$row" $args ${TRAIN:-} --resume >/dev/null 2>&1 &
+      "$pvt3" cv --data "$out/fabric.npz" --only "seed=$seed,fold=$fold" --out "$out/$row" $args ${TRAIN:-} --resume >/dev/null 2>>"$out/$row.log" &
     done
   done
   wait
-  "$pvt3" cv --report "$out/$row" | tail -n 4
+  # A row that cannot run (a class with no touch left to train on, say) is said, and the others go on.
+  if ! "$pvt3" cv --report "$out/$row" 2>/dev/null | tail -n 4; then
+    echo "$row did not run: $(grep -m1 '^Error' "$out/$row.log")" >&2
+    failed+=("$row")
+  fi
 done
+[ ${#failed[@]} -eq 0 ] || { echo "rows that did not run: ${failed[*]}" >&2; exit 1; }
