@@ -41,7 +41,7 @@ impl Samples {
     /// of the `norm.frames` frames the model reads, normalised.
     pub fn new(data: &Dataset, indices: &[usize], norm: &Normalization) -> Self {
         let picks = indices.iter().flat_map(|&i| window_starts(data.lengths[i], norm.frames).into_iter().map(move |s| (i, s)));
-        Self::from_windows(data, picks, norm)
+        Self::from_windows(data, picks, norm, |i, start, raw| data.window_into(i, start, norm.frames, raw))
     }
 
     /// One window of each of the `indices` touches, where `rng` draws it (the whole touch, and
@@ -51,23 +51,22 @@ impl Samples {
     /// the whole touch), resampled to the model's frames ([`pvt3_runtime::resample`]).
     pub fn cropped(data: &Dataset, indices: &[usize], norm: &Normalization, stretch: f64, rng: &mut Rng) -> Self {
         if stretch > 0.0 {
-            let (mut x, mut labels, mut touches) = (Vec::new(), Vec::new(), Vec::new());
-            let mut raw = vec![0.0; data.sample_len() / data.max_frames() * norm.frames];
-            for (k, &i) in indices.iter().enumerate() {
+            // Each touch's window as (first frame, source frames per model frame), drawn in order.
+            let picks: Vec<(usize, (f64, f64))> = indices
+                .iter()
+                .map(|&i| {
+                    let len = data.lengths[i];
+                    let r = ((1.0 + stretch).ln() * (2.0 * rng.uniform() as f64 - 1.0)).exp().min(len as f64 / norm.frames as f64);
+                    (i, (rng.uniform() as f64 * (len as f64 - r * norm.frames as f64), r))
+                })
+                .collect();
+            return Self::from_windows(data, picks, norm, |i, (start, r), raw| {
                 let len = data.lengths[i];
-                let r = ((1.0 + stretch).ln() * (2.0 * rng.uniform() as f64 - 1.0)).exp().min(len as f64 / norm.frames as f64);
-                let span = r * norm.frames as f64;
-                let start = rng.uniform() as f64 * (len as f64 - span);
+                raw.resize(data.sample_len() / data.max_frames() * norm.frames, 0.0);
                 for (row, out) in data.sample(i).chunks(data.max_frames()).zip(raw.chunks_mut(norm.frames)) {
                     pvt3_runtime::resample::resample_into(&row[..len], start, r, out);
                 }
-                norm.apply_into(&raw, &mut x);
-                labels.push(data.labels[i]);
-                touches.push(k);
-            }
-            let mut sample_shape = data.sample_shape.clone();
-            *sample_shape.last_mut().expect("a frame axis") = norm.frames;
-            return Self { x, labels, sample_shape, touches };
+            });
         }
         let picks: Vec<(usize, usize)> = indices
             .iter()
@@ -76,17 +75,24 @@ impl Samples {
                 (i, if spare == 0 { 0 } else { rng.below(spare + 1) })
             })
             .collect();
-        Self::from_windows(data, picks, norm)
+        Self::from_windows(data, picks, norm, |i, start, raw| data.window_into(i, start, norm.frames, raw))
     }
 
-    fn from_windows(data: &Dataset, picks: impl IntoIterator<Item = (usize, usize)>, norm: &Normalization) -> Self {
+    /// The windows `picks` names, each a touch and where in it, read into an empty buffer by `read`
+    /// and normalised; a touch's windows come together.
+    fn from_windows<W>(
+        data: &Dataset,
+        picks: impl IntoIterator<Item = (usize, W)>,
+        norm: &Normalization,
+        mut read: impl FnMut(usize, W, &mut Vec<f32>),
+    ) -> Self {
         let mut sample_shape = data.sample_shape.clone();
         *sample_shape.last_mut().expect("a frame axis") = norm.frames;
         let (mut x, mut raw, mut labels, mut touches) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let mut previous = None;
-        for (i, start) in picks {
+        for (i, at) in picks {
             raw.clear();
-            data.window_into(i, start, norm.frames, &mut raw);
+            read(i, at, &mut raw);
             norm.apply_into(&raw, &mut x);
             labels.push(data.labels[i]);
             let touch = match previous {

@@ -32,7 +32,7 @@ pub struct ImportOptions {
     pub name: Option<NamePattern>,
     /// Each touch read by distance travelled rather than by time: the condition that holds its
     /// sliding speed, and the speed every touch is resampled to (a touch of `n` frames at speed
-    /// `v` becomes `n · |v| / speed` frames, [`crate::resample`]), so that a texture's ridges lie
+    /// `v` becomes `n · |v| / speed` frames, [`pvt3_runtime::read_touch`]), so that a texture's ridges lie
     /// as many frames apart at every speed.
     pub per_distance: Option<(String, f64)>,
     /// Each touch's readings scaled to one pressing force: the condition that holds its force,
@@ -214,8 +214,10 @@ pub fn read_folder(dir: &Path, opts: &ImportOptions) -> Result<Imported> {
         let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         pattern.read(&stem).ok_or_else(|| import_error(path, None, format!("its name `{stem}` does not match --name {pattern}")))
     };
+    // Whether the names give the class, the touches then side by side in `dir`.
+    let flat = opts.name.as_ref().is_some_and(|p| p.fields().contains(&CLASS_FIELD));
     match &opts.name {
-        Some(pattern) if pattern.fields().contains(&CLASS_FIELD) => {
+        Some(pattern) if flat => {
             let found = csvs(dir)?;
             if found.is_empty() {
                 return Err(import_error(
@@ -256,7 +258,6 @@ pub fn read_folder(dir: &Path, opts: &ImportOptions) -> Result<Imported> {
         }
     }
     let classes: Vec<String> = files.iter().map(|(_, c, _)| c.clone()).collect::<std::collections::BTreeSet<_>>().into_iter().collect();
-    let flat = opts.name.as_ref().is_some_and(|p| p.fields().contains(&CLASS_FIELD));
     for class in &classes {
         let count = files.iter().filter(|(_, c, _)| c == class).count();
         if count < FOLDS {
