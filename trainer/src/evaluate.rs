@@ -56,7 +56,7 @@ impl Samples {
                 .iter()
                 .map(|&i| {
                     let len = data.lengths[i];
-                    let r = ((1.0 + stretch).ln() * (2.0 * rng.uniform() as f64 - 1.0)).exp().min(len as f64 / norm.frames as f64);
+                    let r = log_uniform_factor(stretch, rng).min(len as f64 / norm.frames as f64);
                     (i, (rng.uniform() as f64 * (len as f64 - r * norm.frames as f64), r))
                 })
                 .collect();
@@ -131,6 +131,12 @@ impl Samples {
         let labels: Vec<u32> = rows.iter().map(|&r| self.labels[r]).collect();
         Ok((Tensor::from_vec(x, shape, &Device::Cpu)?, Tensor::new(labels, &Device::Cpu)?))
     }
+}
+
+/// A random factor of an augmentation, log-uniform in [1 / (1 + spread), 1 + spread]: as likely
+/// to halve as to double. One draw of `rng`.
+pub(crate) fn log_uniform_factor(spread: f64, rng: &mut Rng) -> f64 {
+    ((1.0 + spread).ln() * (2.0 * rng.uniform() as f64 - 1.0)).exp()
 }
 
 /// What a model did on a set of touches.

@@ -23,7 +23,7 @@ use serde::{Deserialize, Serialize};
 use crate::average::WeightAverage;
 use crate::checkpoint::{self, read_json, write_json, write_json_atomically, Meta, Provenance};
 use crate::data::{Dataset, Split};
-use crate::evaluate::{evaluate, Samples};
+use crate::evaluate::{evaluate, log_uniform_factor, Samples};
 use crate::metrics::EpochMetrics;
 use crate::normalization::Normalization;
 use crate::optim::{is_weight_matrix, AdamW};
@@ -189,7 +189,7 @@ fn augment(sample: &mut [f32], norm: &Normalization, opts: &TrainOptions, rng: &
     let frames = norm.frames;
     if opts.aug_scale > 0.0 {
         // The raw readings times k, in normalised units: k z + (k - 1) mean / std, per channel.
-        let k = ((1.0 + opts.aug_scale).ln() * (2.0 * rng.uniform() as f64 - 1.0)).exp() as f32;
+        let k = log_uniform_factor(opts.aug_scale, rng) as f32;
         for (row, (m, s)) in sample.chunks_mut(frames).zip(norm.mean.iter().zip(&norm.std)) {
             let lift = (k - 1.0) * m / s;
             row.iter_mut().for_each(|v| *v = k * *v + lift);
@@ -197,7 +197,7 @@ fn augment(sample: &mut [f32], norm: &Normalization, opts: &TrainOptions, rng: &
     }
     if opts.aug_vibration > 0.0 {
         // Each channel's variation about its mean over the window, times one factor for all.
-        let k = ((1.0 + opts.aug_vibration).ln() * (2.0 * rng.uniform() as f64 - 1.0)).exp() as f32;
+        let k = log_uniform_factor(opts.aug_vibration, rng) as f32;
         for row in sample.chunks_mut(frames) {
             let mean = row.iter().sum::<f32>() / frames as f32;
             row.iter_mut().for_each(|v| *v = mean + k * (*v - mean));
