@@ -43,16 +43,22 @@ fn scratch(tag: &str) -> PathBuf {
 
 /// The first `per_fold` samples of every fold of the shipped iCub set, as an .npz.
 fn icub_slice(dir: &Path, per_fold: usize) -> PathBuf {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../data/icub20.npz");
+    slice("icub20", dir, per_fold, 1)
+}
+
+/// `per_fold` samples of every fold of the shipped set `name`, every `stride`-th from the first,
+/// as an .npz in `dir`.
+fn slice(name: &str, dir: &Path, per_fold: usize, stride: usize) -> PathBuf {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../data/{name}.npz"));
     let d = Dataset::load(&root, 0).unwrap();
     let mut picked = Vec::new();
     for f in 0..5 {
-        picked.extend((0..d.len()).filter(|&i| d.folds[i] == f).take(per_fold));
+        picked.extend((0..d.len()).filter(|&i| d.folds[i] == f).step_by(stride).take(per_fold));
     }
     let x: Vec<f32> = picked.iter().flat_map(|&i| d.sample(i).to_vec()).collect();
     let mut shape = vec![picked.len()];
     shape.extend(&d.sample_shape);
-    let path = dir.join("slice.npz");
+    let path = dir.join(if name == "icub20" { "slice.npz".to_string() } else { format!("{name}.npz") });
     let mut w = NpzWriter::new_compressed(std::fs::File::create(&path).unwrap());
     w.add_array("x", &ArrayD::from_shape_vec(IxDyn(&shape), x).unwrap()).unwrap();
     w.add_array("y", &Array1::from_iter(picked.iter().map(|&i| d.labels[i] as i64))).unwrap();
@@ -521,5 +527,49 @@ fn a_robot_reads_a_touch_by_its_speed_and_force_as_the_import_did() {
     assert!(c.classify(&window).is_ok());
     let err = c.read_touch(&frames, pvt3_runtime::Touch { speed: Some(50.0), force: None }).unwrap_err().to_string();
     assert!(err.contains("give the touch's force"), "{err}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// `pvt3 cv --joint`: a network per sensor trained together, each reported on its own sensor,
+/// each pruned and exported alone (the other sensor's runs in OUT/seed*/fold*/partner), and the
+/// report of the directory gives both again.
+#[test]
+fn joint_cv_trains_a_network_per_sensor_and_each_is_pruned_and_exported_alone() {
+    let dir = scratch("joint");
+    // BioTac's touches are in class order within a fold: every tenth is one of each class.
+    let (icub, biotac) = (icub_slice(&dir, 12), slice("biotac20", &dir, 20, 10));
+    let out = dir.join("cv");
+    let (d, b, o) = (icub.to_str().unwrap(), biotac.to_str().unwrap(), out.to_str().unwrap());
+    let mut args = vec!["cv", "--data", d, "--joint", b, "--joint-after", "1", "--out", o, "--epochs", "2", "--only", "seed=0,fold=1"];
+    args.extend(["--prune-channels", "0.5", "--fine-tune-epochs", "1"]);
+    args.extend(SMALL);
+    let printed = ok(&args);
+    assert!(printed.contains(&format!("the other sensor's networks, trained beside on {b}")), "{printed}");
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("cv.json")).unwrap()).unwrap();
+    let partner = &summary["partner"];
+    assert_eq!((partner["data"].as_str(), partner["runs"].as_array().unwrap().len()), (Some(b), 1), "{summary}");
+    assert_eq!(partner["pruned_runs"].as_array().unwrap().len(), 1, "{summary}");
+    assert!(out.join("cv-partner-curves.svg").exists());
+    let run = out.join("seed0/fold1");
+    let provenance: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("partner/model/provenance.json")).unwrap()).unwrap();
+    assert_eq!(provenance["options"]["joint"]["partner"].as_str(), Some(d));
+    let pruned: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("partner/pruned/model/provenance.json")).unwrap()).unwrap();
+    assert!(pruned["options"].get("joint").is_none(), "fine-tuned alone: {pruned}");
+    // Each sensor's pruned model is its own file, reading its own sensor's touches.
+    for (net, shape) in [("pruned", vec![6, 10, 75]), ("partner/pruned", vec![19, 1, 400])] {
+        let onnx = dir.join(format!("{}.onnx", net.replace('/', "-")));
+        ok(&["export", run.join(net).to_str().unwrap(), "-o", onnx.to_str().unwrap()]);
+        assert_eq!(pvt3_runtime::Classifier::load(&onnx).unwrap().sample_shape(), shape.as_slice(), "{net}");
+    }
+    let weights = std::fs::read(run.join("partner/model/weights.safetensors")).unwrap();
+    args.push("--resume");
+    ok(&args);
+    assert_eq!(weights, std::fs::read(run.join("partner/model/weights.safetensors")).unwrap(), "not retrained");
+    let report = ok(&["cv", "--report", o]);
+    assert!(report.contains("the other sensor's networks") && report.contains("over 1 runs"), "{report}");
+    let again: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("cv.json")).unwrap()).unwrap();
+    assert_eq!(again["partner"]["runs"], partner["runs"]);
     std::fs::remove_dir_all(dir).unwrap();
 }

@@ -80,13 +80,8 @@ impl Pvt3 {
     }
 
     /// Logits `[b, classes]`. Pass an `rng` to train (dropout on), `None` to evaluate.
-    pub fn forward(&self, x: &Tensor, mut rng: Option<&mut Rng>) -> Result<Tensor> {
-        let sequence = self.sequence(x, rng.as_deref_mut())?;
-        let logits = self.classify_sequence(&sequence, rng)?;
-        match &self.spectrum {
-            Some(spectrum) => Ok((logits + spectrum.forward(x)?)?),
-            None => Ok(logits),
-        }
+    pub fn forward(&self, x: &Tensor, rng: Option<&mut Rng>) -> Result<Tensor> {
+        Ok(self.forward_pooled(x, None, rng)?.0)
     }
 
     /// The spectral head, if the model has one.
@@ -97,10 +92,29 @@ impl Pvt3 {
     /// Logits `[b, classes]` from the first `tokens` temporal tokens of each window alone: the
     /// touch so far, as the runtime's `Session::peek` answers it (the f64 reference's
     /// `forward_prefix`). The temporal transformer runs over the CLS token and those.
-    pub fn forward_prefix(&self, x: &Tensor, tokens: usize, mut rng: Option<&mut Rng>) -> Result<Tensor> {
-        self.cfg.require_streams("provisional answers from a prefix of the touch")?;
+    pub fn forward_prefix(&self, x: &Tensor, tokens: usize, rng: Option<&mut Rng>) -> Result<Tensor> {
+        Ok(self.forward_pooled(x, Some(tokens), rng)?.0)
+    }
+
+    /// Logits `[b, classes]` and the encoding `[b, dim]` the head reads them from (the temporal
+    /// CLS token's output: what joint learning pulls together across sensors), of the whole
+    /// window ([`Self::forward`]) or, with `tokens`, of its first `tokens` temporal tokens
+    /// ([`Self::forward_prefix`]).
+    pub fn forward_pooled(&self, x: &Tensor, tokens: Option<usize>, mut rng: Option<&mut Rng>) -> Result<(Tensor, Tensor)> {
+        if tokens.is_some() {
+            self.cfg.require_streams("provisional answers from a prefix of the touch")?;
+        }
         let sequence = self.sequence(x, rng.as_deref_mut())?;
-        self.classify_sequence(&self.prefix(&sequence, tokens)?, rng)
+        let sequence = match tokens {
+            Some(tokens) => self.prefix(&sequence, tokens)?,
+            None => sequence,
+        };
+        let pooled = self.temporal.forward_cls(&sequence, rng)?;
+        let logits = self.head.forward(&pooled)?;
+        match (&self.spectrum, tokens) {
+            (Some(spectrum), None) => Ok(((logits + spectrum.forward(x)?)?, pooled)),
+            _ => Ok((logits, pooled)),
+        }
     }
 
     /// The first `tokens` temporal tokens of a sequence from [`Self::sequence`], with its CLS token.

@@ -6,7 +6,7 @@
 //! With more than one PVT³ run, one stopping rule for provisional answers is calibrated on all
 //! their validation answers and written into every run ([`crate::cv_stopping`]).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
@@ -17,7 +17,7 @@ use crate::anytime::Stopping;
 use crate::checkpoint::{read_json, write_json_atomically};
 use crate::data::TEST_FOLD;
 use crate::prune::{prune_and_fine_tune, PruneStage};
-use crate::run_dir::{Run, CV_SUMMARY};
+use crate::run_dir::{Run, CV_CURVES, CV_PARTNER_CURVES, CV_SUMMARY};
 use crate::train::{train, RunResult, RunSpec};
 use crate::{Error, Result};
 
@@ -66,32 +66,77 @@ pub struct CvSummary {
     /// The same for `pruned_runs`.
     #[serde(default)]
     pub pruned_stopping: Option<Stopping>,
+    /// A joint run's (`--joint`): the other sensor's networks, summarised alike.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub partner: Option<Box<CvSummary>>,
 }
 
-/// One fold's results: the trained run and, with pruning, its pruned and fine-tuned successor.
+/// Finished runs gathered for a summary: each run, its pruned successor, its directory.
+#[derive(Default)]
+struct Gathered {
+    runs: Vec<RunResult>,
+    pruned: Vec<RunResult>,
+    dirs: Vec<PathBuf>,
+}
+
+impl Gathered {
+    fn push(&mut self, fold: FoldResult, dir: PathBuf) {
+        self.runs.push(fold.dense);
+        self.pruned.extend(fold.pruned);
+        self.dirs.push(dir);
+    }
+
+    /// The summary of the runs, with their stopping rule calibrated together and their figure
+    /// drawn into `out/figure`.
+    fn summarize(self, data: String, stage: Option<PruneStage>, out: &Path, figure: &str) -> Result<CvSummary> {
+        let seeds: Vec<u64> = self.runs.iter().map(|r| r.seed).collect::<std::collections::BTreeSet<_>>().into_iter().collect();
+        let mut summary = summarize(data, &seeds, self.runs, self.pruned, stage);
+        calibrate_stopping(&mut summary, &self.dirs)?;
+        write_figure(out, &summary, &self.dirs, figure)?;
+        Ok(summary)
+    }
+}
+
+/// One fold's results: the trained run and, with pruning, its pruned and fine-tuned successor;
+/// a joint run's other sensor's the same.
 struct FoldResult {
     dense: RunResult,
     pruned: Option<RunResult>,
+    partner: Option<Box<FoldResult>>,
 }
 
 fn run_fold(spec: &RunSpec, stage: Option<&PruneStage>, dir: &Path, resume: bool, bar: &ProgressBar) -> Result<Option<FoldResult>> {
+    // Each network of the run (two in a joint run) in its run directory, with its data.
+    let partner_dir = Run(dir).partner();
+    let mut nets = vec![(dir, spec.data)];
+    nets.extend(spec.partner.as_ref().map(|p| (partner_dir.as_path(), p.data)));
     if stage.is_some() {
-        // The pruned half's directory exists from the start, so that `report` sees a run whose
+        // The pruned halves' directories exist from the start, so that `report` sees a run whose
         // dense half has finished as unfinished, not as a run trained without pruning.
-        let pruned = Run(dir).pruned();
-        std::fs::create_dir_all(&pruned).map_err(Error::io(&pruned))?;
+        for (net, _) in &nets {
+            let pruned = Run(net).pruned();
+            std::fs::create_dir_all(&pruned).map_err(Error::io(&pruned))?;
+        }
     }
     let Some(dense) = train(spec, dir, resume, bar)? else {
         return Ok(None);
     };
-    let pruned = match stage {
-        Some(stage) => match prune_and_fine_tune(dir, spec.data, stage, &Run(dir).pruned(), resume, bar)? {
-            Some(p) => Some(p),
-            None => return Ok(None),
-        },
-        None => None,
-    };
-    Ok(Some(FoldResult { dense, pruned }))
+    let mut results = Vec::new();
+    for (i, (net, data)) in nets.into_iter().enumerate() {
+        let pruned = match stage {
+            // Each network is pruned and fine-tuned alone.
+            Some(stage) => match prune_and_fine_tune(net, data, stage, &Run(net).pruned(), resume, bar)? {
+                Some(p) => Some(p),
+                None => return Ok(None),
+            },
+            None => None,
+        };
+        let dense = if i == 0 { dense.clone() } else { read_json(&Run(net).result())? };
+        results.push(FoldResult { dense, pruned, partner: None });
+    }
+    let mut results = results.into_iter();
+    let main = results.next().expect("the run's own network");
+    Ok(Some(FoldResult { partner: results.next().map(Box::new), ..main }))
 }
 
 /// Mean and sample standard deviation.
@@ -172,36 +217,34 @@ pub fn cross_validate(
             });
         }
     });
-    let (mut runs, mut pruned_runs, mut dirs) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut own, mut partners) = (Gathered::default(), Gathered::default());
     let finished = results.into_inner().expect("threads joined").into_iter().zip(work).filter_map(|(r, w)| Some((r?, w)));
     for (r, &(seed, fold)) in finished {
-        match r? {
-            Some(result) => {
-                runs.push(result.dense);
-                pruned_runs.extend(result.pruned);
-                dirs.push(run_dir(out, seed, fold));
-            }
-            None => return Ok(None),
+        let Some(mut result) = r? else { return Ok(None) };
+        let dir = run_dir(out, seed, fold);
+        if let Some(partner) = result.partner.take() {
+            partners.push(*partner, Run(&dir).partner());
         }
+        own.push(result, dir);
     }
-    let seeds: Vec<u64> = work.iter().map(|w| w.0).collect::<std::collections::BTreeSet<_>>().into_iter().collect();
-    let mut summary = summarize(spec.data.path.display().to_string(), &seeds, runs, pruned_runs, stage.cloned());
+    let mut summary = own.summarize(spec.data.path.display().to_string(), stage.cloned(), out, CV_CURVES)?;
     summary.held_out = spec.data.held_out.clone();
-    calibrate_stopping(&mut summary, &dirs)?;
+    if let Some(p) = &spec.partner {
+        summary.partner = Some(Box::new(partners.summarize(p.data.path.display().to_string(), stage.cloned(), out, CV_PARTNER_CURVES)?));
+    }
     write_json_atomically(&out.join(CV_SUMMARY), &summary)?;
-    write_figure(out, &summary, &dirs)?;
     Ok(Some(summary))
 }
 
-/// The figure of all the runs (`cv-curves.svg`), titled with the summary's accuracy.
-pub fn write_figure(out: &Path, summary: &CvSummary, dirs: &[std::path::PathBuf]) -> Result<()> {
+/// The figure of all the runs (`out/figure`), titled with the summary's accuracy.
+pub fn write_figure(out: &Path, summary: &CvSummary, dirs: &[PathBuf], figure: &str) -> Result<()> {
     let title = format!(
         "{} runs: test accuracy {:.4} ± {:.4} (mean ± std)",
         summary.runs.len(),
         summary.mean_test_accuracy,
         summary.std_test_accuracy
     );
-    crate::plot::curves::write_cv(out, dirs, &title).map(|_| ())
+    crate::plot::curves::write_cv(out, dirs, &title, figure).map(|_| ())
 }
 
 /// The directory of the run of `seed` with validation fold `fold`.
@@ -260,6 +303,7 @@ fn summarize(data: String, seeds: &[u64], runs: Vec<RunResult>, pruned_runs: Vec
         unfinished: Vec::new(),
         stopping: None,
         pruned_stopping: None,
+        partner: None,
     }
 }
 
@@ -292,63 +336,91 @@ pub fn report(out: &Path) -> Result<CvSummary> {
         found.sort();
         Ok(found)
     };
-    let (mut runs, mut pruned_runs, mut unfinished, mut dirs) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    let mut setup: Option<(Setup, std::path::PathBuf)> = None;
+    let (mut own, mut partners, mut unfinished) = (Gathered::default(), Gathered::default(), Vec::new());
+    let mut setups: [Option<(Setup, PathBuf)>; 2] = [None, None];
     for (seed, seed_dir) in entries(out, "seed")? {
         for (fold, dir) in entries(&seed_dir, "fold")? {
-            let damaged = |e: Error| refuse(format!("{} is damaged or half written ({e})", dir.display()));
-            if !Run(&dir).result().exists() {
-                unfinished.push(dir.display().to_string());
+            // The run's network, and a joint run's other sensor's (finished before it).
+            let partner = Run(&dir).partner();
+            let nets = [Some(dir.clone()), Some(partner).filter(|p| p.is_dir())];
+            let mut found = Vec::new();
+            for (net, setup) in nets.iter().zip(&mut setups) {
+                let Some(net) = net else { continue };
+                let Some((fold_result, this)) = finished_run(net, &mut unfinished).map_err(|e| refuse(e.to_string()))? else {
+                    break;
+                };
+                if (fold_result.dense.seed, fold_result.dense.val_fold as u64) != (seed, fold) {
+                    return Err(refuse(format!(
+                        "{} holds the run of seed {} fold {}",
+                        net.display(),
+                        fold_result.dense.seed,
+                        fold_result.dense.val_fold
+                    )));
+                }
+                match setup {
+                    None => *setup = Some((this, net.clone())),
+                    Some((first, first_dir)) if *first != this => {
+                        return Err(refuse(format!(
+                            "{} and {} were trained differently (data, held-out levels, configuration, options or pruning)",
+                            first_dir.display(),
+                            net.display()
+                        )))
+                    }
+                    Some(_) => {}
+                }
+                found.push((fold_result, net.clone()));
+            }
+            if found.len() < nets.iter().flatten().count() {
                 continue;
             }
-            let run: RunResult = read_json(&Run(&dir).result()).map_err(damaged)?;
-            if (run.seed, run.val_fold as u64) != (seed, fold) {
-                return Err(refuse(format!("{} holds the run of seed {} fold {}", dir.display(), run.seed, run.val_fold)));
+            let mut found = found.into_iter();
+            let (fold_result, net) = found.next().expect("the run's own network");
+            own.push(fold_result, net);
+            if let Some((fold_result, net)) = found.next() {
+                partners.push(fold_result, net);
             }
-            let (_, meta) = crate::checkpoint::load_meta(&Run(&dir).model()).map_err(damaged)?;
-            let pruned = Run(&dir).pruned();
-            let (pruned_run, pruning) = match Run(&pruned).result().exists() {
-                true => {
-                    let (_, pmeta) = crate::checkpoint::load_meta(&pruned).map_err(damaged)?;
-                    let o = &pmeta.provenance.options;
-                    let stage = pmeta.provenance.pruning.map(|spec| PruneStage { spec, epochs: o.epochs, lr: o.lr });
-                    (Some(read_json::<RunResult>(&Run(&pruned).result()).map_err(damaged)?), stage)
-                }
-                false if pruned.exists() => {
-                    unfinished.push(pruned.display().to_string());
-                    continue;
-                }
-                false => (None, None),
-            };
-            let options = crate::options::TrainOptions { seed: 0, ..meta.provenance.options };
-            let this = Setup { config: meta.config, data: meta.provenance.data, held_out: meta.provenance.held_out, options, pruning };
-            match &setup {
-                None => setup = Some((this, dir.clone())),
-                Some((first, first_dir)) if *first != this => {
-                    return Err(refuse(format!(
-                        "{} and {} were trained differently (data, held-out levels, configuration, options or pruning)",
-                        first_dir.display(),
-                        dir.display()
-                    )))
-                }
-                Some(_) => {}
-            }
-            runs.push(run);
-            pruned_runs.extend(pruned_run);
-            dirs.push(dir);
         }
     }
-    let Some((setup, _)) = setup else {
+    let [Some((setup, _)), partner_setup] = setups else {
         return Err(refuse(format!("no finished run under it (seed*/fold*/result.json; {} unfinished)", unfinished.len())));
     };
-    let seeds: Vec<u64> = runs.iter().map(|r| r.seed).collect::<std::collections::BTreeSet<_>>().into_iter().collect();
-    let mut summary = summarize(setup.data, &seeds, runs, pruned_runs, setup.pruning);
+    let mut summary = own.summarize(setup.data, setup.pruning, out, CV_CURVES)?;
     summary.held_out = setup.held_out;
+    if let Some((partner, _)) = partner_setup {
+        summary.partner = Some(Box::new(partners.summarize(partner.data, partner.pruning, out, CV_PARTNER_CURVES)?));
+    }
     summary.unfinished = unfinished;
-    calibrate_stopping(&mut summary, &dirs)?;
     write_json_atomically(&out.join(CV_SUMMARY), &summary)?;
-    write_figure(out, &summary, &dirs)?;
     Ok(summary)
+}
+
+/// The finished run in `dir` (with its pruned successor, when it has one) and how it was trained;
+/// `None`, and `dir` or its pruned half added to `unfinished`, while it trains.
+fn finished_run(dir: &Path, unfinished: &mut Vec<String>) -> Result<Option<(FoldResult, Setup)>> {
+    let damaged = |e: Error| Error::Usage(format!("{} is damaged or half written ({e})", dir.display()));
+    if !Run(dir).result().exists() {
+        unfinished.push(dir.display().to_string());
+        return Ok(None);
+    }
+    let run: RunResult = read_json(&Run(dir).result()).map_err(damaged)?;
+    let (_, meta) = crate::checkpoint::load_meta(&Run(dir).model()).map_err(damaged)?;
+    let pruned = Run(dir).pruned();
+    let (pruned_run, pruning) = match Run(&pruned).result().exists() {
+        true => {
+            let (_, pmeta) = crate::checkpoint::load_meta(&pruned).map_err(damaged)?;
+            let o = &pmeta.provenance.options;
+            let stage = pmeta.provenance.pruning.map(|spec| PruneStage { spec, epochs: o.epochs, lr: o.lr });
+            (Some(read_json::<RunResult>(&Run(&pruned).result()).map_err(damaged)?), stage)
+        }
+        false if pruned.exists() => {
+            unfinished.push(pruned.display().to_string());
+            return Ok(None);
+        }
+        false => (None, None),
+    };
+    let options = crate::options::TrainOptions { seed: 0, ..meta.provenance.options };
+    let setup = Setup { config: meta.config, data: meta.provenance.data, held_out: meta.provenance.held_out, options, pruning };
+    Ok(Some((FoldResult { dense: run, pruned: pruned_run, partner: None }, setup)))
 }
 
 #[cfg(test)]

@@ -12,6 +12,7 @@ pub mod error;
 pub mod evaluate;
 pub mod import;
 pub mod info;
+pub mod joint;
 pub mod metrics;
 pub mod mixup;
 pub mod normalization;

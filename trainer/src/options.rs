@@ -96,6 +96,10 @@ pub struct TrainOptions {
     #[arg(long, default_value_t = 0.0)]
     #[serde(default)]
     pub prefix_training: f64,
+    /// Joint learning with a second sensor (`--joint`): what the run was trained beside.
+    #[arg(skip)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub joint: Option<Joint>,
     /// Hold mask entries that are zero at the start at zero (fine-tuning after pruning).
     #[arg(skip)]
     #[serde(default)]
@@ -105,6 +109,19 @@ pub struct TrainOptions {
     #[arg(skip)]
     #[serde(default)]
     pub hold_zero_weights: bool,
+}
+
+/// Joint learning as Gao et al. train their two sensors' networks (`--joint`): beside this run, a
+/// network of another sensor trains on touches of the same classes, and the mean squared error
+/// between the two networks' encodings of same-class touches joins the loss.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Joint {
+    /// The other sensor's data set.
+    pub partner: String,
+    /// Weight of the mean squared error between the encodings.
+    pub weight: f64,
+    /// Epochs trained before the encodings are pulled together (each network on its own loss).
+    pub after_epochs: usize,
 }
 
 fn one() -> f64 {

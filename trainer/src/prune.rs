@@ -48,6 +48,8 @@ pub fn prune_and_fine_tune(
         warmup_epochs: parent_options.warmup_epochs.min(1),
         hold_pruned: true,
         hold_zero_weights: stage.spec.weights > 0.0,
+        // A model of a joint run is pruned and fine-tuned alone.
+        joint: None,
         ..parent_options
     };
     let spec = RunSpec {
@@ -59,6 +61,7 @@ pub fn prune_and_fine_tune(
         pause_after: None,
         start: Some(tensors),
         pruning: Some(stage.spec.clone()),
+        partner: None,
     };
     train(&spec, out, resume, bar)
 }

@@ -6,10 +6,11 @@
 //!   optimiser's state, the run's state and, when averaging, the weight average;
 //! - `metrics.jsonl`, one line per epoch, and `result.json` once the run has finished;
 //! - `curves.svg`, the training curves, redrawn after every epoch;
-//! - `pruned/`, a run directory of its own: the pruned and fine-tuned model.
+//! - `pruned/`, a run directory of its own: the pruned and fine-tuned model;
+//! - `partner/`, a joint run's (`--joint`): the other sensor's run directory.
 //!
 //! `pvt3 cv --out DIR` writes one run directory per seed and fold, [`CV_SUMMARY`] and
-//! [`CV_CURVES`].
+//! [`CV_CURVES`] (and a joint one [`CV_PARTNER_CURVES`]).
 
 use std::path::{Path, PathBuf};
 
@@ -18,6 +19,13 @@ pub const CV_SUMMARY: &str = "cv.json";
 
 /// The figure of a cross-validation's runs, in its directory.
 pub const CV_CURVES: &str = "cv-curves.svg";
+
+/// A joint cross-validation's (`--joint`): the figure of the other sensor's runs.
+pub const CV_PARTNER_CURVES: &str = "cv-partner-curves.svg";
+
+/// A joint run's partner (`--joint`): inside a run directory, the other sensor's run directory;
+/// inside its `last/`, that run's resume state.
+pub const PARTNER: &str = "partner";
 
 /// A run directory.
 #[derive(Clone, Copy, Debug)]
@@ -51,6 +59,11 @@ impl Run<'_> {
     /// The pruned and fine-tuned model's run directory.
     pub fn pruned(self) -> PathBuf {
         self.0.join("pruned")
+    }
+
+    /// A joint run's other sensor: its run directory.
+    pub fn partner(self) -> PathBuf {
+        self.0.join(PARTNER)
     }
 }
 
@@ -88,6 +101,11 @@ impl Checkpoint<'_> {
     /// `last/` only: the weight average, when the run averages.
     pub fn average(self) -> PathBuf {
         self.0.join("average.safetensors")
+    }
+
+    /// `last/` of a joint run only: the other sensor's resume state, a checkpoint of its own.
+    pub fn partner(self) -> PathBuf {
+        self.0.join(PARTNER)
     }
 
     /// `last/` only: where the run stands (epochs done, the best so far, the random state).

@@ -8,9 +8,10 @@
 //! `result.json` (written when the run is complete).
 
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+use candle_core::backprop::GradStore;
 use candle_core::{DType, Device, Tensor, Var, D};
 use candle_nn::VarMap;
 use indicatif::ProgressBar;
@@ -24,6 +25,7 @@ use crate::average::WeightAverage;
 use crate::checkpoint::{self, read_json, write_json, write_json_atomically, Meta, Provenance};
 use crate::data::{Dataset, Split};
 use crate::evaluate::{evaluate, log_uniform_factor, Samples};
+use crate::joint::Partner;
 use crate::metrics::EpochMetrics;
 use crate::normalization::Normalization;
 use crate::optim::{is_weight_matrix, AdamW};
@@ -51,6 +53,9 @@ struct RunState {
     step: usize,
     rng: Rng,
     best: Option<Best>,
+    /// A joint run's: the partner network's best epoch so far.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    partner_best: Option<Best>,
     wall_seconds: f64,
 }
 
@@ -76,6 +81,8 @@ pub struct RunSpec<'a> {
     pub start: Option<Tensors>,
     /// The pruning that produced `start`, recorded in the provenance.
     pub pruning: Option<PruneSpec>,
+    /// Joint learning (`--joint`): the second sensor trained beside.
+    pub partner: Option<Partner<'a>>,
 }
 
 /// Cross-entropy against labels smoothed by `eps`.
@@ -128,6 +135,14 @@ impl Learner {
     /// (plus the L1 penalty on the masks), backward, gradient clipping, AdamW. Returns the loss and
     /// logits.
     pub fn step(&mut self, x: &Tensor, y: &Tensor, opts: &TrainOptions, lr: f64, rng: &mut Rng) -> Result<(f64, Tensor)> {
+        let pass = self.forward(x, y, opts, false, rng)?;
+        let grads = pass.loss.backward()?;
+        self.update(&grads, &pass.saved, opts, lr)?;
+        Ok((pass.loss.to_scalar::<f32>()? as f64, pass.logits))
+    }
+
+    /// A training step up to its loss: with `pooled`, PVT³'s encoding too (joint learning).
+    fn forward(&mut self, x: &Tensor, y: &Tensor, opts: &TrainOptions, pooled: bool, rng: &mut Rng) -> Result<Pass> {
         let mut saved = Vec::new();
         if opts.random_prune > 0.0 {
             let p = opts.random_prune as f32;
@@ -140,12 +155,15 @@ impl Learner {
         }
         let mixed = if opts.mixup > 0.0 { Some(crate::mixup::mix(x, y, opts.mixup, rng)?) } else { None };
         let x = mixed.as_ref().map_or(x, |m| &m.x);
-        let (logits, extra) = if opts.prefix_training > 0.0 && rng.uniform() < opts.prefix_training as f32 {
-            let pvt3 = self.model.pvt3("--prefix-training")?;
-            let tokens = 1 + rng.below(pvt3.config().time_tokens());
-            (pvt3.forward_prefix(x, tokens, Some(rng))?, None)
+        let prefix = opts.prefix_training > 0.0 && rng.uniform() < opts.prefix_training as f32;
+        let (logits, extra, pooled) = if prefix || pooled {
+            let pvt3 = self.model.pvt3(if prefix { "--prefix-training" } else { "--joint" })?;
+            let tokens = prefix.then(|| 1 + rng.below(pvt3.config().time_tokens()));
+            let (logits, pooled) = pvt3.forward_pooled(x, tokens, Some(rng))?;
+            (logits, None, Some(pooled))
         } else {
-            self.model.forward_with_loss(x, Some(rng))?
+            let (logits, extra) = self.model.forward_with_loss(x, Some(rng))?;
+            (logits, extra, None)
         };
         let mut loss = smoothed_cross_entropy(&logits, y, opts.label_smoothing)?;
         if let Some(m) = &mixed {
@@ -159,17 +177,58 @@ impl Learner {
             let flat: Vec<Tensor> = self.masks.iter().map(|m| m.abs()).collect::<candle_core::Result<_>>()?;
             loss = (loss + (Tensor::cat(&flat, 0)?.mean_all()? * opts.l1)?)?;
         }
-        let grads = loss.backward()?;
-        for (var, full) in self.matrices.iter().zip(&saved) {
+        Ok(Pass { loss, logits, pooled, saved })
+    }
+
+    /// The rest of a step, once `grads` are known: the randomly pruned weights restored, the
+    /// gradients clipped, AdamW, and held zeros kept.
+    fn update(&mut self, grads: &GradStore, saved: &[Tensor], opts: &TrainOptions, lr: f64) -> Result<()> {
+        for (var, full) in self.matrices.iter().zip(saved) {
             var.set(full)?;
         }
-        let scale = if opts.clip_grad > 0.0 { (opts.clip_grad / self.optimizer.grad_norm(&grads)?.max(1e-12)).min(1.0) } else { 1.0 };
-        self.optimizer.step(&grads, lr, scale)?;
+        let scale = if opts.clip_grad > 0.0 { (opts.clip_grad / self.optimizer.grad_norm(grads)?.max(1e-12)).min(1.0) } else { 1.0 };
+        self.optimizer.step(grads, lr, scale)?;
         for (var, keep) in &self.held {
             var.set(&(var.as_tensor() * keep)?)?;
         }
-        Ok((loss.to_scalar::<f32>()? as f64, logits))
+        Ok(())
     }
+}
+
+/// A training step's forward pass: the loss, the logits and, when asked, the encoding.
+struct Pass {
+    loss: Tensor,
+    logits: Tensor,
+    pooled: Option<Tensor>,
+    /// The full weight matrices, while random pruning has zeroed some of their entries.
+    saved: Vec<Tensor>,
+}
+
+/// One step of two sensors' networks trained together (`--joint`) on batches of the same labels:
+/// each network's own loss, plus `weight` × the mean squared error between their encodings,
+/// backward once, and each network's own update. Returns both passes' losses and logits, and the
+/// alignment loss.
+#[allow(clippy::too_many_arguments)]
+fn joint_step(
+    a: &mut Learner,
+    b: &mut Learner,
+    [(xa, ya), (xb, yb)]: [(&Tensor, &Tensor); 2],
+    weight: f64,
+    opts: &TrainOptions,
+    lr: f64,
+    rng: &mut Rng,
+) -> Result<[(f64, Tensor); 2]> {
+    let pa = a.forward(xa, ya, opts, true, rng)?;
+    let pb = b.forward(xb, yb, opts, true, rng)?;
+    let mut total = (&pa.loss + &pb.loss)?;
+    if weight > 0.0 {
+        let (ea, eb) = (pa.pooled.as_ref().expect("asked for"), pb.pooled.as_ref().expect("asked for"));
+        total = (total + ((ea - eb)?.sqr()?.mean_all()? * weight)?)?;
+    }
+    let grads = total.backward()?;
+    a.update(&grads, &pa.saved, opts, lr)?;
+    b.update(&grads, &pb.saved, opts, lr)?;
+    Ok([(pa.loss.to_scalar::<f32>()? as f64, pa.logits), (pb.loss.to_scalar::<f32>()? as f64, pb.logits)])
 }
 
 /// A selection mask (channel or frame).
@@ -221,8 +280,184 @@ fn augment(sample: &mut [f32], norm: &Normalization, opts: &TrainOptions, rng: &
     }
 }
 
+/// One sensor's network in a run and what its epochs read: its split as windows, normalised,
+/// its learner and weight average. A joint run (`--joint`) trains two side by side.
+struct Sensor<'a> {
+    data: &'a Dataset,
+    config: Config,
+    classes: Vec<String>,
+    normalization: Normalization,
+    split: Split,
+    /// Every training touch read as its evaluation windows: what fits the spectral head's
+    /// standardisation, and each epoch's batches when every touch is one window long.
+    train_set: Samples,
+    /// A touch longer than a window (or stretched) gives each epoch one window drawn at random.
+    crops: bool,
+    val_set: Samples,
+    test_set: Samples,
+    net: Net,
+}
+
+/// What a sensor's training steps change: its learner and weight average.
+struct Net {
+    learner: Learner,
+    average: Option<WeightAverage>,
+}
+
+impl Net {
+    fn update_average(&mut self, step: usize) -> Result<()> {
+        match &mut self.average {
+            Some(average) => average.update(step),
+            None => Ok(()),
+        }
+    }
+}
+
+impl<'a> Sensor<'a> {
+    fn new(
+        data: &'a Dataset,
+        config: Config,
+        classes: Vec<String>,
+        val_fold: usize,
+        opts: &TrainOptions,
+        start: Option<&Tensors>,
+    ) -> Result<Self> {
+        data.check_fits(&config)?;
+        let split: Split = data.split(val_fold)?;
+        let normalization = crate::normalization::fit(data, &split.train, config.frames);
+        let train_set = Samples::new(data, &split.train, &normalization);
+        let crops = opts.aug_stretch > 0.0 || split.train.iter().any(|&i| data.lengths[i] > config.frames);
+        let val_set = Samples::new(data, &split.val, &normalization);
+        let test_set = Samples::new(data, &split.test, &normalization);
+        Ok(Self {
+            data,
+            net: Net { learner: Learner::new(&config, opts, start)?, average: None },
+            config,
+            classes,
+            normalization,
+            split,
+            train_set,
+            crops,
+            val_set,
+            test_set,
+        })
+    }
+
+    /// This epoch's training windows, when they are drawn anew each epoch (see `crops`).
+    fn epoch_windows(&self, opts: &TrainOptions, rng: &mut Rng) -> Option<Samples> {
+        self.crops.then(|| Samples::cropped(self.data, &self.split.train, &self.normalization, opts.aug_stretch, rng))
+    }
+
+    /// The weights, optimiser state and weight average of the checkpoint `dir` (a `last/`).
+    fn restore(&mut self, dir: &Path, step: usize) -> Result<()> {
+        pvt3_models::weights::load_weights(&self.net.learner.varmap, &Checkpoint(dir).weights())?;
+        self.net.learner.optimizer.load(&Checkpoint(dir).optimizer(), step)?;
+        if let Some(average) = &mut self.net.average {
+            average.load(&Checkpoint(dir).average())?;
+        }
+        Ok(())
+    }
+
+    /// Writes the resume state of this sensor's network into `dir` (a `last/` being filled).
+    fn save_last(&self, dir: &Path, meta: &Meta) -> Result<()> {
+        checkpoint::write_files(dir, &self.net.learner.varmap, meta)?;
+        let files = Checkpoint(dir);
+        self.net.learner.optimizer.save(&files.optimizer())?;
+        if let Some(average) = &self.net.average {
+            average.save(&files.average())?;
+        }
+        Ok(())
+    }
+
+    fn meta(&self, val_fold: usize, opts: &TrainOptions, pruning: &Option<PruneSpec>, epoch: usize, val: f64, test: Option<f64>) -> Meta {
+        Meta {
+            config: self.config.clone(),
+            normalization: self.normalization.clone(),
+            classes: self.classes.clone(),
+            provenance: Provenance {
+                pvt3_version: env!("CARGO_PKG_VERSION").to_string(),
+                data: self.data.path.display().to_string(),
+                val_fold,
+                seed: opts.seed,
+                epoch,
+                val_accuracy: val,
+                test_accuracy: test,
+                options: opts.clone(),
+                pruning: pruning.clone(),
+                held_out: self.data.held_out.clone(),
+                reading: self.data.reading,
+                stopping: None,
+            },
+        }
+    }
+
+    /// The end of an epoch: the network (its weight average, when averaging) evaluated on
+    /// validation; when it improved on `best`, on the test touches too and checkpointed into
+    /// `model`.
+    fn validate(
+        &mut self,
+        epoch: usize,
+        best: &mut Option<Best>,
+        model: &Path,
+        run: (usize, &TrainOptions, &Option<PruneSpec>),
+    ) -> Result<Validated> {
+        if let Some(average) = &mut self.net.average {
+            average.swap()?;
+        }
+        let val = evaluate(&self.net.learner.model, &self.val_set)?;
+        let improved =
+            best.as_ref().is_none_or(|b| val.accuracy > b.val_accuracy || (val.accuracy == b.val_accuracy && val.loss < b.val_loss));
+        let mut test_accuracy = None;
+        if improved {
+            let test = if self.test_set.is_empty() { None } else { Some(evaluate(&self.net.learner.model, &self.test_set)?.accuracy) };
+            test_accuracy = test;
+            let (val_fold, opts, pruning) = run;
+            checkpoint::save(model, &self.net.learner.varmap, &self.meta(val_fold, opts, pruning, epoch, val.accuracy, test))?;
+            *best = Some(Best { epoch, val_accuracy: val.accuracy, val_loss: val.loss, test_accuracy: test.unwrap_or(f64::NAN) });
+        }
+        if let Some(average) = &mut self.net.average {
+            average.swap()?;
+        }
+        Ok(Validated { loss: val.loss, accuracy: val.accuracy, test_accuracy })
+    }
+}
+
+/// A sensor's validation at the end of an epoch.
+struct Validated {
+    loss: f64,
+    accuracy: f64,
+    test_accuracy: Option<f64>,
+}
+
+/// Losses and correct answers of one sensor's batches over an epoch.
+#[derive(Default)]
+struct Tally {
+    loss: f64,
+    correct: usize,
+}
+
+impl Tally {
+    fn add(&mut self, loss: f64, logits: &Tensor, y: &Tensor, rows: usize) -> Result<()> {
+        self.loss += loss * rows as f64;
+        let predicted = logits.argmax(D::Minus1)?.to_vec1::<u32>()?;
+        self.correct += predicted.iter().zip(y.to_vec1::<u32>()?).filter(|(p, l)| **p == *l).count();
+        Ok(())
+    }
+}
+
+/// Each class's rows in `set`: where a joint run draws the partner of a touch of that class.
+fn rows_by_class(set: &Samples, classes: usize) -> Vec<Vec<usize>> {
+    let mut rows = vec![Vec::new(); classes];
+    for (r, &label) in set.labels.iter().enumerate() {
+        rows[label as usize].push(r);
+    }
+    rows
+}
+
 /// Trains one split into `out`; with `resume`, continues the run found there. `None` means the
-/// run paused (see [`RunSpec::pause_after`]) and can be resumed.
+/// run paused (see [`RunSpec::pause_after`]) and can be resumed. With a partner (`--joint`), its
+/// network trains beside, into the run directory `out/partner/` (its resume state inside
+/// `out/last/`, so that the two resume together).
 pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Result<Option<RunResult>> {
     let run_dir = Run(out);
     let result_path = run_dir.result();
@@ -247,21 +482,26 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
         state = Some((dir.clone(), read_json::<RunState>(&Checkpoint(dir).state())?));
     }
     let opts = &spec_options;
-    spec.data.check_fits(&config)?;
-    let split: Split = spec.data.split(spec.val_fold)?;
-    let normalization = crate::normalization::fit(spec.data, &split.train, config.frames);
-    // Every training touch read as its evaluation windows: what fits the spectral head's
-    // standardisation, and each epoch's batches when every touch is one window long. A longer
-    // touch gives each epoch one window drawn at random (`Samples::cropped`).
-    let train_set = Samples::new(spec.data, &split.train, &normalization);
-    let crops = opts.aug_stretch > 0.0 || split.train.iter().any(|&i| spec.data.lengths[i] > config.frames);
-    let val_set = Samples::new(spec.data, &split.val, &normalization);
-    let test_set = Samples::new(spec.data, &split.test, &normalization);
-
+    let mut main = Sensor::new(spec.data, config, spec.classes.clone(), spec.val_fold, opts, spec.start.as_ref())?;
+    let partner_opts = spec.partner.as_ref().map(|_| Partner::options(opts, spec.data));
+    let mut partner = match (&spec.partner, &partner_opts) {
+        (Some(p), Some(po)) => {
+            p.check(&main.config, &main.classes, opts)?;
+            Some(Sensor::new(p.data, p.config.clone(), p.classes.clone(), spec.val_fold, po, None)?)
+        }
+        _ => None,
+    };
+    let partner_dir = run_dir.partner();
     std::fs::create_dir_all(out).map_err(Error::io(out))?;
-    let mut learner = Learner::new(&config, opts, spec.start.as_ref())?;
-    let mut average = if opts.ema > 0.0 { Some(WeightAverage::new(&learner.varmap, opts.ema)?) } else { None };
-    let steps_per_epoch = split.train.len().div_ceil(opts.batch_size);
+    if partner.is_some() {
+        std::fs::create_dir_all(&partner_dir).map_err(Error::io(&partner_dir))?;
+    }
+    for sensor in std::iter::once(&mut main).chain(partner.as_mut()) {
+        if opts.ema > 0.0 {
+            sensor.net.average = Some(WeightAverage::new(&sensor.net.learner.varmap, opts.ema)?);
+        }
+    }
+    let steps_per_epoch = main.split.train.len().div_ceil(opts.batch_size);
     let schedule = Schedule {
         peak: opts.lr,
         floor: opts.lr * opts.lr_floor,
@@ -270,137 +510,158 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
     };
     let mut run = match state {
         Some((dir, st)) => {
-            pvt3_models::weights::load_weights(&learner.varmap, &Checkpoint(&dir).weights())?;
-            learner.optimizer.load(&Checkpoint(&dir).optimizer(), st.step)?;
-            if let Some(average) = &mut average {
-                average.load(&Checkpoint(&dir).average())?;
-            }
+            main.restore(&dir, st.step)?;
             truncate_metrics(&run_dir.metrics(), st.epochs_done)?;
+            if let Some(p) = &mut partner {
+                p.restore(&Checkpoint(&dir).partner(), st.step)?;
+                truncate_metrics(&Run(&partner_dir).metrics(), st.epochs_done)?;
+            }
             st
         }
         None => {
-            if spec.start.is_none() {
-                crate::spectrum_fit::fit(&learner.model, &learner.varmap, &train_set)?;
+            for sensor in std::iter::once(&main).chain(partner.as_ref()) {
+                if spec.start.is_none() {
+                    crate::spectrum_fit::fit(&sensor.net.learner.model, &sensor.net.learner.varmap, &sensor.train_set)?;
+                }
             }
             let _ = std::fs::remove_file(run_dir.metrics());
-            RunState { epochs_done: 0, step: 0, rng: Rng::new(opts.seed.wrapping_add(1)), best: None, wall_seconds: 0.0 }
+            let _ = std::fs::remove_file(Run(&partner_dir).metrics());
+            RunState {
+                epochs_done: 0,
+                step: 0,
+                rng: Rng::new(opts.seed.wrapping_add(1)),
+                best: None,
+                partner_best: None,
+                wall_seconds: 0.0,
+            }
         }
     };
 
-    let meta_for = |epoch: usize, val_accuracy: f64, test_accuracy: Option<f64>| Meta {
-        config: config.clone(),
-        normalization: normalization.clone(),
-        classes: spec.classes.clone(),
-        provenance: Provenance {
-            pvt3_version: env!("CARGO_PKG_VERSION").to_string(),
-            data: spec.data.path.display().to_string(),
-            val_fold: spec.val_fold,
-            seed: opts.seed,
-            epoch,
-            val_accuracy,
-            test_accuracy,
-            options: opts.clone(),
-            pruning: spec.pruning.clone(),
-            held_out: spec.data.held_out.clone(),
-            reading: spec.data.reading,
-            stopping: None,
-        },
-    };
-
-    if opts.hold_pruned {
-        learner.hold_zeros(is_mask)?;
-    }
-    if opts.hold_zero_weights {
-        learner.hold_zeros(is_weight_matrix)?;
+    for sensor in std::iter::once(&mut main).chain(partner.as_mut()) {
+        if opts.hold_pruned {
+            sensor.net.learner.hold_zeros(is_mask)?;
+        }
+        if opts.hold_zero_weights {
+            sensor.net.learner.hold_zeros(is_weight_matrix)?;
+        }
     }
     bar.set_length((opts.epochs * steps_per_epoch) as u64);
     bar.set_position((run.epochs_done * steps_per_epoch) as u64);
-    let mut log = std::fs::OpenOptions::new().create(true).append(true).open(run_dir.metrics()).map_err(Error::io(out))?;
+    let open_log = |path: PathBuf| std::fs::OpenOptions::new().create(true).append(true).open(&path).map_err(Error::io(&path));
+    let mut log = open_log(run_dir.metrics())?;
+    let mut partner_log = partner.as_ref().map(|_| open_log(Run(&partner_dir).metrics())).transpose()?;
     let first_epoch = run.epochs_done + 1;
     for epoch in first_epoch..=opts.epochs {
         if spec.pause_after.is_some_and(|p| epoch - first_epoch >= p) {
             return Ok(None);
         }
         let started = Instant::now();
-        let cropped = crops.then(|| Samples::cropped(spec.data, &split.train, &normalization, opts.aug_stretch, &mut run.rng));
-        let train_set = cropped.as_ref().unwrap_or(&train_set);
+        let cropped = main.epoch_windows(opts, &mut run.rng);
+        let partner_cropped = partner.as_ref().and_then(|p| p.epoch_windows(opts, &mut run.rng));
+        let Sensor { net, train_set, normalization, .. } = &mut main;
+        let train_set = cropped.as_ref().unwrap_or(train_set);
+        // A joint run's other sensor: its windows this epoch, each class's rows among them, its network.
+        let mut other = partner.as_mut().map(|p| {
+            let set = partner_cropped.as_ref().unwrap_or(&p.train_set);
+            (set, rows_by_class(set, p.config.classes), &p.normalization, &mut p.net)
+        });
         let mut order: Vec<usize> = (0..train_set.len()).collect();
         run.rng.shuffle(&mut order);
-        let (mut loss_sum, mut correct) = (0.0, 0usize);
+        let (mut tally, mut partner_tally) = (Tally::default(), Tally::default());
         let mut lr = schedule.at(run.step);
         for rows in order.chunks(opts.batch_size) {
             let rng = &mut run.rng;
-            let (x, y) = train_set.batch(rows, |s| augment(s, &normalization, opts, rng))?;
+            let (x, y) = train_set.batch(rows, |s| augment(s, normalization, opts, rng))?;
             lr = schedule.at(run.step);
-            let (loss, logits) = learner.step(&x, &y, opts, lr, &mut run.rng)?;
-            run.step += 1;
-            if let Some(average) = &mut average {
-                average.update(run.step)?;
+            match (&mut other, &opts.joint) {
+                (Some((set, same_class, norm, other_net)), Some(joint)) => {
+                    // Each touch's partner: a touch of its class among the other sensor's training windows.
+                    let pairs = crate::joint::draw_partners(rows.iter().map(|&r| train_set.labels[r]), same_class, &mut run.rng)?;
+                    let rng = &mut run.rng;
+                    let (xb, yb) = set.batch(&pairs, |s| augment(s, norm, opts, rng))?;
+                    let weight = if epoch > joint.after_epochs { joint.weight } else { 0.0 };
+                    let [(loss, logits), (partner_loss, partner_logits)] =
+                        joint_step(&mut net.learner, &mut other_net.learner, [(&x, &y), (&xb, &yb)], weight, opts, lr, &mut run.rng)?;
+                    tally.add(loss, &logits, &y, rows.len())?;
+                    partner_tally.add(partner_loss, &partner_logits, &yb, rows.len())?;
+                    other_net.update_average(run.step + 1)?;
+                }
+                _ => {
+                    let (loss, logits) = net.learner.step(&x, &y, opts, lr, &mut run.rng)?;
+                    tally.add(loss, &logits, &y, rows.len())?;
+                }
             }
-            loss_sum += loss * rows.len() as f64;
-            let predicted = logits.argmax(D::Minus1)?.to_vec1::<u32>()?;
-            correct += predicted.iter().zip(y.to_vec1::<u32>()?).filter(|(p, l)| **p == *l).count();
+            run.step += 1;
+            net.update_average(run.step)?;
             bar.inc(1);
         }
+        let n = train_set.len() as f64;
         // With weight averaging, the average is what is evaluated, selected and checkpointed.
-        if let Some(average) = &mut average {
-            average.swap()?;
-        }
-        let val = evaluate(&learner.model, &val_set)?;
-        let improved =
-            run.best.as_ref().is_none_or(|b| val.accuracy > b.val_accuracy || (val.accuracy == b.val_accuracy && val.loss < b.val_loss));
-        let mut test_accuracy = None;
-        if improved {
-            let test = if test_set.is_empty() { None } else { Some(evaluate(&learner.model, &test_set)?.accuracy) };
-            test_accuracy = test;
-            checkpoint::save(&run_dir.model(), &learner.varmap, &meta_for(epoch, val.accuracy, test))?;
-            run.best = Some(Best { epoch, val_accuracy: val.accuracy, val_loss: val.loss, test_accuracy: test.unwrap_or(f64::NAN) });
-        }
-        if let Some(average) = &mut average {
-            average.swap()?;
-        }
+        let (val_fold, pruning) = (spec.val_fold, &spec.pruning);
+        let val = main.validate(epoch, &mut run.best, &run_dir.model(), (val_fold, opts, pruning))?;
+        let partner_val = match (&mut partner, &partner_opts) {
+            (Some(p), Some(po)) => Some(p.validate(epoch, &mut run.partner_best, &Run(&partner_dir).model(), (val_fold, po, pruning))?),
+            _ => None,
+        };
         let seconds = started.elapsed().as_secs_f64();
         run.wall_seconds += seconds;
         run.epochs_done = epoch;
-        let n = train_set.len() as f64;
-        let line = EpochMetrics {
+        let line = |t: &Tally, v: &Validated| EpochMetrics {
             epoch,
             lr,
-            train_loss: loss_sum / n,
-            train_accuracy: correct as f64 / n,
-            val_loss: val.loss,
-            val_accuracy: val.accuracy,
-            test_accuracy,
+            train_loss: t.loss / n,
+            train_accuracy: t.correct as f64 / n,
+            val_loss: v.loss,
+            val_accuracy: v.accuracy,
+            test_accuracy: v.test_accuracy,
             seconds,
         };
         checkpoint::replace_dir(&last, |dir| {
-            checkpoint::write_files(dir, &learner.varmap, &meta_for(epoch, val.accuracy, None))?;
-            let files = Checkpoint(dir);
-            learner.optimizer.save(&files.optimizer())?;
-            if let Some(average) = &average {
-                average.save(&files.average())?;
+            main.save_last(dir, &main.meta(val_fold, opts, pruning, epoch, val.accuracy, None))?;
+            if let (Some(p), Some(po), Some(pv)) = (&partner, &partner_opts, &partner_val) {
+                let sub = Checkpoint(dir).partner();
+                std::fs::create_dir_all(&sub).map_err(Error::io(&sub))?;
+                p.save_last(&sub, &p.meta(val_fold, po, pruning, epoch, pv.accuracy, None))?;
             }
-            write_json(&files.state(), &run)
+            write_json(&Checkpoint(dir).state(), &run)
         })?;
-        writeln!(log, "{}", serde_json::to_string(&line).expect("plain data")).map_err(Error::io(out))?;
+        writeln!(log, "{}", serde_json::to_string(&line(&tally, &val)).expect("plain data")).map_err(Error::io(out))?;
         crate::plot::curves::write_run(out)?;
+        if let (Some(plog), Some(pv)) = (&mut partner_log, &partner_val) {
+            writeln!(plog, "{}", serde_json::to_string(&line(&partner_tally, pv)).expect("plain data")).map_err(Error::io(&partner_dir))?;
+            crate::plot::curves::write_run(&partner_dir)?;
+        }
         let best = run.best.as_ref().expect("set after the first epoch");
         bar.set_message(format!(
             "epoch {epoch}/{} loss {:.3} train {:.3} val {:.3} (best {:.3} @ {})",
-            opts.epochs, line.train_loss, line.train_accuracy, val.accuracy, best.val_accuracy, best.epoch
+            opts.epochs,
+            tally.loss / n,
+            tally.correct as f64 / n,
+            val.accuracy,
+            best.val_accuracy,
+            best.epoch
         ));
     }
-    let best = run.best.clone().ok_or_else(|| Error::Usage("no epoch was trained (epochs = 0)".into()))?;
-    calibrate_stopping(&run_dir.model(), &val_set)?;
-    let result = RunResult {
-        val_fold: spec.val_fold,
-        seed: opts.seed,
-        best_epoch: best.epoch,
-        val_accuracy: best.val_accuracy,
-        test_accuracy: best.test_accuracy,
-        epochs: opts.epochs,
-        wall_seconds: run.wall_seconds,
+    let result = |best: &Option<Best>| -> Result<RunResult> {
+        let best = best.clone().ok_or_else(|| Error::Usage("no epoch was trained (epochs = 0)".into()))?;
+        Ok(RunResult {
+            val_fold: spec.val_fold,
+            seed: opts.seed,
+            best_epoch: best.epoch,
+            val_accuracy: best.val_accuracy,
+            test_accuracy: best.test_accuracy,
+            epochs: opts.epochs,
+            wall_seconds: run.wall_seconds,
+        })
     };
+    // The partner's run finishes first: a run with its result.json is a finished joint run.
+    if let Some(p) = &partner {
+        let partner_result = result(&run.partner_best)?;
+        calibrate_stopping(&Run(&partner_dir).model(), &p.val_set)?;
+        write_json(&Run(&partner_dir).result(), &partner_result)?;
+    }
+    let result = result(&run.best)?;
+    calibrate_stopping(&run_dir.model(), &main.val_set)?;
     write_json(&result_path, &result)?;
     Ok(Some(result))
 }

@@ -5,7 +5,7 @@ use std::path::Path;
 
 use super::chart::{figure, Panel, Series, COLORS};
 use crate::metrics::{self, EpochMetrics};
-use crate::run_dir::{Run, CV_CURVES};
+use crate::run_dir::Run;
 use crate::Result;
 
 fn points(m: &[EpochMetrics], value: impl Fn(&EpochMetrics) -> Option<f64>) -> Vec<(f64, f64)> {
@@ -84,14 +84,14 @@ pub fn cv_figure(title: &str, runs: &[(String, Vec<EpochMetrics>, Option<usize>)
 
 /// Writes the figure of the cross-validation in `out` from its runs `dirs` (each `seed*/fold*`);
 /// the path written.
-pub fn write_cv(out: &Path, dirs: &[std::path::PathBuf], title: &str) -> Result<std::path::PathBuf> {
+pub fn write_cv(out: &Path, dirs: &[std::path::PathBuf], title: &str, figure: &str) -> Result<std::path::PathBuf> {
     let mut runs = Vec::new();
     for dir in dirs {
         let name = dir.strip_prefix(out).unwrap_or(dir).display().to_string();
         let (m, selected) = read_run(dir)?;
         runs.push((name, m, selected));
     }
-    let path = out.join(CV_CURVES);
+    let path = out.join(figure);
     super::write(&path, &cv_figure(title, &runs))?;
     Ok(path)
 }

@@ -83,6 +83,7 @@ fn options(epochs: usize) -> TrainOptions {
         mask_lr: 1.0,
         random_prune: 0.0,
         prefix_training: 0.0,
+        joint: None,
         hold_pruned: false,
         hold_zero_weights: false,
     }
@@ -104,6 +105,7 @@ pub(crate) fn spec(data: &Dataset, epochs: usize, pause_after: Option<usize>) ->
         pause_after,
         start: None,
         pruning: None,
+        partner: None,
     }
 }
 
@@ -158,14 +160,24 @@ fn a_seed_fixes_the_run_and_a_paused_run_resumes_exactly() {
 /// Trains `options` for `epochs` twice, once paused after 2 epochs and resumed: the two must
 /// agree bit for bit. Returns the uninterrupted run's directory.
 fn resumes_exactly(tag: &str, data: &Dataset, options: TrainOptions) -> PathBuf {
-    let with = |pause| RunSpec { options: options.clone(), ..spec(data, options.epochs, pause) };
+    resumes_exactly_as(tag, &RunSpec { options: options.clone(), ..spec(data, options.epochs, None) })
+}
+
+/// [`resumes_exactly`] for any run: `base` trained twice, once paused after 2 epochs and resumed;
+/// the two agree bit for bit, and so do their partners' (`--joint`).
+fn resumes_exactly_as(tag: &str, base: &RunSpec) -> PathBuf {
+    let with = |pause| RunSpec { pause_after: pause, ..base.clone() };
     let (a, b) = (out_dir(&format!("{tag}-a")), out_dir(&format!("{tag}-b")));
     train(&with(None), &a, false, &ProgressBar::hidden()).unwrap().unwrap();
     assert!(train(&with(Some(2)), &b, false, &ProgressBar::hidden()).unwrap().is_none());
     train(&with(None), &b, true, &ProgressBar::hidden()).unwrap().unwrap();
     let weights = |d: &PathBuf| std::fs::read(d.join("model/weights.safetensors")).unwrap();
-    assert_eq!(metrics(&a), metrics(&b), "{tag}");
-    assert_eq!(weights(&a), weights(&b), "{tag}: identical weights, bit for bit");
+    let mut compared = vec![(a.clone(), b.clone())];
+    compared.extend(base.partner.as_ref().map(|_| (Run(&a).partner(), Run(&b).partner())));
+    for (a, b) in &compared {
+        assert_eq!(metrics(a), metrics(b), "{tag}: {}", a.display());
+        assert_eq!(weights(a), weights(b), "{tag}: identical weights of {}, bit for bit", a.display());
+    }
     std::fs::remove_dir_all(b).unwrap();
     a
 }
@@ -317,4 +329,76 @@ fn time_shift_moves_frames_and_repeats_the_edge() {
         seen.insert(shift);
     }
     assert_eq!(seen.into_iter().collect::<Vec<_>>(), vec![-2, -1, 0, 1, 2]);
+}
+
+/// A second tiny sensor touching the same two classes: 3 × 1 taxels, the ramp on the middle one,
+/// its touches in another order than [`tiny_data`]'s.
+fn tiny_other_sensor() -> (Dataset, Config) {
+    let mut rng = Rng::new(12);
+    let n = 60;
+    let labels: Vec<u32> = (0..n as u32).map(|i| (i / 3) % 2).collect();
+    let mut x = Vec::new();
+    for &label in &labels {
+        for taxel in 0..3 {
+            for t in 0..8 {
+                let ramp = if label == 0 { t as f32 } else { 7.0 - t as f32 };
+                x.push(20.0 + if taxel == 1 { 2.0 * ramp } else { 0.0 } + rng.normal());
+            }
+        }
+    }
+    let data = Dataset { x, sample_shape: vec![3, 1, 8], lengths: vec![8; n], labels, path: PathBuf::from("tiny-other"), ..tiny_data() };
+    (data, Config { height: 3, width: 1, patch_height: 3, patch_width: 1, ..tiny_config() })
+}
+
+fn joint_spec<'a>(data: &'a Dataset, other: &'a (Dataset, Config), epochs: usize, weight: f64) -> RunSpec<'a> {
+    let joint = crate::options::Joint { partner: "tiny-other".into(), weight, after_epochs: 2 };
+    RunSpec {
+        options: TrainOptions { joint: Some(joint), ..options(epochs) },
+        partner: Some(Partner { data: &other.0, config: other.1.clone(), classes: vec!["up".into(), "down".into()] }),
+        ..spec(data, epochs, None)
+    }
+}
+
+/// A joint run trains the other sensor's network beside, into `partner/`, each validated on its
+/// own sensor; both resume bit for bit; the encodings' error changes training only from the
+/// epoch after `after_epochs`, and the partner's provenance names this run's data as its partner.
+#[test]
+fn a_joint_run_trains_both_sensors_and_resumes_exactly() {
+    let (data, other) = (tiny_data(), tiny_other_sensor());
+    let a = resumes_exactly_as("joint", &joint_spec(&data, &other, 12, 1.0));
+    let partner = Run(&a).partner();
+    let result: RunResult = read_json(&Run(&partner).result()).unwrap();
+    assert!(result.test_accuracy >= 0.9, "the other sensor learns its touches: {result:?}");
+    let (_, meta) = crate::checkpoint::load_meta(&partner).unwrap();
+    assert_eq!(meta.provenance.data, "tiny-other");
+    assert_eq!(meta.provenance.options.joint.as_ref().unwrap().partner, "tiny");
+    assert_eq!(meta.config.height, 3);
+    assert_eq!(metrics(&partner).len(), 12);
+    // Without the encodings' error (weight 0) the first two epochs are the same, then not.
+    let apart = out_dir("joint-apart");
+    train(&joint_spec(&data, &other, 3, 0.0), &apart, false, &ProgressBar::hidden()).unwrap().unwrap();
+    let pulled = out_dir("joint-pulled");
+    train(&joint_spec(&data, &other, 3, 1.0), &pulled, false, &ProgressBar::hidden()).unwrap().unwrap();
+    let (m0, m1) = (metrics(&apart), metrics(&pulled));
+    assert_eq!(m0[..2], m1[..2]);
+    assert_ne!(m0[2]["train_loss"], m1[2]["train_loss"]);
+    for d in [a, apart, pulled] {
+        std::fs::remove_dir_all(d).unwrap();
+    }
+}
+
+/// Joint learning refuses what it cannot pair or compare, naming the other data set.
+#[test]
+fn a_joint_run_refuses_encodings_of_other_widths_other_classes_and_mixup() {
+    let (data, other) = (tiny_data(), tiny_other_sensor());
+    let refused = |spec: RunSpec| train(&spec, &out_dir("joint-refused"), false, &ProgressBar::hidden()).unwrap_err().to_string();
+    let wide = (other.0.clone(), Config { dim: 12, ..other.1.clone() });
+    let err = refused(joint_spec(&data, &wide, 1, 1.0));
+    assert!(err.contains("--joint tiny-other") && err.contains("12 values and this one in 8"), "{err}");
+    let base = joint_spec(&data, &other, 1, 1.0);
+    let renamed = Partner { classes: vec!["smooth".into(), "rough".into()], ..base.partner.clone().unwrap() };
+    let err = refused(RunSpec { partner: Some(renamed), ..base.clone() });
+    assert!(err.contains("pairs are made by class"), "{err}");
+    let err = refused(RunSpec { options: TrainOptions { mixup: 0.2, ..base.options.clone() }, ..base });
+    assert!(err.contains("--mixup"), "{err}");
 }

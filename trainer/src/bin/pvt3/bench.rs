@@ -26,7 +26,7 @@ pub enum Bench {
         #[arg(long)]
         dropout: Option<f64>,
         #[command(flatten)]
-        options: TrainOptions,
+        options: Box<TrainOptions>,
     },
     /// Numerical stress of the robot runtime: the exported model's f32 logits against the baked
     /// f64 reference on extreme inputs and folded weights; prints a markdown table (docs/benchmarks.md).

@@ -78,6 +78,17 @@ pub fn run(a: CvArgs) -> Result<()> {
 }
 
 fn print_summary(s: &CvSummary, wall: f64, summary: &std::path::Path) {
+    print_runs(s, wall, summary);
+    if let Some(partner) = &s.partner {
+        println!(
+            "\nthe other sensor's networks, trained beside on {} and each tested on it alone (OUT/seed*/fold*/partner):",
+            partner.data
+        );
+        print_runs(partner, wall, summary);
+    }
+}
+
+fn print_runs(s: &CvSummary, wall: f64, summary: &std::path::Path) {
     for dir in &s.unfinished {
         println!("not finished, not counted: {dir}");
     }

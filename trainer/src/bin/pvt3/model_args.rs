@@ -8,11 +8,12 @@ use anyhow::{bail, Context, Result};
 use pvt3_models::{Architecture, Config};
 use pvt3_trainer::checkpoint;
 use pvt3_trainer::data::{Dataset, HoldOut};
-use pvt3_trainer::options::TrainOptions;
+use pvt3_trainer::joint::Partner;
+use pvt3_trainer::options::{Joint, TrainOptions};
 use pvt3_trainer::train::RunSpec;
 
 /// Which data and which model.
-#[derive(clap::Args)]
+#[derive(Clone, clap::Args)]
 pub struct ModelArgs {
     /// Data set: an .npz file (x, y, optional fold) or a directory of x.npy, y.npy, fold.npy.
     #[arg(long, default_value = "data/icub20.npz")]
@@ -45,6 +46,22 @@ pub struct ModelArgs {
     /// others train and validate. E.g. `--hold-out force=210,250` or `--hold-out speed=10,-10`.
     #[arg(long, value_name = "NAME=LEVEL,…", value_parser = parse_hold_out)]
     pub hold_out: Option<(String, Vec<String>)>,
+    /// Joint learning (Gao et al.): train a second PVT³ beside, on this data set of another
+    /// sensor touching the same classes (same class order), e.g. `--data ../shared/data/icub20
+    /// --joint ../shared/data/biotac20`. Each batch pairs every touch with a touch of its class
+    /// from the other sensor's training split; after --joint-after epochs the mean squared error
+    /// between the two networks' encodings (× --joint-weight) joins their losses. Each network is
+    /// selected and tested on its own sensor; the other's run is OUT/…/partner (reported beside,
+    /// pruned, exported alone).
+    #[arg(long, value_name = "DATA")]
+    pub joint: Option<PathBuf>,
+    /// Joint learning: weight of the encodings' mean squared error (Gao et al.: 1).
+    #[arg(long, default_value_t = 1.0, requires = "joint")]
+    pub joint_weight: f64,
+    /// Joint learning: epochs each network trains on its own loss before the encodings are pulled
+    /// together (Gao et al.: 20).
+    #[arg(long, default_value_t = 20, requires = "joint")]
+    pub joint_after: usize,
     /// Stop after this many epochs (per run), leaving the work to be continued with --resume.
     #[arg(long)]
     pub pause_after: Option<usize>,
@@ -74,11 +91,14 @@ pub fn resolve_config(model: &str) -> Result<Config> {
     Ok(Config::preset(model)?)
 }
 
-/// A loaded data set with the model configuration and class names for it.
+/// A loaded data set with the model configuration and class names for it, and with `--joint`
+/// the other sensor's.
 pub struct Prepared {
     pub data: Dataset,
     pub config: Config,
     pub classes: Vec<String>,
+    pub options: TrainOptions,
+    pub partner: Option<Box<Prepared>>,
 }
 
 impl Prepared {
@@ -87,11 +107,12 @@ impl Prepared {
             data: &self.data,
             config: self.config.clone(),
             val_fold,
-            options: args.options.clone(),
+            options: self.options.clone(),
             classes: self.classes.clone(),
             pause_after: args.pause_after,
             start: None,
             pruning: None,
+            partner: self.partner.as_ref().map(|p| Partner { data: &p.data, config: p.config.clone(), classes: p.classes.clone() }),
         }
     }
 }
@@ -175,7 +196,26 @@ pub fn prepare(args: &ModelArgs) -> Result<Prepared> {
     if !data.folds_from_file && args.hold_out.is_none() {
         eprintln!("note: {} has no fold array; stratified folds were drawn with seed {}", data.path.display(), args.options.seed);
     }
-    Ok(Prepared { data, config: cfg, classes })
+    let mut options = args.options.clone();
+    let partner = match &args.joint {
+        Some(path) => {
+            // The other sensor: its own data and the network that fits it, the same --set and --dropout.
+            let other = ModelArgs {
+                data: path.clone(),
+                preset: None,
+                config: None,
+                class_names: None,
+                hold_out: None,
+                joint: None,
+                ..args.clone()
+            };
+            let partner = prepare(&other).with_context(|| format!("--joint {}", path.display()))?;
+            options.joint = Some(Joint { partner: path.display().to_string(), weight: args.joint_weight, after_epochs: args.joint_after });
+            Some(Box::new(partner))
+        }
+        None => None,
+    };
+    Ok(Prepared { data, config: cfg, classes, options, partner })
 }
 
 fn apply_overrides(cfg: Config, overrides: &[String]) -> Result<Config> {

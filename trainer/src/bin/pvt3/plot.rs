@@ -7,7 +7,7 @@ use anyhow::{bail, Context, Result};
 use pvt3_trainer::checkpoint::read_json;
 use pvt3_trainer::cv::{self, CvSummary};
 use pvt3_trainer::plot::curves;
-use pvt3_trainer::run_dir::{Run, CV_SUMMARY};
+use pvt3_trainer::run_dir::{Run, CV_CURVES, CV_PARTNER_CURVES, CV_SUMMARY};
 
 /// Draw the training curves of a run (DIR/curves.svg), or of every run of a cross-validation
 /// and the figure of all of them (DIR/cv-curves.svg). The confusion matrix is `pvt3 eval`'s.
@@ -47,10 +47,16 @@ pub fn run(a: PlotArgs) -> Result<()> {
     }
     let summary: CvSummary = read_json(&dir.join(CV_SUMMARY))?;
     let dirs = cv_runs(dir)?;
-    for run in &dirs {
+    // A joint cross-validation's other sensor: its runs inside each run, its own figure.
+    let partners: Vec<PathBuf> = dirs.iter().map(|d| Run(d).partner()).filter(|p| Run(p).metrics().exists()).collect();
+    for run in dirs.iter().chain(&partners) {
         curves::write_run(run)?;
     }
-    cv::write_figure(dir, &summary, &dirs)?;
-    println!("drew the curves of {} runs and {}", dirs.len(), dir.join(pvt3_trainer::run_dir::CV_CURVES).display());
+    cv::write_figure(dir, &summary, &dirs, CV_CURVES)?;
+    println!("drew the curves of {} runs and {}", dirs.len(), dir.join(CV_CURVES).display());
+    if let Some(partner) = &summary.partner {
+        cv::write_figure(dir, partner, &partners, CV_PARTNER_CURVES)?;
+        println!("drew the curves of the other sensor's {} runs and {}", partners.len(), dir.join(CV_PARTNER_CURVES).display());
+    }
     Ok(())
 }
