@@ -16,6 +16,11 @@
 #             scores (after rpp): 60 % of channels by default (LEVELS picks others), 20 epochs each
 #   rp        PVT³ with per-step random pruning of 5 % of every weight matrix (--random-prune 0.05)
 #   vit, raec the paper's baselines
+#   joint     joint learning as Gao et al. (--joint): the set's PVT³ trained beside the other
+#             set's, their encodings pulled together after 20 epochs; each network then pruned
+#             to 60 % of channels alone (20 epochs of fine-tuning). joint-icub reports both sensors
+#             (runs/cv-joint-icub/cv.json, its partner the BioTac networks); not in the default list
+#   joint-shared  the same with one temporal transformer for both networks (--joint-share-temporal)
 #   raec-published  RAEC with Gao et al.'s decoder (zeros in, its state mapped from the code:
 #             decoder_from_state) and training: Adam at a constant 5e-4 (no warm-up, decay,
 #             weight decay, label smoothing, dropout, clipping or augmentation) for EPOCHS (2000,
@@ -107,6 +112,9 @@ for row in "${rows[@]}"; do
             prunings "$set" rpp "runs/cv-rpp-$set" "runs/cv-unpruned-$set" channels60
             continue ;;
         rp-*) args=(--random-prune 0.05) ;;
+        joint-shared-icub) args=(--joint data/biotac20.npz --joint-share-temporal --prune-channels 60 --fine-tune-epochs 20) ;;
+        joint-icub) args=(--joint data/biotac20.npz --prune-channels 60 --fine-tune-epochs 20) ;;
+        joint-biotac) args=(--joint data/icub20.npz --prune-channels 60 --fine-tune-epochs 20) ;;
         vit-*) args=(--model vit) ;;
         # RAEC: Gao et al.'s Adam (AdamW without weight decay), lr 5e-4, batch 32; -published with
         # the rest of their training too (before raec-*, which it would match).

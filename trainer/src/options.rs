@@ -122,6 +122,10 @@ pub struct Joint {
     pub weight: f64,
     /// Epochs trained before the encodings are pulled together (each network on its own loss).
     pub after_epochs: usize,
+    /// The two networks share one temporal transformer (each keeps its embedding, spatial
+    /// transformer and head).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub share_temporal: bool,
 }
 
 fn one() -> f64 {

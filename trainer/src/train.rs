@@ -115,9 +115,44 @@ impl Learner {
         if let Some(start) = start {
             pvt3_models::weights::set_vars(&varmap, start, Path::new("(start weights)"))?;
         }
+        Self::with(model, varmap.clone(), &varmap, opts)
+    }
+
+    /// A seeded model whose variables under `prefix` are `shared`'s own (the same values, one
+    /// storage): a joint run's other network sharing the run's temporal transformer
+    /// (`--joint-share-temporal`). Its optimiser updates only its own variables; the shared ones
+    /// are updated by `shared`'s learner, with the gradients of both networks' losses.
+    pub fn sharing(config: &Config, opts: &TrainOptions, shared: &VarMap, prefix: &str) -> Result<Self> {
+        let (_, seeded) = Classifier::init(config, opts.seed)?;
+        let (own, varmap) = (VarMap::new(), VarMap::new());
+        {
+            let shared = shared.data().lock().expect("varmap lock poisoned");
+            let mut all = varmap.data().lock().expect("varmap lock poisoned");
+            for (name, var) in seeded.data().lock().expect("varmap lock poisoned").iter() {
+                if !name.starts_with(prefix) {
+                    own.data().lock().expect("varmap lock poisoned").insert(name.clone(), var.clone());
+                    all.insert(name.clone(), var.clone());
+                    continue;
+                }
+                match shared.get(name) {
+                    Some(other) if other.shape() == var.shape() => all.insert(name.clone(), other.clone()),
+                    _ => {
+                        return Err(Error::Usage(format!(
+                            "the two networks' `{name}` differ in shape: sharing their {prefix}* variables needs the same dim, depth, heads, dim_head and mlp_dim"
+                        )))
+                    }
+                };
+            }
+        }
+        let model = Classifier::new(config, candle_nn::VarBuilder::from_varmap(&varmap, DType::F32, &Device::Cpu))?;
+        Self::with(model, varmap, &own, opts)
+    }
+
+    /// `model` over `varmap`, trained by an optimiser of the variables of `own`.
+    fn with(model: Classifier, varmap: VarMap, own: &VarMap, opts: &TrainOptions) -> Result<Self> {
         let masks = vars_where(&varmap, is_mask).into_iter().map(|v| v.as_tensor().clone()).collect();
-        let optimizer = AdamW::new(&varmap, opts.weight_decay, |n, v| if is_mask(n, v) { opts.mask_lr } else { 1.0 })?;
-        let matrices = vars_where(&varmap, is_weight_matrix);
+        let optimizer = AdamW::new(own, opts.weight_decay, |n, v| if is_mask(n, v) { opts.mask_lr } else { 1.0 })?;
+        let matrices = vars_where(own, is_weight_matrix);
         Ok(Self { model, varmap, optimizer, masks, held: Vec::new(), matrices })
     }
 
@@ -314,13 +349,14 @@ impl Net {
 }
 
 impl<'a> Sensor<'a> {
+    /// With `share`, the network's temporal transformer is that learner's ([`Learner::sharing`]).
     fn new(
         data: &'a Dataset,
         config: Config,
         classes: Vec<String>,
-        val_fold: usize,
-        opts: &TrainOptions,
+        (val_fold, opts): (usize, &TrainOptions),
         start: Option<&Tensors>,
+        share: Option<&VarMap>,
     ) -> Result<Self> {
         data.check_fits(&config)?;
         let split: Split = data.split(val_fold)?;
@@ -329,18 +365,11 @@ impl<'a> Sensor<'a> {
         let crops = opts.aug_stretch > 0.0 || split.train.iter().any(|&i| data.lengths[i] > config.frames);
         let val_set = Samples::new(data, &split.val, &normalization);
         let test_set = Samples::new(data, &split.test, &normalization);
-        Ok(Self {
-            data,
-            net: Net { learner: Learner::new(&config, opts, start)?, average: None },
-            config,
-            classes,
-            normalization,
-            split,
-            train_set,
-            crops,
-            val_set,
-            test_set,
-        })
+        let learner = match share {
+            Some(shared) => Learner::sharing(&config, opts, shared, &format!("{}.", pvt3_spec::names::TEMPORAL))?,
+            None => Learner::new(&config, opts, start)?,
+        };
+        Ok(Self { data, net: Net { learner, average: None }, config, classes, normalization, split, train_set, crops, val_set, test_set })
     }
 
     /// This epoch's training windows, when they are drawn anew each epoch (see `crops`).
@@ -482,12 +511,13 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
         state = Some((dir.clone(), read_json::<RunState>(&Checkpoint(dir).state())?));
     }
     let opts = &spec_options;
-    let mut main = Sensor::new(spec.data, config, spec.classes.clone(), spec.val_fold, opts, spec.start.as_ref())?;
+    let mut main = Sensor::new(spec.data, config, spec.classes.clone(), (spec.val_fold, opts), spec.start.as_ref(), None)?;
     let partner_opts = spec.partner.as_ref().map(|_| Partner::options(opts, spec.data));
     let mut partner = match (&spec.partner, &partner_opts) {
         (Some(p), Some(po)) => {
             p.check(&main.config, &main.classes, opts)?;
-            Some(Sensor::new(p.data, p.config.clone(), p.classes.clone(), spec.val_fold, po, None)?)
+            let share = opts.joint.as_ref().is_some_and(|j| j.share_temporal).then_some(&main.net.learner.varmap);
+            Some(Sensor::new(p.data, p.config.clone(), p.classes.clone(), (spec.val_fold, po), None, share)?)
         }
         _ => None,
     };

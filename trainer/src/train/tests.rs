@@ -351,7 +351,7 @@ fn tiny_other_sensor() -> (Dataset, Config) {
 }
 
 fn joint_spec<'a>(data: &'a Dataset, other: &'a (Dataset, Config), epochs: usize, weight: f64) -> RunSpec<'a> {
-    let joint = crate::options::Joint { partner: "tiny-other".into(), weight, after_epochs: 2 };
+    let joint = crate::options::Joint { partner: "tiny-other".into(), weight, after_epochs: 2, share_temporal: false };
     RunSpec {
         options: TrainOptions { joint: Some(joint), ..options(epochs) },
         partner: Some(Partner { data: &other.0, config: other.1.clone(), classes: vec!["up".into(), "down".into()] }),
@@ -401,4 +401,39 @@ fn a_joint_run_refuses_encodings_of_other_widths_other_classes_and_mixup() {
     assert!(err.contains("pairs are made by class"), "{err}");
     let err = refused(RunSpec { options: TrainOptions { mixup: 0.2, ..base.options.clone() }, ..base });
     assert!(err.contains("--mixup"), "{err}");
+}
+
+/// With a shared temporal transformer the two networks hold one set of its weights, updated once
+/// a step with both losses' gradients (the partner's optimiser has none of them), and still
+/// resume bit for bit.
+#[test]
+fn a_joint_run_sharing_the_temporal_transformer_holds_one_copy_and_resumes_exactly() {
+    let (data, other) = (tiny_data(), tiny_other_sensor());
+    let mut spec = joint_spec(&data, &other, 4, 1.0);
+    spec.options.joint.as_mut().unwrap().share_temporal = true;
+    let a = resumes_exactly_as("joint-shared", &spec);
+    let load = |p: PathBuf| candle_core::safetensors::load(p, &Device::Cpu).unwrap();
+    let last = Run(&a).last();
+    let (own, partner) = (load(Checkpoint(&last).weights()), load(Checkpoint(&Checkpoint(&last).partner()).weights()));
+    let temporal: Vec<&String> = own.keys().filter(|k| k.starts_with("temporal.")).collect();
+    assert!(!temporal.is_empty());
+    for name in temporal {
+        assert_eq!(flat_of(&own, name), flat_of(&partner, name), "{name}: one copy");
+    }
+    assert_ne!(flat_of(&own, "head.weight"), flat_of(&partner, "head.weight"), "each its own head");
+    let moments = load(Checkpoint(&Checkpoint(&last).partner()).optimizer());
+    assert!(moments.keys().all(|k| !k.contains(".temporal.")) && !moments.is_empty(), "the partner's optimiser leaves them alone");
+    // Without sharing, the two transformers differ after training.
+    let apart = out_dir("joint-unshared");
+    train(&joint_spec(&data, &other, 4, 1.0), &apart, false, &ProgressBar::hidden()).unwrap().unwrap();
+    let last = Run(&apart).last();
+    let (own, partner) = (load(Checkpoint(&last).weights()), load(Checkpoint(&Checkpoint(&last).partner()).weights()));
+    assert_ne!(flat_of(&own, "temporal.layers.0.ffn.fc1.weight"), flat_of(&partner, "temporal.layers.0.ffn.fc1.weight"));
+    for d in [a, apart] {
+        std::fs::remove_dir_all(d).unwrap();
+    }
+}
+
+fn flat_of(tensors: &std::collections::HashMap<String, Tensor>, name: &str) -> Vec<f32> {
+    tensors.get(name).unwrap_or_else(|| panic!("no {name} among {:?}", tensors.keys())).flatten_all().unwrap().to_vec1::<f32>().unwrap()
 }

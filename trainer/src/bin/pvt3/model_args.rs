@@ -62,6 +62,11 @@ pub struct ModelArgs {
     /// together (Gao et al.: 20).
     #[arg(long, default_value_t = 20, requires = "joint")]
     pub joint_after: usize,
+    /// Joint learning: the two networks share one temporal transformer, trained on both sensors'
+    /// touches (each keeps its own embedding, spatial transformer and head; each exported file
+    /// carries a copy). Needs the same dim, time_depth, heads, dim_head and mlp_dim.
+    #[arg(long, requires = "joint")]
+    pub joint_share_temporal: bool,
     /// Stop after this many epochs (per run), leaving the work to be continued with --resume.
     #[arg(long)]
     pub pause_after: Option<usize>,
@@ -210,7 +215,12 @@ pub fn prepare(args: &ModelArgs) -> Result<Prepared> {
                 ..args.clone()
             };
             let partner = prepare(&other).with_context(|| format!("--joint {}", path.display()))?;
-            options.joint = Some(Joint { partner: path.display().to_string(), weight: args.joint_weight, after_epochs: args.joint_after });
+            options.joint = Some(Joint {
+                partner: path.display().to_string(),
+                weight: args.joint_weight,
+                after_epochs: args.joint_after,
+                share_temporal: args.joint_share_temporal,
+            });
             Some(Box::new(partner))
         }
         None => None,
