@@ -21,7 +21,8 @@ inputs() {
   {
     rustc -V
     git ls-files -z runtime/src runtime/Cargo.toml format/src format/Cargo.toml | xargs -0 sha256sum
-    cargo tree -q --locked -p pvt3-runtime --no-default-features -e normal,features --prefix none | sort -u
+    # The workspace's own crates print their absolute path, which differs between clones.
+    cargo tree -q --locked -p pvt3-runtime --no-default-features -e normal,features --prefix none | sed "s# ($PWD/# (#" | sort -u
     awk '/^\[/ { p = /^\[profile/ } p' Cargo.toml
   } | sha256sum | cut -c1-64
 }
