@@ -18,6 +18,10 @@ pub struct EpochMetrics {
     /// Measured only at the epochs that improved on validation (the candidates).
     pub test_accuracy: Option<f64>,
     pub seconds: f64,
+    /// A joint run's (`--joint`): the mean squared difference between the two networks'
+    /// encodings of the paired training touches, whether or not it was in the loss yet.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub encodings_apart: Option<f64>,
 }
 
 /// Every epoch of the log at `path`, in order; a malformed line is an error naming it.

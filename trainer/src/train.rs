@@ -242,7 +242,7 @@ struct Pass {
 /// One step of two sensors' networks trained together (`--joint`) on batches of the same labels:
 /// each network's own loss, plus `weight` × the mean squared error between their encodings,
 /// backward once, and each network's own update. Returns both passes' losses and logits, and the
-/// alignment loss.
+/// encodings' mean squared error (measured at any weight).
 #[allow(clippy::too_many_arguments)]
 fn joint_step(
     a: &mut Learner,
@@ -252,18 +252,20 @@ fn joint_step(
     opts: &TrainOptions,
     lr: f64,
     rng: &mut Rng,
-) -> Result<[(f64, Tensor); 2]> {
+) -> Result<([(f64, Tensor); 2], f64)> {
     let pa = a.forward(xa, ya, opts, true, rng)?;
     let pb = b.forward(xb, yb, opts, true, rng)?;
+    let (ea, eb) = (pa.pooled.as_ref().expect("asked for"), pb.pooled.as_ref().expect("asked for"));
+    let apart = (ea - eb)?.sqr()?.mean_all()?;
     let mut total = (&pa.loss + &pb.loss)?;
     if weight > 0.0 {
-        let (ea, eb) = (pa.pooled.as_ref().expect("asked for"), pb.pooled.as_ref().expect("asked for"));
-        total = (total + ((ea - eb)?.sqr()?.mean_all()? * weight)?)?;
+        total = (total + (&apart * weight)?)?;
     }
     let grads = total.backward()?;
     a.update(&grads, &pa.saved, opts, lr)?;
     b.update(&grads, &pb.saved, opts, lr)?;
-    Ok([(pa.loss.to_scalar::<f32>()? as f64, pa.logits), (pb.loss.to_scalar::<f32>()? as f64, pb.logits)])
+    let losses = [(pa.loss.to_scalar::<f32>()? as f64, pa.logits), (pb.loss.to_scalar::<f32>()? as f64, pb.logits)];
+    Ok((losses, apart.to_scalar::<f32>()? as f64))
 }
 
 /// A selection mask (channel or frame).
@@ -458,11 +460,13 @@ struct Validated {
     test_accuracy: Option<f64>,
 }
 
-/// Losses and correct answers of one sensor's batches over an epoch.
+/// Losses and correct answers of one sensor's batches over an epoch, and in a joint run the
+/// encodings' distance to the other sensor's.
 #[derive(Default)]
 struct Tally {
     loss: f64,
     correct: usize,
+    apart: Option<f64>,
 }
 
 impl Tally {
@@ -610,10 +614,13 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
                     let rng = &mut run.rng;
                     let (xb, yb) = set.batch(&pairs, |s| augment(s, norm, opts, rng))?;
                     let weight = if epoch > joint.after_epochs { joint.weight } else { 0.0 };
-                    let [(loss, logits), (partner_loss, partner_logits)] =
+                    let ([(loss, logits), (partner_loss, partner_logits)], apart) =
                         joint_step(&mut net.learner, &mut other_net.learner, [(&x, &y), (&xb, &yb)], weight, opts, lr, &mut run.rng)?;
                     tally.add(loss, &logits, &y, rows.len())?;
                     partner_tally.add(partner_loss, &partner_logits, &yb, rows.len())?;
+                    for t in [&mut tally, &mut partner_tally] {
+                        *t.apart.get_or_insert(0.0) += apart * rows.len() as f64;
+                    }
                     other_net.update_average(run.step + 1)?;
                 }
                 _ => {
@@ -645,6 +652,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
             val_accuracy: v.accuracy,
             test_accuracy: v.test_accuracy,
             seconds,
+            encodings_apart: t.apart.map(|a| a / n),
         };
         checkpoint::replace_dir(&last, |dir| {
             main.save_last(dir, &main.meta(val_fold, opts, pruning, epoch, val.accuracy, None))?;

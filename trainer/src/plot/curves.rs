@@ -1,5 +1,5 @@
-//! Training curves: one run's losses, accuracies and learning rate per epoch with the selected
-//! epoch marked, and a cross-validation's runs together.
+//! Training curves: one run's losses (and a joint run's encodings' distance), accuracies and
+//! learning rate per epoch with the selected epoch marked, and a cross-validation's runs together.
 
 use std::path::Path;
 
@@ -16,16 +16,16 @@ fn points(m: &[EpochMetrics], value: impl Fn(&EpochMetrics) -> Option<f64>) -> V
 /// validation selected marked.
 pub fn run_figure(title: &str, m: &[EpochMetrics], selected: Option<usize>) -> String {
     let marker = selected.map(|e| (e as f64, format!("selected: epoch {e}")));
-    let loss = Panel {
-        title: "loss".into(),
-        x_label: "epoch".into(),
-        series: vec![
-            Series::line("training", COLORS[0], points(m, |e| Some(e.train_loss))),
-            Series::line("validation", COLORS[1], points(m, |e| Some(e.val_loss))),
-        ],
-        y_range: None,
-        marker: marker.clone(),
-    };
+    let mut losses = vec![
+        Series::line("training", COLORS[0], points(m, |e| Some(e.train_loss))),
+        Series::line("validation", COLORS[1], points(m, |e| Some(e.val_loss))),
+    ];
+    // A joint run's: how far its encodings are from the other sensor's.
+    let apart = points(m, |e| e.encodings_apart);
+    if !apart.is_empty() {
+        losses.push(Series::line("encodings apart (joint)", COLORS[3], apart));
+    }
+    let loss = Panel { title: "loss".into(), x_label: "epoch".into(), series: losses, y_range: None, marker: marker.clone() };
     let accuracy = Panel {
         title: "accuracy".into(),
         x_label: "epoch".into(),

@@ -78,6 +78,7 @@ fn epochs(n: usize) -> Vec<EpochMetrics> {
                 val_accuracy: 0.25 + 0.6 * t,
                 test_accuracy: (e % 3 == 0).then_some(0.2 + 0.6 * t),
                 seconds: 1.0,
+                encodings_apart: None,
             }
         })
         .collect()

@@ -374,6 +374,10 @@ fn a_joint_run_trains_both_sensors_and_resumes_exactly() {
     assert_eq!(meta.provenance.options.joint.as_ref().unwrap().partner, "tiny");
     assert_eq!(meta.config.height, 3);
     assert_eq!(metrics(&partner).len(), 12);
+    let apart = |d: &PathBuf| metrics(d).iter().map(|m| m["encodings_apart"].as_f64().expect("measured every epoch")).collect::<Vec<_>>();
+    assert_eq!(apart(&a), apart(&partner), "one distance, in both logs");
+    assert!(apart(&a)[11] < apart(&a)[1], "pulled together: {:?}", apart(&a));
+    assert!(metrics(&a).len() == 12 && learnt_alone_has_no_distance(&data));
     // Without the encodings' error (weight 0) the first two epochs are the same, then not.
     let apart = out_dir("joint-apart");
     train(&joint_spec(&data, &other, 3, 0.0), &apart, false, &ProgressBar::hidden()).unwrap().unwrap();
@@ -436,4 +440,13 @@ fn a_joint_run_sharing_the_temporal_transformer_holds_one_copy_and_resumes_exact
 
 fn flat_of(tensors: &std::collections::HashMap<String, Tensor>, name: &str) -> Vec<f32> {
     tensors.get(name).unwrap_or_else(|| panic!("no {name} among {:?}", tensors.keys())).flatten_all().unwrap().to_vec1::<f32>().unwrap()
+}
+
+/// A run of one sensor logs no encodings' distance.
+fn learnt_alone_has_no_distance(data: &Dataset) -> bool {
+    let dir = out_dir("alone-no-distance");
+    train(&spec(data, 1, None), &dir, false, &ProgressBar::hidden()).unwrap().unwrap();
+    let none = metrics(&dir).iter().all(|m| m.get("encodings_apart").is_none());
+    std::fs::remove_dir_all(dir).unwrap();
+    none
 }
