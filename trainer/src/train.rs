@@ -22,9 +22,9 @@ use pvt3_spec::weights::Tensors;
 use serde::{Deserialize, Serialize};
 
 use crate::average::WeightAverage;
-use crate::checkpoint::{self, read_json, write_json, write_json_atomically, Meta, Provenance};
-use crate::data::{Dataset, Split};
-use crate::evaluate::{evaluate, log_uniform_factor, Samples};
+use crate::checkpoint::{self, read_json, write_json, write_json_atomically};
+use crate::data::Dataset;
+use crate::evaluate::{log_uniform_factor, Samples};
 use crate::joint::Partner;
 use crate::metrics::EpochMetrics;
 use crate::normalization::Normalization;
@@ -33,6 +33,7 @@ use crate::options::TrainOptions;
 use crate::run_dir::{Checkpoint, Run};
 use crate::schedule::Schedule;
 use crate::{Error, Result};
+use sensor::{rows_by_class, Sensor, Tally, Validated};
 
 /// The outcome of a finished run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -317,176 +318,6 @@ fn augment(sample: &mut [f32], norm: &Normalization, opts: &TrainOptions, rng: &
     }
 }
 
-/// One sensor's network in a run and what its epochs read: its split as windows, normalised,
-/// its learner and weight average. A joint run (`--joint`) trains two side by side.
-struct Sensor<'a> {
-    data: &'a Dataset,
-    config: Config,
-    classes: Vec<String>,
-    normalization: Normalization,
-    split: Split,
-    /// Every training touch read as its evaluation windows: what fits the spectral head's
-    /// standardisation, and each epoch's batches when every touch is one window long.
-    train_set: Samples,
-    /// A touch longer than a window (or stretched) gives each epoch one window drawn at random.
-    crops: bool,
-    val_set: Samples,
-    test_set: Samples,
-    net: Net,
-}
-
-/// What a sensor's training steps change: its learner and weight average.
-struct Net {
-    learner: Learner,
-    average: Option<WeightAverage>,
-}
-
-impl Net {
-    fn update_average(&mut self, step: usize) -> Result<()> {
-        match &mut self.average {
-            Some(average) => average.update(step),
-            None => Ok(()),
-        }
-    }
-}
-
-impl<'a> Sensor<'a> {
-    /// With `share`, the network's temporal transformer is that learner's ([`Learner::sharing`]).
-    fn new(
-        data: &'a Dataset,
-        config: Config,
-        classes: Vec<String>,
-        (val_fold, opts): (usize, &TrainOptions),
-        start: Option<&Tensors>,
-        share: Option<&VarMap>,
-    ) -> Result<Self> {
-        data.check_fits(&config)?;
-        let split: Split = data.split(val_fold)?;
-        let normalization = crate::normalization::fit(data, &split.train, config.frames);
-        let train_set = Samples::new(data, &split.train, &normalization);
-        let crops = opts.aug_stretch > 0.0 || split.train.iter().any(|&i| data.lengths[i] > config.frames);
-        let val_set = Samples::new(data, &split.val, &normalization);
-        let test_set = Samples::new(data, &split.test, &normalization);
-        let learner = match share {
-            Some(shared) => Learner::sharing(&config, opts, shared, &format!("{}.", pvt3_spec::names::TEMPORAL))?,
-            None => Learner::new(&config, opts, start)?,
-        };
-        Ok(Self { data, net: Net { learner, average: None }, config, classes, normalization, split, train_set, crops, val_set, test_set })
-    }
-
-    /// This epoch's training windows, when they are drawn anew each epoch (see `crops`).
-    fn epoch_windows(&self, opts: &TrainOptions, rng: &mut Rng) -> Option<Samples> {
-        self.crops.then(|| Samples::cropped(self.data, &self.split.train, &self.normalization, opts.aug_stretch, rng))
-    }
-
-    /// The weights, optimiser state and weight average of the checkpoint `dir` (a `last/`).
-    fn restore(&mut self, dir: &Path, step: usize) -> Result<()> {
-        pvt3_models::weights::load_weights(&self.net.learner.varmap, &Checkpoint(dir).weights())?;
-        self.net.learner.optimizer.load(&Checkpoint(dir).optimizer(), step)?;
-        if let Some(average) = &mut self.net.average {
-            average.load(&Checkpoint(dir).average())?;
-        }
-        Ok(())
-    }
-
-    /// Writes the resume state of this sensor's network into `dir` (a `last/` being filled).
-    fn save_last(&self, dir: &Path, meta: &Meta) -> Result<()> {
-        checkpoint::write_files(dir, &self.net.learner.varmap, meta)?;
-        let files = Checkpoint(dir);
-        self.net.learner.optimizer.save(&files.optimizer())?;
-        if let Some(average) = &self.net.average {
-            average.save(&files.average())?;
-        }
-        Ok(())
-    }
-
-    fn meta(&self, val_fold: usize, opts: &TrainOptions, pruning: &Option<PruneSpec>, epoch: usize, val: f64, test: Option<f64>) -> Meta {
-        Meta {
-            config: self.config.clone(),
-            normalization: self.normalization.clone(),
-            classes: self.classes.clone(),
-            provenance: Provenance {
-                pvt3_version: env!("CARGO_PKG_VERSION").to_string(),
-                data: self.data.path.display().to_string(),
-                val_fold,
-                seed: opts.seed,
-                epoch,
-                val_accuracy: val,
-                test_accuracy: test,
-                options: opts.clone(),
-                pruning: pruning.clone(),
-                held_out: self.data.held_out.clone(),
-                reading: self.data.reading,
-                stopping: None,
-            },
-        }
-    }
-
-    /// The end of an epoch: the network (its weight average, when averaging) evaluated on
-    /// validation; when it improved on `best`, on the test touches too and checkpointed into
-    /// `model`.
-    fn validate(
-        &mut self,
-        epoch: usize,
-        best: &mut Option<Best>,
-        model: &Path,
-        run: (usize, &TrainOptions, &Option<PruneSpec>),
-    ) -> Result<Validated> {
-        if let Some(average) = &mut self.net.average {
-            average.swap()?;
-        }
-        let val = evaluate(&self.net.learner.model, &self.val_set)?;
-        let improved =
-            best.as_ref().is_none_or(|b| val.accuracy > b.val_accuracy || (val.accuracy == b.val_accuracy && val.loss < b.val_loss));
-        let mut test_accuracy = None;
-        if improved {
-            let test = if self.test_set.is_empty() { None } else { Some(evaluate(&self.net.learner.model, &self.test_set)?.accuracy) };
-            test_accuracy = test;
-            let (val_fold, opts, pruning) = run;
-            checkpoint::save(model, &self.net.learner.varmap, &self.meta(val_fold, opts, pruning, epoch, val.accuracy, test))?;
-            *best = Some(Best { epoch, val_accuracy: val.accuracy, val_loss: val.loss, test_accuracy: test.unwrap_or(f64::NAN) });
-        }
-        if let Some(average) = &mut self.net.average {
-            average.swap()?;
-        }
-        Ok(Validated { loss: val.loss, accuracy: val.accuracy, test_accuracy })
-    }
-}
-
-/// A sensor's validation at the end of an epoch.
-struct Validated {
-    loss: f64,
-    accuracy: f64,
-    test_accuracy: Option<f64>,
-}
-
-/// Losses and correct answers of one sensor's batches over an epoch, and in a joint run the
-/// encodings' distance to the other sensor's.
-#[derive(Default)]
-struct Tally {
-    loss: f64,
-    correct: usize,
-    apart: Option<f64>,
-}
-
-impl Tally {
-    fn add(&mut self, loss: f64, logits: &Tensor, y: &Tensor, rows: usize) -> Result<()> {
-        self.loss += loss * rows as f64;
-        let predicted = logits.argmax(D::Minus1)?.to_vec1::<u32>()?;
-        self.correct += predicted.iter().zip(y.to_vec1::<u32>()?).filter(|(p, l)| **p == *l).count();
-        Ok(())
-    }
-}
-
-/// Each class's rows in `set`: where a joint run draws the partner of a touch of that class.
-fn rows_by_class(set: &Samples, classes: usize) -> Vec<Vec<usize>> {
-    let mut rows = vec![Vec::new(); classes];
-    for (r, &label) in set.labels.iter().enumerate() {
-        rows[label as usize].push(r);
-    }
-    rows
-}
-
 /// Trains one split into `out`; with `resume`, continues the run found there. `None` means the
 /// run paused (see [`RunSpec::pause_after`]) and can be resumed. With a partner (`--joint`), its
 /// network trains beside, into the run directory `out/partner/` (its resume state inside
@@ -722,6 +553,8 @@ fn truncate_metrics(path: &Path, epochs: usize) -> Result<()> {
     let kept: String = text.lines().take(epochs).map(|l| format!("{l}\n")).collect();
     std::fs::write(path, kept).map_err(Error::io(path))
 }
+
+mod sensor;
 
 #[cfg(test)]
 pub(crate) mod tests;

@@ -1,0 +1,198 @@
+//! One sensor's network in a run (a joint run trains two): what its epochs read, its learner,
+//! its validation and checkpoints, its resume state.
+
+use std::path::Path;
+
+use candle_core::{Tensor, D};
+use candle_nn::VarMap;
+use pvt3_models::{Config, Rng};
+use pvt3_spec::prune::PruneSpec;
+use pvt3_spec::weights::Tensors;
+
+use super::{Best, Learner};
+use crate::average::WeightAverage;
+use crate::checkpoint::{self, Meta, Provenance};
+use crate::data::{Dataset, Split};
+use crate::evaluate::{evaluate, Samples};
+use crate::normalization::Normalization;
+use crate::options::TrainOptions;
+use crate::run_dir::Checkpoint;
+use crate::Result;
+
+/// One sensor's network in a run and what its epochs read: its split as windows, normalised,
+/// its learner and weight average. A joint run (`--joint`) trains two side by side.
+pub(super) struct Sensor<'a> {
+    pub(super) data: &'a Dataset,
+    pub(super) config: Config,
+    pub(super) classes: Vec<String>,
+    pub(super) normalization: Normalization,
+    pub(super) split: Split,
+    /// Every training touch read as its evaluation windows: what fits the spectral head's
+    /// standardisation, and each epoch's batches when every touch is one window long.
+    pub(super) train_set: Samples,
+    /// A touch longer than a window (or stretched) gives each epoch one window drawn at random.
+    pub(super) crops: bool,
+    pub(super) val_set: Samples,
+    pub(super) test_set: Samples,
+    pub(super) net: Net,
+}
+
+/// What a sensor's training steps change: its learner and weight average.
+pub(super) struct Net {
+    pub(super) learner: Learner,
+    pub(super) average: Option<WeightAverage>,
+}
+
+impl Net {
+    pub(super) fn update_average(&mut self, step: usize) -> Result<()> {
+        match &mut self.average {
+            Some(average) => average.update(step),
+            None => Ok(()),
+        }
+    }
+}
+
+impl<'a> Sensor<'a> {
+    /// With `share`, the network's temporal transformer is that learner's ([`Learner::sharing`]).
+    pub(super) fn new(
+        data: &'a Dataset,
+        config: Config,
+        classes: Vec<String>,
+        (val_fold, opts): (usize, &TrainOptions),
+        start: Option<&Tensors>,
+        share: Option<&VarMap>,
+    ) -> Result<Self> {
+        data.check_fits(&config)?;
+        let split: Split = data.split(val_fold)?;
+        let normalization = crate::normalization::fit(data, &split.train, config.frames);
+        let train_set = Samples::new(data, &split.train, &normalization);
+        let crops = opts.aug_stretch > 0.0 || split.train.iter().any(|&i| data.lengths[i] > config.frames);
+        let val_set = Samples::new(data, &split.val, &normalization);
+        let test_set = Samples::new(data, &split.test, &normalization);
+        let learner = match share {
+            Some(shared) => Learner::sharing(&config, opts, shared, &format!("{}.", pvt3_spec::names::TEMPORAL))?,
+            None => Learner::new(&config, opts, start)?,
+        };
+        Ok(Self { data, net: Net { learner, average: None }, config, classes, normalization, split, train_set, crops, val_set, test_set })
+    }
+
+    /// This epoch's training windows, when they are drawn anew each epoch (see `crops`).
+    pub(super) fn epoch_windows(&self, opts: &TrainOptions, rng: &mut Rng) -> Option<Samples> {
+        self.crops.then(|| Samples::cropped(self.data, &self.split.train, &self.normalization, opts.aug_stretch, rng))
+    }
+
+    /// The weights, optimiser state and weight average of the checkpoint `dir` (a `last/`).
+    pub(super) fn restore(&mut self, dir: &Path, step: usize) -> Result<()> {
+        pvt3_models::weights::load_weights(&self.net.learner.varmap, &Checkpoint(dir).weights())?;
+        self.net.learner.optimizer.load(&Checkpoint(dir).optimizer(), step)?;
+        if let Some(average) = &mut self.net.average {
+            average.load(&Checkpoint(dir).average())?;
+        }
+        Ok(())
+    }
+
+    /// Writes the resume state of this sensor's network into `dir` (a `last/` being filled).
+    pub(super) fn save_last(&self, dir: &Path, meta: &Meta) -> Result<()> {
+        checkpoint::write_files(dir, &self.net.learner.varmap, meta)?;
+        let files = Checkpoint(dir);
+        self.net.learner.optimizer.save(&files.optimizer())?;
+        if let Some(average) = &self.net.average {
+            average.save(&files.average())?;
+        }
+        Ok(())
+    }
+
+    pub(super) fn meta(
+        &self,
+        val_fold: usize,
+        opts: &TrainOptions,
+        pruning: &Option<PruneSpec>,
+        epoch: usize,
+        val: f64,
+        test: Option<f64>,
+    ) -> Meta {
+        Meta {
+            config: self.config.clone(),
+            normalization: self.normalization.clone(),
+            classes: self.classes.clone(),
+            provenance: Provenance {
+                pvt3_version: env!("CARGO_PKG_VERSION").to_string(),
+                data: self.data.path.display().to_string(),
+                val_fold,
+                seed: opts.seed,
+                epoch,
+                val_accuracy: val,
+                test_accuracy: test,
+                options: opts.clone(),
+                pruning: pruning.clone(),
+                held_out: self.data.held_out.clone(),
+                reading: self.data.reading,
+                stopping: None,
+            },
+        }
+    }
+
+    /// The end of an epoch: the network (its weight average, when averaging) evaluated on
+    /// validation; when it improved on `best`, on the test touches too and checkpointed into
+    /// `model`.
+    pub(super) fn validate(
+        &mut self,
+        epoch: usize,
+        best: &mut Option<Best>,
+        model: &Path,
+        run: (usize, &TrainOptions, &Option<PruneSpec>),
+    ) -> Result<Validated> {
+        if let Some(average) = &mut self.net.average {
+            average.swap()?;
+        }
+        let val = evaluate(&self.net.learner.model, &self.val_set)?;
+        let improved =
+            best.as_ref().is_none_or(|b| val.accuracy > b.val_accuracy || (val.accuracy == b.val_accuracy && val.loss < b.val_loss));
+        let mut test_accuracy = None;
+        if improved {
+            let test = if self.test_set.is_empty() { None } else { Some(evaluate(&self.net.learner.model, &self.test_set)?.accuracy) };
+            test_accuracy = test;
+            let (val_fold, opts, pruning) = run;
+            checkpoint::save(model, &self.net.learner.varmap, &self.meta(val_fold, opts, pruning, epoch, val.accuracy, test))?;
+            *best = Some(Best { epoch, val_accuracy: val.accuracy, val_loss: val.loss, test_accuracy: test.unwrap_or(f64::NAN) });
+        }
+        if let Some(average) = &mut self.net.average {
+            average.swap()?;
+        }
+        Ok(Validated { loss: val.loss, accuracy: val.accuracy, test_accuracy })
+    }
+}
+
+/// A sensor's validation at the end of an epoch.
+pub(super) struct Validated {
+    pub(super) loss: f64,
+    pub(super) accuracy: f64,
+    pub(super) test_accuracy: Option<f64>,
+}
+
+/// Losses and correct answers of one sensor's batches over an epoch, and in a joint run the
+/// encodings' distance to the other sensor's.
+#[derive(Default)]
+pub(super) struct Tally {
+    pub(super) loss: f64,
+    pub(super) correct: usize,
+    pub(super) apart: Option<f64>,
+}
+
+impl Tally {
+    pub(super) fn add(&mut self, loss: f64, logits: &Tensor, y: &Tensor, rows: usize) -> Result<()> {
+        self.loss += loss * rows as f64;
+        let predicted = logits.argmax(D::Minus1)?.to_vec1::<u32>()?;
+        self.correct += predicted.iter().zip(y.to_vec1::<u32>()?).filter(|(p, l)| **p == *l).count();
+        Ok(())
+    }
+}
+
+/// Each class's rows in `set`: where a joint run draws the partner of a touch of that class.
+pub(super) fn rows_by_class(set: &Samples, classes: usize) -> Vec<Vec<usize>> {
+    let mut rows = vec![Vec::new(); classes];
+    for (r, &label) in set.labels.iter().enumerate() {
+        rows[label as usize].push(r);
+    }
+    rows
+}
