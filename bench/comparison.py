@@ -5,9 +5,11 @@ seed means), with the model's size and the paper's figure beside it.
 
     python3 bench/comparison.py                             # the two tables of docs/results.md
     python3 bench/comparison.py tried                       # its "Pushing accuracy" tables
+    python3 bench/comparison.py joint                       # its "Joint learning" table
     python3 bench/comparison.py 'LABEL|PUBLISHED|DIR[:pruned]' ...   # one table of your own rows
 
-DIR is a `pvt3 cv` output directory; `:pruned` reads its pruned and fine-tuned runs. Sizes come
+DIR is a `pvt3 cv` output directory; `:pruned` reads its pruned and fine-tuned runs, `:partner`
+and `:partner-pruned` a joint cross-validation's other sensor's (`--joint`). Sizes come
 from `pvt3 info` of its first run: the baked (deployed) size for a pruned PVT³ model, the
 trainable parameters otherwise (random pruning leaves the matrices dense). A row whose cross-validation has not run says which command
 runs it.
@@ -32,8 +34,8 @@ def size(run):
 
 
 def cv_part(where):
-    """`DIR` or `DIR:pruned` (a `pvt3 cv` directory, its pruned runs with `:pruned`): that part of
-    its cv.json under plain keys (runs, mean, std, seed_means, interval) and the first run's
+    """`DIR` or `DIR:pruned` (a `pvt3 cv` directory, its pruned runs with `:pruned`; a joint one's
+    other sensor with `:partner` and `:partner-pruned`): that part of its cv.json under plain keys (runs, mean, std, seed_means, interval) and the first run's
     directory, or None if the directory has no cv.json yet."""
     directory, _, part = where.partition(":")
     summary_path = Path(directory) / "cv.json"
@@ -42,6 +44,9 @@ def cv_part(where):
     s = json.loads(summary_path.read_text())
     first = s["runs"][0]
     run = Path(directory) / f"seed{first['seed']}" / f"fold{first['val_fold']}"
+    if part.startswith("partner"):
+        # A joint cross-validation's other sensor: its summary inside, its runs inside each run.
+        s, run, part = s["partner"], run / "partner", part.removeprefix("partner").removeprefix("-")
     key = "pruned_" if part == "pruned" else ""
     if part == "pruned":
         run = run / "pruned"
@@ -132,6 +137,28 @@ TRIED = {
 }
 
 
+# docs/results.md's "Joint learning": each sensor's network of a joint cross-validation, tested on
+# its own sensor, beside the same network trained alone. Published: RAEC trained jointly (Gao et al.).
+JOINT = {
+    "iCub-20": [
+        "alone (the headline rows), unpruned|—|runs/cv-rpp-icub",
+        "alone, pruned to 60 % of channels|—|runs/cv-unpruned-icub-channels60:pruned",
+        "joint, encodings pulled together (Gao et al.), unpruned|0.9323 (RAEC)|runs/cv-joint-icub",
+        "joint, encodings pulled together, pruned to 60 % of channels|—|runs/cv-joint-icub:pruned",
+        "joint, one temporal transformer, unpruned|—|runs/cv-joint-shared-icub",
+        "joint, one temporal transformer, pruned to 60 % of channels|—|runs/cv-joint-shared-icub:pruned",
+    ],
+    "BioTac-20": [
+        "alone (the headline rows), unpruned|—|runs/cv-rpp-biotac",
+        "alone, pruned to 60 % of channels|—|runs/cv-unpruned-biotac-channels60:pruned",
+        "joint, encodings pulled together (Gao et al.), unpruned|0.9601 (RAEC)|runs/cv-joint-icub:partner",
+        "joint, encodings pulled together, pruned to 60 % of channels|—|runs/cv-joint-icub:partner-pruned",
+        "joint, one temporal transformer, unpruned|—|runs/cv-joint-shared-icub:partner",
+        "joint, one temporal transformer, pruned to 60 % of channels|—|runs/cv-joint-shared-icub:partner-pruned",
+    ],
+}
+
+
 def table(specs):
     print("| model | parameters | multiply-adds | seeds × folds | test accuracy, mean ± std | seed means | 95 % interval | published |")
     print("|---|---:|---:|---|---:|---|---|---:|")
@@ -140,11 +167,11 @@ def table(specs):
 
 
 def main():
-    tried = sys.argv[1:] == ["tried"]
-    if sys.argv[1:] and not tried:
+    named = {"tried": TRIED, "joint": JOINT}
+    if sys.argv[1:] and sys.argv[1] not in named:
         table(sys.argv[1:])
         return
-    for name, specs in (TRIED if tried else TABLES).items():
+    for name, specs in (named[sys.argv[1]] if sys.argv[1:] else TABLES).items():
         print(f"### {name}\n")
         table(specs)
         print()
