@@ -47,15 +47,16 @@ pub struct ModelArgs {
     #[arg(long, value_name = "NAME=LEVEL,…", value_parser = parse_hold_out)]
     pub hold_out: Option<(String, Vec<String>)>,
     /// Joint learning (Gao et al.): train a second PVT³ beside, on this data set of another
-    /// sensor touching the same classes (same class order), e.g. `--data ../shared/data/icub20
-    /// --joint ../shared/data/biotac20`. Each batch pairs every touch with a touch of its class
+    /// sensor touching the same classes (same class order), e.g. `--data data/icub20.npz --joint
+    /// data/biotac20.npz`. Each batch pairs every touch with a touch of its class
     /// from the other sensor's training split; after --joint-after epochs the mean squared error
     /// between the two networks' encodings (× --joint-weight) joins their losses. Each network is
     /// selected and tested on its own sensor; the other's run is OUT/…/partner (reported beside,
     /// pruned, exported alone).
     #[arg(long, value_name = "DATA")]
     pub joint: Option<PathBuf>,
-    /// Joint learning: weight of the encodings' mean squared error (Gao et al.: 1).
+    /// Joint learning: weight of the encodings' mean squared error (Gao et al.: 1; 0 trains the
+    /// two side by side without pulling them together, e.g. with --joint-share-temporal).
     #[arg(long, default_value_t = 1.0, requires = "joint")]
     pub joint_weight: f64,
     /// Joint learning: epochs each network trains on its own loss before the encodings are pulled
