@@ -108,12 +108,11 @@ struct FoldResult {
 fn run_fold(spec: &RunSpec, stage: Option<&PruneStage>, dir: &Path, resume: bool, bar: &ProgressBar) -> Result<Option<FoldResult>> {
     // Each network of the run (two in a joint run) in its run directory, with its data.
     let partner_dir = Run(dir).partner();
-    let mut nets = vec![(dir, spec.data)];
-    nets.extend(spec.partner.as_ref().map(|p| (partner_dir.as_path(), p.data)));
+    let partner = spec.partner.as_ref().map(|p| (partner_dir.as_path(), p.data));
     if stage.is_some() {
         // The pruned halves' directories exist from the start, so that `report` sees a run whose
         // dense half has finished as unfinished, not as a run trained without pruning.
-        for (net, _) in &nets {
+        for (net, _) in std::iter::once((dir, spec.data)).chain(partner) {
             let pruned = Run(net).pruned();
             std::fs::create_dir_all(&pruned).map_err(Error::io(&pruned))?;
         }
@@ -121,22 +120,20 @@ fn run_fold(spec: &RunSpec, stage: Option<&PruneStage>, dir: &Path, resume: bool
     let Some(dense) = train(spec, dir, resume, bar)? else {
         return Ok(None);
     };
-    let mut results = Vec::new();
-    for (i, (net, data)) in nets.into_iter().enumerate() {
-        let pruned = match stage {
-            // Each network is pruned and fine-tuned alone.
-            Some(stage) => match prune_and_fine_tune(net, data, stage, &Run(net).pruned(), resume, bar)? {
-                Some(p) => Some(p),
-                None => return Ok(None),
-            },
-            None => None,
-        };
-        let dense = if i == 0 { dense.clone() } else { read_json(&Run(net).result())? };
-        results.push(FoldResult { dense, pruned, partner: None });
-    }
-    let mut results = results.into_iter();
-    let main = results.next().expect("the run's own network");
-    Ok(Some(FoldResult { partner: results.next().map(Box::new), ..main }))
+    // Each network is pruned and fine-tuned alone; `None`: paused.
+    let prune = |net: &Path, data| match stage {
+        Some(stage) => prune_and_fine_tune(net, data, stage, &Run(net).pruned(), resume, bar).map(|p| p.map(Some)),
+        None => Ok(Some(None)),
+    };
+    let Some(pruned) = prune(dir, spec.data)? else { return Ok(None) };
+    let partner = match partner {
+        Some((net, data)) => {
+            let Some(pruned) = prune(net, data)? else { return Ok(None) };
+            Some(Box::new(FoldResult { dense: read_json(&Run(net).result())?, pruned, partner: None }))
+        }
+        None => None,
+    };
+    Ok(Some(FoldResult { dense, pruned, partner }))
 }
 
 /// Mean and sample standard deviation.

@@ -21,7 +21,6 @@ use pvt3_spec::prune::PruneSpec;
 use pvt3_spec::weights::Tensors;
 use serde::{Deserialize, Serialize};
 
-use crate::average::WeightAverage;
 use crate::checkpoint::{self, read_json, write_json, write_json_atomically};
 use crate::data::Dataset;
 use crate::evaluate::{log_uniform_factor, Samples};
@@ -244,7 +243,6 @@ struct Pass {
 /// each network's own loss, plus `weight` × the mean squared error between their encodings,
 /// backward once, and each network's own update. Returns both passes' losses and logits, and the
 /// encodings' mean squared error (measured at any weight).
-#[allow(clippy::too_many_arguments)]
 fn joint_step(
     a: &mut Learner,
     b: &mut Learner,
@@ -361,11 +359,6 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
     if partner.is_some() {
         std::fs::create_dir_all(&partner_dir).map_err(Error::io(&partner_dir))?;
     }
-    for sensor in std::iter::once(&mut main).chain(partner.as_mut()) {
-        if opts.ema > 0.0 {
-            sensor.net.average = Some(WeightAverage::new(&sensor.net.learner.varmap, opts.ema)?);
-        }
-    }
     let steps_per_epoch = main.split.train.len().div_ceil(opts.batch_size);
     let schedule = Schedule {
         peak: opts.lr,
@@ -384,8 +377,8 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
             st
         }
         None => {
-            for sensor in std::iter::once(&main).chain(partner.as_ref()) {
-                if spec.start.is_none() {
+            if spec.start.is_none() {
+                for sensor in std::iter::once(&main).chain(partner.as_ref()) {
                     crate::spectrum_fit::fit(&sensor.net.learner.model, &sensor.net.learner.varmap, &sensor.train_set)?;
                 }
             }

@@ -73,7 +73,9 @@ impl<'a> Sensor<'a> {
             Some(shared) => Learner::sharing(&config, opts, shared, &format!("{}.", pvt3_spec::names::TEMPORAL))?,
             None => Learner::new(&config, opts, start)?,
         };
-        Ok(Self { data, net: Net { learner, average: None }, config, classes, normalization, split, train_set, crops, val_set, test_set })
+        // With weight averaging, the average of the weights as they start.
+        let average = if opts.ema > 0.0 { Some(WeightAverage::new(&learner.varmap, opts.ema)?) } else { None };
+        Ok(Self { data, net: Net { learner, average }, config, classes, normalization, split, train_set, crops, val_set, test_set })
     }
 
     /// This epoch's training windows, when they are drawn anew each epoch (see `crops`).
