@@ -1,9 +1,11 @@
 """Check an exported PVT³ file with onnx and onnxruntime.
 
-    python tests/onnx_check.py MODEL.onnx INPUT.npy EXPECTED.npy [--output logits] [--atol 1e-5]
+    python tests/onnx_check.py MODEL.onnx INPUT.npy EXPECTED.npy [--output logits] [--atol 1e-5] [--prefix TOKENS]
 
 Runs onnx.checker.check_model(full_check=True), then the model in onnxruntime (CPU) on INPUT, and
-compares the named output with EXPECTED. Exit status 0: checker passed and every element is within
+compares the named output with EXPECTED. With --prefix, the file's key bias (the constant behind
+`token_bias`) hides every temporal token from TOKENS on (-inf), as a streaming runtime does for a
+touch so far. Exit status 0: checker passed and every element is within
 --atol; 1: otherwise. The message names the worst element either way.
 """
 
@@ -12,7 +14,18 @@ import sys
 
 import numpy as np
 import onnx
+import onnx.numpy_helper
 import onnxruntime as ort
+
+
+def hide_tokens_from(model, tokens):
+    """Sets the key bias (the initializer the `token_bias` Identity reads, [1, 1, 1, 1 + time tokens],
+    the CLS token first) to 0 up to temporal token `tokens` and -inf after it."""
+    (source,) = [n.input[0] for n in model.graph.node if "token_bias" in n.output]
+    (bias,) = [t for t in model.graph.initializer if t.name == source]
+    values = onnx.numpy_helper.to_array(bias).copy()
+    values[..., tokens + 1 :] = -np.inf
+    bias.CopyFrom(onnx.numpy_helper.from_array(values, source))
 
 
 def main() -> int:
@@ -22,6 +35,7 @@ def main() -> int:
     ap.add_argument("expected")
     ap.add_argument("--output", default="logits")
     ap.add_argument("--atol", type=float, default=1e-5)
+    ap.add_argument("--prefix", type=int, help="temporal tokens received (the touch so far)")
     args = ap.parse_args()
 
     try:
@@ -29,7 +43,10 @@ def main() -> int:
     except Exception as e:  # the checker raises several exception types
         print(f"FAIL {args.model}: onnx checker: {e}")
         return 1
-    session = ort.InferenceSession(args.model, providers=["CPUExecutionProvider"])
+    model = onnx.load(args.model)
+    if args.prefix is not None:
+        hide_tokens_from(model, args.prefix)
+    session = ort.InferenceSession(model.SerializeToString(), providers=["CPUExecutionProvider"])
     x = np.load(args.input).astype(np.float32)
     expected = np.load(args.expected).astype(np.float64)
     (got,) = session.run([args.output], {session.get_inputs()[0].name: x})

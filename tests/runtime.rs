@@ -229,17 +229,18 @@ fn bad_input_and_bad_files_are_typed_errors() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
-/// A model with a spectral head runs in tract (its DFT op an FFT) as the f64 reference computes
-/// it, at batch 1 and 3; streaming it is refused with a typed error, since it reads the whole
-/// window.
+/// A model with a spectral head (a third of its tokens pruned) runs in tract (its DFT op an FFT)
+/// as the f64 reference computes it, at batch 1 and 3, and streams: a session's provisional
+/// answer after every token is the reference's on the touch so far, the head reading the kept
+/// frames received and nothing else, and its final answer is the whole window's.
 #[test]
-fn a_spectral_head_runs_in_tract_as_the_reference_and_is_not_streamed() {
+fn a_spectral_head_runs_in_tract_as_the_reference_and_streams() {
     let spectral_case::SpectralCase { baked, norm, raw: x, normalised } = spectral_case::spectral_case(3);
     let reference = reference::forward(&baked, &normalised, 3).unwrap();
     let meta = pvt3_export::Metadata {
         classes: (0..20).map(|k| format!("c{k}")).collect(),
         provenance: serde_json::json!({"data": "synthetic"}),
-        stop_rule: None,
+        stop_rule: Some(StopRule { top_probability: 0.5, agreeing: 2 }),
         reading: None,
     };
     let dir = scratch("spectral");
@@ -252,8 +253,28 @@ fn a_spectral_head_runs_in_tract_as_the_reference_and_is_not_streamed() {
         assert!(worst <= 1e-5, "batch {batch}: tract against the f64 reference: {worst:e}");
     }
     tract_onnx_agrees(&path, &c, &x, 3);
-    assert!(!c.streams() && matches!(c.session(), Err(Error::WholeWindowOnly)));
-    assert!(matches!(c.prepare(&[1], true), Err(Error::WholeWindowOnly)));
-    c.prepare(&[1, 3], false).unwrap();
+    assert!(c.streams());
+    c.prepare(&[1, 3], true).unwrap();
+    let whole = c.classify_batch(&x, 3).unwrap();
+    let mut session = c.session().unwrap();
+    // Twice through the same session: the second touch starts from an empty window.
+    for (sample, (normalised, expected)) in
+        x.chunks(7600).zip(normalised.chunks(7600).zip(&whole)).chain(x.chunks(7600).zip(normalised.chunks(7600).zip(&whole)).take(1))
+    {
+        for n in 0..400 {
+            session.push_frame(&(0..19).map(|e| sample[e * 400 + n]).collect::<Vec<_>>()).unwrap();
+            if n % 10 != 9 {
+                continue;
+            }
+            let tokens = (n + 1) / 10;
+            let logits = &reference::forward_prefix(&baked, normalised, 1, tokens).unwrap()[0];
+            let peek = session.peek().unwrap();
+            let worst = peek.prediction.probabilities.iter().zip(softmax(logits)).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
+            assert!(worst <= 1e-5, "{tokens} tokens: {worst:e}");
+        }
+        let streamed = session.finish().unwrap();
+        let worst = streamed.probabilities.iter().zip(&expected.probabilities).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+        assert!(worst <= 1e-5 && streamed.class == expected.class, "streamed against whole window: {worst:e}");
+    }
     std::fs::remove_dir_all(dir).unwrap();
 }

@@ -83,9 +83,6 @@ fn check(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<()> {
     if meta.classes.len() != c.classes {
         return Err(Error::Inconsistent(format!("{} class names for {} classes", meta.classes.len(), c.classes)));
     }
-    if !c.streams() && meta.stop_rule.is_some() {
-        return Err(Error::Inconsistent("a stopping rule for provisional answers, and a spectral head that reads the whole window".into()));
-    }
     if let Some(problem) = meta.stop_rule.and_then(|r| r.problem()) {
         return Err(Error::Inconsistent(format!("stopping rule: {problem}")));
     }

@@ -1,16 +1,18 @@
-//! The spectral head (`pvt3_models::spectrum` in training, `pvt3_spec::spectrum` for its band maths) as ONNX nodes, from the file's input: each
-//! channel's frames normalised, its level, the Fourier transform of the detrended frames (the
-//! `DFT` op, an FFT in tract and onnxruntime, where the trainer multiplies by the transform's
-//! matrix), the band sums of the squared transform, their logarithms, the standardisation and
-//! the linear map. Its output, logits, is named [`SPECTRAL_LOGITS`]: the seam by which a
-//! streaming runtime knows the model needs the whole window.
+//! The spectral head (`pvt3_models::spectrum` in training, `pvt3_spec::spectrum` for its maths)
+//! as ONNX nodes, from the file's input and the key bias: the frames' weights ([`FRAME_WEIGHTS`],
+//! the kept tokens the bias has not hidden), each channel's frames normalised, its weighted
+//! level, the Fourier transform of the weighted, detrended frames (the `DFT` op, an FFT in tract
+//! and onnxruntime, where the trainer multiplies by the transform's matrix), the band sums of the
+//! squared transform over the frames weighed, their logarithms, the standardisation and the
+//! linear map, named [`SPECTRAL_LOGITS`]. A streaming runtime feeds the temporal stage the window
+//! so far along with the bias, and the head reads exactly the frames received.
 
-use pvt3_format::{INPUT, SPECTRAL_LOGITS};
+use pvt3_format::{FRAME_WEIGHTS, INPUT, SPECTRAL_LOGITS, TOKEN_BIAS};
 use pvt3_spec::baked::{BakedPvt3, BakedSpectrum};
 use pvt3_spec::normalization::Normalization;
 use pvt3_spec::spectrum::{band_matrix, bins, POWER_FLOOR};
 
-use pvt3_format::onnx::{int, ints, Op};
+use pvt3_format::onnx::{int, Op};
 
 use crate::graph::Graph;
 use crate::layers::linear;
@@ -19,15 +21,40 @@ use crate::layers::linear;
 pub(crate) fn spectral_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, norm: &Normalization) -> String {
     let c = &m.config;
     let (channels, frames, bands) = (c.sensor_channels(), c.frames, c.spectral_bands());
-    let k = bins(frames);
+    let (k, t, tt) = (bins(frames), c.time_tokens(), c.tubelet);
+    // The weights: max(bias + 1, 0) is 1 where the key bias is 0 and 0 where it is −∞, times 1
+    // for a kept token; each token's weight repeated over its frames.
+    let bias = g.i64s("spectral_bias_rows", &[1], vec![-1]);
+    let bias = g.op(Op::Reshape, &[TOKEN_BIAS, &bias]);
+    let (from, to, axis) = (g.i64s("one", &[1], vec![1]), g.i64s("tokens_end", &[1], vec![t as i64 + 1]), g.i64s("axis0", &[1], vec![0]));
+    let bias = g.op(Op::Slice, &[&bias, &from, &to, &axis]);
+    let one = g.f32s("one", &[1], vec![1.0]);
+    let zero = g.f32s("zero", &[1], vec![0.0]);
+    let received = g.op(Op::Add, &[&bias, &one]);
+    let received = g.op(Op::Max, &[&received, &zero]);
+    let kept = g.f32s("kept_token_weights", &[t], (0..t).map(|k| if m.kept_tokens.contains(&k) { 1.0 } else { 0.0 }).collect());
+    let weights = g.op(Op::Mul, &[&received, &kept]);
+    let column = g.i64s("token_column", &[2], vec![t as i64, 1]);
+    let weights = g.op(Op::Reshape, &[&weights, &column]);
+    let per_frame = g.i64s("token_frames_shape", &[2], vec![t as i64, tt as i64]);
+    let weights = g.op(Op::Expand, &[&weights, &per_frame]);
+    let flat_frames = g.i64s("frames_shape", &[1], vec![frames as i64]);
+    g.node(Op::Reshape, &[&weights, &flat_frames], vec![], Some(FRAME_WEIGHTS));
+    let weighed = g.node(Op::ReduceSum, &[FRAME_WEIGHTS, &axis], vec![int("keepdims", 1)], None);
+    let weighed = g.op(Op::Max, &[&weighed, &one]);
+
     let rows = g.i64s("spectral_rows", &[3], vec![-1, channels as i64, frames as i64]);
     let x = g.op(Op::Reshape, &[INPUT, &rows]);
     let mean = g.f32s("spectral_norm_mean", &[channels, 1], norm.mean.clone());
     let std = g.f32s("spectral_norm_std", &[channels, 1], norm.std.clone());
     let x = g.op(Op::Sub, &[&x, &mean]);
     let x = g.op(Op::Div, &[&x, &std]);
-    let level = g.node(Op::ReduceMean, &[&x], vec![ints("axes", &[2]), int("keepdims", 1)], None);
+    let x = g.op(Op::Mul, &[&x, FRAME_WEIGHTS]);
+    let last = g.i64s("last_axis", &[1], vec![2]);
+    let level = g.node(Op::ReduceSum, &[&x, &last], vec![int("keepdims", 1)], None);
+    let level = g.op(Op::Div, &[&level, &weighed]);
     let centred = g.op(Op::Sub, &[&x, &level]);
+    let centred = g.op(Op::Mul, &[&centred, FRAME_WEIGHTS]);
     // A real signal for the DFT op: [b, channels, frames, 1] → [b, channels, frames, 2].
     let real = g.i64s("spectral_real", &[4], vec![-1, channels as i64, frames as i64, 1]);
     let centred = g.op(Op::Reshape, &[&centred, &real]);
@@ -37,14 +64,16 @@ pub(crate) fn spectral_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, n
     let squares = g.op(Op::Mul, &[&one_sided, &one_sided]);
     let parts = g.i64s("spectral_parts", &[3], vec![-1, channels as i64, 2 * k as i64]);
     let squares = g.op(Op::Reshape, &[&squares, &parts]);
-    // Band sums of re² + im² (rows interleaved per frequency here), with the trainer's 1/frames.
+    // Band sums of re² + im² (rows interleaved per frequency here). The op's transform has no
+    // 1/√T, so the power (T / N) · |X|² of the trainer's scaled transform is |DFT|² / N.
     let sums = band_matrix(frames, bands);
     let interleaved: Vec<f32> = (0..k)
         .flat_map(|f| [f, k + f])
-        .flat_map(|row| sums[row * bands..(row + 1) * bands].iter().map(|v| (*v / frames as f64) as f32).collect::<Vec<_>>())
+        .flat_map(|row| sums[row * bands..(row + 1) * bands].iter().map(|v| *v as f32).collect::<Vec<_>>())
         .collect();
     let sums = g.f32s("spectral_bands", &[2 * k, bands], interleaved);
     let power = g.op(Op::MatMul, &[&squares, &sums]);
+    let power = g.op(Op::Div, &[&power, &weighed]);
     let floor = g.f32s("power_floor", &[1], vec![POWER_FLOOR as f32]);
     let power = g.op(Op::Add, &[&power, &floor]);
     let log_power = g.op(Op::Log, &[&power]);

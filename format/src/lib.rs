@@ -28,9 +28,14 @@ pub const TOKEN_ENCODINGS: &str = "token_encodings";
 /// on the tokens a touch has not reached yet classifies the touch so far (a provisional answer).
 pub const TOKEN_BIAS: &str = "token_bias";
 /// The logits of a spectral head (a model with `spectral_bands`), `[batch, classes]`, added to
-/// the transformer's: computed from the whole window, so such a file classifies whole windows
-/// only, and a runtime that streams refuses it by this name.
+/// the transformer's. They read the window itself (`INPUT`), not the tokens' encodings.
 pub const SPECTRAL_LOGITS: &str = "spectral_logits";
+/// The spectral head's weight of each frame, `[frames]`, computed from [`TOKEN_BIAS`]: 1 for a
+/// frame of a kept temporal token received so far, 0 otherwise. A file with a spectral head and
+/// this tensor streams: its temporal stage also reads the window so far (`INPUT`, anything where
+/// the weight is 0). A spectral file without it (written before it existed) reads the whole
+/// window, and a runtime classifies it whole only.
+pub const FRAME_WEIGHTS: &str = "frame_weights";
 
 /// Metadata keys (`metadata_props` of the ONNX model).
 pub mod keys {

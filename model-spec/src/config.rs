@@ -184,24 +184,6 @@ impl Config {
         }
     }
 
-    /// Whether the model answers from a part of a window: streamed frame by frame, provisional
-    /// answers, a stopping rule. Not with a spectral head, whose features are the whole
-    /// window's. (The runtime reads the same from a file: its `spectral_logits` seam.)
-    pub fn streams(&self) -> bool {
-        self.spectral_bands() == 0
-    }
-
-    /// Fails, naming `what`, if the model does not [`Self::streams`].
-    pub fn require_streams(&self, what: &str) -> Result<()> {
-        if self.streams() {
-            return Ok(());
-        }
-        Err(Error::Config(format!(
-            "{what}: a model with a spectral head (spectral_bands = {}) reads the whole window",
-            self.spectral_bands()
-        )))
-    }
-
     /// ViT: rows and columns of the frame all frames are tiled into (the frame itself for the
     /// other networks).
     pub fn tiled_size(&self) -> (usize, usize) {

@@ -97,19 +97,25 @@ fn patches(m: &BakedPvt3, sample: &[f32], k: usize) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// The spectral head's logits for one sample: per channel, the level and the log band powers
-/// of the detrended frames by the transform's definition, standardised, then the linear map.
-fn spectral_logits(s: &BakedSpectrum, sample: &[f32], frames: usize, bands: usize) -> Vec<f64> {
+/// The spectral head's logits for one sample from the frames of its first `tokens` temporal
+/// tokens that the model keeps: per channel, the level and the log band powers of the detrended
+/// frames by the transform's definition (`spectrum`'s docs), standardised, then the linear map.
+fn spectral_logits(m: &BakedPvt3, s: &BakedSpectrum, sample: &[f32], tokens: usize) -> Vec<f64> {
+    let c = &m.config;
+    let (frames, bands) = (c.frames, c.spectral_bands());
     let (k, dft, band) = (spectrum::bins(frames), spectrum::dft_matrix(frames), spectrum::band_matrix(frames, bands));
+    let weights = spectrum::frame_weights(frames, c.tubelet, tokens, |t| m.kept_tokens.contains(&t));
+    let weighed = spectrum::weighed_frames(&weights);
     let mut features = Vec::with_capacity(s.scale.len());
     for row in sample.chunks(frames) {
-        let level = row.iter().map(|v| *v as f64).sum::<f64>() / frames as f64;
-        let parts: Vec<f64> =
-            (0..2 * k).map(|f| row.iter().enumerate().map(|(n, v)| (*v as f64 - level) * dft[n * 2 * k + f]).sum()).collect();
+        let level = row.iter().zip(&weights).map(|(v, w)| *v as f64 * w).sum::<f64>() / weighed;
+        let parts: Vec<f64> = (0..2 * k)
+            .map(|f| row.iter().zip(&weights).enumerate().map(|(n, (v, w))| w * (*v as f64 - level) * dft[n * 2 * k + f]).sum())
+            .collect();
         features.push(level);
         features.extend((0..bands).map(|j| {
             let power: f64 = parts.iter().enumerate().map(|(f, p)| p * p * band[f * bands + j]).sum();
-            (power + spectrum::POWER_FLOOR).ln()
+            (power * frames as f64 / weighed + spectrum::POWER_FLOOR).ln()
         }));
     }
     let standard: Vec<f64> = features.iter().enumerate().map(|(i, v)| v * s.scale[i] as f64 + s.shift[i] as f64).collect();
@@ -118,23 +124,21 @@ fn spectral_logits(s: &BakedSpectrum, sample: &[f32], frames: usize, bands: usiz
 
 /// Logits `[batch][classes]` for `batch` raw samples laid out back to back.
 pub fn forward(m: &BakedPvt3, x: &[f32], batch: usize) -> Result<Vec<Vec<f64>>> {
-    let c = &m.config;
-    let mut logits = transformer_logits(m, x, batch, c.time_tokens())?;
-    if let Some(s) = &m.spectrum {
-        let sample_len = x.len() / batch;
-        for (l, sample) in logits.iter_mut().zip(x.chunks(sample_len)) {
-            l.iter_mut().zip(spectral_logits(s, sample, c.frames, c.spectral_bands())).for_each(|(l, s)| *l += s);
-        }
-    }
-    Ok(logits)
+    forward_prefix(m, x, batch, m.config.time_tokens())
 }
 
 /// Logits `[batch][classes]` from the first `tokens` temporal tokens of each sample alone (a
 /// touch so far, pruned tokens included as their constants): the temporal transformer runs over
-/// the CLS token and those. Not for a model with a spectral head, which reads the whole window.
+/// the CLS token and those, and a spectral head reads the kept frames among them.
 pub fn forward_prefix(m: &BakedPvt3, x: &[f32], batch: usize, tokens: usize) -> Result<Vec<Vec<f64>>> {
-    m.config.require_streams("provisional answers from a prefix of the touch")?;
-    transformer_logits(m, x, batch, tokens)
+    let mut logits = transformer_logits(m, x, batch, tokens)?;
+    if let Some(s) = &m.spectrum {
+        let sample_len = x.len() / batch;
+        for (l, sample) in logits.iter_mut().zip(x.chunks(sample_len)) {
+            l.iter_mut().zip(spectral_logits(m, s, sample, tokens)).for_each(|(l, s)| *l += s);
+        }
+    }
+    Ok(logits)
 }
 
 /// The transformer's logits from the first `tokens` temporal tokens.

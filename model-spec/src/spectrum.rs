@@ -1,6 +1,15 @@
 //! The band maths of PVT³'s spectral head (`Config::spectral_bands() > 0`): which frequencies
-//! each band sums, the real transform as a matrix, and the band sums as a matrix. The trainer's
-//! candle head (`pvt3_models::spectrum`), the f64 reference and the exporter all read them here.
+//! each band sums, the real transform as a matrix, the band sums as a matrix, and which frames
+//! the features read. The trainer's candle head (`pvt3_models::spectrum`), the f64 reference and
+//! the exporter all read them here.
+//!
+//! The features stream: they are those of the frames a touch has delivered so far, of the kept
+//! temporal tokens only. Frame `n` has weight `w_n`, 1 if its token is kept and received, else 0;
+//! with `N = max(Σ w_n, 1)`, a channel's level is `Σ w_n x_n / N`, its transform
+//! `X_f = Σ w_n (x_n − level) D[n, f]` ([`dft_matrix`]: the window's basis, zeros where `w` is),
+//! and band `j`'s power `(T / N) Σ_{f ∈ j} X_f²`, so that a stationary signal has the same
+//! expected power after any number of frames. With every frame kept and received, `N = T`: the
+//! whole window's periodogram.
 
 /// Power added before the logarithm (normalised units), so that a silent band is finite.
 pub const POWER_FLOOR: f64 = 1e-6;
@@ -19,6 +28,18 @@ pub fn band_edges(frames: usize, bands: usize) -> Vec<usize> {
         edges.push(geometric.max(lowest).min(top - (bands - j)));
     }
     edges
+}
+
+/// The weight of each of `frames` frames (see the module's docs): 1 for a frame of a temporal
+/// token (`tubelet` frames each) below `tokens` that `kept` keeps, 0 otherwise.
+pub fn frame_weights(frames: usize, tubelet: usize, tokens: usize, kept: impl Fn(usize) -> bool) -> Vec<f64> {
+    (0..frames).map(|n| if n / tubelet < tokens && kept(n / tubelet) { 1.0 } else { 0.0 }).collect()
+}
+
+/// `N` of the module's docs: the frames weighed, at least 1 (a touch with no kept frame yet has
+/// level 0 and no power).
+pub fn weighed_frames(weights: &[f64]) -> f64 {
+    weights.iter().sum::<f64>().max(1.0)
 }
 
 /// `[frames, 2 · bins]` row-major: frame `n`'s `cos(2π k n / T) / √T` for each frequency `k`,

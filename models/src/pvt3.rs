@@ -10,6 +10,7 @@ use candle_core::{Tensor, D};
 use candle_nn::{linear, Init, Linear, Module, VarBuilder, VarMap};
 
 use pvt3_spec::names;
+use pvt3_spec::spectrum::frame_weights;
 
 use crate::dropout::Dropout;
 use crate::fused_block::pack;
@@ -101,26 +102,28 @@ impl Pvt3 {
     /// window ([`Self::forward`]) or, with `tokens`, of its first `tokens` temporal tokens
     /// ([`Self::forward_prefix`]).
     pub fn forward_pooled(&self, x: &Tensor, tokens: Option<usize>, mut rng: Option<&mut Rng>) -> Result<(Tensor, Tensor)> {
-        if tokens.is_some() {
-            self.cfg.require_streams("provisional answers from a prefix of the touch")?;
-        }
         let sequence = self.sequence(x, rng.as_deref_mut())?;
-        let sequence = match tokens {
-            Some(tokens) => self.prefix(&sequence, tokens)?,
-            None => sequence,
-        };
-        let pooled = self.temporal.forward_cls(&sequence, rng)?;
+        self.classify_prefix(x, &sequence, tokens.unwrap_or(self.cfg.time_tokens()), rng)
+    }
+
+    /// Logits `[b, classes]` and the encoding `[b, dim]` of windows `x` from the first `tokens`
+    /// temporal tokens of their sequence ([`Self::sequence`]): the temporal transformer over the
+    /// CLS token and those, and the spectral head over their kept frames.
+    pub fn classify_prefix(&self, x: &Tensor, sequence: &Tensor, tokens: usize, rng: Option<&mut Rng>) -> Result<(Tensor, Tensor)> {
+        self.cfg.check_prefix(tokens)?;
+        let pooled = self.temporal.forward_cls(&sequence.narrow(1, 0, tokens + 1)?, rng)?;
         let logits = self.head.forward(&pooled)?;
-        match (&self.spectrum, tokens) {
-            (Some(spectrum), None) => Ok(((logits + spectrum.forward(x)?)?, pooled)),
-            _ => Ok((logits, pooled)),
+        match &self.spectrum {
+            Some(spectrum) => Ok(((logits + spectrum.forward(x, &self.frame_weights(tokens)?)?)?, pooled)),
+            None => Ok((logits, pooled)),
         }
     }
 
-    /// The first `tokens` temporal tokens of a sequence from [`Self::sequence`], with its CLS token.
-    pub fn prefix(&self, sequence: &Tensor, tokens: usize) -> Result<Tensor> {
-        self.cfg.check_prefix(tokens)?;
-        Ok(sequence.narrow(1, 0, tokens + 1)?)
+    /// The spectral head's weight of each frame (`pvt3_spec::spectrum::frame_weights`): the
+    /// frames of the first `tokens` temporal tokens that the frame mask keeps (not zero).
+    pub fn frame_weights(&self, tokens: usize) -> Result<Vec<f64>> {
+        let mask = self.frame_mask.to_vec1::<f32>()?;
+        Ok(frame_weights(self.cfg.frames, self.cfg.tubelet, tokens, |t| mask[t] != 0.0))
     }
 
     /// The temporal transformer's input `[b, 1 + time_tokens, dim]`: the CLS token, then each
@@ -134,12 +137,6 @@ impl Pvt3 {
         let frames = self.space.forward_cls(&tokens.reshape((b * t, n + 1, d))?, rng)?;
         let cls = self.temporal_cls.broadcast_as((b, 1, d))?;
         Ok(Tensor::cat(&[&cls, &frames.reshape((b, t, d))?], 1)?)
-    }
-
-    /// Logits `[b, classes]` from a temporal sequence (or a prefix of one).
-    pub fn classify_sequence(&self, sequence: &Tensor, rng: Option<&mut Rng>) -> Result<Tensor> {
-        let pooled = self.temporal.forward_cls(sequence, rng)?;
-        Ok(self.head.forward(&pooled)?)
     }
 
     /// The tokens of the spatial transformer, `[b, t, n + 1, dim]`, from patches `[b, t, n, patch_dim]`:

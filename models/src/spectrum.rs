@@ -1,6 +1,8 @@
 //! The spectral head of PVT³ (`Config::spectral_bands() > 0`): what a texture's vibration says,
-//! given to the network directly. For each sensor channel of the window, its mean level and the
-//! log power of `spectral_bands` frequency bands (geometrically spaced) of its detrended signal;
+//! given to the network directly. For each sensor channel, its mean level and the log power of
+//! `spectral_bands` frequency bands (geometrically spaced) of its detrended signal, over the
+//! frames of the kept temporal tokens received so far (`pvt3_spec::spectrum`'s docs: the whole
+//! window's at the end of a touch, so the head streams and answers early like the transformer);
 //! the features are standardised (a scale and a shift per feature, fitted to the training set by
 //! the trainer and trained on) and mapped linearly to class logits, which are added to the
 //! transformer's. A logistic regression on such features alone is a strong texture classifier
@@ -13,7 +15,7 @@
 use candle_core::{DType, Device, Tensor, D};
 use candle_nn::{linear, Init, Linear, Module, VarBuilder};
 use pvt3_spec::names;
-use pvt3_spec::spectrum::{band_matrix, bins, dft_matrix, POWER_FLOOR};
+use pvt3_spec::spectrum::{band_matrix, bins, dft_matrix, weighed_frames, POWER_FLOOR};
 
 use crate::Config;
 
@@ -48,21 +50,24 @@ impl Spectrum {
         })
     }
 
-    /// The unstandardised features `[b, channels · (1 + bands)]` of windows `[b, h, w, (c,) t]`:
-    /// per channel its mean level, then the log power of each band of the detrended signal.
-    pub fn features(&self, x: &Tensor) -> candle_core::Result<Tensor> {
+    /// The unstandardised features `[b, channels · (1 + bands)]` of windows `[b, h, w, (c,) t]`
+    /// from the frames `weights` selects (`[t]`, `pvt3_spec::spectrum::frame_weights`): per
+    /// channel its mean level, then the log power of each band of the detrended signal.
+    pub fn features(&self, x: &Tensor, weights: &[f64]) -> candle_core::Result<Tensor> {
         let b = x.dim(0)?;
+        let weighed = weighed_frames(weights);
+        let w = Tensor::from_iter(weights.iter().map(|v| *v as f32), x.device())?.reshape((1, self.frames))?;
         let rows = x.reshape((b * self.channels, self.frames))?;
-        let level = rows.mean_keepdim(D::Minus1)?;
-        let transform = rows.broadcast_sub(&level)?.matmul(&self.dft)?;
-        let power = transform.sqr()?.matmul(&self.bands)?;
+        let level = (rows.broadcast_mul(&w)?.sum_keepdim(D::Minus1)? / weighed)?;
+        let transform = rows.broadcast_sub(&level)?.broadcast_mul(&w)?.matmul(&self.dft)?;
+        let power = (transform.sqr()?.matmul(&self.bands)? * (self.frames as f64 / weighed))?;
         let log_power = (power + POWER_FLOOR)?.log()?;
         Tensor::cat(&[&level, &log_power], 1)?.reshape((b, ()))
     }
 
-    /// Logits `[b, classes]`.
-    pub fn forward(&self, x: &Tensor) -> candle_core::Result<Tensor> {
-        let standard = self.features(x)?.broadcast_mul(&self.scale)?.broadcast_add(&self.shift)?;
+    /// Logits `[b, classes]` from the frames `weights` selects.
+    pub fn forward(&self, x: &Tensor, weights: &[f64]) -> candle_core::Result<Tensor> {
+        let standard = self.features(x, weights)?.broadcast_mul(&self.scale)?.broadcast_add(&self.shift)?;
         self.linear.forward(&standard)
     }
 }
@@ -91,7 +96,7 @@ mod tests {
         let head = Spectrum::new(&cfg, vb).unwrap();
         let wave: Vec<f32> = (0..40).map(|n| 3.0 + 2.0 * (2.0 * std::f32::consts::PI * 5.0 * n as f32 / 40.0).sin()).collect();
         let x = Tensor::from_vec(wave, (1, 1, 1, 40), &Device::Cpu).unwrap();
-        let f: Vec<f32> = head.features(&x).unwrap().flatten_all().unwrap().to_vec1().unwrap();
+        let f: Vec<f32> = head.features(&x, &[1.0; 40]).unwrap().flatten_all().unwrap().to_vec1().unwrap();
         let edges = band_edges(40, 4);
         let band = edges.windows(2).position(|w| (w[0]..w[1]).contains(&5)).unwrap();
         assert!((f[0] - 3.0).abs() < 1e-5, "level {}", f[0]);
@@ -101,5 +106,22 @@ mod tests {
         for (j, v) in f[1..].iter().enumerate().filter(|(j, _)| *j != band) {
             assert!((*v as f64) < (2.0 * POWER_FLOOR).ln(), "band {j}: {v}");
         }
+    }
+
+    /// The frames a weight leaves out change nothing, and those it keeps do: the features of the
+    /// first half of a window are those of the first half followed by anything.
+    #[test]
+    fn frames_outside_the_weights_are_not_read() {
+        let cfg = Config { frames: 40, height: 2, width: 1, patch_height: 1, patch_width: 1, ..Config::icub20() };
+        let cfg = Config { network: Pvt3Config { spectral_bands: 4 }.into(), ..cfg };
+        let head = Spectrum::new(&cfg, VarBuilder::zeros(DType::F32, &Device::Cpu)).unwrap();
+        let weights: Vec<f64> = (0..40).map(|n| if n < 20 { 1.0 } else { 0.0 }).collect();
+        let window = |tail: f32| -> Tensor {
+            let v: Vec<f32> = (0..80).map(|i| if i % 40 < 20 { ((i * 7) % 11) as f32 } else { tail * i as f32 }).collect();
+            Tensor::from_vec(v, (1, 2, 1, 40), &Device::Cpu).unwrap()
+        };
+        let features = |x: &Tensor, w: &[f64]| -> Vec<f32> { head.features(x, w).unwrap().flatten_all().unwrap().to_vec1().unwrap() };
+        assert_eq!(features(&window(0.0), &weights), features(&window(-3.5), &weights));
+        assert_ne!(features(&window(0.0), &[1.0; 40]), features(&window(-3.5), &[1.0; 40]));
     }
 }

@@ -9,7 +9,9 @@ use tract_core::prelude::*;
 use tract_core::runtime::RunOptions;
 use tract_linalg::multithread::Executor;
 
-use pvt3_format::{Header, INPUT, LOGITS, PROBABILITIES, SPECTRAL_LOGITS, TOKEN_BIAS, TOKEN_ENCODINGS, TOKEN_FRAMES, TOKEN_INDEX};
+use pvt3_format::{
+    Header, FRAME_WEIGHTS, INPUT, LOGITS, PROBABILITIES, SPECTRAL_LOGITS, TOKEN_BIAS, TOKEN_ENCODINGS, TOKEN_FRAMES, TOKEN_INDEX,
+};
 
 use crate::error::{catch_panic, tract_error};
 use crate::kernels::Kernels;
@@ -185,10 +187,11 @@ impl Classifier {
         plan.map(Plan::new).map_err(|e| Error::NotOnnx { path: self.path.clone(), reason: format!("{e:#}") })
     }
 
-    /// Whether the file can be streamed (sessions, provisional answers): not a model with a
-    /// spectral head, which reads the whole window (`Error::WholeWindowOnly`).
+    /// Whether the file can be streamed (sessions, provisional answers): not a model whose
+    /// spectral head reads the whole window (one exported before the head streamed, without
+    /// `FRAME_WEIGHTS`: `Error::WholeWindowOnly`).
     pub fn streams(&self) -> bool {
-        !self.has_tensor(SPECTRAL_LOGITS)
+        !self.has_tensor(SPECTRAL_LOGITS) || self.has_tensor(FRAME_WEIGHTS)
     }
 
     /// Builds now what the first call at each batch size of `batches`, and with `streaming` the
@@ -261,11 +264,16 @@ impl Classifier {
         if prefixes {
             temporal.push((TOKEN_BIAS, f32::fact([1, 1, 1, kept_index.len() + 1])));
         }
+        let window = self.has_tensor(FRAME_WEIGHTS);
+        if window {
+            temporal.push((INPUT, f32::fact(self.batch_shape(1))));
+        }
         Ok(Stages {
             // A session feeds the spatial stage the index of a kept token: below `kept`.
             spatial: self.optimise(self.wire(&spatial, &[TOKEN_ENCODINGS])?, &[(TOKEN_INDEX, kept)])?,
             temporal: self.optimise(self.wire(&temporal, &[PROBABILITIES])?, &[])?,
             prefixes,
+            window: window.then(|| self.batch_shape(1)),
             stop_rule: self.stop_rule(),
             kept_index,
             token_shape,

@@ -38,7 +38,8 @@ pub struct Continuous {
 impl Classifier {
     /// A continuous classification of an unbounded stream of frames, answering for the latest
     /// window after every `every` temporal tokens (1: after each). Works for every file,
-    /// pruned or with a spectral head too, since it classifies whole windows.
+    /// pruned or with a spectral head that reads the whole window too, since it classifies
+    /// whole windows.
     pub fn continuous(&self, every: usize) -> Result<Continuous> {
         if every == 0 {
             return Err(Error::NoStride);

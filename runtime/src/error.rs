@@ -28,7 +28,7 @@ pub enum Error {
     NoTokenYet { tubelet: usize },
     #[error("this file gives no provisional answers: it was exported before format 1.1; export it again")]
     NoPrefixes,
-    #[error("this model has a spectral head, which reads the whole window: classify whole windows, not a stream")]
+    #[error("this model's spectral head reads the whole window (the file was exported before the head streamed; export it again): classify whole windows, not a stream")]
     WholeWindowOnly,
     #[error("batch size must be at least 1")]
     EmptyBatch,

@@ -10,11 +10,16 @@ use crate::StopRule;
 pub(crate) struct Stages {
     /// One kept token's frames `[1, tubelet, height, width, channels]` and its index → `[1, dim]`.
     pub(crate) spatial: Plan,
-    /// All kept tokens' encodings `[kept, dim]` (and, where the file has the seam, the key bias
-    /// `[1, 1, 1, tokens + 1]`) → probabilities `[1, classes]`.
+    /// All kept tokens' encodings `[kept, dim]` (and, where the file has the seams, the key bias
+    /// `[1, 1, 1, tokens + 1]` and the window so far `[1, height, width, (channels,) frames]`)
+    /// → probabilities `[1, classes]`.
     pub(crate) temporal: Plan,
     /// Whether the temporal stage reads a key bias, so that it can answer for a prefix.
     pub(crate) prefixes: bool,
+    /// For a file whose spectral head streams (`FRAME_WEIGHTS`), the shape of the window the
+    /// temporal stage reads, `[1, height, width, (channels,) frames]`: a session writes the kept
+    /// frames it receives into one, zeros elsewhere.
+    pub(crate) window: Option<Vec<usize>>,
     /// The file's stopping rule (`Header::stop_rule`).
     pub(crate) stop_rule: Option<StopRule>,
     /// For each temporal token, its index among the kept tokens.

@@ -11,6 +11,10 @@
 //! the tokens received so far. The file's key bias (`token_bias`, format 1.1) takes −∞ for every
 //! token not yet received, so no temporal attention reads one: the CLS token sees the touch so
 //! far, exactly as if the window ended there (the f64 reference's `forward_prefix`).
+//!
+//! A spectral head reads frames, not encodings: for a file whose head streams (`frame_weights`),
+//! the session keeps the kept frames received in a window (zeros elsewhere) and hands it to the
+//! temporal stage with the bias, from which the head weighs the frames received.
 
 use std::sync::Arc;
 
@@ -45,6 +49,9 @@ pub struct Session {
     token: Vec<f32>,
     /// The encodings of the kept tokens completed so far, `[kept, dim]`.
     encodings: Vec<f32>,
+    /// For a spectral head, the window so far in the sample layout: the kept frames received,
+    /// zeros elsewhere.
+    window: Option<Vec<f32>>,
     /// The class answered after each number of tokens of this touch, where one was asked: what
     /// the stopping rule's agreement reads.
     answered: Vec<Option<usize>>,
@@ -53,7 +60,9 @@ pub struct Session {
 impl Classifier {
     /// A streaming session (builds the two stages on first use).
     pub fn session(&self) -> Result<Session> {
-        Ok(Session { stages: self.stages()?, received: 0, token: Vec::new(), encodings: Vec::new(), answered: Vec::new() })
+        let stages = self.stages()?;
+        let window = stages.window.as_ref().map(|shape| vec![0.0; shape.iter().product()]);
+        Ok(Session { stages, received: 0, token: Vec::new(), encodings: Vec::new(), window, answered: Vec::new() })
     }
 }
 
@@ -87,6 +96,10 @@ impl Session {
             return Err(Error::NonFinite { index, value: *value });
         }
         self.token.extend_from_slice(frame);
+        if let Some(window) = &mut self.window {
+            // The sample layout is frame-last: value `p` of frame `n` sits at `p · frames + n`.
+            window.iter_mut().skip(self.received).step_by(frames).zip(frame).for_each(|(w, v)| *w = *v);
+        }
         self.received += 1;
         if self.received.is_multiple_of(tubelet) {
             let frames = Tensor::from_shape(&self.stages.token_shape, &self.token).map_err(tract_error)?;
@@ -177,6 +190,9 @@ impl Session {
             let bias: Vec<f32> = (0..=total).map(|k| if k <= tokens { 0.0 } else { f32::NEG_INFINITY }).collect();
             inputs.push(Tensor::from_shape(&[1, 1, 1, total + 1], &bias).map_err(tract_error)?.into());
         }
+        if let (Some(shape), Some(window)) = (&self.stages.window, &self.window) {
+            inputs.push(Tensor::from_shape(shape, window).map_err(tract_error)?.into());
+        }
         let out = self.stages.temporal.run(inputs)?;
         Ok(prediction(&self.stages.classes, &outputs_of(&out, 0, self.stages.classes.len())?))
     }
@@ -186,6 +202,9 @@ impl Session {
         self.received = 0;
         self.token.clear();
         self.encodings.clear();
+        if let Some(window) = &mut self.window {
+            window.fill(0.0);
+        }
         self.answered.clear();
     }
 }

@@ -1,5 +1,5 @@
 //! A BioTac-shaped PVT³ with a spectral head (a standardisation and a normalisation other than
-//! the identity) and raw windows for it: what the export test runs in onnxruntime and the runtime
+//! the identity, a third of its temporal tokens pruned) and raw windows for it: what the export test runs in onnxruntime and the runtime
 //! test in tract, each against the f64 reference of the same baked model.
 
 use pvt3_models::weights::varmap_tensors;
@@ -26,6 +26,8 @@ pub fn spectral_case(windows: usize) -> SpectralCase {
     for name in ["spectral.scale", "spectral.shift"] {
         tensors.get_mut(name).unwrap().1.iter_mut().for_each(|v| *v = 0.5 + rng.normal().abs());
     }
+    // Tokens 1, 4, 7, … pruned: the head reads neither their frames nor any after a prefix.
+    tensors.get_mut("frame_mask").unwrap().1.iter_mut().enumerate().for_each(|(k, v)| *v = if k % 3 == 1 { 0.0 } else { 1.0 });
     let norm = Normalization {
         mean: (0..19).map(|_| 100.0 * rng.normal()).collect(),
         std: (0..19).map(|_| 1.0 + 20.0 * rng.normal().abs()).collect(),

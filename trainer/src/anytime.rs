@@ -76,16 +76,14 @@ pub struct Answers {
     pub tokens: usize,
 }
 
-/// The PVT³ network of `model` if it gives provisional answers: not another network, nor a PVT³
-/// with a spectral head, which reads the whole window.
+/// The PVT³ network of `model`, which gives provisional answers; `None` for another network.
 pub fn answering(model: &pvt3_models::Classifier) -> Option<&Pvt3> {
-    model.pvt3("provisional answers").ok().filter(|m| m.config().streams())
+    model.pvt3("provisional answers").ok()
 }
 
 /// The provisional answers of `model` on `samples`: the spatial stage once per window, the
 /// temporal one per prefix (as `Session::peek` runs it).
 pub fn answers(model: &Pvt3, samples: &Samples) -> Result<Answers> {
-    model.config().require_streams("provisional answers")?;
     let tokens = model.config().time_tokens();
     let mut probabilities = vec![Vec::with_capacity(tokens); samples.len()];
     let rows: Vec<usize> = (0..samples.len()).collect();
@@ -93,7 +91,7 @@ pub fn answers(model: &Pvt3, samples: &Samples) -> Result<Answers> {
         let (x, _) = samples.batch(chunk, |_| {})?;
         let sequence = model.sequence(&x, None)?;
         for k in 1..=tokens {
-            let p = candle_nn::ops::softmax_last_dim(&model.classify_sequence(&model.prefix(&sequence, k)?, None)?)?.to_vec2::<f32>()?;
+            let p = candle_nn::ops::softmax_last_dim(&model.classify_prefix(&x, &sequence, k, None)?.0)?.to_vec2::<f32>()?;
             for (row, &r) in p.into_iter().zip(chunk) {
                 probabilities[r].push(row);
             }

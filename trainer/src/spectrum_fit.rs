@@ -13,14 +13,15 @@ use crate::Result;
 /// Sets `spectral.scale` and `spectral.shift` of a PVT³ model with a spectral head from the
 /// features of `train`; does nothing for other models.
 pub fn fit(model: &Classifier, varmap: &VarMap, train: &Samples) -> Result<()> {
-    let Some(spectrum) = model.pvt3("the spectral head").ok().and_then(|m| m.spectrum()) else {
+    let Some((pvt3, spectrum)) = model.pvt3("the spectral head").ok().and_then(|m| Some((m, m.spectrum()?))) else {
         return Ok(());
     };
+    let whole = pvt3.frame_weights(pvt3.config().time_tokens())?;
     let rows: Vec<usize> = (0..train.len()).collect();
     let mut features = Vec::with_capacity(train.len());
     for chunk in rows.chunks(256) {
         let (x, _) = train.batch(chunk, |_| {})?;
-        features.push(spectrum.features(&x)?);
+        features.push(spectrum.features(&x, &whole)?);
     }
     let features = Tensor::cat(&features, 0)?.to_dtype(candle_core::DType::F64)?;
     let mean = features.mean(0)?;
@@ -58,7 +59,7 @@ mod tests {
         let (x, _) = train.batch(&(0..n).collect::<Vec<_>>(), |_| {}).unwrap();
         let data = varmap.data().lock().unwrap();
         let (scale, shift) = (data["spectral.scale"].as_tensor(), data["spectral.shift"].as_tensor());
-        let z = spectrum.features(&x).unwrap().broadcast_mul(scale).unwrap().broadcast_add(shift).unwrap();
+        let z = spectrum.features(&x, &[1.0; 75]).unwrap().broadcast_mul(scale).unwrap().broadcast_add(shift).unwrap();
         let mean: Vec<f32> = z.mean(0).unwrap().to_vec1().unwrap();
         let var: Vec<f32> = z.sqr().unwrap().mean(0).unwrap().to_vec1().unwrap();
         assert_eq!(mean.len(), cfg.spectral_features());

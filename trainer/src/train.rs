@@ -530,7 +530,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
 
 /// Calibrates the stopping rule of provisional answers ([`crate::anytime`]) for the PVT³
 /// checkpoint in `dir` on the validation samples, into its provenance (which the exporter
-/// writes into the file). Other networks, and PVT³ with a spectral head, give no provisional answers.
+/// writes into the file). Other networks give no provisional answers.
 fn calibrate_stopping(dir: &Path, val_set: &Samples) -> Result<()> {
     let (mut meta, model, _) = checkpoint::load(dir)?;
     let Some(pvt3) = crate::anytime::answering(&model) else { return Ok(()) };

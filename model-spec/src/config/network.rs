@@ -79,8 +79,8 @@ impl Network {
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Pvt3Config {
     /// Frequency bands of the spectral head (`crate::spectrum`), which adds to the transformer's
-    /// logits a linear map of each channel's mean level and log band powers over the window; 0
-    /// has no such head.
+    /// logits a linear map of each channel's mean level and log band powers over the kept frames
+    /// received so far (the whole window at the end of a touch); 0 has no such head.
     pub spectral_bands: usize,
 }
 

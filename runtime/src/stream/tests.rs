@@ -112,9 +112,10 @@ fn a_file_without_the_key_bias_gives_no_provisional_answer() {
     assert_eq!(s.finish().unwrap().probabilities, expected.probabilities);
 }
 
-/// A file with a spectral head (here the golden graph with a node writing `spectral_logits`,
-/// signed again) loads where the runtime has the `spectral` feature, and is not streamed; the
-/// small robot build, without it, refuses it at load, by name.
+/// A file with a spectral head that reads the whole window (here the golden graph with a node
+/// writing `spectral_logits` and none writing `frame_weights`, as files exported before the head
+/// streamed, signed again) loads where the runtime has the `spectral` feature, and is not
+/// streamed; the small robot build, without it, refuses it at load, by name.
 #[test]
 fn a_spectral_file_needs_the_spectral_feature() {
     use prost::Message;

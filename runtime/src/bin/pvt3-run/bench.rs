@@ -131,7 +131,7 @@ pub fn bench(path: &str, threads: usize, seconds: f64) -> Result<serde_json::Val
         "continuous_per_token_us": continuous_per_token_us,
     });
     if !c.streams() {
-        // A spectral head reads the whole window: the file is not streamed.
+        // A spectral head exported before it streamed reads the whole window: not streamed.
         return Ok(whole);
     }
     // A streamed touch.

@@ -21,7 +21,7 @@ with the exported model, one line per window: index, class, label, probability.
 --bench measures latency instead, on THREADS threads (default 1) for about SECONDS (default 2)
 per measurement: batch 1 and 32, batch 1 with tract's own kernels and with kernels timed at load,
 the first call, and a streamed touch (per kept frame, per pruned frame, end of touch; not for a
-file with a spectral head, which reads the whole window). Prints one JSON line.";
+file whose spectral head reads the whole window, exported before the head streamed). Prints one JSON line.";
 
 fn main() -> ExitCode {
     // SAFETY: first thing in main, before any other thread exists.
