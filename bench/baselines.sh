@@ -40,6 +40,9 @@
 #   spectral  with a spectral head of 16 bands (--set spectral_bands=16): each channel's level and
 #             log band powers, standardised, mapped linearly to logits added to the transformer's
 #   spectral-mixup  the same with --mixup 0.2
+#   spectral-anytime  the spectral row trained for early answers too (--prefix-training 0.8): the
+#             head reads the frames received so far, so its provisional answers and the
+#             cross-validation's stopping rule (docs/anytime.md) apply
 #   spectral-prunings  the spectral row's trained runs pruned further (after spectral): 70 % of
 #             channels, and 50 % of channels with 50 % of frames (LEVELS picks)
 #   e300-mixup-prunings  the e300-mixup row's trained runs pruned otherwise (after e300-mixup), as
@@ -134,6 +137,7 @@ for row in "${rows[@]}"; do
                 "channels70 channels50-frames50" "${route[@]}" --set spectral_bands=16
             continue ;;
         spectral-mixup-*) args=("${tried[@]}" --set spectral_bands=16 --mixup 0.2) ;;
+        spectral-anytime-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.8) ;;
         spectral-*) args=("${tried[@]}" --set spectral_bands=16) ;;
         ema-*) args=("${tried[@]}" --ema 0.995) ;;
         mixup-*) args=("${tried[@]}" --mixup 0.2) ;;

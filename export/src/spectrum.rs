@@ -43,18 +43,26 @@ pub(crate) fn spectral_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, n
     let weighed = g.node(Op::ReduceSum, &[FRAME_WEIGHTS, &axis], vec![int("keepdims", 1)], None);
     let weighed = g.op(Op::Max, &[&weighed, &one]);
 
+    // Every operand of the element-wise ops below is [channels, frames] or [b, channels, 1]: tract
+    // runs those in one pass, where a [channels, 1] or [frames] operand broadcast over the other
+    // axis takes 10–20 µs an op on BioTac's window (measured with bench/tools' profile).
     let rows = g.i64s("spectral_rows", &[3], vec![-1, channels as i64, frames as i64]);
     let x = g.op(Op::Reshape, &[INPUT, &rows]);
+    let plane = g.i64s("spectral_plane", &[3], vec![1, channels as i64, frames as i64]);
     let mean = g.f32s("spectral_norm_mean", &[channels, 1], norm.mean.clone());
+    let mean = g.op(Op::Expand, &[&mean, &plane]);
     let std = g.f32s("spectral_norm_std", &[channels, 1], norm.std.clone());
+    let std = g.op(Op::Expand, &[&std, &plane]);
+    let weights = g.op(Op::Expand, &[FRAME_WEIGHTS, &plane]);
     let x = g.op(Op::Sub, &[&x, &mean]);
     let x = g.op(Op::Div, &[&x, &std]);
-    let x = g.op(Op::Mul, &[&x, FRAME_WEIGHTS]);
-    let last = g.i64s("last_axis", &[1], vec![2]);
-    let level = g.node(Op::ReduceSum, &[&x, &last], vec![int("keepdims", 1)], None);
+    // The weighted sum as a product with the weights' column: a fifth of a ReduceSum's time.
+    let column = g.i64s("frames_column", &[2], vec![frames as i64, 1]);
+    let column = g.op(Op::Reshape, &[FRAME_WEIGHTS, &column]);
+    let level = g.op(Op::MatMul, &[&x, &column]);
     let level = g.op(Op::Div, &[&level, &weighed]);
     let centred = g.op(Op::Sub, &[&x, &level]);
-    let centred = g.op(Op::Mul, &[&centred, FRAME_WEIGHTS]);
+    let centred = g.op(Op::Mul, &[&centred, &weights]);
     // A real signal for the DFT op: [b, channels, frames, 1] → [b, channels, frames, 2].
     let real = g.i64s("spectral_real", &[4], vec![-1, channels as i64, frames as i64, 1]);
     let centred = g.op(Op::Reshape, &[&centred, &real]);

@@ -27,6 +27,8 @@ mod npy;
 mod onnx;
 mod plan;
 mod reading;
+#[cfg(feature = "spectral")]
+mod real_dft;
 pub mod resample;
 #[cfg(target_arch = "x86_64")]
 mod small_products;

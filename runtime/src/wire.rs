@@ -14,8 +14,6 @@ use tract_core::internal::*;
 use tract_core::ops::array::{Gather, MultiBroadcastTo, Slice, TypedConcat};
 use tract_core::ops::change_axes::{perm_to_ops, to_axis_ops_with_onnx_rules, wire_with_rank_broadcast};
 use tract_core::ops::einsum::EinSum;
-#[cfg(feature = "spectral")]
-use tract_core::ops::fft::Fft;
 use tract_core::ops::math;
 use tract_core::ops::nn::{Reduce, Reducer, Softmax};
 
@@ -150,17 +148,14 @@ impl Builder<'_> {
             #[cfg(feature = "spectral")]
             Op::Dft => {
                 // Opset 17, as the exporter writes it (the spectral head): a forward, two-sided
-                // transform of a real signal `[…, n, 1]` along `axis`, to `[…, n, 2]`. tract's FFT
-                // reads complex values: the imaginary parts, zeros, are appended first.
+                // transform of a real signal `[…, n, 1]` along its frames `n`, to `[…, n, 2]`.
                 arity(1..=1)?;
                 ensure!(node.int("inverse", 0) == 0 && node.int("onesided", 0) == 0, "an inverse or one-sided transform");
                 let shape = self.shape(x)?;
                 ensure!(shape.last() == Some(&1), "a complex input");
                 let axis = Self::axis(node.int("axis", 1), rank)?;
-                ensure!(axis < rank - 1, "a transform along the real/imaginary axis");
-                let zeros = self.model.add_const(format!("{name}.imaginary"), Tensor::zero::<f32>(&shape)?)?;
-                let complex = self.wire(format!("{name}.complex"), TypedConcat::new(rank - 1), &[x, zeros])?;
-                self.wire(name, Fft { axis, inverse: false }, &[complex])
+                ensure!(axis + 2 == rank, "a transform along another axis than the next-to-last");
+                self.wire(name, crate::real_dft::RealDft::new(shape[axis]), &[x])
             }
             // `Classifier::from_bytes` refuses a spectral file first (`Error::NoSpectral`).
             #[cfg(not(feature = "spectral"))]
