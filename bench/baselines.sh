@@ -43,6 +43,8 @@
 #   spectral-anytime  the spectral row trained for early answers too (--prefix-training 0.8): the
 #             head reads the frames received so far, so its provisional answers and the
 #             cross-validation's stopping rule (docs/anytime.md) apply
+#   spectral-anytime0.3  the same with --prefix-training 0.3
+#   spectral-anytime-mixup  the same with --prefix-training 0.5 --mixup 0.2
 #   spectral-prunings  the spectral row's trained runs pruned further (after spectral): 70 % of
 #             channels, and 50 % of channels with 50 % of frames (LEVELS picks)
 #   e300-mixup-prunings  the e300-mixup row's trained runs pruned otherwise (after e300-mixup), as
@@ -137,6 +139,8 @@ for row in "${rows[@]}"; do
                 "channels70 channels50-frames50" "${route[@]}" --set spectral_bands=16
             continue ;;
         spectral-mixup-*) args=("${tried[@]}" --set spectral_bands=16 --mixup 0.2) ;;
+        spectral-anytime-mixup-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.5 --mixup 0.2) ;;
+        spectral-anytime0.3-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.3) ;;
         spectral-anytime-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.8) ;;
         spectral-*) args=("${tried[@]}" --set spectral_bands=16) ;;
         ema-*) args=("${tried[@]}" --ema 0.995) ;;

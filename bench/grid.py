@@ -1,6 +1,7 @@
 """The run-time-versus-error frontier of docs/benchmarks.md. For each model of a grid (one
 `NAME=DIR[:pruned]` per argument: a `pvt3 cv` directory of several seeds × 4 folds, `:pruned` for
-its pruned runs, as `bash bench/baselines.sh` writes them), it takes the mean ± std of the test
+its pruned runs, as `bash bench/baselines.sh` writes them; a joint one's other sensor with
+`:partner` or `:partner-pruned`), it takes the mean ± std of the test
 accuracy over the runs from the directory's cv.json, the baked parameters and multiply-adds
 (`pvt3 info`), and, for the first run's model exported to ONNX, the latency in the pvt3 runtime (`pvt3-run --bench`, robot
 profile unless `--runner` names another build; also with tract's own kernel choice, untuned) and in
@@ -30,6 +31,13 @@ def info(run):
 
 def bench(cmd):
     return json.loads(subprocess.run(cmd, capture_output=True, text=True, check=True).stdout)
+
+
+def end_of_touch(measurements):
+    """The median time from a streamed touch's last frame to its answer, or — for a file that
+    is classified whole only."""
+    times = [m["stream_end_of_touch_median_us"] for m in measurements if "stream_end_of_touch_median_us" in m]
+    return f"{statistics.median(times):.0f}" if times else "—"
 
 
 def ticks(lo, hi, most=6):
@@ -119,15 +127,16 @@ def main():
             r["pvt3"].append(bench([a.runner, "--bench", r["onnx"], "1", str(a.seconds)]))
             r["ort"].append(bench([sys.executable, "bench/ort_latency.py", r["onnx"], str(a.seconds)]))
     med = lambda xs, k: statistics.median(x[k] for x in xs)
-    print("| model | seeds × folds | test accuracy, mean ± std | parameters | multiply-adds | tokens kept | pvt3 batch 1 median / p99 (µs) | pvt3 batch 1, untuned kernels (µs) | pvt3 batch 32 (windows/s) | onnxruntime batch 1 median (µs) | onnxruntime batch 32 (windows/s) | pvt3 / onnxruntime | speed-up over unpruned (pvt3, batch 1) |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    print("| model | seeds × folds | test accuracy, mean ± std | parameters | multiply-adds | tokens kept | pvt3 batch 1 median / p99 (µs) | pvt3 batch 1, untuned kernels (µs) | pvt3 batch 32 (windows/s) | onnxruntime batch 1 median (µs) | onnxruntime batch 32 (windows/s) | pvt3 / onnxruntime | speed-up over unpruned (pvt3, batch 1) | pvt3 streamed, answer after the last frame, median (µs) |")
+    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
     base = med(rows[0]["pvt3"], "batch1_median_us")
     for r in rows:
         r["pvt3_us"], r["ort_us"] = med(r["pvt3"], "batch1_median_us"), med(r["ort"], "batch1_median_us")
         print(f"| {r['name']} | {r['seeds']} × {r['runs'] // r['seeds']} | {r['accuracy'] + 1e-12:.4f} ± {r['std']:.4f} | {r['params']:,} | {r['macs'] / 1e6:.2f} M | {r['kept']} | "
               f"{r['pvt3_us']:.0f} / {med(r['pvt3'], 'batch1_p99_us'):.0f} | {med(r['pvt3'], 'batch1_untuned_median_us'):.0f} | "
               f"{med(r['pvt3'], 'batch32_windows_per_second'):.0f} | "
-              f"{r['ort_us']:.0f} | {med(r['ort'], 'batch32_windows_per_second'):.0f} | {r['pvt3_us'] / r['ort_us']:.2f} | {base / r['pvt3_us']:.2f}× |")
+              f"{r['ort_us']:.0f} | {med(r['ort'], 'batch32_windows_per_second'):.0f} | {r['pvt3_us'] / r['ort_us']:.2f} | {base / r['pvt3_us']:.2f}× | "
+              f"{end_of_touch(r['pvt3'])} |")
     svg(rows, a.svg)
 
 

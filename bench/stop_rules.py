@@ -18,7 +18,8 @@ target/stop_rules/). The rules:
   stricter neighbours (higher t, longer agreement) lose nothing either.
 - per-class thresholds: one threshold per answered class, each calibrated as the shipped one.
 - 0.5-point allowance: the shipped rule calibrated to lose at most 0.5 points on validation.
-- pooled over the cross-validation (runs of one `pvt3 cv`, `OUT/seedS/foldK`, given together):
+- pooled over the cross-validation (runs of one `pvt3 cv`, `OUT/seedS/foldK`, or its pruned runs
+  `OUT/seedS/foldK/pruned`, given together):
   calibrated once on the validation answers of all its runs (each fold's model on its own
   validation fold; 12 × 200 samples for 3 seeds) and applied to each run's test answers; with no
   loss allowed and 3 agreeing, and as `pvt3 cv` ships it (trainer/src/cv_stopping.rs): a loss of
@@ -167,8 +168,11 @@ def main():
         pt, yt, report = answers(run, 4)
         val, test = Answers(pv, yv), Answers(pt, yt)
         here = Path(run).resolve()
-        if here.name.startswith("fold") and here.parent.name.startswith("seed"):
-            cv_of.setdefault(here.parent.parent, []).append(((pv, yv), test, report, run))
+        # A fold's run, or its pruned run (`OUT/seedS/foldK/pruned`), pooled with its own kind.
+        fold = here.parent if here.name == "pruned" else here
+        if fold.name.startswith("fold") and fold.parent.name.startswith("seed"):
+            kind = f"{fold.parent.parent}" + (" (pruned runs)" if fold != here else "")
+            cv_of.setdefault(kind, []).append(((pv, yv), test, report, run))
         results = rules(val, test, confusions)
         if report["calibrated"].get("calibrated_on", "validation_fold") == "validation_fold":
             check(run, results[0][1:], report)
