@@ -45,6 +45,7 @@
 #             cross-validation's stopping rule (docs/anytime.md) apply
 #   spectral-anytime0.3  the same with --prefix-training 0.3
 #   spectral-anytime-mixup  the same with --prefix-training 0.5 --mixup 0.2
+#   anytime   trained for early answers too (--prefix-training 0.5), without the spectral head
 #   spectral-prunings  the spectral row's trained runs pruned further (after spectral): 70 % of
 #             channels, and 50 % of channels with 50 % of frames (LEVELS picks)
 #   e300-mixup-prunings  the e300-mixup row's trained runs pruned otherwise (after e300-mixup), as
@@ -139,6 +140,7 @@ for row in "${rows[@]}"; do
                 "channels70 channels50-frames50" "${route[@]}" --set spectral_bands=16
             continue ;;
         spectral-mixup-*) args=("${tried[@]}" --set spectral_bands=16 --mixup 0.2) ;;
+        anytime-*) args=("${tried[@]}" --prefix-training 0.5) ;;
         spectral-anytime-mixup-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.5 --mixup 0.2) ;;
         spectral-anytime0.3-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.3) ;;
         spectral-anytime-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.8) ;;
