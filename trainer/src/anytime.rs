@@ -244,6 +244,36 @@ impl Prefixes {
 mod tests {
     use super::*;
 
+    /// The answers after each token are the model's on the touch so far, a spectral head's over
+    /// the frames received (`Pvt3::forward_prefix`), and the last is the whole window's.
+    #[test]
+    fn the_answers_are_the_model_on_each_prefix_with_a_spectral_head() {
+        let cfg = pvt3_models::Config {
+            frames: 12,
+            tubelet: 3,
+            network: pvt3_models::Pvt3Config { spectral_bands: 4 }.into(),
+            ..pvt3_models::Config::icub20()
+        };
+        let (model, _) = Pvt3::init(&cfg, 5).unwrap();
+        let mut rng = pvt3_models::Rng::new(8);
+        let n = 3;
+        let x: Vec<f32> = (0..n * 60 * 12).map(|_| rng.normal()).collect();
+        let samples = Samples { x, labels: vec![0; n], sample_shape: cfg.sample_shape(), touches: (0..n).collect() };
+        let a = answers(&model, &samples).unwrap();
+        assert_eq!(a.tokens, 4);
+        let (x, _) = samples.batch(&[0, 1, 2], |_| {}).unwrap();
+        for tokens in 1..=4 {
+            let logits = if tokens == 4 { model.forward(&x, None) } else { model.forward_prefix(&x, tokens, None) };
+            let expected = candle_nn::ops::softmax_last_dim(&logits.unwrap()).unwrap().to_vec2::<f32>().unwrap();
+            for (sample, row) in expected.iter().enumerate() {
+                let got = &a.probabilities[sample][tokens - 1];
+                assert!(got.iter().zip(row).all(|(g, e)| (g - e).abs() < 1e-6), "{tokens} tokens, sample {sample}");
+            }
+        }
+        // The head reads the frames received: the first token's answer is not the whole window's.
+        assert_ne!(a.probabilities[0][0], a.probabilities[0][3]);
+    }
+
     /// Stopping reads each sample's first confident token whose class the answers before agree
     /// on; the calibration stops before the first threshold that costs accuracy.
     #[test]
