@@ -21,27 +21,8 @@ use crate::layers::linear;
 pub(crate) fn spectral_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, norm: &Normalization) -> String {
     let c = &m.config;
     let (channels, frames, bands) = (c.sensor_channels(), c.frames, c.spectral_bands());
-    let (k, t, tt) = (bins(frames), c.time_tokens(), c.tubelet);
-    // The weights: max(bias + 1, 0) is 1 where the key bias is 0 and 0 where it is −∞, times 1
-    // for a kept token; each token's weight repeated over its frames.
-    let bias = g.i64s("spectral_bias_rows", &[1], vec![-1]);
-    let bias = g.op(Op::Reshape, &[TOKEN_BIAS, &bias]);
-    let (from, to, axis) = (g.i64s("one", &[1], vec![1]), g.i64s("tokens_end", &[1], vec![t as i64 + 1]), g.i64s("axis0", &[1], vec![0]));
-    let bias = g.op(Op::Slice, &[&bias, &from, &to, &axis]);
-    let one = g.f32s("one", &[1], vec![1.0]);
-    let zero = g.f32s("zero", &[1], vec![0.0]);
-    let received = g.op(Op::Add, &[&bias, &one]);
-    let received = g.op(Op::Max, &[&received, &zero]);
-    let kept = g.f32s("kept_token_weights", &[t], (0..t).map(|k| if m.kept_tokens.contains(&k) { 1.0 } else { 0.0 }).collect());
-    let weights = g.op(Op::Mul, &[&received, &kept]);
-    let column = g.i64s("token_column", &[2], vec![t as i64, 1]);
-    let weights = g.op(Op::Reshape, &[&weights, &column]);
-    let per_frame = g.i64s("token_frames_shape", &[2], vec![t as i64, tt as i64]);
-    let weights = g.op(Op::Expand, &[&weights, &per_frame]);
-    let flat_frames = g.i64s("frames_shape", &[1], vec![frames as i64]);
-    g.node(Op::Reshape, &[&weights, &flat_frames], vec![], Some(FRAME_WEIGHTS));
-    let weighed = g.node(Op::ReduceSum, &[FRAME_WEIGHTS, &axis], vec![int("keepdims", 1)], None);
-    let weighed = g.op(Op::Max, &[&weighed, &one]);
+    let k = bins(frames);
+    let weighed = frame_weights(g, m);
 
     // Every operand of the element-wise ops below is [channels, frames] or [b, channels, 1]: tract
     // runs those in one pass, where a [channels, 1] or [frames] operand broadcast over the other
@@ -94,4 +75,30 @@ pub(crate) fn spectral_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, n
     let features = g.op(Op::Add, &[&features, &shift]);
     let logits = linear(g, &features, &s.linear, "spectral_linear");
     g.node(Op::Identity, &[&logits], vec![], Some(SPECTRAL_LOGITS))
+}
+
+/// Writes [`FRAME_WEIGHTS`] `[frames]` from the key bias: max(bias + 1, 0) is 1 where the bias is
+/// 0 and 0 where it is −∞, times 1 for a kept token, each token's weight repeated over its
+/// frames. Returns `N`, the frames weighed, at least 1 (`pvt3_spec::spectrum::weighed_frames`).
+fn frame_weights(g: &mut Graph, m: &BakedPvt3) -> String {
+    let c = &m.config;
+    let (t, tt) = (c.time_tokens(), c.tubelet);
+    let bias = g.i64s("spectral_bias_rows", &[1], vec![-1]);
+    let bias = g.op(Op::Reshape, &[TOKEN_BIAS, &bias]);
+    let (from, to, axis) = (g.i64s("one", &[1], vec![1]), g.i64s("tokens_end", &[1], vec![t as i64 + 1]), g.i64s("axis0", &[1], vec![0]));
+    let bias = g.op(Op::Slice, &[&bias, &from, &to, &axis]);
+    let one = g.f32s("one", &[1], vec![1.0]);
+    let zero = g.f32s("zero", &[1], vec![0.0]);
+    let received = g.op(Op::Add, &[&bias, &one]);
+    let received = g.op(Op::Max, &[&received, &zero]);
+    let kept = g.f32s("kept_token_weights", &[t], (0..t).map(|k| if m.kept_tokens.contains(&k) { 1.0 } else { 0.0 }).collect());
+    let weights = g.op(Op::Mul, &[&received, &kept]);
+    let column = g.i64s("token_column", &[2], vec![t as i64, 1]);
+    let weights = g.op(Op::Reshape, &[&weights, &column]);
+    let per_frame = g.i64s("token_frames_shape", &[2], vec![t as i64, tt as i64]);
+    let weights = g.op(Op::Expand, &[&weights, &per_frame]);
+    let flat_frames = g.i64s("frames_shape", &[1], vec![c.frames as i64]);
+    g.node(Op::Reshape, &[&weights, &flat_frames], vec![], Some(FRAME_WEIGHTS));
+    let weighed = g.node(Op::ReduceSum, &[FRAME_WEIGHTS, &axis], vec![int("keepdims", 1)], None);
+    g.op(Op::Max, &[&weighed, &one])
 }
