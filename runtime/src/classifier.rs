@@ -264,16 +264,16 @@ impl Classifier {
         if prefixes {
             temporal.push((TOKEN_BIAS, f32::fact([1, 1, 1, kept_index.len() + 1])));
         }
-        let window = self.has_tensor(FRAME_WEIGHTS);
-        if window {
-            temporal.push((INPUT, f32::fact(self.batch_shape(1))));
+        let window = self.has_tensor(FRAME_WEIGHTS).then(|| self.batch_shape(1));
+        if let Some(shape) = &window {
+            temporal.push((INPUT, f32::fact(shape)));
         }
         Ok(Stages {
             // A session feeds the spatial stage the index of a kept token: below `kept`.
             spatial: self.optimise(self.wire(&spatial, &[TOKEN_ENCODINGS])?, &[(TOKEN_INDEX, kept)])?,
             temporal: self.optimise(self.wire(&temporal, &[PROBABILITIES])?, &[])?,
             prefixes,
-            window: window.then(|| self.batch_shape(1)),
+            window,
             stop_rule: self.stop_rule(),
             kept_index,
             token_shape,
