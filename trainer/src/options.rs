@@ -47,6 +47,13 @@ pub struct TrainOptions {
     #[arg(long, default_value_t = 0.0)]
     #[serde(default)]
     pub aug_scale: f64,
+    /// Augmentation: multiply each channel's raw readings in a training window by a random
+    /// factor of its own, log-uniform in [1 / (1 + S), 1 + S]: the pattern of levels across the
+    /// sensor distorted, as a press beyond the trained forces distorts it (docs/robustness.md,
+    /// "What force does to the readings"). E.g. 0.05. 0 turns it off.
+    #[arg(long, default_value_t = 0.0)]
+    #[serde(default)]
+    pub aug_channel_scale: f64,
     /// Augmentation: multiply each training window's variation about its mean (per channel, the
     /// level kept) by a random factor, log-uniform in [1 / (1 + S), 1 + S]: a firmer press makes
     /// a texture's vibration grow faster than the level (docs/robustness.md). E.g. 0.5. 0 turns

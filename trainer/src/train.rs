@@ -282,10 +282,13 @@ fn vars_where(varmap: &VarMap, keep: fn(&str, &Var) -> bool) -> Vec<Var> {
 
 fn augment(sample: &mut [f32], norm: &Normalization, opts: &TrainOptions, rng: &mut Rng) {
     let frames = norm.frames;
-    if opts.aug_scale > 0.0 {
-        // The raw readings times k, in normalised units: k z + (k - 1) mean / std, per channel.
-        let k = log_uniform_factor(opts.aug_scale, rng) as f32;
+    if opts.aug_scale > 0.0 || opts.aug_channel_scale > 0.0 {
+        // The raw readings times k, in normalised units: k z + (k - 1) mean / std, per channel;
+        // k one factor for the window times one of the channel's own.
+        let window = if opts.aug_scale > 0.0 { log_uniform_factor(opts.aug_scale, rng) as f32 } else { 1.0 };
         for (row, (m, s)) in sample.chunks_mut(frames).zip(norm.mean.iter().zip(&norm.std)) {
+            let own = if opts.aug_channel_scale > 0.0 { log_uniform_factor(opts.aug_channel_scale, rng) as f32 } else { 1.0 };
+            let k = window * own;
             let lift = (k - 1.0) * m / s;
             row.iter_mut().for_each(|v| *v = k * *v + lift);
         }

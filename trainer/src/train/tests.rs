@@ -74,6 +74,7 @@ fn options(epochs: usize) -> TrainOptions {
         aug_noise: 0.05,
         aug_shift: 0,
         aug_scale: 0.0,
+        aug_channel_scale: 0.0,
         aug_vibration: 0.0,
         aug_stretch: 0.0,
         mixup: 0.0,
@@ -289,6 +290,32 @@ fn scaling_multiplies_the_raw_readings_of_every_channel_alike() {
         factors.push(k);
     }
     assert!(factors.iter().any(|k| *k < 0.8) && factors.iter().any(|k| *k > 1.25), "{factors:?}");
+}
+
+#[test]
+fn channel_scaling_multiplies_each_channels_raw_readings_by_a_factor_of_its_own() {
+    let opts = TrainOptions { aug_channel_scale: 0.2, aug_gain: 0.0, aug_noise: 0.0, ..TrainOptions::default() };
+    let norm = Normalization { mean: vec![100.0, -4.0, 50.0], std: vec![10.0, 2.0, 5.0], frames: 3 };
+    let raw = [90.0, 100.0, 130.0, -6.0, -4.0, -1.0, 40.0, 55.0, 60.0];
+    let mut sample = Vec::new();
+    norm.apply_into(&raw, &mut sample);
+    let mut rng = Rng::new(5);
+    let mut apart = 0;
+    for _ in 0..40 {
+        let mut s = sample.clone();
+        augment(&mut s, &norm, &opts, &mut rng);
+        let back: Vec<f32> = s.iter().enumerate().map(|(i, z)| z * norm.std[i / 3] + norm.mean[i / 3]).collect();
+        let factors: Vec<f32> = (0..3).map(|c| back[3 * c] / raw[3 * c]).collect();
+        for (c, k) in factors.iter().enumerate() {
+            assert!((1.0 / 1.2 - 1e-4..=1.2 + 1e-4).contains(k), "{k}");
+            for t in 0..3 {
+                let (b, r) = (back[3 * c + t], raw[3 * c + t]);
+                assert!((b - k * r).abs() < 1e-3, "channel {c}: {back:?} is not {k} × {raw:?}");
+            }
+        }
+        apart += usize::from((factors[0] - factors[2]).abs() > 0.02);
+    }
+    assert!(apart > 20, "the channels' factors differ: {apart} of 40");
 }
 
 #[test]
