@@ -525,6 +525,28 @@ fn a_robot_reads_a_touch_by_its_speed_and_force_as_the_import_did() {
     assert_eq!(read, imported, "the robot reads the touch as the training's import did, bit for bit");
     let window: Vec<f32> = read.chunks(n).flat_map(|row| row[..32].to_vec()).collect();
     assert!(c.classify(&window).is_ok());
+    // Streamed as recorded: a session for the touch takes the file's rows one at a time and
+    // answers, provisionally and at the end, as a session given the window read_touch returns.
+    let touch = pvt3_runtime::Touch { speed: Some(50.0), force: Some(210.0) };
+    let (mut recorded, mut given) = (c.session_for(touch).unwrap(), c.session().unwrap());
+    let frame_of = |frames: &[f32], len: usize, t: usize| -> Vec<f32> { (0..4).map(|e| frames[e * len + t]).collect() };
+    let (mut pushed, mut peeks) = (0, 0);
+    while recorded.received() < recorded.frames() {
+        recorded.push_frame(&rows[pushed]).unwrap();
+        pushed += 1;
+        while given.received() < recorded.received() {
+            given.push_frame(&frame_of(&window, 32, given.received())).unwrap();
+        }
+        if let (Ok(a), Ok(b)) = (recorded.peek(), given.peek()) {
+            assert_eq!((a.prediction.probabilities, a.frames), (b.prediction.probabilities, b.frames));
+            peeks += 1;
+        }
+    }
+    assert!(pushed <= 32 / 5 + 2 && peeks >= 4, "{pushed} recorded frames for 32 read, {peeks} peeks");
+    assert!(matches!(recorded.push_frame(&rows[pushed]), Err(pvt3_runtime::Error::TooManyFrames { .. })));
+    let (a, b) = (recorded.finish().unwrap(), given.finish().unwrap());
+    assert_eq!(a.probabilities, b.probabilities, "the same frames, the same answer, bit for bit");
+    assert!(c.classify(&window).unwrap().probabilities.iter().zip(&a.probabilities).all(|(x, y)| (x - y).abs() < 1e-5));
     let err = c.read_touch(&frames, pvt3_runtime::Touch { speed: Some(50.0), force: None }).unwrap_err().to_string();
     assert!(err.contains("give the touch's force"), "{err}");
     std::fs::remove_dir_all(dir).unwrap();

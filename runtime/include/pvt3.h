@@ -82,6 +82,13 @@ int pvt3_read_touch(const pvt3_classifier *c, const float *frames, size_t frames
  * arrives, and finishing runs only the temporal stage; the result equals pvt3_classify on the
  * whole window. After finish the session is ready for the next touch. */
 int pvt3_session_new(const pvt3_classifier *c, pvt3_session **out);
+/* A session for touches recorded at `speed` and `force` (0: not known): it takes the frames as
+ * the sensor records them and reads them as the model reads touches, frame by frame what
+ * pvt3_read_touch does to a whole touch (a frame read by distance is pushed on as soon as the
+ * recorded frames it spans are in; frames read beyond the window are dropped; finishing first takes
+ * the frames read after the last recorded one). For a model without a reading, pvt3_session_new.
+ * PVT3_ERR_INPUT for a speed or force the model needs and was not given. */
+int pvt3_session_new_touch(const pvt3_classifier *c, double speed, double force, pvt3_session **out);
 /* Frees a session (NULL is ignored); it may outlive its classifier. */
 void pvt3_session_free(pvt3_session *s);
 int pvt3_session_push_frame(pvt3_session *s, const float *frame, size_t frame_len);

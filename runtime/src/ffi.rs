@@ -315,9 +315,7 @@ pub unsafe extern "C" fn pvt3_read_touch(
             return Err(null("out"));
         }
         let written = written.as_mut().ok_or_else(|| null("written"))?;
-        let known = |v: f64| (v != 0.0).then_some(v);
-        let touch = crate::Touch { speed: known(speed), force: known(force) };
-        let read = c.classifier.read_touch(std::slice::from_raw_parts(frames, frames_len), touch).map_err(fail)?;
+        let read = c.classifier.read_touch(std::slice::from_raw_parts(frames, frames_len), touch(speed, force)).map_err(fail)?;
         *written = read.len();
         if out_len < read.len() {
             return Err((PVT3_ERR_INPUT, format!("out has room for {out_len} values; the touch reads as {}", read.len())));
@@ -341,6 +339,30 @@ pub unsafe extern "C" fn pvt3_session_new(c: *const Pvt3Classifier, out: *mut *m
         *out = Box::into_raw(Box::new(Pvt3Session { session, names: c.names.len() }));
         Ok(())
     })
+}
+
+/// Starts a streaming session for touches recorded at `speed` and `force` (0: not known), as
+/// `pvt3_session_new`, whose frames are taken as recorded and read as the model reads touches
+/// (`Classifier::session_for`, frame by frame what `pvt3_read_touch` does to a whole touch).
+/// PVT3_ERR_INPUT for a speed or force the model needs and was not given.
+///
+/// # Safety
+/// `c` is a live handle or null; `out` is writable or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_session_new_touch(c: *const Pvt3Classifier, speed: f64, force: f64, out: *mut *mut Pvt3Session) -> c_int {
+    guard(|| {
+        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
+        let out = out.as_mut().ok_or_else(|| null("out"))?;
+        let session = c.classifier.session_for(touch(speed, force)).map_err(fail)?;
+        *out = Box::into_raw(Box::new(Pvt3Session { session, names: c.names.len() }));
+        Ok(())
+    })
+}
+
+/// What the robot knows of a touch, 0 for what it does not.
+fn touch(speed: f64, force: f64) -> crate::Touch {
+    let known = |v: f64| (v != 0.0).then_some(v);
+    crate::Touch { speed: known(speed), force: known(force) }
 }
 
 /// Frees a session (null is ignored).

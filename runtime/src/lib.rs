@@ -44,5 +44,5 @@ pub use kernels::{tune as tune_kernels, Kernels};
 pub use npy::read_npy;
 pub use plan::declutter;
 pub use pvt3_format::StopRule;
-pub use reading::{read_touch, Reading, Touch};
+pub use reading::{read_touch, Reading, Touch, TouchReader};
 pub use stream::{Peek, Session};

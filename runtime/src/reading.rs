@@ -4,7 +4,7 @@
 //! it commands, hands them over with its frames, and gets the frames the model reads. The
 //! trainer's import calls the same function, so a robot reads a touch as the training did.
 
-use crate::resample::resample;
+use crate::resample::{span_mean, span_reads_up_to};
 use crate::{Error, Result};
 
 pub use pvt3_format::Reading;
@@ -21,42 +21,144 @@ pub struct Touch {
 /// as long as the touch, to how `reading` reads touches: resampled to the frames it would have at
 /// `reading.speed` (`n · |speed| / reading.speed` of them, at least one), then its readings times
 /// `reading.force / force`. A reading that needs the speed or the force refuses a touch without it.
+/// It is the touch pushed through a [`TouchReader`] frame by frame, so that a robot's stream and
+/// a whole touch are read alike, bit for bit.
 pub fn read_touch(frames: &[f32], rows: usize, reading: &Reading, touch: Touch) -> Result<Vec<f32>> {
-    let refuse = |reason: String| Err(Error::Touch(reason));
     if rows == 0 || frames.is_empty() || !frames.len().is_multiple_of(rows) {
-        return refuse(format!("{} values are not {rows} rows of one or more frames", frames.len()));
+        return Err(Error::Touch(format!("{} values are not {rows} rows of one or more frames", frames.len())));
     }
     if let Some(index) = frames.iter().position(|v| !v.is_finite()) {
         return Err(Error::NonFinite { index, value: frames[index] });
     }
     let n = frames.len() / rows;
-    let mut out = frames.to_vec();
-    if let Some(to) = reading.speed {
-        let Some(speed) = touch.speed.filter(|v| v.is_finite() && *v != 0.0) else {
-            return refuse(format!(
-                "the model reads touches by distance, as at speed {to}: give the touch's speed (finite, not 0), not {:?}",
-                touch.speed
-            ));
-        };
-        let len = ((n as f64 * speed.abs() / to).round() as usize).max(1);
-        out = out.chunks(n).flat_map(|row| resample(row, len)).collect();
+    let mut reader = TouchReader::new(rows, reading, touch)?;
+    let (mut read, mut frame) = (Vec::new(), vec![0.0; rows]);
+    for t in 0..n {
+        frame.iter_mut().enumerate().for_each(|(r, v)| *v = frames[r * n + t]);
+        reader.push(&frame, &mut read)?;
     }
-    if let Some(to) = reading.force {
-        let Some(force) = touch.force.filter(|v| v.is_finite() && *v > 0.0) else {
-            return refuse(format!(
-                "the model reads touches scaled to force {to}: give the touch's force (above 0), not {:?}",
-                touch.force
-            ));
+    reader.finish(&mut read);
+    // Frame after frame, back to the sample layout: row after row.
+    let len = read.len() / rows;
+    Ok((0..rows).flat_map(|r| read.iter().skip(r).step_by(rows).take(len).copied()).collect())
+}
+
+/// A touch read as [`read_touch`] reads it, frame by frame as the robot records it: a frame read
+/// by distance is given out as soon as the recorded frames it spans (and the one after, which
+/// the straight line between frames reads) have arrived, and the frames after the last recorded
+/// one when the touch ends ([`TouchReader::finish`]). A session made for a touch
+/// ([`crate::Classifier::session_for`]) reads its frames through one.
+#[derive(Clone, Debug)]
+pub struct TouchReader {
+    /// Values in one frame.
+    frame_len: usize,
+    /// Reading by distance: the touch's speed and the reading's.
+    speeds: Option<(f64, f64)>,
+    /// Reading at one force: the factor of every value.
+    scale: Option<f32>,
+    /// The touch recorded so far, one row of frames per value of a frame.
+    rows: Vec<Vec<f32>>,
+    /// Frames given out so far.
+    read: usize,
+}
+
+impl TouchReader {
+    /// A reader of frames of `frame_len` values, recorded at `touch`, read as `reading` reads
+    /// touches; refused where the reading needs a speed or a force `touch` does not give.
+    pub fn new(frame_len: usize, reading: &Reading, touch: Touch) -> Result<Self> {
+        let refuse = |reason: String| Err(Error::Touch(reason));
+        let speeds = match reading.speed {
+            None => None,
+            Some(to) => match touch.speed.filter(|v| v.is_finite() && *v != 0.0) {
+                Some(speed) => Some((speed.abs(), to)),
+                None => {
+                    return refuse(format!(
+                        "the model reads touches by distance, as at speed {to}: give the touch's speed (finite, not 0), not {:?}",
+                        touch.speed
+                    ))
+                }
+            },
         };
-        let k = (to / force) as f32;
-        out.iter_mut().for_each(|v| *v *= k);
+        let scale = match reading.force {
+            None => None,
+            Some(to) => match touch.force.filter(|v| v.is_finite() && *v > 0.0) {
+                Some(force) => Some((to / force) as f32),
+                None => {
+                    return refuse(format!(
+                        "the model reads touches scaled to force {to}: give the touch's force (above 0), not {:?}",
+                        touch.force
+                    ))
+                }
+            },
+        };
+        Ok(Self { frame_len, speeds, scale, rows: vec![Vec::new(); frame_len], read: 0 })
     }
-    Ok(out)
+
+    /// Takes the next recorded frame and appends the frames it completes to `out` (each
+    /// `frame_len` values); returns how many.
+    pub fn push(&mut self, frame: &[f32], out: &mut Vec<f32>) -> Result<usize> {
+        if frame.len() != self.frame_len {
+            return Err(Error::FrameLength { got: frame.len(), expected: self.frame_len });
+        }
+        if let Some((index, value)) = frame.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(Error::NonFinite { index, value: *value });
+        }
+        let Some((speed, to)) = self.speeds else {
+            let k = self.scale.unwrap_or(1.0);
+            out.extend(frame.iter().map(|v| if self.scale.is_some() { v * k } else { *v }));
+            return Ok(1);
+        };
+        self.rows.iter_mut().zip(frame).for_each(|(row, v)| row.push(*v));
+        let step = to / speed;
+        let before = self.read;
+        while span_reads_up_to(self.read as f64 * step, step) < self.recorded() {
+            self.give_out(out);
+        }
+        Ok(self.read - before)
+    }
+
+    /// Ends the touch: appends the frames read after its last recorded one (its frames held
+    /// beyond its end), up to `n · |speed| / reading.speed` in all (at least one); returns how
+    /// many. The reader is then ready for the next touch.
+    pub fn finish(&mut self, out: &mut Vec<f32>) -> usize {
+        let n = self.recorded();
+        let mut added = 0;
+        if let (Some((speed, to)), true) = (self.speeds, n > 0) {
+            let len = ((n as f64 * speed / to).round() as usize).max(1);
+            added = len.saturating_sub(self.read);
+            (0..added).for_each(|_| self.give_out(out));
+        }
+        self.reset();
+        added
+    }
+
+    /// Forgets the touch in progress.
+    pub fn reset(&mut self) {
+        self.rows.iter_mut().for_each(Vec::clear);
+        self.read = 0;
+    }
+
+    fn recorded(&self) -> usize {
+        self.rows.first().map_or(0, Vec::len)
+    }
+
+    /// Appends the next frame read by distance, from the frames recorded so far.
+    fn give_out(&mut self, out: &mut Vec<f32>) {
+        let Some((speed, to)) = self.speeds else { return };
+        let (step, last) = (to / speed, self.recorded() - 1);
+        let from = self.read as f64 * step;
+        for row in &self.rows {
+            let v = span_mean(|j| row[j], last, from, step);
+            out.push(self.scale.map_or(v, |k| v * k));
+        }
+        self.read += 1;
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::resample::resample_into;
 
     #[test]
     fn a_touch_is_resampled_by_its_speed_and_scaled_by_its_force() {
@@ -64,10 +166,45 @@ mod tests {
         let frames = [1.0, 3.0, 2.0, 6.0, 4.0, 0.0, 10.0, 10.0, 10.0, 10.0, 10.0, 10.0];
         let reading = Reading { speed: Some(150.0), force: Some(150.0) };
         let out = read_touch(&frames, 2, &reading, Touch { speed: Some(-50.0), force: Some(300.0) }).unwrap();
-        let rows: Vec<f32> = resample(&frames[..6], 2).into_iter().chain(resample(&frames[6..], 2)).map(|v| v * 0.5).collect();
-        assert_eq!(out, rows);
+        let mut rows = [0.0; 4];
+        resample_into(&frames[..6], 0.0, 3.0, &mut rows[..2]);
+        resample_into(&frames[6..], 0.0, 3.0, &mut rows[2..]);
+        assert_eq!(out, rows.map(|v| v * 0.5));
         // Neither part: the frames as they are.
         assert_eq!(read_touch(&frames, 2, &Reading::default(), Touch::default()).unwrap(), frames);
+    }
+
+    #[test]
+    fn a_stream_is_read_as_the_whole_touch_and_each_frame_as_soon_as_its_span_is_recorded() {
+        let (n, to) = (53, 150.0);
+        let touch: Vec<Vec<f32>> = (0..3).map(|r| (0..n).map(|t| ((t * 7 + r * 13) % 17) as f32 * 0.37 - r as f32).collect()).collect();
+        for speed in [150.0, 37.0, -10.0, 149.9, 400.0, -73.3] {
+            let reading = Reading { speed: Some(to), force: Some(120.0) };
+            let mut reader = TouchReader::new(3, &reading, Touch { speed: Some(speed), force: Some(240.0) }).unwrap();
+            let step = to / f64::abs(speed);
+            let len = ((n as f64 * f64::abs(speed) / to).round() as usize).max(1);
+            let (mut read, mut given) = (Vec::new(), 0);
+            for t in 0..n {
+                let frame: Vec<f32> = touch.iter().map(|row| row[t]).collect();
+                given += reader.push(&frame, &mut read).unwrap();
+                assert_eq!(given * 3, read.len(), "push counts the frames it gives out");
+                // A frame read is given out at most two recorded frames after the end of its span.
+                let due = (0..len).filter(|&k| (k + 1) as f64 * step + 2.0 <= (t + 1) as f64).count();
+                assert!(read.len() / 3 >= due, "speed {speed}: {} frames given after {} recorded, {due} due", read.len() / 3, t + 1);
+            }
+            let streamed = read.len() / 3;
+            assert_eq!(reader.finish(&mut read) + streamed, len, "speed {speed}");
+            for (r, row) in touch.iter().enumerate() {
+                let mut whole = vec![0.0; len];
+                resample_into(row, 0.0, step, &mut whole);
+                let got: Vec<f32> = read.iter().skip(r).step_by(3).copied().collect();
+                assert_eq!(got, whole.iter().map(|v| v * 0.5).collect::<Vec<f32>>(), "speed {speed}, row {r}, bit for bit");
+            }
+            let flat: Vec<f32> = touch.concat();
+            let whole = read_touch(&flat, 3, &reading, Touch { speed: Some(speed), force: Some(240.0) }).unwrap();
+            let rows: Vec<f32> = (0..3).flat_map(|r| read.iter().skip(r).step_by(3).copied().collect::<Vec<_>>()).collect();
+            assert_eq!(whole, rows);
+        }
     }
 
     #[test]

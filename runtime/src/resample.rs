@@ -9,33 +9,55 @@
 /// `start + t * step` to `start + (t + 1) * step` (in frames; source frame `j` spans `j..j + 1`,
 /// its value at its middle), the ends held beyond the first and last frames.
 pub fn resample_into(src: &[f32], start: f64, step: f64, out: &mut [f32]) {
-    let last = src.len().saturating_sub(1) as f64;
-    let at = |x: f64| -> f64 {
-        let x = (x - 0.5).clamp(0.0, last);
-        let j = x.floor() as usize;
-        let f = x - j as f64;
-        let next = src[(j + 1).min(src.len() - 1)] as f64;
-        src[j] as f64 * (1.0 - f) + next * f
-    };
-    // Points averaged per output frame: about one per source frame it spans.
-    let points = step.ceil().max(1.0) as usize;
+    let last = src.len().saturating_sub(1);
     for (t, o) in out.iter_mut().enumerate() {
-        let from = start + t as f64 * step;
-        let sum: f64 = (0..points).map(|k| at(from + (k as f64 + 0.5) / points as f64 * step)).sum();
-        *o = (sum / points as f64) as f32;
+        *o = span_mean(|j| src[j], last, start + t as f64 * step, step);
     }
 }
 
-/// The whole of `src` as `len` frames.
-pub fn resample(src: &[f32], len: usize) -> Vec<f32> {
-    let mut out = vec![0.0; len];
-    resample_into(src, 0.0, src.len() as f64 / len as f64, &mut out);
-    out
+/// The mean of a source with frames `0..=last`, read by `value`, over the span from `from` to
+/// `from + step`: about one point per source frame of the span, the source read as straight
+/// lines between its frames, held beyond its ends.
+pub(crate) fn span_mean(value: impl Fn(usize) -> f32, last: usize, from: f64, step: f64) -> f32 {
+    let at = |x: f64| -> f64 {
+        let x = (x - 0.5).clamp(0.0, last as f64);
+        let j = x.floor() as usize;
+        let f = x - j as f64;
+        value(j) as f64 * (1.0 - f) + value((j + 1).min(last)) as f64 * f
+    };
+    let points = points(step);
+    let sum: f64 = (0..points).map(|k| at(position(from, step, points, k))).sum();
+    (sum / points as f64) as f32
+}
+
+/// The last source frame [`span_mean`] reads for the span from `from` to `from + step`, the
+/// source's end not reached: the span can be read once that frame has arrived, as a stream
+/// reads it ([`crate::TouchReader`]).
+pub(crate) fn span_reads_up_to(from: f64, step: f64) -> usize {
+    let points = points(step);
+    let x = position(from, step, points, points - 1) - 0.5;
+    x.max(0.0).floor() as usize + 1
+}
+
+/// Points averaged per output frame: about one per source frame it spans.
+fn points(step: f64) -> usize {
+    step.ceil().max(1.0) as usize
+}
+
+fn position(from: f64, step: f64, points: usize, k: usize) -> f64 {
+    from + (k as f64 + 0.5) / points as f64 * step
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The whole of `src` as `len` frames.
+    fn resample(src: &[f32], len: usize) -> Vec<f32> {
+        let mut out = vec![0.0; len];
+        resample_into(src, 0.0, src.len() as f64 / len as f64, &mut out);
+        out
+    }
 
     #[test]
     fn the_same_rate_copies_and_halving_it_averages_pairs() {

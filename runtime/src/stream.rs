@@ -24,7 +24,7 @@ use crate::classifier::prediction;
 use crate::error::tract_error;
 use crate::plan::outputs_of;
 use crate::stages::Stages;
-use crate::{Classifier, Error, Prediction, Result};
+use crate::{Classifier, Error, Prediction, Result, Touch, TouchReader};
 
 /// A provisional answer ([`Session::peek`]).
 #[derive(Clone, Debug)]
@@ -55,6 +55,9 @@ pub struct Session {
     /// The class answered after each number of tokens of this touch, where one was asked: what
     /// the stopping rule's agreement reads.
     answered: Vec<Option<usize>>,
+    /// For a session made for a touch ([`Classifier::session_for`]): its recorded frames, read as
+    /// the model reads touches, and the frames read not yet taken.
+    reader: Option<(TouchReader, Vec<f32>)>,
 }
 
 impl Classifier {
@@ -62,7 +65,21 @@ impl Classifier {
     pub fn session(&self) -> Result<Session> {
         let stages = self.stages()?;
         let window = stages.window.as_ref().map(|shape| vec![0.0; shape.iter().product()]);
-        Ok(Session { stages, received: 0, token: Vec::new(), encodings: Vec::new(), window, answered: Vec::new() })
+        Ok(Session { stages, received: 0, token: Vec::new(), encodings: Vec::new(), window, answered: Vec::new(), reader: None })
+    }
+
+    /// A streaming session for touches the robot records at `touch` (the speed and force it
+    /// commands): it takes the frames as recorded and reads them as the model reads touches
+    /// ([`Classifier::read_touch`]), frame by frame ([`TouchReader`]), so that its answers are
+    /// those of a session given the frames `read_touch` returns. A model without a reading takes
+    /// the frames as they are.
+    pub fn session_for(&self, touch: Touch) -> Result<Session> {
+        let mut session = self.session()?;
+        if let Some(reading) = self.reading() {
+            let frame_len = session.frame_len();
+            session.reader = Some((TouchReader::new(frame_len, &reading, touch)?, Vec::new()));
+        }
+        Ok(session)
     }
 }
 
@@ -78,8 +95,36 @@ impl Session {
     }
 
     /// Takes the next frame, `[height, width, (channels)]` in row-major order. A frame the model
-    /// pruned is dropped at once; the last frame of a kept token runs the spatial stage.
+    /// pruned is dropped at once; the last frame of a kept token runs the spatial stage. A
+    /// session for a touch ([`Classifier::session_for`]) takes the frame as recorded and goes on
+    /// with the frames it completes, read as the model reads touches.
     pub fn push_frame(&mut self, frame: &[f32]) -> Result<()> {
+        let (frames, room) = (self.frames(), (self.frames() - self.received) * self.frame_len());
+        let Some((reader, read)) = &mut self.reader else { return self.push_read(frame) };
+        if room == 0 {
+            return Err(Error::TooManyFrames { frames });
+        }
+        // Frames read beyond the window are not the model's: the window ends there.
+        reader.push(frame, read)?;
+        read.truncate(room);
+        self.take_read()
+    }
+
+    /// Pushes the frames the reader gave out.
+    fn take_read(&mut self) -> Result<()> {
+        let Some((_, read)) = &mut self.reader else { return Ok(()) };
+        let read = std::mem::take(read);
+        let result = read.chunks(self.frame_len()).try_for_each(|frame| self.push_read(frame));
+        if let Some((_, buffer)) = &mut self.reader {
+            // The allocation kept for the next frames.
+            *buffer = read;
+            buffer.clear();
+        }
+        result
+    }
+
+    /// Takes the next frame the model reads.
+    fn push_read(&mut self, frame: &[f32]) -> Result<()> {
         let (expected, frames) = (self.frame_len(), self.frames());
         if frame.len() != expected {
             return Err(Error::FrameLength { got: frame.len(), expected });
@@ -117,9 +162,16 @@ impl Session {
     }
 
     /// The answer for the touch, once all its frames have arrived: runs the temporal stage only.
-    /// The session is then empty, ready for the next touch.
+    /// The session is then empty, ready for the next touch. A session for a touch first takes the
+    /// frames read after its last recorded one, as many as the window still lacks.
     pub fn finish(&mut self) -> Result<Prediction> {
         let frames = self.frames();
+        let room = (frames - self.received) * self.frame_len();
+        if let Some((reader, read)) = &mut self.reader {
+            reader.finish(read);
+            read.truncate(room);
+            self.take_read()?;
+        }
         if self.received < frames {
             return Err(Error::Incomplete { got: self.received, frames });
         }
@@ -199,6 +251,10 @@ impl Session {
 
     /// Forgets the touch in progress.
     pub fn reset(&mut self) {
+        if let Some((reader, read)) = &mut self.reader {
+            reader.reset();
+            read.clear();
+        }
         self.received = 0;
         self.token.clear();
         self.encodings.clear();

@@ -90,7 +90,7 @@ fn the_header_declares_exactly_what_the_code_exports() {
         .collect();
     let code_fns: BTreeMap<_, _> = code.split("extern \"C\" fn ").skip(1).filter_map(rust_signature).collect();
     assert_eq!(header_fns, code_fns, "functions, their return and parameter types");
-    assert_eq!(code_fns.len(), 22);
+    assert_eq!(code_fns.len(), 23);
     assert_eq!(code_fns["pvt3_classify"].1[6], "size_t *", "the types are read");
     let mut header_consts: Vec<(String, String)> = header
         .split("#define ")
@@ -313,6 +313,17 @@ fn every_entry_point_reports_instead_of_crashing() {
         assert_eq!(pvt3_classifier_frames(c, &mut n), PVT3_OK);
         assert_eq!(n, 75);
         assert_eq!(pvt3_session_new(c, null_mut()), PVT3_ERR_NULL);
+        assert_eq!(pvt3_session_new_touch(null(), 50.0, 0.0, &mut s), PVT3_ERR_NULL);
+        assert_eq!(pvt3_session_new_touch(c, 50.0, 0.0, null_mut()), PVT3_ERR_NULL);
+        // This model reads frames as recorded: a session for a touch at any speed takes them so.
+        assert_eq!(pvt3_session_new_touch(c, 50.0, 0.0, &mut s), PVT3_OK);
+        for _ in 0..75 {
+            assert_eq!(pvt3_session_push_frame(s, frames.as_ptr(), 60), PVT3_OK);
+        }
+        let mut class = 99usize;
+        assert_eq!(pvt3_session_finish(s, probs.as_mut_ptr(), 20, &mut class), PVT3_OK);
+        assert_eq!(class, best[0], "a constant window read as recorded = the same window batched");
+        pvt3_session_free(s);
         assert_eq!(pvt3_session_new(c, &mut s), PVT3_OK);
         pvt3_classifier_free(c); // the session outlives its classifier
         assert_eq!(pvt3_session_push_frame(s, null(), 60), PVT3_ERR_NULL);
