@@ -163,7 +163,8 @@ impl Session {
 
     /// The answer for the touch, once all its frames have arrived: runs the temporal stage only.
     /// The session is then empty, ready for the next touch. A session for a touch first takes the
-    /// frames read after its last recorded one, as many as the window still lacks.
+    /// frames read after its last recorded one, as many as the window still lacks; if they are
+    /// still too few ([`Error::Incomplete`]) the recorded touch has ended all the same: reset.
     pub fn finish(&mut self) -> Result<Prediction> {
         let frames = self.frames();
         let room = (frames - self.received) * self.frame_len();
