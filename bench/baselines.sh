@@ -48,6 +48,7 @@
 #   anytime   trained for early answers too (--prefix-training 0.5), without the spectral head
 #   anytime-chscale  the anytime row with each channel's readings scaled by a factor of its own
 #             (--aug-channel-scale 0.05, docs/robustness.md)
+#   spectral-anytime-mixup-chscale  the spectral-anytime-mixup row with --aug-channel-scale 0.05
 #   spectral-prunings  the spectral row's trained runs pruned further (after spectral): 70 % of
 #             channels, and 50 % of channels with 50 % of frames (LEVELS picks)
 #   e300-mixup-prunings  the e300-mixup row's trained runs pruned otherwise (after e300-mixup), as
@@ -144,6 +145,7 @@ for row in "${rows[@]}"; do
         spectral-mixup-*) args=("${tried[@]}" --set spectral_bands=16 --mixup 0.2) ;;
         anytime-chscale-*) args=("${tried[@]}" --prefix-training 0.5 --aug-channel-scale 0.05) ;;
         anytime-*) args=("${tried[@]}" --prefix-training 0.5) ;;
+        spectral-anytime-mixup-chscale-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.5 --mixup 0.2 --aug-channel-scale 0.05) ;;
         spectral-anytime-mixup-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.5 --mixup 0.2) ;;
         spectral-anytime0.3-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.3) ;;
         spectral-anytime-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.8) ;;
