@@ -3,7 +3,8 @@
 the mean ± std test accuracy over all runs (seeds × validation folds) on the held-out touches,
 the 95 % interval of the mean (Student's t over the seeds' means, as `pvt3 cv` computes it), and
 the gap to the random split (the variant's own, else the `plain` variant's); then, for every row
-that several variants ran, one table of them side by side.
+that several variants ran, one table of them side by side; last, a variant's runs pooled with
+those of more seeds (a variant NAME-seeds).
 
     python3 bench/robustness_report.py [ROOT]          # ROOT: target/robustness by default
 
@@ -11,6 +12,7 @@ A row whose cross-validation has not finished is shown as `–`; one with fewer 
 says how many it has.
 """
 import json
+import statistics
 import sys
 from pathlib import Path
 
@@ -67,6 +69,22 @@ def main():
             random = found[variant].get("random")
             random_mean = random["mean_test_accuracy"] if random else plain_random
             print(f"| {variant} | {cell(s, random_mean)} | {len(s['runs']) if s else 0} |")
+    more_seeds(found)
+
+
+def more_seeds(found):
+    """A variant `NAME-seeds` holds more seeds of `NAME` (SEEDS=3,4 VARIANT=NAME-seeds): each row
+    both ran, with all their runs pooled (mean ± std over the runs, and each seed's mean)."""
+    for variant, rows in found.items():
+        extra = found.get(f"{variant}-seeds", {})
+        for row in (r for r in rows if rows[r] and extra.get(r)):
+            runs = rows[row]["runs"] + extra[row]["runs"]
+            acc = [r["test_accuracy"] for r in runs]
+            seeds = sorted({r["seed"] for r in runs})
+            means = [statistics.mean(r["test_accuracy"] for r in runs if r["seed"] == s) for s in seeds]
+            print(f"\n{variant} {row}, seeds {', '.join(map(str, seeds))} pooled: "
+                  f"{statistics.mean(acc):.4f} ± {statistics.stdev(acc):.4f} over {len(acc)} runs; "
+                  f"seed means {', '.join(f'{m:.4f}' for m in means)}")
 
 
 if __name__ == "__main__":
