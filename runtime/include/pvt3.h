@@ -7,10 +7,10 @@
  * at load (integrity digest).
  *
  * Threads: a classifier may be used from several threads at once (pvt3_classify,
- * pvt3_classifier_prepare, pvt3_session_new, pvt3_continuous_new and the getters; the Rust API's
- * test checks every answer against one thread's), but pvt3_classifier_set_kernels and
- * pvt3_classifier_free must not run alongside any other call on it. A session or a continuous
- * stream belongs to one thread at a time. pvt3_last_error() is per
+ * pvt3_classifier_prepare, pvt3_session_new, pvt3_session_new_touch, pvt3_continuous_new and the
+ * getters; the Rust API's test checks every answer against one thread's), but
+ * pvt3_classifier_set_kernels and pvt3_classifier_free must not run alongside any other call on
+ * it. A session or a continuous stream belongs to one thread at a time. pvt3_last_error() is per
  * thread. */
 #ifndef PVT3_H
 #define PVT3_H
