@@ -39,8 +39,7 @@ pub fn read_touch(frames: &[f32], rows: usize, reading: &Reading, touch: Touch) 
     }
     reader.finish(&mut read);
     // Frame after frame, back to the sample layout: row after row.
-    let len = read.len() / rows;
-    Ok((0..rows).flat_map(|r| read.iter().skip(r).step_by(rows).take(len).copied()).collect())
+    Ok((0..rows).flat_map(|r| read.iter().skip(r).step_by(rows).copied()).collect())
 }
 
 /// A touch read as [`read_touch`] reads it, frame by frame as the robot records it: a frame read
@@ -104,15 +103,14 @@ impl TouchReader {
             return Err(Error::NonFinite { index, value: *value });
         }
         let Some((speed, to)) = self.speeds else {
-            let k = self.scale.unwrap_or(1.0);
-            out.extend(frame.iter().map(|v| if self.scale.is_some() { v * k } else { *v }));
+            out.extend(frame.iter().map(|v| self.scaled(*v)));
             return Ok(1);
         };
         self.rows.iter_mut().zip(frame).for_each(|(row, v)| row.push(*v));
         let step = to / speed;
         let before = self.read;
         while span_reads_up_to(self.read as f64 * step, step) < self.recorded() {
-            self.give_out(out);
+            self.give_out(step, out);
         }
         Ok(self.read - before)
     }
@@ -126,7 +124,7 @@ impl TouchReader {
         if let (Some((speed, to)), true) = (self.speeds, n > 0) {
             let len = ((n as f64 * speed / to).round() as usize).max(1);
             added = len.saturating_sub(self.read);
-            (0..added).for_each(|_| self.give_out(out));
+            (0..added).for_each(|_| self.give_out(to / speed, out));
         }
         self.reset();
         added
@@ -142,16 +140,19 @@ impl TouchReader {
         self.rows.first().map_or(0, Vec::len)
     }
 
-    /// Appends the next frame read by distance, from the frames recorded so far.
-    fn give_out(&mut self, out: &mut Vec<f32>) {
-        let Some((speed, to)) = self.speeds else { return };
-        let (step, last) = (to / speed, self.recorded() - 1);
-        let from = self.read as f64 * step;
+    /// Appends the next frame read by distance, `step` recorded frames a frame read, from the
+    /// frames recorded so far.
+    fn give_out(&mut self, step: f64, out: &mut Vec<f32>) {
+        let (last, from) = (self.recorded() - 1, self.read as f64 * step);
         for row in &self.rows {
-            let v = span_mean(|j| row[j], last, from, step);
-            out.push(self.scale.map_or(v, |k| v * k));
+            out.push(self.scaled(span_mean(|j| row[j], last, from, step)));
         }
         self.read += 1;
+    }
+
+    /// A value read at the reading's force.
+    fn scaled(&self, v: f32) -> f32 {
+        self.scale.map_or(v, |k| v * k)
     }
 }
 

@@ -99,21 +99,23 @@ impl Session {
     /// session for a touch ([`Classifier::session_for`]) takes the frame as recorded and goes on
     /// with the frames it completes, read as the model reads touches.
     pub fn push_frame(&mut self, frame: &[f32]) -> Result<()> {
-        let (frames, room) = (self.frames(), (self.frames() - self.received) * self.frame_len());
+        let frames = self.frames();
+        let full = self.received == frames;
         let Some((reader, read)) = &mut self.reader else { return self.push_read(frame) };
-        if room == 0 {
+        if full {
             return Err(Error::TooManyFrames { frames });
         }
-        // Frames read beyond the window are not the model's: the window ends there.
         reader.push(frame, read)?;
-        read.truncate(room);
         self.take_read()
     }
 
-    /// Pushes the frames the reader gave out.
+    /// Pushes the frames the reader gave out, up to the window's end: frames read beyond it are
+    /// not the model's.
     fn take_read(&mut self) -> Result<()> {
+        let room = (self.frames() - self.received) * self.frame_len();
         let Some((_, read)) = &mut self.reader else { return Ok(()) };
-        let read = std::mem::take(read);
+        let mut read = std::mem::take(read);
+        read.truncate(room);
         let result = read.chunks(self.frame_len()).try_for_each(|frame| self.push_read(frame));
         if let Some((_, buffer)) = &mut self.reader {
             // The allocation kept for the next frames.
@@ -167,10 +169,8 @@ impl Session {
     /// still too few ([`Error::Incomplete`]) the recorded touch has ended all the same: reset.
     pub fn finish(&mut self) -> Result<Prediction> {
         let frames = self.frames();
-        let room = (frames - self.received) * self.frame_len();
         if let Some((reader, read)) = &mut self.reader {
             reader.finish(read);
-            read.truncate(room);
             self.take_read()?;
         }
         if self.received < frames {
