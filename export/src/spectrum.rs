@@ -1,14 +1,15 @@
 //! The spectral head (`pvt3_models::spectrum` in training, `pvt3_spec::spectrum` for its maths)
 //! as ONNX nodes, from the file's input and the key bias: the frames' weights ([`FRAME_WEIGHTS`],
-//! the kept tokens the bias has not hidden), each channel's frames normalised, its weighted
-//! level, the Fourier transform of the weighted, detrended frames (the `DFT` op, an FFT in tract
-//! and onnxruntime, where the trainer multiplies by the transform's matrix), the band sums of the
-//! squared transform over the frames weighed, their logarithms, the standardisation and the
-//! linear map, named [`SPECTRAL_LOGITS`]. A streaming runtime feeds the temporal stage the window
-//! so far along with the bias, and the head reads exactly the frames received.
+//! the kept tokens the bias has not hidden), each channel's weighted level, normalised, the
+//! Fourier transform of the weighted, detrended frames (the `DFT` op, an FFT in tract and
+//! onnxruntime, where the trainer multiplies by the transform's matrix), the band sums of the
+//! squared transform over the frames weighed and the channel's variance, their logarithms, and
+//! the linear map with the standardisation folded in, named [`SPECTRAL_LOGITS`]. A streaming
+//! runtime feeds the temporal stage the window so far along with the bias, and the head reads
+//! exactly the frames received.
 
 use pvt3_format::{FRAME_WEIGHTS, INPUT, SPECTRAL_LOGITS, TOKEN_BIAS};
-use pvt3_spec::baked::{BakedPvt3, BakedSpectrum};
+use pvt3_spec::baked::{BakedPvt3, BakedSpectrum, Dense};
 use pvt3_spec::normalization::Normalization;
 use pvt3_spec::spectrum::{band_matrix, bins, POWER_FLOOR};
 
@@ -27,16 +28,17 @@ pub(crate) fn spectral_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, n
     // Every operand of the element-wise ops below is [channels, frames] or [b, channels, 1]: tract
     // runs those in one pass, where a [channels, 1] or [frames] operand broadcast over the other
     // axis takes 10–20 µs an op on BioTac's window (measured with bench/tools' profile).
+    // The frames are centred on the training mean, not divided by σ: ((x − μ) minus its weighted
+    // level) / σ is the normalised frames' detrended signal, so the level alone is divided by σ
+    // and the band powers by σ² once summed, an element-wise op on the window spared. (Centring
+    // on the touch's own level alone would lose the f32 digits of a channel's large mean.)
     let rows = g.i64s("spectral_rows", &[3], vec![-1, channels as i64, frames as i64]);
     let x = g.op(Op::Reshape, &[INPUT, &rows]);
     let plane = g.i64s("spectral_plane", &[3], vec![1, channels as i64, frames as i64]);
     let mean = g.f32s("spectral_norm_mean", &[channels, 1], norm.mean.clone());
     let mean = g.op(Op::Expand, &[&mean, &plane]);
-    let std = g.f32s("spectral_norm_std", &[channels, 1], norm.std.clone());
-    let std = g.op(Op::Expand, &[&std, &plane]);
     let weights = g.op(Op::Expand, &[FRAME_WEIGHTS, &plane]);
     let x = g.op(Op::Sub, &[&x, &mean]);
-    let x = g.op(Op::Div, &[&x, &std]);
     // The weighted sum as a product with the weights' column: a fifth of a ReduceSum's time.
     let column = g.i64s("frames_column", &[2], vec![frames as i64, 1]);
     let column = g.op(Op::Reshape, &[FRAME_WEIGHTS, &column]);
@@ -44,6 +46,8 @@ pub(crate) fn spectral_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, n
     let level = g.op(Op::Div, &[&level, &weighed]);
     let centred = g.op(Op::Sub, &[&x, &level]);
     let centred = g.op(Op::Mul, &[&centred, &weights]);
+    let std = g.f32s("spectral_norm_std", &[channels, 1], norm.std.clone());
+    let level = g.op(Op::Div, &[&level, &std]);
     // A real signal for the DFT op: [b, channels, frames, 1] → [b, channels, frames, 2].
     let real = g.i64s("spectral_real", &[4], vec![-1, channels as i64, frames as i64, 1]);
     let centred = g.op(Op::Reshape, &[&centred, &real]);
@@ -62,6 +66,9 @@ pub(crate) fn spectral_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, n
         .collect();
     let sums = g.f32s("spectral_bands", &[2 * k, bands], interleaved);
     let power = g.op(Op::MatMul, &[&squares, &sums]);
+    let variance: Vec<f32> = norm.std.iter().flat_map(|s| std::iter::repeat_n(s * s, bands)).collect();
+    let variance = g.f32s("spectral_norm_variance", &[channels, bands], variance);
+    let power = g.op(Op::Div, &[&power, &variance]);
     let power = g.op(Op::Div, &[&power, &weighed]);
     let floor = g.f32s("power_floor", &[1], vec![POWER_FLOOR as f32]);
     let power = g.op(Op::Add, &[&power, &floor]);
@@ -69,12 +76,25 @@ pub(crate) fn spectral_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, n
     let features = g.node(Op::Concat, &[&level, &log_power], vec![int("axis", 2)], None);
     let flat = g.i64s("spectral_features", &[2], vec![-1, c.spectral_features() as i64]);
     let features = g.op(Op::Reshape, &[&features, &flat]);
-    let scale = g.f32s("spectral_scale", &[s.scale.len()], s.scale.clone());
-    let shift = g.f32s("spectral_shift", &[s.shift.len()], s.shift.clone());
-    let features = g.op(Op::Mul, &[&features, &scale]);
-    let features = g.op(Op::Add, &[&features, &shift]);
-    let logits = linear(g, &features, &s.linear, "spectral_linear");
+    let logits = linear(g, &features, &standardised(s), "spectral_linear");
     g.node(Op::Identity, &[&logits], vec![], Some(SPECTRAL_LOGITS))
+}
+
+/// The head's linear map with the standardisation folded in, one op instead of three:
+/// `W (f · scale + shift) + b` is `(W · diag(scale)) f + (W shift + b)`, summed in f64.
+fn standardised(s: &BakedSpectrum) -> Dense {
+    let l = &s.linear;
+    let weight = l.weight.chunks(l.cols).flat_map(|row| row.iter().zip(&s.scale).map(|(w, k)| w * k)).collect();
+    let bias = l
+        .weight
+        .chunks(l.cols)
+        .enumerate()
+        .map(|(r, row)| {
+            let b = l.bias.as_ref().map_or(0.0, |b| b[r] as f64);
+            (b + row.iter().zip(&s.shift).map(|(w, v)| *w as f64 * *v as f64).sum::<f64>()) as f32
+        })
+        .collect();
+    Dense { weight, bias: Some(bias), ..l.clone() }
 }
 
 /// Writes [`FRAME_WEIGHTS`] `[frames]` from the key bias: max(bias + 1, 0) is 1 where the bias is
