@@ -10,6 +10,7 @@ pub mod cv_stopping;
 pub mod data;
 pub mod error;
 pub mod evaluate;
+pub mod extrapolation;
 pub mod import;
 pub mod info;
 pub mod joint;

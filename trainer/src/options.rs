@@ -73,6 +73,13 @@ pub struct TrainOptions {
     #[arg(long, default_value_t = 0.0)]
     #[serde(default)]
     pub mixup: f64,
+    /// Same-class extrapolation: move each training sample away from another of its class in the
+    /// batch, x + λ (x − x_p) with λ ~ U(0, L) per sample, its label kept; this is L (e.g. 0.5).
+    /// The step between two touches of a material continues past them, as a press firmer or a
+    /// slide faster than any trained would (docs/robustness.md). 0 turns it off.
+    #[arg(long, default_value_t = 0.0)]
+    #[serde(default)]
+    pub extrapolate: f64,
     /// Weight averaging: evaluate, select and checkpoint an exponential moving average of the
     /// weights with this decay per step (e.g. 0.995: about the last 200 steps), not the raw
     /// weights. 0 turns it off.

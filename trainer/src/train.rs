@@ -166,7 +166,7 @@ impl Learner {
         Ok(())
     }
 
-    /// One optimiser step on a batch: optional mixup, forward with dropout, smoothed cross-entropy
+    /// One optimiser step on a batch: optional same-class extrapolation and mixup, forward with dropout, smoothed cross-entropy
     /// (plus the L1 penalty on the masks), backward, gradient clipping, AdamW. Returns the loss and
     /// logits.
     pub fn step(&mut self, x: &Tensor, y: &Tensor, opts: &TrainOptions, lr: f64, rng: &mut Rng) -> Result<(f64, Tensor)> {
@@ -188,6 +188,9 @@ impl Learner {
                 saved.push(full);
             }
         }
+        let extrapolated =
+            if opts.extrapolate > 0.0 { Some(crate::extrapolation::extrapolate(x, y, opts.extrapolate, rng)?) } else { None };
+        let x = extrapolated.as_ref().unwrap_or(x);
         let mixed = if opts.mixup > 0.0 { Some(crate::mixup::mix(x, y, opts.mixup, rng)?) } else { None };
         let x = mixed.as_ref().map_or(x, |m| &m.x);
         let prefix = opts.prefix_training > 0.0 && rng.uniform() < opts.prefix_training as f32;

@@ -78,6 +78,7 @@ fn options(epochs: usize) -> TrainOptions {
         aug_vibration: 0.0,
         aug_stretch: 0.0,
         mixup: 0.0,
+        extrapolate: 0.0,
         ema: 0.0,
         seed: 5,
         l1: 0.0,
@@ -217,6 +218,13 @@ fn weight_averaging_resumes_exactly_and_checkpoints_the_average() {
     for d in [a, raw] {
         std::fs::remove_dir_all(d).unwrap();
     }
+}
+
+/// Same-class extrapolation draws from the run's own generator too: a run resumes bit for bit.
+#[test]
+fn extrapolation_resumes_exactly() {
+    let dir = resumes_exactly("extrapolate", &tiny_data(), TrainOptions { extrapolate: 0.5, ..options(4) });
+    std::fs::remove_dir_all(dir).unwrap();
 }
 
 /// Mixup draws from the run's own generator too, and still learns the tiny problem.
