@@ -4,7 +4,8 @@ the mean ± std test accuracy over all runs (seeds × validation folds) on the h
 the 95 % interval of the mean (Student's t over the seeds' means, as `pvt3 cv` computes it), and
 the gap to the random split (the variant's own, else the `plain` variant's); then, for every row
 that several variants ran, one table of them side by side; last, a variant's runs pooled with
-those of more seeds (a variant NAME-seeds).
+those of more seeds (a variant NAME-seeds), and a variant of five seeds or more against `plain`,
+seed by seed.
 
     python3 bench/robustness_report.py [ROOT]          # ROOT: target/robustness by default
 
@@ -72,19 +73,55 @@ def main():
     more_seeds(found)
 
 
+# Student's t, two-sided 95 %, by degrees of freedom (1–9).
+T95 = [12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262]
+
+
+def interval(values):
+    """The mean of `values` (one per seed) and its 95 % interval, Student's t."""
+    mean = statistics.mean(values)
+    half = T95[len(values) - 2] * statistics.stdev(values) / len(values) ** 0.5
+    return mean, mean - half, mean + half
+
+
+def seed_means(runs):
+    seeds = sorted({r["seed"] for r in runs})
+    return {s: statistics.mean(r["test_accuracy"] for r in runs if r["seed"] == s) for s in seeds}
+
+
 def more_seeds(found):
     """A variant `NAME-seeds` holds more seeds of `NAME` (SEEDS=3,4 VARIANT=NAME-seeds): each row
-    both ran, with all their runs pooled (mean ± std over the runs, and each seed's mean)."""
+    both ran, with all their runs pooled (mean ± std over the runs, each seed's mean and the 95 %
+    interval over them). Then every variant of five seeds or more against `plain` on the seeds
+    both ran: the difference of each seed's mean, and its mean's 95 % interval (paired seeds)."""
+    pooled = {}
     for variant, rows in found.items():
+        if variant.endswith("-seeds"):
+            continue
         extra = found.get(f"{variant}-seeds", {})
-        for row in (r for r in rows if rows[r] and extra.get(r)):
-            runs = rows[row]["runs"] + extra[row]["runs"]
+        for row in (r for r in rows if rows[r]):
+            runs = rows[row]["runs"] + (extra[row]["runs"] if extra.get(row) else [])
+            pooled[variant, row] = runs
+            if not extra.get(row):
+                continue
             acc = [r["test_accuracy"] for r in runs]
-            seeds = sorted({r["seed"] for r in runs})
-            means = [statistics.mean(r["test_accuracy"] for r in runs if r["seed"] == s) for s in seeds]
-            print(f"\n{variant} {row}, seeds {', '.join(map(str, seeds))} pooled: "
-                  f"{statistics.mean(acc):.4f} ± {statistics.stdev(acc):.4f} over {len(acc)} runs; "
-                  f"seed means {', '.join(f'{m:.4f}' for m in means)}")
+            means = seed_means(runs)
+            _, low, high = interval(list(means.values()))
+            print(f"\n{variant} {row}, seeds {', '.join(map(str, means))} pooled: "
+                  f"{statistics.mean(acc):.4f} ± {statistics.stdev(acc):.4f} [{low:.4f}, {high:.4f}] over {len(acc)} runs; "
+                  f"seed means {', '.join(f'{m:.4f}' for m in means.values())}")
+    for (variant, row), runs in pooled.items():
+        base = pooled.get(("plain", row))
+        if variant == "plain" or base is None:
+            continue
+        mine, theirs = seed_means(runs), seed_means(base)
+        common = [s for s in mine if s in theirs]
+        if len(common) < 5:
+            continue
+        diffs = [100 * (mine[s] - theirs[s]) for s in common]
+        mean, low, high = interval(diffs)
+        print(f"\n{variant} against plain, {row}, seeds {', '.join(map(str, common))}: "
+              f"{', '.join(f'{d:+.1f}' for d in diffs)} pts; mean {mean:+.1f} [{low:+.1f}, {high:+.1f}]")
 
 
 if __name__ == "__main__":
