@@ -49,8 +49,7 @@
 #   anytime-chscale  the anytime row with each channel's readings scaled by a factor of its own
 #             (--aug-channel-scale 0.05, docs/robustness.md)
 #   spectral-anytime-mixup-chscale  the spectral-anytime-mixup row with --aug-channel-scale 0.05
-#   anytime-extrapolate, spectral-anytime-mixup-extrapolate  the anytime and spectral-anytime-mixup
-#             rows with same-class extrapolation (--extrapolate 1, docs/robustness.md)
+#   extrapolate  same-class extrapolation in training (--extrapolate 1, docs/robustness.md)
 #   spectral-prunings  the spectral row's trained runs pruned further (after spectral): 70 % of
 #             channels, and 50 % of channels with 50 % of frames (LEVELS picks)
 #   e300-mixup-prunings  the e300-mixup row's trained runs pruned otherwise (after e300-mixup), as
@@ -145,16 +144,15 @@ for row in "${rows[@]}"; do
                 "channels70 channels50-frames50" "${route[@]}" --set spectral_bands=16
             continue ;;
         spectral-mixup-*) args=("${tried[@]}" --set spectral_bands=16 --mixup 0.2) ;;
-        anytime-extrapolate-*) args=("${tried[@]}" --prefix-training 0.5 --extrapolate 1) ;;
         anytime-chscale-*) args=("${tried[@]}" --prefix-training 0.5 --aug-channel-scale 0.05) ;;
         anytime-*) args=("${tried[@]}" --prefix-training 0.5) ;;
-        spectral-anytime-mixup-extrapolate-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.5 --mixup 0.2 --extrapolate 1) ;;
         spectral-anytime-mixup-chscale-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.5 --mixup 0.2 --aug-channel-scale 0.05) ;;
         spectral-anytime-mixup-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.5 --mixup 0.2) ;;
         spectral-anytime0.3-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.3) ;;
         spectral-anytime-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.8) ;;
         spectral-*) args=("${tried[@]}" --set spectral_bands=16) ;;
         ema-*) args=("${tried[@]}" --ema 0.995) ;;
+        extrapolate-*) args=("${tried[@]}" --extrapolate 1) ;;
         mixup-*) args=("${tried[@]}" --mixup 0.2) ;;
         shift-*) args=("${tried[@]}" --aug-shift 20) ;;
         *) echo "unknown row $row" >&2; exit 2 ;;
