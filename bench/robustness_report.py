@@ -73,14 +73,21 @@ def main():
     more_seeds(found)
 
 
-# Student's t, two-sided 95 %, by degrees of freedom (1–9).
-T95 = [12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262]
+def t_975(df):
+    """The two-sided 95 % quantile of Student's t with `df` degrees of freedom, as `pvt3 cv`
+    computes it (trainer/src/cv.rs, `t_975`): tabled to 30, then the Cornish–Fisher expansion."""
+    table = [12.706, 4.303, 3.182, 2.776, 2.571, 2.447, 2.365, 2.306, 2.262, 2.228, 2.201, 2.179, 2.160, 2.145, 2.131,
+             2.120, 2.110, 2.101, 2.093, 2.086, 2.080, 2.074, 2.069, 2.064, 2.060, 2.056, 2.052, 2.048, 2.045, 2.042]
+    if df <= 30:
+        return table[df - 1]
+    z = 1.959964
+    return z + (z**3 + z) / (4 * df) + (5 * z**5 + 16 * z**3 + 3 * z) / (96 * df * df)
 
 
 def interval(values):
     """The mean of `values` (one per seed) and its 95 % interval, Student's t."""
     mean = statistics.mean(values)
-    half = T95[len(values) - 2] * statistics.stdev(values) / len(values) ** 0.5
+    half = t_975(len(values) - 1) * statistics.stdev(values) / len(values) ** 0.5
     return mean, mean - half, mean + half
 
 
