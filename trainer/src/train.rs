@@ -166,9 +166,9 @@ impl Learner {
         Ok(())
     }
 
-    /// One optimiser step on a batch: optional same-class extrapolation and mixup, forward with dropout, smoothed cross-entropy
-    /// (plus the L1 penalty on the masks), backward, gradient clipping, AdamW. Returns the loss and
-    /// logits.
+    /// One optimiser step on a batch: optional same-class extrapolation and mixup, forward with
+    /// dropout, smoothed cross-entropy (plus the L1 penalty on the masks), backward, gradient
+    /// clipping, AdamW. Returns the loss and logits.
     pub fn step(&mut self, x: &Tensor, y: &Tensor, opts: &TrainOptions, lr: f64, rng: &mut Rng) -> Result<(f64, Tensor)> {
         let pass = self.forward(x, y, opts, false, rng)?;
         let grads = pass.loss.backward()?;
