@@ -81,6 +81,12 @@ pub struct TrainOptions {
     #[arg(long, default_value_t = 0.0)]
     #[serde(default)]
     pub extrapolate: f64,
+    /// With --extrapolate: move only each channel's level (its mean over the window) and keep the
+    /// window's own variation. Two touches' vibrations are not aligned in time, so their
+    /// difference is noise that a whole-window step adds to the sample.
+    #[arg(long, requires = "extrapolate")]
+    #[serde(default)]
+    pub extrapolate_levels: bool,
     /// Weight averaging: evaluate, select and checkpoint an exponential moving average of the
     /// weights with this decay per step (e.g. 0.995: about the last 200 steps), not the raw
     /// weights. 0 turns it off.

@@ -188,8 +188,11 @@ impl Learner {
                 saved.push(full);
             }
         }
-        let extrapolated =
-            if opts.extrapolate > 0.0 { Some(crate::extrapolation::extrapolate(x, y, opts.extrapolate, rng)?) } else { None };
+        let extrapolated = if opts.extrapolate > 0.0 {
+            Some(crate::extrapolation::extrapolate(x, y, opts.extrapolate, opts.extrapolate_levels, rng)?)
+        } else {
+            None
+        };
         let x = extrapolated.as_ref().unwrap_or(x);
         let mixed = if opts.mixup > 0.0 { Some(crate::mixup::mix(x, y, opts.mixup, rng)?) } else { None };
         let x = mixed.as_ref().map_or(x, |m| &m.x);

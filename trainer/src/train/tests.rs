@@ -79,6 +79,7 @@ fn options(epochs: usize) -> TrainOptions {
         aug_stretch: 0.0,
         mixup: 0.0,
         extrapolate: 0.0,
+        extrapolate_levels: false,
         ema: 0.0,
         seed: 5,
         l1: 0.0,
