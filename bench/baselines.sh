@@ -50,6 +50,7 @@
 #             (--aug-channel-scale 0.05, docs/robustness.md)
 #   spectral-anytime-mixup-chscale  the spectral-anytime-mixup row with --aug-channel-scale 0.05
 #   extrapolate  same-class extrapolation in training (--extrapolate 1, docs/robustness.md)
+#   extrapolate-levels  the same, each channel's level only (--extrapolate 1 --extrapolate-levels)
 #   spectral-prunings  the spectral row's trained runs pruned further (after spectral): 70 % of
 #             channels, and 50 % of channels with 50 % of frames (LEVELS picks)
 #   e300-mixup-prunings  the e300-mixup row's trained runs pruned otherwise (after e300-mixup), as
@@ -152,6 +153,7 @@ for row in "${rows[@]}"; do
         spectral-anytime-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.8) ;;
         spectral-*) args=("${tried[@]}" --set spectral_bands=16) ;;
         ema-*) args=("${tried[@]}" --ema 0.995) ;;
+        extrapolate-levels-*) args=("${tried[@]}" --extrapolate 1 --extrapolate-levels) ;;
         extrapolate-*) args=("${tried[@]}" --extrapolate 1) ;;
         mixup-*) args=("${tried[@]}" --mixup 0.2) ;;
         shift-*) args=("${tried[@]}" --aug-shift 20) ;;
