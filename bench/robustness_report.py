@@ -4,8 +4,9 @@ the mean ± std test accuracy over all runs (seeds × validation folds) on the h
 the 95 % interval of the mean (Student's t over the seeds' means, as `pvt3 cv` computes it), and
 the gap to the random split (the variant's own, else the `plain` variant's); then, for every row
 that several variants ran, one table of them side by side; last, a variant's runs pooled with
-those of more seeds (a variant NAME-seeds), and a variant of five seeds or more against `plain`,
-seed by seed.
+those of more seeds (a variant NAME-seeds), and each variant against `plain` and against the
+variant its name extends (`extrapolate1-levels` against `extrapolate1`), seed by seed, on a row
+both ran by the headline protocol (three seeds or more, each seed's four validation folds).
 
     python3 bench/robustness_report.py [ROOT]          # ROOT: target/robustness by default
 
@@ -96,11 +97,20 @@ def seed_means(runs):
     return {s: statistics.mean(r["test_accuracy"] for r in runs if r["seed"] == s) for s in seeds}
 
 
+def whole_seeds(runs):
+    """Each seed's mean over its runs, for the seeds that ran all four validation folds."""
+    folds = {}
+    for r in runs:
+        folds.setdefault(r["seed"], set()).add(r["val_fold"])
+    return {s: m for s, m in seed_means(runs).items() if len(folds[s]) == 4}
+
+
 def more_seeds(found):
     """A variant `NAME-seeds` holds more seeds of `NAME` (SEEDS=3,4 VARIANT=NAME-seeds): each row
     both ran, with all their runs pooled (mean ± std over the runs, each seed's mean and the 95 %
-    interval over them). Then every variant of five seeds or more against `plain` on the seeds
-    both ran: the difference of each seed's mean, and its mean's 95 % interval (paired seeds)."""
+    interval over them). Then every variant against `plain` and against the variant its name
+    extends, on the seeds both ran with all four folds (three or more): the difference of each
+    seed's mean, and its mean's 95 % interval (paired seeds)."""
     pooled = {}
     for variant, rows in found.items():
         if variant.endswith("-seeds"):
@@ -118,17 +128,19 @@ def more_seeds(found):
                   f"{statistics.mean(acc):.4f} ± {statistics.stdev(acc):.4f} [{low:.4f}, {high:.4f}] over {len(acc)} runs; "
                   f"seed means {', '.join(f'{m:.4f}' for m in means.values())}")
     for (variant, row), runs in pooled.items():
-        base = pooled.get(("plain", row))
-        if variant == "plain" or base is None:
-            continue
-        mine, theirs = seed_means(runs), seed_means(base)
-        common = [s for s in mine if s in theirs]
-        if len(common) < 5:
-            continue
-        diffs = [100 * (mine[s] - theirs[s]) for s in common]
-        mean, low, high = interval(diffs)
-        print(f"\n{variant} against plain, {row}, seeds {', '.join(map(str, common))}: "
-              f"{', '.join(f'{d:+.1f}' for d in diffs)} pts; mean {mean:+.1f} [{low:+.1f}, {high:+.1f}]")
+        extended = [v for v, r in pooled if r == row and v != variant and variant.startswith(f"{v}-")]
+        for other in ["plain"] * (variant != "plain") + extended:
+            base = pooled.get((other, row))
+            if base is None:
+                continue
+            mine, theirs = whole_seeds(runs), whole_seeds(base)
+            common = [s for s in mine if s in theirs]
+            if len(common) < 3:
+                continue
+            diffs = [100 * (mine[s] - theirs[s]) for s in common]
+            mean, low, high = interval(diffs)
+            print(f"\n{variant} against {other}, {row}, seeds {', '.join(map(str, common))}: "
+                  f"{', '.join(f'{d:+.1f}' for d in diffs)} pts; mean {mean:+.1f} [{low:+.1f}, {high:+.1f}]")
 
 
 if __name__ == "__main__":
