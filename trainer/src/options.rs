@@ -83,7 +83,9 @@ pub struct TrainOptions {
     pub extrapolate: f64,
     /// With --extrapolate: move only each channel's level (its mean over the window) and keep the
     /// window's own variation. Two touches' vibrations are not aligned in time, so their
-    /// difference is noise that a whole-window step adds to the sample.
+    /// difference is noise that a whole-window step adds to the sample: on FabricSlide the levels
+    /// alone keep unseen firmer presses at 0.95 and a lighter one at 0.95, where whole windows
+    /// give 0.96 and 0.88 (docs/robustness.md).
     #[arg(long, requires = "extrapolate")]
     #[serde(default)]
     pub extrapolate_levels: bool,
