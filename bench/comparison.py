@@ -120,6 +120,7 @@ TRIED = {
         *unpruned_and_pruned("300 epochs", "runs/cv-e300-icub"),
         *unpruned_and_pruned("mixup 0.2", "runs/cv-mixup-icub"),
         *unpruned_and_pruned("same-class extrapolation, `--extrapolate 1`", "runs/cv-extrapolate-icub"),
+        *unpruned_and_pruned("its levels only, `--extrapolate 1 --extrapolate-levels`", "runs/cv-extrapolate-levels-icub"),
     ],
     "BioTac-20, trained masks (`--l1 0.25 --mask-lr 10`), pruned to 60 % of channels": [
         "as in the headline rows, unpruned|—|runs/cv-masks-biotac",
@@ -127,6 +128,7 @@ TRIED = {
         *unpruned_and_pruned("EMA 0.995", "runs/cv-ema-biotac"),
         *unpruned_and_pruned("mixup 0.2", "runs/cv-mixup-biotac"),
         *unpruned_and_pruned("same-class extrapolation, `--extrapolate 1`", "runs/cv-extrapolate-biotac"),
+        *unpruned_and_pruned("its levels only, `--extrapolate 1 --extrapolate-levels`", "runs/cv-extrapolate-levels-biotac"),
         *unpruned_and_pruned("time shift ±20 frames", "runs/cv-shift-biotac"),
         *unpruned_and_pruned("300 epochs with mixup 0.2", "runs/cv-e300-mixup-biotac"),
         *unpruned_and_pruned("300 epochs with mixup 0.4", "runs/cv-e300-mixup0.4-biotac"),
