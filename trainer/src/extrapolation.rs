@@ -35,9 +35,9 @@ pub fn extrapolate(x: &Tensor, y: &Tensor, up_to: f64, levels: bool, rng: &mut R
     let partners = Tensor::new(partners.as_slice(), &Device::Cpu)?;
     let mut away = (x - x.index_select(&partners, 0)?)?;
     if levels {
-        away = away.mean_keepdim(x.rank() - 1)?.broadcast_as(x.shape())?.contiguous()?;
+        away = away.mean_keepdim(x.rank() - 1)?;
     }
-    Ok((x + away.broadcast_mul(&lambdas)?)?)
+    Ok(x.broadcast_add(&away.broadcast_mul(&lambdas)?)?)
 }
 
 #[cfg(test)]
