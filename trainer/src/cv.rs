@@ -314,6 +314,20 @@ struct Setup {
     pruning: Option<PruneStage>,
 }
 
+/// The entries of `dir` named `prefix` and a number (`seed3`, `fold0`), by number.
+pub(crate) fn numbered(dir: &Path, prefix: &str) -> Result<Vec<(u64, std::path::PathBuf)>> {
+    let mut found = Vec::new();
+    for entry in std::fs::read_dir(dir).map_err(Error::io(dir))? {
+        let path = entry.map_err(Error::io(dir))?.path();
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+        if let Some(n) = name.strip_prefix(prefix).and_then(|n| n.parse::<u64>().ok()) {
+            found.push((n, path));
+        }
+    }
+    found.sort();
+    Ok(found)
+}
+
 /// Reports every finished run under `out` (`seed{S}/fold{K}/`, as `cross_validate` and separate
 /// `--only` jobs write them) into `out/cv.json`, trains nothing and deletes nothing; with more
 /// than one finished PVT³ run, their stopping rule is calibrated on all of them and written into
@@ -321,22 +335,10 @@ struct Setup {
 /// configuration, options or pruning), a run whose files are damaged or half written.
 pub fn report(out: &Path) -> Result<CvSummary> {
     let refuse = |reason: String| Error::Usage(format!("cannot report {}: {reason}", out.display()));
-    let entries = |dir: &Path, prefix: &str| -> Result<Vec<(u64, std::path::PathBuf)>> {
-        let mut found = Vec::new();
-        for entry in std::fs::read_dir(dir).map_err(Error::io(dir))? {
-            let path = entry.map_err(Error::io(dir))?.path();
-            let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
-            if let Some(n) = name.strip_prefix(prefix).and_then(|n| n.parse::<u64>().ok()) {
-                found.push((n, path));
-            }
-        }
-        found.sort();
-        Ok(found)
-    };
     let (mut own, mut partners, mut unfinished) = (Gathered::default(), Gathered::default(), Vec::new());
     let mut setups: [Option<(Setup, PathBuf)>; 2] = [None, None];
-    for (seed, seed_dir) in entries(out, "seed")? {
-        for (fold, dir) in entries(&seed_dir, "fold")? {
+    for (seed, seed_dir) in numbered(out, "seed")? {
+        for (fold, dir) in numbered(&seed_dir, "fold")? {
             // The run's network, and a joint run's other sensor's (finished before it).
             let partner = Run(&dir).partner();
             let nets = [Some(dir.clone()), Some(partner).filter(|p| p.is_dir())];

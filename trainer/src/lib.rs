@@ -8,6 +8,7 @@ pub mod checkpoint;
 pub mod cv;
 pub mod cv_stopping;
 pub mod data;
+pub mod distill;
 pub mod error;
 pub mod evaluate;
 pub mod extrapolation;

@@ -119,6 +119,18 @@ pub struct TrainOptions {
     #[arg(long, default_value_t = 0.0)]
     #[serde(default)]
     pub prefix_training: f64,
+    /// Distillation (trainer/src/distill.rs): the runs of this earlier cross-validation (`pvt3 cv
+    /// --out DIR`) that share this run's training split, every DIR/seed*/foldK/model with K this
+    /// run's validation fold, teach it: each batch's loss adds --distill-weight times the
+    /// cross-entropy between their averaged class probabilities for the whole window and this
+    /// run's answer (to a prefix too, with --prefix-training). What ships is still one model.
+    #[arg(long, value_name = "CV_DIR")]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub distill: Option<String>,
+    /// With --distill: the weight of the teachers' term in the loss.
+    #[arg(long, default_value_t = 1.0, requires = "distill")]
+    #[serde(default = "one")]
+    pub distill_weight: f64,
     /// Joint learning with a second sensor (`--joint`): what the run was trained beside.
     #[arg(skip)]
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -106,6 +106,8 @@ pub struct Learner {
     held: Vec<(Var, Tensor)>,
     /// The weight matrices, for random pruning.
     matrices: Vec<Var>,
+    /// Distillation (`--distill`): the runs whose answers join the targets.
+    pub teachers: Option<crate::distill::Teachers>,
 }
 
 impl Learner {
@@ -153,7 +155,7 @@ impl Learner {
         let masks = vars_where(&varmap, is_mask).into_iter().map(|v| v.as_tensor().clone()).collect();
         let optimizer = AdamW::new(own, opts.weight_decay, |n, v| if is_mask(n, v) { opts.mask_lr } else { 1.0 })?;
         let matrices = vars_where(own, is_weight_matrix);
-        Ok(Self { model, varmap, optimizer, masks, held: Vec::new(), matrices })
+        Ok(Self { model, varmap, optimizer, masks, held: Vec::new(), matrices, teachers: None })
     }
 
     /// From now on, entries of the variables `which` selects that are zero stay zero (masks after
@@ -167,7 +169,7 @@ impl Learner {
     }
 
     /// One optimiser step on a batch: optional same-class extrapolation and mixup, forward with
-    /// dropout, smoothed cross-entropy (plus the L1 penalty on the masks), backward, gradient
+    /// dropout, smoothed cross-entropy (plus the teachers' term and the L1 penalty on the masks), backward, gradient
     /// clipping, AdamW. Returns the loss and logits.
     pub fn step(&mut self, x: &Tensor, y: &Tensor, opts: &TrainOptions, lr: f64, rng: &mut Rng) -> Result<(f64, Tensor)> {
         let pass = self.forward(x, y, opts, false, rng)?;
@@ -210,6 +212,12 @@ impl Learner {
         if let Some(m) = &mixed {
             let partners = smoothed_cross_entropy(&logits, &m.partner_labels, opts.label_smoothing)?;
             loss = ((loss * m.lambda)? + (partners * (1.0 - m.lambda))?)?;
+        }
+        if let Some(teachers) = &self.teachers {
+            // The teachers read the whole window (mixed, if mixup mixed it) even where this
+            // batch's answers are to its first tokens.
+            let target = teachers.probabilities(x)?;
+            loss = (loss + (crate::distill::soft_cross_entropy(&logits, &target)? * opts.distill_weight)?)?;
         }
         if let Some(extra) = extra {
             loss = (loss + extra)?;
@@ -363,6 +371,13 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
         }
         _ => None,
     };
+    if let Some(teachers) = &opts.distill {
+        if partner.is_some() {
+            return Err(Error::Usage("--distill does not go with --joint: distil each sensor's runs alone".into()));
+        }
+        main.net.learner.teachers =
+            Some(crate::distill::Teachers::load(Path::new(teachers), spec.val_fold, &main.normalization, &main.classes)?);
+    }
     let partner_dir = run_dir.partner();
     std::fs::create_dir_all(out).map_err(Error::io(out))?;
     if partner.is_some() {

@@ -80,6 +80,8 @@ fn options(epochs: usize) -> TrainOptions {
         mixup: 0.0,
         extrapolate: 0.0,
         extrapolate_levels: false,
+        distill: None,
+        distill_weight: 1.0,
         ema: 0.0,
         seed: 5,
         l1: 0.0,
@@ -226,6 +228,38 @@ fn weight_averaging_resumes_exactly_and_checkpoints_the_average() {
 fn extrapolation_resumes_exactly() {
     let dir = resumes_exactly("extrapolate", &tiny_data(), TrainOptions { extrapolate: 0.5, ..options(4) });
     std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// Distillation: runs of the same split teach, a taught run resumes bit for bit and differs from
+/// one untaught; teachers of another split, or none for the run's fold, are refused by name.
+#[test]
+fn distillation_learns_from_runs_of_the_same_split_and_resumes_exactly() {
+    let data = tiny_data();
+    let teachers = out_dir("teachers");
+    for seed in [0, 1] {
+        let options = TrainOptions { seed, ..options(3) };
+        let run = RunSpec { options, ..spec(&data, 3, None) };
+        train(&run, &teachers.join(format!("seed{seed}/fold0")), false, &ProgressBar::hidden()).unwrap().unwrap();
+    }
+    let taught = TrainOptions { distill: Some(teachers.display().to_string()), distill_weight: 2.0, ..options(4) };
+    let a = resumes_exactly("distill", &data, taught.clone());
+    let alone = out_dir("distill-alone");
+    train(&spec(&data, 4, None), &alone, false, &ProgressBar::hidden()).unwrap().unwrap();
+    assert_ne!(metrics(&a), metrics(&alone), "the teachers change the training");
+
+    let refused = |val_fold: usize, data: &Dataset, tag: &str| {
+        let run = RunSpec { val_fold, options: taught.clone(), ..spec(data, 4, None) };
+        train(&run, &out_dir(tag), false, &ProgressBar::hidden()).unwrap_err().to_string()
+    };
+    let none = refused(1, &data, "distill-fold1");
+    assert!(none.contains("no trained run of validation fold 1") && none.contains(&teachers.display().to_string()), "{none}");
+    let mut other = tiny_data();
+    other.x.iter_mut().for_each(|v| *v += 1.0);
+    let elsewhere = refused(0, &other, "distill-other");
+    assert!(elsewhere.contains("trained on another split") && elsewhere.contains("seed0/fold0"), "{elsewhere}");
+    for d in [a, alone, teachers] {
+        std::fs::remove_dir_all(d).unwrap();
+    }
 }
 
 /// Mixup draws from the run's own generator too, and still learns the tiny problem.
