@@ -49,6 +49,11 @@
 #   anytime-chscale  the anytime row with each channel's readings scaled by a factor of its own
 #             (--aug-channel-scale 0.05, docs/robustness.md)
 #   spectral-anytime-mixup-chscale  the spectral-anytime-mixup row with --aug-channel-scale 0.05
+#   e300-spectral-anytime-mixup  the spectral-anytime-mixup row trained 300 epochs
+#   e300-anytime  the anytime row trained 300 epochs
+#   distill-spectral-anytime-mixup  the spectral-anytime-mixup row taught by the spectral row's
+#             runs of its split (--distill runs/cv-spectral-SET, after spectral): each batch's
+#             targets include their averaged answers to the whole window
 #   extrapolate  same-class extrapolation in training (--extrapolate 1, docs/robustness.md)
 #   extrapolate-levels  the same, each channel's level only (--extrapolate 1 --extrapolate-levels)
 #   spectral-prunings  the spectral row's trained runs pruned further (after spectral): 70 % of
@@ -138,6 +143,8 @@ for row in "${rows[@]}"; do
                 "channels60-ft100 channels70" "${route[@]}" --mixup 0.2
             continue ;;
         e300-mixup-*) args=("${tried[@]}" --mixup 0.2) epochs=300 ;;
+        e300-anytime-*) args=("${tried[@]}" --prefix-training 0.5) epochs=300 ;;
+        e300-spectral-anytime-mixup-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.5 --mixup 0.2) epochs=300 ;;
         e300-mixup0.4-*) args=("${tried[@]}" --mixup 0.4) epochs=300 ;;
         e300-*) args=("${tried[@]}") epochs=300 ;;
         spectral-prunings-*)
@@ -147,6 +154,7 @@ for row in "${rows[@]}"; do
         spectral-mixup-*) args=("${tried[@]}" --set spectral_bands=16 --mixup 0.2) ;;
         anytime-chscale-*) args=("${tried[@]}" --prefix-training 0.5 --aug-channel-scale 0.05) ;;
         anytime-*) args=("${tried[@]}" --prefix-training 0.5) ;;
+        distill-spectral-anytime-mixup-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.5 --mixup 0.2 --distill "runs/cv-spectral-$set") ;;
         spectral-anytime-mixup-chscale-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.5 --mixup 0.2 --aug-channel-scale 0.05) ;;
         spectral-anytime-mixup-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.5 --mixup 0.2) ;;
         spectral-anytime0.3-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.3) ;;
