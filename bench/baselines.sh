@@ -54,6 +54,8 @@
 #   distill-spectral-anytime-mixup  the spectral-anytime-mixup row taught by the spectral row's
 #             runs of its split (--distill runs/cv-spectral-SET, after spectral): each batch's
 #             targets include their averaged answers to the whole window
+#   distill-anytime  the anytime row taught by its own row's runs of its split (--distill
+#             runs/cv-anytime-SET, after anytime)
 #   extrapolate  same-class extrapolation in training (--extrapolate 1, docs/robustness.md)
 #   extrapolate-levels  the same, each channel's level only (--extrapolate 1 --extrapolate-levels)
 #   spectral-prunings  the spectral row's trained runs pruned further (after spectral): 70 % of
@@ -152,6 +154,7 @@ for row in "${rows[@]}"; do
                 "channels70 channels50-frames50" "${route[@]}" --set spectral_bands=16
             continue ;;
         spectral-mixup-*) args=("${tried[@]}" --set spectral_bands=16 --mixup 0.2) ;;
+        distill-anytime-*) args=("${tried[@]}" --prefix-training 0.5 --distill "runs/cv-anytime-$set") ;;
         anytime-chscale-*) args=("${tried[@]}" --prefix-training 0.5 --aug-channel-scale 0.05) ;;
         anytime-*) args=("${tried[@]}" --prefix-training 0.5) ;;
         distill-spectral-anytime-mixup-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.5 --mixup 0.2 --distill "runs/cv-spectral-$set") ;;
