@@ -39,7 +39,7 @@ def summary(name, probabilities, labels):
     accuracies = (answered == labels).mean(1)
     averaged = (np.mean(probabilities, 0).argmax(1) == labels).mean()
     hard = np.flatnonzero(wrong >= HARD)
-    print(f"| {name} | {len(probabilities)} | {accuracies.mean():.4f} ± {accuracies.std(ddof=1):.4f} | "
+    print(f"| {name} | {len(probabilities)} | {accuracies.mean():.4f} ± {accuracies.std(ddof=1):.4f} | {accuracies.max():.4f} | "
           f"{len(hard)} | {1 - len(hard) / len(labels):.4f} | {averaged:.4f} |")
     return hard, answered
 
@@ -73,9 +73,9 @@ def main():
             sys.exit(f"{run}: its test fold is not the other runs' (another data set?)")
         labels = y
         groups.setdefault(group_of(run), []).append(p[:, -1, :])
-    print(f"| runs of | runs | test accuracy, mean ± std | touches wrong in ≥ {HARD:.0%} of the runs | "
+    print(f"| runs of | runs | test accuracy, mean ± std | best run | touches wrong in ≥ {HARD:.0%} of the runs | "
           "at most, with those wrong | the runs' probabilities averaged (not a model) |")
-    print("|---|---:|---:|---:|---:|---:|")
+    print("|---|---:|---:|---:|---:|---:|---:|")
     for name, probabilities in groups.items():
         summary(name, probabilities, labels)
     everything = [p for probabilities in groups.values() for p in probabilities]
