@@ -22,14 +22,21 @@ pub struct Teachers {
 impl Teachers {
     /// Every trained run `cv_dir/seed*/fold{val_fold}/model`, each checked to read the windows
     /// this run reads (its normalisation, fitted on its training split, equal to `normalization`)
-    /// and to answer with the same `classes`.
-    pub fn load(cv_dir: &Path, val_fold: usize, normalization: &Normalization, classes: &[String]) -> Result<Self> {
+    /// and to answer with the same `classes`, and not to be the run in `out` itself (or the
+    /// run it was pruned from).
+    pub fn load(cv_dir: &Path, val_fold: usize, normalization: &Normalization, classes: &[String], out: &Path) -> Result<Self> {
         let refuse = |what: String| Error::Usage(format!("--distill {}: {what}", cv_dir.display()));
+        let absolute = |p: &Path| std::path::absolute(p).map_err(Error::io(p));
+        let out = absolute(out)?;
         let mut models = Vec::new();
         for (_, seed_dir) in crate::cv::numbered(cv_dir, "seed")? {
-            let checkpoint = Run(&seed_dir.join(format!("fold{val_fold}"))).model();
+            let run = seed_dir.join(format!("fold{val_fold}"));
+            let checkpoint = Run(&run).model();
             if !checkpoint.is_dir() {
                 continue;
+            }
+            if out.starts_with(absolute(&run)?) {
+                return Err(refuse(format!("{} is this run, or the run it was pruned from: a run cannot teach itself", run.display())));
             }
             let (meta, model, _) = crate::checkpoint::load(&checkpoint)?;
             if meta.provenance.val_fold != val_fold || meta.normalization != *normalization {

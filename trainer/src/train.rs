@@ -376,7 +376,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
             return Err(Error::Usage("--distill does not go with --joint: distil each sensor's runs alone".into()));
         }
         main.net.learner.teachers =
-            Some(crate::distill::Teachers::load(Path::new(teachers), spec.val_fold, &main.normalization, &main.classes)?);
+            Some(crate::distill::Teachers::load(Path::new(teachers), spec.val_fold, &main.normalization, &main.classes, out)?);
     }
     let partner_dir = run_dir.partner();
     std::fs::create_dir_all(out).map_err(Error::io(out))?;

@@ -231,7 +231,8 @@ fn extrapolation_resumes_exactly() {
 }
 
 /// Distillation: runs of the same split teach, a taught run resumes bit for bit and differs from
-/// one untaught; teachers of another split, or none for the run's fold, are refused by name.
+/// one untaught; teachers of another split, none for the run's fold, or the run itself are
+/// refused by name.
 #[test]
 fn distillation_learns_from_runs_of_the_same_split_and_resumes_exactly() {
     let data = tiny_data();
@@ -257,6 +258,9 @@ fn distillation_learns_from_runs_of_the_same_split_and_resumes_exactly() {
     other.x.iter_mut().for_each(|v| *v += 1.0);
     let elsewhere = refused(0, &other, "distill-other");
     assert!(elsewhere.contains("trained on another split") && elsewhere.contains("seed0/fold0"), "{elsewhere}");
+    let own = RunSpec { options: taught.clone(), ..spec(&data, 4, None) };
+    let itself = train(&own, &teachers.join("seed1/fold0/pruned"), false, &ProgressBar::hidden()).unwrap_err().to_string();
+    assert!(itself.contains("cannot teach itself") && itself.contains("seed1/fold0"), "{itself}");
     for d in [a, alone, teachers] {
         std::fs::remove_dir_all(d).unwrap();
     }
