@@ -119,7 +119,7 @@ pub struct TrainOptions {
     #[arg(long, default_value_t = 0.0)]
     #[serde(default)]
     pub prefix_training: f64,
-    /// Distillation (trainer/src/distill.rs): the runs of this earlier cross-validation (`pvt3 cv
+    /// Distillation (docs/anytime.md): the runs of this earlier cross-validation (`pvt3 cv
     /// --out DIR`) that share this run's training split, every DIR/seed*/foldK/model with K this
     /// run's validation fold, teach it: each batch's loss adds --distill-weight times the
     /// cross-entropy between their averaged class probabilities for the whole window and this
