@@ -22,7 +22,7 @@ pub struct Teachers {
 impl Teachers {
     /// Every trained run `cv_dir/seed*/fold{val_fold}/model`, each checked to read the windows
     /// this run reads (its normalisation, fitted on its training split, equal to `normalization`)
-    /// and to answer with the same `classes`, and not to be the run in `out` itself (or the
+    /// and to answer with the same `classes`, finished, and not the run in `out` itself (or the
     /// run it was pruned from).
     pub fn load(cv_dir: &Path, val_fold: usize, normalization: &Normalization, classes: &[String], out: &Path) -> Result<Self> {
         let refuse = |what: String| Error::Usage(format!("--distill {}: {what}", cv_dir.display()));
@@ -37,6 +37,9 @@ impl Teachers {
             }
             if out.starts_with(absolute(&run)?) {
                 return Err(refuse(format!("{} is this run, or the run it was pruned from: a run cannot teach itself", run.display())));
+            }
+            if !Run(&run).result().exists() {
+                return Err(refuse(format!("{} is still training (no result.json): let it finish first", run.display())));
             }
             let (meta, model, _) = crate::checkpoint::load(&checkpoint)?;
             if meta.provenance.val_fold != val_fold || meta.normalization != *normalization {

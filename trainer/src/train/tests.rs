@@ -231,8 +231,8 @@ fn extrapolation_resumes_exactly() {
 }
 
 /// Distillation: runs of the same split teach, a taught run resumes bit for bit and differs from
-/// one untaught; teachers of another split, none for the run's fold, or the run itself are
-/// refused by name.
+/// one untaught; teachers of another split, none for the run's fold, the run itself or a run
+/// still training are refused by name.
 #[test]
 fn distillation_learns_from_runs_of_the_same_split_and_resumes_exactly() {
     let data = tiny_data();
@@ -261,6 +261,9 @@ fn distillation_learns_from_runs_of_the_same_split_and_resumes_exactly() {
     let own = RunSpec { options: taught.clone(), ..spec(&data, 4, None) };
     let itself = train(&own, &teachers.join("seed1/fold0/pruned"), false, &ProgressBar::hidden()).unwrap_err().to_string();
     assert!(itself.contains("cannot teach itself") && itself.contains("seed1/fold0"), "{itself}");
+    std::fs::remove_file(Run(&teachers.join("seed0/fold0")).result()).unwrap();
+    let unfinished = refused(0, &data, "distill-unfinished");
+    assert!(unfinished.contains("still training") && unfinished.contains("seed0/fold0"), "{unfinished}");
     for d in [a, alone, teachers] {
         std::fs::remove_dir_all(d).unwrap();
     }
