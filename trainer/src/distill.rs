@@ -31,8 +31,7 @@ impl Teachers {
         let mut models = Vec::new();
         for (_, seed_dir) in crate::cv::numbered(cv_dir, "seed")? {
             let run = seed_dir.join(format!("fold{val_fold}"));
-            let checkpoint = Run(&run).model();
-            if !checkpoint.is_dir() {
+            if !run.is_dir() {
                 continue;
             }
             if out.starts_with(absolute(&run)?) {
@@ -41,6 +40,7 @@ impl Teachers {
             if !Run(&run).result().exists() {
                 return Err(refuse(format!("{} is still training (no result.json): let it finish first", run.display())));
             }
+            let checkpoint = Run(&run).model();
             let (meta, model, _) = crate::checkpoint::load(&checkpoint)?;
             if meta.provenance.val_fold != val_fold || meta.normalization != *normalization {
                 return Err(refuse(format!(

@@ -47,6 +47,9 @@ impl Partner<'_> {
         if opts.mixup > 0.0 {
             return refuse("--mixup blends touches of two classes, which have no partner; train with one or the other".into());
         }
+        if opts.distill.is_some() {
+            return refuse("--distill teaches one sensor's network by its own runs; train with one or the other".into());
+        }
         Ok(())
     }
 

@@ -372,9 +372,6 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
         _ => None,
     };
     if let Some(teachers) = &opts.distill {
-        if partner.is_some() {
-            return Err(Error::Usage("--distill does not go with --joint: distil each sensor's runs alone".into()));
-        }
         main.net.learner.teachers =
             Some(crate::distill::Teachers::load(Path::new(teachers), spec.val_fold, &main.normalization, &main.classes, out)?);
     }

@@ -470,7 +470,7 @@ fn a_joint_run_trains_both_sensors_and_resumes_exactly() {
 
 /// Joint learning refuses what it cannot pair or compare, naming the other data set.
 #[test]
-fn a_joint_run_refuses_encodings_of_other_widths_other_classes_and_mixup() {
+fn a_joint_run_refuses_encodings_of_other_widths_other_classes_mixup_and_distillation() {
     let (data, other) = (tiny_data(), tiny_other_sensor());
     let refused = |spec: RunSpec| train(&spec, &out_dir("joint-refused"), false, &ProgressBar::hidden()).unwrap_err().to_string();
     let wide = (other.0.clone(), Config { dim: 12, ..other.1.clone() });
@@ -480,8 +480,10 @@ fn a_joint_run_refuses_encodings_of_other_widths_other_classes_and_mixup() {
     let renamed = Partner { classes: vec!["smooth".into(), "rough".into()], ..base.partner.clone().unwrap() };
     let err = refused(RunSpec { partner: Some(renamed), ..base.clone() });
     assert!(err.contains("pairs are made by class"), "{err}");
-    let err = refused(RunSpec { options: TrainOptions { mixup: 0.2, ..base.options.clone() }, ..base });
+    let err = refused(RunSpec { options: TrainOptions { mixup: 0.2, ..base.options.clone() }, ..base.clone() });
     assert!(err.contains("--mixup"), "{err}");
+    let err = refused(RunSpec { options: TrainOptions { distill: Some("runs/any".into()), ..base.options.clone() }, ..base });
+    assert!(err.contains("--joint tiny-other") && err.contains("--distill"), "{err}");
 }
 
 /// With a shared temporal transformer the two networks hold one set of its weights, updated once
