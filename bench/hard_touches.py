@@ -22,15 +22,18 @@ from pathlib import Path
 
 import numpy as np
 
-from stop_rules import answers
+from stop_rules import answers, cross_validation_of
 
 HARD = float(os.environ.get("HARD", "0.75"))
 
 
 def group_of(run):
-    here = Path(run).resolve()
-    fold = here.parent if here.name == "pruned" else here
-    return f"{fold.parent.parent.name}" + (" (pruned)" if fold != here else "")
+    """A run's cross-validation (and pruned or not), or the run itself outside one."""
+    found = cross_validation_of(run)
+    if found is None:
+        return str(run)
+    cv, pruned = found
+    return cv.name + (" (pruned)" if pruned else "")
 
 
 def summary(name, probabilities, labels):

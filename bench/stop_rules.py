@@ -56,6 +56,16 @@ def answers(run, fold):
     return np.array(a["probabilities"], dtype=np.float64), np.array(a["labels"]), report
 
 
+def cross_validation_of(run):
+    """The `pvt3 cv` directory of a fold's run (`OUT/seedS/foldK`) or of its pruned run
+    (`OUT/seedS/foldK/pruned`), and whether it is the pruned one; None for another run."""
+    here = Path(run).resolve()
+    fold = here.parent if here.name == "pruned" else here
+    if fold.name.startswith("fold") and fold.parent.name.startswith("seed"):
+        return fold.parent.parent, fold != here
+    return None
+
+
 class Answers:
     def __init__(self, p, y):
         self.y, self.n, self.tokens = y, p.shape[0], p.shape[1]
@@ -183,11 +193,10 @@ def main():
         pv, yv, _ = answers(run, val_fold)
         pt, yt, report = answers(run, 4)
         val, test = Answers(pv, yv), Answers(pt, yt)
-        here = Path(run).resolve()
-        # A fold's run, or its pruned run (`OUT/seedS/foldK/pruned`), pooled with its own kind.
-        fold = here.parent if here.name == "pruned" else here
-        if fold.name.startswith("fold") and fold.parent.name.startswith("seed"):
-            kind = f"{fold.parent.parent}" + (" (pruned runs)" if fold != here else "")
+        # A fold's run, or its pruned run, pooled with its own kind.
+        if found := cross_validation_of(run):
+            cv, pruned = found
+            kind = f"{cv}" + (" (pruned runs)" if pruned else "")
             cv_of.setdefault(kind, []).append(((pv, yv), test, report, run))
         results = rules(val, test, confusions)
         if report["calibrated"].get("calibrated_on", "validation_fold") == "validation_fold":
