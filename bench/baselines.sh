@@ -50,6 +50,8 @@
 #             (--aug-channel-scale 0.05, docs/robustness.md)
 #   spectral-anytime-mixup-chscale  the spectral-anytime-mixup row with --aug-channel-scale 0.05
 #   e300-spectral-anytime-mixup  the spectral-anytime-mixup row trained 300 epochs
+#   e300-distill-spectral-anytime-mixup  the distill-spectral-anytime-mixup row trained 300 epochs
+#   e300-anytime  the anytime row trained 300 epochs
 #   distill-spectral-anytime-mixup  the spectral-anytime-mixup row taught by the spectral row's
 #             runs of its split (--distill runs/cv-spectral-SET, after spectral): each batch's
 #             targets include their averaged answers to the whole window
@@ -145,6 +147,8 @@ for row in "${rows[@]}"; do
             continue ;;
         e300-mixup-*) args=("${tried[@]}" --mixup 0.2) epochs=300 ;;
         e300-spectral-anytime-mixup-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.5 --mixup 0.2) epochs=300 ;;
+        e300-distill-spectral-anytime-mixup-*) args=("${tried[@]}" --set spectral_bands=16 --prefix-training 0.5 --mixup 0.2 --distill "runs/cv-spectral-$set") epochs=300 ;;
+        e300-anytime-*) args=("${tried[@]}" --prefix-training 0.5) epochs=300 ;;
         e300-mixup0.4-*) args=("${tried[@]}" --mixup 0.4) epochs=300 ;;
         e300-*) args=("${tried[@]}") epochs=300 ;;
         spectral-prunings-*)
