@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from stop_rules import answers, cross_validation_of
+from stop_rules import answers, cross_validation_of, nearest_by_levels
 
 HARD = float(os.environ.get("HARD", "0.75"))
 
@@ -45,22 +45,6 @@ def summary(name, probabilities, labels):
     print(f"| {name} | {len(probabilities)} | {accuracies.mean():.4f} ± {accuracies.std(ddof=1):.4f} | {accuracies.max():.4f} | "
           f"{len(hard)} | {1 - len(hard) / len(labels):.4f} | {averaged:.4f} |")
     return hard, answered
-
-
-def nearest_by_levels(data, touches, k=3):
-    """The classes of the k nearest non-test touches of each test touch in `touches`, by
-    standardised channel levels."""
-    d = np.load(data)
-    x, y, fold = d["x"], d["y"], d["fold"]
-    levels = x.reshape(len(x), -1, x.shape[-1]).astype(np.float64).mean(-1)
-    rest = fold != 4
-    levels = (levels - levels[rest].mean(0)) / (levels[rest].std(0) + 1e-9)
-    test = np.flatnonzero(fold == 4)
-    out = []
-    for i in touches:
-        distance = ((levels[rest] - levels[test[i]]) ** 2).sum(1)
-        out.append(y[rest][np.argsort(distance)[:k]])
-    return out
 
 
 def main():

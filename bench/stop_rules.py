@@ -28,7 +28,11 @@ target/stop_rules/). The rules:
   whether the test fold's larger loss is the allowance's: no loss allowed, and the loss's
   one-sided 95 % upper bound (its mean plus 1.645 standard errors over the pooled samples)
   within 0.5 points. Where a run carries that rule, this script's
-  figure for it must equal `pvt3 eval --anytime`'s, which it checks.
+  figure for it must equal `pvt3 eval --anytime`'s, which it checks. The test touches whose
+  answer that rule changes against the whole touch (lost or gained) are listed, each with the
+  number of runs it happens in (whether the loss is a few touches' or spread) and the classes of
+  its three nearest touches outside the test fold by channel levels over the frames read by then
+  (what the recordings themselves place that much of it among).
 - best threshold on the test fold: not a rule (it looks at the test fold); the most a single
   threshold with 3 agreeing answers could do, within 0.5 points of the whole touch. The classes
   it stops wrongly on (that the whole touch gets right) are listed under the table.
@@ -174,6 +178,48 @@ def pooled_rules(group):
     return out
 
 
+def nearest_by_levels(data, touches, k=3, share=1.0):
+    """The classes of the k nearest non-test touches of each test touch in `touches`, by
+    standardised channel levels (each channel's mean over the touch's first `share` of frames)."""
+    d = np.load(data)
+    x, y, fold = d["x"], d["y"], d["fold"]
+    x = x.reshape(len(x), -1, x.shape[-1])
+    levels = x[..., :max(1, round(share * x.shape[-1]))].astype(np.float64).mean(-1)
+    rest = fold != 4
+    levels = (levels - levels[rest].mean(0)) / (levels[rest].std(0) + 1e-9)
+    test = np.flatnonzero(fold == 4)
+    out = []
+    for i in touches:
+        distance = ((levels[rest] - levels[test[i]]) ** 2).sum(1)
+        out.append(y[rest][np.argsort(distance)[:k]])
+    return out
+
+
+def print_changed_touches(cv, tests, classes, threshold, agreeing, data):
+    """The test touches whose answer pvt3 cv's rule changes against the whole touch, over the runs
+    of `cv` (each run's `Answers` on the same test fold, in the same order, of `classes` classes):
+    where the whole touch is right and the stop wrong (lost) or the other way round (gained), in
+    how many runs, at what share of the touch and with which answer; and the classes of the three
+    nearest touches outside the test fold in `data` by channel levels over the frames read there."""
+    changed = {}
+    for test in tests:
+        answer, k = test.stops("top", np.full(classes, threshold), agreeing)
+        full_right, stop_right = test.cls[:, -1] == test.y, answer == test.y
+        for i in np.where(full_right != stop_right)[0]:
+            c = changed.setdefault(int(i), {"class": int(test.y[i]), "lost": bool(full_right[i]), "answers": [], "shares": []})
+            c["answers"].append(int(answer[i] if full_right[i] else test.cls[i, -1]))
+            c["shares"].append((k[i] + 1) / test.tokens)
+    print(f"{cv}: test touches pvt3 cv's rule changes against the whole touch, over {len(tests)} runs "
+          f"(the classes of the 3 nearest non-test touches in {data} by channel levels over the frames read):", file=sys.stderr)
+    for i, c in sorted(changed.items(), key=lambda kv: (-len(kv[1]["shares"]), kv[0])):
+        runs, share = len(c["shares"]), float(np.mean(c["shares"]))
+        answers = ", ".join(f"{b} × {c['answers'].count(b)}" for b in sorted(set(c["answers"])))
+        how = f"stopped as {answers}" if c["lost"] else f"right at the stop, the whole touch answers {answers}"
+        near = ", ".join(map(str, nearest_by_levels(data, [i], share=share)[0]))
+        print(f"  touch {i} (class {c['class']}): {'lost' if c['lost'] else 'gained'} in {runs} run{'s' * (runs > 1)}, "
+              f"{how}, at {100 * share:.0f} % of the touch; nearest there: {near}", file=sys.stderr)
+
+
 def check(run, row, report):
     """This script's figures for the rule `run` carries must be `pvt3 eval --anytime`'s."""
     change, share = row
@@ -210,10 +256,12 @@ def main():
             for name, (t, a), rows in pooled:
                 table.setdefault(name, []).extend(rows)
                 print(f"{cv}: {name} (≥ {t:.4f}, {a} agreeing): " + "; ".join(f"{c:+.1f} @ {s:.2f}" for c, s in rows), file=sys.stderr)
-            cv_rule_rows = pooled[-1][2]  # pvt3 cv's rule, the last of pooled_rules
+            (t, a), cv_rule_rows = pooled[-1][1:]  # pvt3 cv's rule, the last of pooled_rules
             for (_, _, report, run), row in zip(group, cv_rule_rows):
                 if report["calibrated"].get("calibrated_on", "validation_fold") != "validation_fold":
                     check(run, row, report)
+            data = json.loads(Path(group[0][3], "model", "provenance.json").read_text())["data"]
+            print_changed_touches(cv, [g[1] for g in group], group[0][0][0].shape[-1], t, a, data)
     print(f"| rule ({len(runs)} runs) | test accuracy change (points) | share of the touch used (%) |")
     print("|---|---:|---:|")
     best = [n for n in table if n.startswith("best")]
