@@ -178,19 +178,26 @@ def pooled_rules(group):
     return out
 
 
-def nearest_by_levels(data, touches, k=3, share=1.0):
+def nearest_by_levels(data, touches, k=3, shares=None):
     """The classes of the k nearest non-test touches of each test touch in `touches`, by
-    standardised channel levels (each channel's mean over the touch's first `share` of frames)."""
+    standardised channel levels: each channel's mean over the touch's first `shares[j]` of its
+    frames for the j-th touch (the whole touch by default)."""
     d = np.load(data)
     x, y, fold = d["x"], d["y"], d["fold"]
-    x = x.reshape(len(x), -1, x.shape[-1])
-    levels = x[..., :max(1, round(share * x.shape[-1]))].astype(np.float64).mean(-1)
-    rest = fold != 4
-    levels = (levels - levels[rest].mean(0)) / (levels[rest].std(0) + 1e-9)
-    test = np.flatnonzero(fold == 4)
+    x = x.reshape(len(x), -1, x.shape[-1]).astype(np.float64)
+    rest, test = fold != 4, np.flatnonzero(fold == 4)
+    levels_over = {}  # frames read -> standardised levels of every touch
+
+    def levels(frames):
+        if frames not in levels_over:
+            v = x[..., :frames].mean(-1)
+            levels_over[frames] = (v - v[rest].mean(0)) / (v[rest].std(0) + 1e-9)
+        return levels_over[frames]
+
     out = []
-    for i in touches:
-        distance = ((levels[rest] - levels[test[i]]) ** 2).sum(1)
+    for i, share in zip(touches, np.ones(len(touches)) if shares is None else shares):
+        v = levels(max(1, round(share * x.shape[-1])))
+        distance = ((v[rest] - v[test[i]]) ** 2).sum(1)
         out.append(y[rest][np.argsort(distance)[:k]])
     return out
 
@@ -211,13 +218,14 @@ def print_changed_touches(cv, tests, classes, threshold, agreeing, data):
             c["shares"].append((k[i] + 1) / test.tokens)
     print(f"{cv}: test touches pvt3 cv's rule changes against the whole touch, over {len(tests)} runs "
           f"(the classes of the 3 nearest non-test touches in {data} by channel levels over the frames read):", file=sys.stderr)
-    for i, c in sorted(changed.items(), key=lambda kv: (-len(kv[1]["shares"]), kv[0])):
-        runs, share = len(c["shares"]), float(np.mean(c["shares"]))
+    touches = sorted(changed, key=lambda i: (-len(changed[i]["shares"]), i))
+    shares = [float(np.mean(changed[i]["shares"])) for i in touches]
+    for i, share, near in zip(touches, shares, nearest_by_levels(data, touches, shares=shares)):
+        c, runs = changed[i], len(changed[i]["shares"])
         answers = ", ".join(f"{b} × {c['answers'].count(b)}" for b in sorted(set(c["answers"])))
         how = f"stopped as {answers}" if c["lost"] else f"right at the stop, the whole touch answers {answers}"
-        near = ", ".join(map(str, nearest_by_levels(data, [i], share=share)[0]))
         print(f"  touch {i} (class {c['class']}): {'lost' if c['lost'] else 'gained'} in {runs} run{'s' * (runs > 1)}, "
-              f"{how}, at {100 * share:.0f} % of the touch; nearest there: {near}", file=sys.stderr)
+              f"{how}, at {100 * share:.0f} % of the touch; nearest there: {', '.join(map(str, near))}", file=sys.stderr)
 
 
 def check(run, row, report):
