@@ -119,12 +119,9 @@ fn draw_panel(s: &mut String, panel: &Panel, ox: f64, oy: f64) {
     }
     let _ = writeln!(s, r#"<rect x="{x0}" y="{y0}" width="{}" height="{}" fill="none" stroke="black"/>"#, x1 - x0, y1 - y0);
     let _ = writeln!(s, r#"<text x="{}" y="{}" text-anchor="middle">{}</text>"#, (x0 + x1) / 2.0, y1 + 32.0, escape(&panel.x_label));
-    if let Some((x, text)) = &panel.marker {
-        let x = px(*x);
+    let marker = panel.marker.as_ref().map(|(x, text)| (px(*x), text));
+    if let Some((x, _)) = marker {
         let _ = writeln!(s, r##"<line x1="{x:.1}" y1="{y0}" x2="{x:.1}" y2="{y1}" stroke="#777" stroke-dasharray="4 3"/>"##);
-        // The label on the side with room: left of a line in the right half.
-        let (tx, anchor) = if x > (x0 + x1) / 2.0 { (x - 3.0, "end") } else { (x + 3.0, "start") };
-        let _ = writeln!(s, r##"<text x="{tx:.1}" y="{}" text-anchor="{anchor}" fill="#555">{}</text>"##, y0 + 12.0, escape(text));
     }
     for series in &panel.series {
         let points: Vec<String> =
@@ -144,10 +141,37 @@ fn draw_panel(s: &mut String, panel: &Panel, ox: f64, oy: f64) {
             );
         }
     }
+    if let Some((x, text)) = marker {
+        // The label over the curves, haloed in white, on the side with room: left of a line in the
+        // right half.
+        let (tx, anchor) = if x > (x0 + x1) / 2.0 { (x - 3.0, "end") } else { (x + 3.0, "start") };
+        let _ = writeln!(
+            s,
+            r##"<text x="{tx:.1}" y="{}" text-anchor="{anchor}" fill="#555" stroke="white" stroke-width="3" paint-order="stroke">{}</text>"##,
+            y0 + 12.0,
+            escape(text)
+        );
+    }
     let legend: Vec<&Series> = panel.series.iter().filter(|s| !s.faint).collect();
+    let (lx, ly0) = (x0 + 8.0, y0 + 14.0 + if panel.marker.is_some() { 10.0 } else { 0.0 });
+    if let Some(longest) = legend.iter().map(|s| s.name.chars().count()).max() {
+        // A pale ground, so that the entries stay legible over the curves they name.
+        let (w, h) = (16.0 + 6.5 * longest as f64 + 8.0, 14.0 * legend.len() as f64 + 4.0);
+        let _ = writeln!(s, r#"<rect x="{}" y="{}" width="{w}" height="{h}" fill="white" fill-opacity="0.85"/>"#, lx - 4.0, ly0 - 12.0);
+    }
     for (k, series) in legend.iter().enumerate() {
-        let (lx, ly) = (x0 + 8.0, y0 + 14.0 + 14.0 * k as f64 + if panel.marker.is_some() { 10.0 } else { 0.0 });
-        let _ = writeln!(s, r#"<rect x="{lx}" y="{}" width="12" height="3" fill="{}"/>"#, ly - 4.0, series.color);
+        let (lx, ly) = (lx, ly0 + 14.0 * k as f64);
+        let _ = writeln!(s, "{}", legend_mark(series, lx, ly));
         let _ = writeln!(s, r#"<text x="{}" y="{ly}">{}</text>"#, lx + 16.0, escape(&series.name));
+    }
+}
+
+/// A legend entry's mark at (`x`, `y`), the baseline of its text: the series' own mark, a dot for
+/// a series of points and a short bar for a line.
+pub(super) fn legend_mark(series: &Series, x: f64, y: f64) -> String {
+    if series.dots {
+        format!(r#"<circle cx="{}" cy="{}" r="2.5" fill="{}"/>"#, x + 6.0, y - 3.5, series.color)
+    } else {
+        format!(r#"<rect x="{x}" y="{}" width="12" height="3" fill="{}"/>"#, y - 4.0, series.color)
     }
 }

@@ -124,6 +124,29 @@ fn a_cross_validation_figure_draws_every_run() {
     }
 }
 
+/// Of the rows holding pixels within 40 of `color` in the columns `x0..x1`: how many, and the
+/// most such pixels in one.
+fn rows_and_widest(image: &(usize, usize, Vec<u8>), color: [u8; 3], x0: usize, x1: usize) -> (usize, usize) {
+    let (w, h, px) = image;
+    let near = |x: usize, y: usize| (0..3).all(|c| (px[(y * w + x) * 4 + c] as i32 - color[c] as i32).abs() <= 40);
+    let widths: Vec<usize> = (0..*h).map(|y| (x0..x1).filter(|&x| near(x, y)).count()).collect();
+    (widths.iter().filter(|&&n| n > 0).count(), widths.into_iter().max().unwrap_or(0))
+}
+
+#[test]
+fn a_legend_marks_a_series_of_dots_with_a_dot() {
+    let runs: Vec<_> = (0..4).map(|k| (format!("seed0/fold{k}"), epochs(12), Some(8))).collect();
+    let image = render(&curves::cv_figure("cv", &runs), "legend");
+    // The accuracy panel's one entry, "selected epochs" (the runs are faint, unlisted): left of
+    // its text at x = 56 + 8 + 16, clear of the selected epochs' dots (x ≈ 260).
+    let (rows, widest) = rows_and_widest(&image, rgb(COLORS[6]), 56, 80);
+    assert!(rows >= 3 && (3..=7).contains(&widest), "a dot, not a 12 px bar: {rows} rows, {widest} px at most");
+    // A line's entry stays a bar: the run figure's learning rate, in its third panel.
+    let image = render(&curves::run_figure("run", &epochs(30), None), "legend-line");
+    let (_, widest) = rows_and_widest(&image, rgb(COLORS[6]), 840 + 56, 840 + 80);
+    assert!(widest >= 11, "a bar: {widest} px");
+}
+
 #[test]
 fn the_confusion_matrix_shades_each_cell_by_its_share_of_the_true_class() {
     let names: Vec<String> = ["cotton", "denim", "silk"].map(String::from).to_vec();
