@@ -39,7 +39,9 @@ pub fn svg(m: &[Vec<usize>], names: &[String], title: &str) -> String {
     let cell = (480.0 / n as f64).clamp(14.0, 48.0);
     let label_room = 12.0 + 6.5 * names.iter().map(|s| s.chars().count()).max().unwrap_or(1) as f64;
     let (x0, y0) = (label_room + 24.0, label_room + 48.0);
-    let (width, height) = (x0 + cell * n as f64 + 20.0, y0 + cell * n as f64 + 20.0);
+    let (grid_width, height) = (x0 + cell * n as f64 + 20.0, y0 + cell * n as f64 + 20.0);
+    // Wide enough for the title (14 px type, about 8 px a character), the grid centred below it.
+    let width = grid_width.max(8.0 * title.chars().count() as f64 + 24.0);
     let mut s = String::new();
     let _ = writeln!(
         s,
@@ -47,6 +49,7 @@ pub fn svg(m: &[Vec<usize>], names: &[String], title: &str) -> String {
     );
     let _ = writeln!(s, r#"<rect width="100%" height="100%" fill="white"/>"#);
     let _ = writeln!(s, r#"<text x="{}" y="18" text-anchor="middle" font-size="14">{}</text>"#, width / 2.0, escape(title));
+    let _ = writeln!(s, r#"<g transform="translate({} 0)">"#, (width - grid_width) / 2.0);
     let _ = writeln!(s, r#"<text x="{}" y="36" text-anchor="middle">answered</text>"#, x0 + cell * n as f64 / 2.0);
     let _ = writeln!(
         s,
@@ -80,6 +83,6 @@ pub fn svg(m: &[Vec<usize>], names: &[String], title: &str) -> String {
             }
         }
     }
-    s.push_str("</svg>\n");
+    s.push_str("</g>\n</svg>\n");
     s
 }

@@ -171,4 +171,10 @@ fn the_confusion_matrix_shades_each_cell_by_its_share_of_the_true_class() {
     assert_eq!(at(0, 1), [255, 255, 255], "never answered: white");
     let half = at(1, 1);
     assert!(half[0] > 100 && half[0] < 160 && half == at(1, 2), "half the row: half the shade, {half:?}");
+    // A title longer than the grid is wide widens the picture: its ink clear of both edges.
+    let title = "runs/a-long-name/seed0/fold0: fold 4, 56 touches, accuracy 0.8393";
+    let (w, _, px) = render(&confusion::svg(&m, &names, title), "confusion-title");
+    let inked: Vec<usize> = (0..w * 24).filter(|&i| px[i * 4 + 3] > 200 && px[i * 4] < 128).map(|i| i % w).collect();
+    let (left, right) = (inked.iter().min().copied().unwrap_or(0), inked.iter().max().copied().unwrap_or(w));
+    assert!(!inked.is_empty() && left >= 4 && right + 4 < w, "the title's ink spans x = {left}..={right} of {w}");
 }
