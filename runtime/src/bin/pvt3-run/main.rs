@@ -1,6 +1,7 @@
 //! `pvt3-run MODEL.onnx INPUT.npy`: classify tactile windows on the robot with the pvt3 runtime.
 //! INPUT holds one window `[height, width, (channels,) frames]` or a batch of them, raw sensor
-//! values as recorded. Prints one line per window: index, class, label, probability.
+//! values as recorded (axes of length 1 may be left out). Prints one line per window: index,
+//! class, label, probability.
 //!
 //! `pvt3-run --bench MODEL.onnx [THREADS [SECONDS]]` measures latency on this machine instead
 //! (one JSON line; see `bench.rs`).
@@ -16,8 +17,9 @@ mod bench;
 const USAGE: &str = "usage: pvt3-run MODEL.onnx INPUT.npy
        pvt3-run --bench MODEL.onnx [THREADS [SECONDS]]
 
-Classifies the window(s) in INPUT (raw sensor values, [batch,] height, width, [channels,] frames)
-with the exported model, one line per window: index, class, label, probability.
+Classifies the window(s) in INPUT (raw sensor values, [batch,] height, width, [channels,] frames;
+axes of length 1 may be left out) with the exported model, one line per window: index, class,
+label, probability.
 --bench measures latency instead, on THREADS threads (default 1) for about SECONDS (default 2)
 per measurement: batch 1 and 32, batch 1 with tract's own kernels and with kernels timed at load,
 the first call, and a streamed touch (per kept frame, per pruned frame, end of touch; not for a
@@ -53,9 +55,68 @@ fn usage() -> ExitCode {
 fn run(model: &str, input: &str) -> pvt3_runtime::Result<()> {
     let classifier = Classifier::load(model)?;
     let (shape, values) = read_npy(std::path::Path::new(input))?;
-    let batch = if shape.len() == classifier.sample_shape().len() { 1 } else { shape.first().copied().unwrap_or(0) };
+    let batch =
+        windows(&shape, classifier.sample_shape()).map_err(|reason| pvt3_runtime::Error::Npy { path: input.to_string(), reason })?;
     for (i, p) in classifier.classify_batch(&values, batch)?.iter().enumerate() {
         println!("{i}\t{}\t{}\t{:.4}", p.class, p.label, p.probabilities[p.class]);
     }
     Ok(())
+}
+
+/// How many of the model's windows an array of `shape` holds: one window of `sample` (`[height,
+/// width, (channels,) frames]`) or a batch of them, axes of length 1 left in or out. Otherwise
+/// what is wrong, in the user's terms.
+fn windows(shape: &[usize], sample: &[usize]) -> Result<usize, String> {
+    let numbers = |s: &[usize], by: &str| s.iter().map(usize::to_string).collect::<Vec<_>>().join(by);
+    if shape.contains(&0) {
+        return Err(format!("an empty array, of shape [{}]", numbers(shape, ", ")));
+    }
+    let long = |s: &[usize]| s.iter().copied().filter(|&n| n != 1).collect::<Vec<_>>();
+    let (got, want) = (long(shape), long(sample));
+    if got == want {
+        return Ok(1);
+    }
+    if got.len() == want.len() + 1 && got[1..] == want[..] {
+        return Ok(got[0]);
+    }
+    let (frames, space) = sample.split_last().expect("a frame axis");
+    let hint = match shape.split_last() {
+        Some((n, rest)) if n != frames && long(rest).ends_with(&long(space)) => {
+            format!("; its windows have {n} frames where the model reads {frames}: cut each touch into windows of {frames} frames")
+        }
+        _ => String::new(),
+    };
+    Err(format!(
+        "an array of shape [{}]; the model reads one window of {} (height × width × [channels ×] frames) or a batch of them{hint}",
+        numbers(shape, ", "),
+        numbers(sample, " × ")
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::windows;
+
+    #[test]
+    fn one_window_or_a_batch_with_or_without_axes_of_length_one() {
+        let sample = [24, 1, 270];
+        assert_eq!(windows(&[24, 1, 270], &sample), Ok(1));
+        assert_eq!(windows(&[24, 270], &sample), Ok(1));
+        assert_eq!(windows(&[1, 24, 1, 270], &sample), Ok(1));
+        assert_eq!(windows(&[3, 24, 1, 270], &sample), Ok(3));
+        assert_eq!(windows(&[3, 24, 270], &sample), Ok(3));
+        assert_eq!(windows(&[6, 10, 3, 75], &[6, 10, 3, 75]), Ok(1));
+        assert_eq!(windows(&[8, 6, 10, 3, 75], &[6, 10, 3, 75]), Ok(8));
+    }
+
+    #[test]
+    fn a_wrong_shape_is_named_with_what_the_model_reads() {
+        let e = windows(&[3, 24, 281], &[24, 1, 270]).unwrap_err();
+        assert!(e.starts_with("an array of shape [3, 24, 281]; the model reads one window of 24 × 1 × 270"), "{e}");
+        assert!(e.ends_with("its windows have 281 frames where the model reads 270: cut each touch into windows of 270 frames"), "{e}");
+        let e = windows(&[3, 19, 270], &[24, 1, 270]).unwrap_err();
+        assert!(e.contains("[3, 19, 270]") && !e.contains("cut each touch"), "{e}");
+        assert!(windows(&[0, 24, 270], &[24, 1, 270]).unwrap_err().starts_with("an empty array"));
+        assert!(windows(&[10, 6, 3, 75], &[6, 10, 3, 75]).is_err(), "height and width swapped");
+    }
 }
