@@ -434,7 +434,15 @@ fn choose_columns(names: &[String], touches: &[TouchFile], opts: &ImportOptions)
         }
     }
     if chosen.is_empty() {
-        return Err(Error::Usage(format!("no column is a numeric channel that varies; the header has {names:?} (choose with --columns)")));
+        let why: Vec<String> = left_out
+            .iter()
+            .zip(0..)
+            .map(|((name, why), c)| match text_at(c) {
+                Some((path, line)) => format!("`{name}` {why} ({}:{line})", path.display()),
+                None => format!("`{name}` {why}"),
+            })
+            .collect();
+        return Err(Error::Usage(format!("no column is a numeric channel that varies: {} (choose with --columns)", why.join(", "))));
     }
     Ok((chosen, left_out))
 }

@@ -90,6 +90,22 @@ fn bad_files_are_named_with_their_line() {
 }
 
 #[test]
+fn with_no_column_to_take_each_is_named_with_why() {
+    let dir = std::env::temp_dir().join(format!("pvt3-import-nothing-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    for class in ["cotton", "denim"] {
+        std::fs::create_dir_all(dir.join(class)).unwrap();
+        for n in 0..6 {
+            std::fs::write(dir.join(format!("{class}/t{n}.csv")), "counter,level,note\n0,1,a\n1,1,b\n2,1,c\n").unwrap();
+        }
+    }
+    let msg = read_folder(&dir, &ImportOptions::default()).unwrap_err().to_string();
+    let want = "no column is a numeric channel that varies: `counter` a time stamp: it rises in every touch, `level` constant, `note` not numeric (";
+    assert!(msg.starts_with(want) && msg.contains("t0.csv:2)"), "{msg}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
 fn patterns_match_whole_names() {
     assert!(matches("ff_e*", "ff_e12") && matches("e?", "e1") && matches("*", ""));
     assert!(!matches("e?", "e12") && !matches("ff_e*", "ff_pdc") && !matches("e1", "e12"));
