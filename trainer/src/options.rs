@@ -9,6 +9,7 @@ pub struct TrainOptions {
     /// Passes over the training split.
     #[arg(long, default_value_t = 100)]
     pub epochs: usize,
+    /// Training windows per optimiser step.
     #[arg(long, default_value_t = 32)]
     pub batch_size: usize,
     /// Peak learning rate (reached after the warm-up, then cosine decay to `--lr-floor` of it).
@@ -19,11 +20,13 @@ pub struct TrainOptions {
     #[arg(long, default_value_t = 0.01)]
     #[serde(default = "hundredth")]
     pub lr_floor: f64,
+    /// Epochs over which the learning rate rises linearly to its peak.
     #[arg(long, default_value_t = 5)]
     pub warmup_epochs: usize,
     /// Decoupled weight decay on weight matrices.
     #[arg(long, default_value_t = 0.05)]
     pub weight_decay: f64,
+    /// Label smoothing: this share of each target is spread evenly over the classes (0: none).
     #[arg(long, default_value_t = 0.1)]
     pub label_smoothing: f64,
     /// Clip the global gradient norm to this (0: no clipping).

@@ -22,6 +22,8 @@ pub struct CvArgs {
     /// Seeds to repeat the four folds with, comma-separated.
     #[arg(long, value_delimiter = ',', default_value = "0")]
     pub seeds: Vec<u64>,
+    /// The cross-validation's directory: a run directory per seed and fold (OUT/seed0/fold0, …),
+    /// cv.json (the summary and the stopping rule) and cv-curves.svg.
     #[arg(long, short, default_value = "runs/cv")]
     pub out: PathBuf,
     /// Continue: finished folds are kept, an interrupted one resumes.

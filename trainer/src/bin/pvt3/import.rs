@@ -17,6 +17,7 @@ pub struct ImportArgs {
     /// The folder: DIR/<class>/<touch>.csv, class names the folder names; or, with --name
     /// naming the class, DIR/<touch>.csv.
     pub dir: PathBuf,
+    /// The data set to write (`x`, `y`, `lengths`, class names, channels, the files read).
     #[arg(short, long, default_value = "data.npz")]
     pub out: PathBuf,
     /// The sensor channels: column names or patterns (`*` any characters, `?` one), comma

@@ -18,8 +18,10 @@ pub struct PruneCommand {
     /// Data set (default: the one the run was trained on).
     #[arg(long)]
     pub data: Option<PathBuf>,
+    /// The pruned run's directory (checkpoint in OUT/model, resume state in OUT/last).
     #[arg(long, short, default_value = "runs/pruned")]
     pub out: PathBuf,
+    /// Continue the interrupted fine-tuning in OUT.
     #[arg(long)]
     pub resume: bool,
     #[command(flatten)]
