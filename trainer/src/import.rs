@@ -434,10 +434,10 @@ fn choose_columns(names: &[String], touches: &[TouchFile], opts: &ImportOptions)
         }
     }
     if chosen.is_empty() {
-        let why: Vec<String> = left_out
-            .iter()
-            .zip(0..)
-            .map(|((name, why), c)| match text_at(c) {
+        // Every column is left out, in the header's order.
+        let why: Vec<String> = (0..)
+            .zip(&left_out)
+            .map(|(c, (name, why))| match text_at(c) {
                 Some((path, line)) => format!("`{name}` {why} ({}:{line})", path.display()),
                 None => format!("`{name}` {why}"),
             })

@@ -160,7 +160,7 @@ fn draw_panel(s: &mut String, panel: &Panel, ox: f64, oy: f64) {
         let _ = writeln!(s, r#"<rect x="{}" y="{}" width="{w}" height="{h}" fill="white" fill-opacity="0.85"/>"#, lx - 4.0, ly0 - 12.0);
     }
     for (k, series) in legend.iter().enumerate() {
-        let (lx, ly) = (lx, ly0 + 14.0 * k as f64);
+        let ly = ly0 + 14.0 * k as f64;
         let _ = writeln!(s, "{}", legend_mark(series, lx, ly));
         let _ = writeln!(s, r#"<text x="{}" y="{ly}">{}</text>"#, lx + 16.0, escape(&series.name));
     }
@@ -168,7 +168,7 @@ fn draw_panel(s: &mut String, panel: &Panel, ox: f64, oy: f64) {
 
 /// A legend entry's mark at (`x`, `y`), the baseline of its text: the series' own mark, a dot for
 /// a series of points and a short bar for a line.
-pub(super) fn legend_mark(series: &Series, x: f64, y: f64) -> String {
+fn legend_mark(series: &Series, x: f64, y: f64) -> String {
     if series.dots {
         format!(r#"<circle cx="{}" cy="{}" r="2.5" fill="{}"/>"#, x + 6.0, y - 3.5, series.color)
     } else {

@@ -54,10 +54,12 @@ fn count(image: &(usize, usize, Vec<u8>), color: [u8; 3], x0: usize, x1: usize) 
 
 fn count_near(image: &(usize, usize, Vec<u8>), color: [u8; 3], x0: usize, x1: usize, tolerance: i32) -> usize {
     let (w, _, px) = image;
-    px.chunks(4)
-        .enumerate()
-        .filter(|(i, p)| (x0..x1).contains(&(i % w)) && p[3] > 200 && (0..3).all(|c| (p[c] as i32 - color[c] as i32).abs() <= tolerance))
-        .count()
+    px.chunks(4).enumerate().filter(|(i, p)| (x0..x1).contains(&(i % w)) && near(p, color, tolerance)).count()
+}
+
+/// An RGBA pixel, opaque and within `tolerance` of `color` in each channel.
+fn near(p: &[u8], color: [u8; 3], tolerance: i32) -> bool {
+    p[3] > 200 && (0..3).all(|c| (p[c] as i32 - color[c] as i32).abs() <= tolerance)
 }
 
 /// `color` drawn at `opacity` on white.
@@ -124,12 +126,11 @@ fn a_cross_validation_figure_draws_every_run() {
     }
 }
 
-/// Of the rows holding pixels within 40 of `color` in the columns `x0..x1`: how many, and the
-/// most such pixels in one.
+/// Of the rows holding pixels near `color` (within 40) in the columns `x0..x1`: how many, and
+/// the most such pixels in one.
 fn rows_and_widest(image: &(usize, usize, Vec<u8>), color: [u8; 3], x0: usize, x1: usize) -> (usize, usize) {
     let (w, h, px) = image;
-    let near = |x: usize, y: usize| (0..3).all(|c| (px[(y * w + x) * 4 + c] as i32 - color[c] as i32).abs() <= 40);
-    let widths: Vec<usize> = (0..*h).map(|y| (x0..x1).filter(|&x| near(x, y)).count()).collect();
+    let widths: Vec<usize> = (0..*h).map(|y| (x0..x1).filter(|&x| near(&px[(y * w + x) * 4..], color, 40)).count()).collect();
     (widths.iter().filter(|&&n| n > 0).count(), widths.into_iter().max().unwrap_or(0))
 }
 
