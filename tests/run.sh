@@ -88,6 +88,26 @@ for line in sys.stdin:
   unset PVT3_VALGRIND
 fi
 
+step "the README's main job reuses this build: cargo build --release needs no crate built otherwise"
+# trainer/Cargo.toml turns on the features the tests' dev-dependencies turn on, so that the main job
+# and the tests build candle, tract and the pvt3 crates once. Every library the main job builds
+# must have been built by the tests with the same features; where not, say which.
+lib_features() { cargo "$@" --message-format=json 2>/dev/null | python3 -c 'import json, sys
+for line in sys.stdin:
+    m = json.loads(line)
+    if m.get("reason") == "compiler-artifact" and "lib" in m["target"]["kind"]:
+        print(m["package_id"].rsplit("#", 1)[-1], ",".join(sorted(m["features"])) or "-")' | LC_ALL=C sort -u; }
+tests_features=$(lib_features test -q --release --workspace --no-run)
+parted=$(LC_ALL=C comm -23 <(lib_features build --release) - <<<"$tests_features")
+if [ -n "$parted" ]; then
+  echo "tests/run.sh: the main job (cargo build --release) builds crates with features the tests' build does not:" >&2
+  while read -r crate main; do
+    echo "  $crate: main job $main; tests $(awk -v c="$crate" '$1 == c { print $2 }' <<<"$tests_features" | paste -sd' ')" >&2
+  done <<<"$parted"
+  echo "turn the tests' features on in trainer/Cargo.toml's list" >&2
+  exit 1
+fi
+
 step "runtime lints: cargo clippy -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings"
 cargo clippy --version >/dev/null 2>&1 || rustup component add clippy || missing "clippy (rustup component add clippy)"
 cargo clippy --release -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings
