@@ -17,7 +17,7 @@ use crate::anytime::Stopping;
 use crate::checkpoint::{read_json, write_json_atomically};
 use crate::data::TEST_FOLD;
 use crate::prune::{prune_and_fine_tune, PruneStage};
-use crate::run_dir::{Run, CV_CURVES, CV_PARTNER_CURVES, CV_SUMMARY};
+use crate::run_dir::{CrossValidation, Run, CV_CURVES, CV_PARTNER_CURVES, CV_SUMMARY};
 use crate::train::{train, RunResult, RunSpec};
 use crate::{Error, Result};
 
@@ -203,7 +203,7 @@ pub fn cross_validate(
                 bar.set_prefix(format!("seed {seed} fold {fold}"));
                 let run_spec =
                     RunSpec { val_fold: fold, options: crate::options::TrainOptions { seed, ..spec.options.clone() }, ..spec.clone() };
-                let dir = run_dir(out, seed, fold);
+                let dir = CrossValidation(out).run(seed, fold);
                 let result = run_fold(&run_spec, stage, &dir, resume, &bar);
                 bar.finish();
                 let failed = result.is_err();
@@ -218,7 +218,7 @@ pub fn cross_validate(
     let finished = results.into_inner().expect("threads joined").into_iter().zip(work).filter_map(|(r, w)| Some((r?, w)));
     for (r, &(seed, fold)) in finished {
         let Some(mut result) = r? else { return Ok(None) };
-        let dir = run_dir(out, seed, fold);
+        let dir = CrossValidation(out).run(seed, fold);
         if let Some(partner) = result.partner.take() {
             partners.push(*partner, Run(&dir).partner());
         }
@@ -242,11 +242,6 @@ pub fn write_figure(out: &Path, summary: &CvSummary, dirs: &[PathBuf], figure: &
         summary.std_test_accuracy
     );
     crate::plot::curves::write_cv(out, dirs, &title, figure).map(|_| ())
-}
-
-/// The directory of the run of `seed` with validation fold `fold`.
-fn run_dir(out: &Path, seed: u64, fold: usize) -> std::path::PathBuf {
-    out.join(format!("seed{seed}")).join(format!("fold{fold}"))
 }
 
 /// With more than one run: one stopping rule on all the runs' validation answers, and one on
@@ -314,20 +309,6 @@ struct Setup {
     pruning: Option<PruneStage>,
 }
 
-/// The entries of `dir` named `prefix` and a number (`seed3`, `fold0`), by number.
-pub(crate) fn numbered(dir: &Path, prefix: &str) -> Result<Vec<(u64, std::path::PathBuf)>> {
-    let mut found = Vec::new();
-    for entry in std::fs::read_dir(dir).map_err(Error::io(dir))? {
-        let path = entry.map_err(Error::io(dir))?.path();
-        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
-        if let Some(n) = name.strip_prefix(prefix).and_then(|n| n.parse::<u64>().ok()) {
-            found.push((n, path));
-        }
-    }
-    found.sort();
-    Ok(found)
-}
-
 /// Reports every finished run under `out` (`seed{S}/fold{K}/`, as `cross_validate` and separate
 /// `--only` jobs write them) into `out/cv.json`, trains nothing and deletes nothing; with more
 /// than one finished PVT³ run, their stopping rule is calibrated on all of them and written into
@@ -337,47 +318,45 @@ pub fn report(out: &Path) -> Result<CvSummary> {
     let refuse = |reason: String| Error::Usage(format!("cannot report {}: {reason}", out.display()));
     let (mut own, mut partners, mut unfinished) = (Gathered::default(), Gathered::default(), Vec::new());
     let mut setups: [Option<(Setup, PathBuf)>; 2] = [None, None];
-    for (seed, seed_dir) in numbered(out, "seed")? {
-        for (fold, dir) in numbered(&seed_dir, "fold")? {
-            // The run's network, and a joint run's other sensor's (finished before it).
-            let partner = Run(&dir).partner();
-            let nets = [Some(dir.clone()), Some(partner).filter(|p| p.is_dir())];
-            let mut found = Vec::new();
-            for (net, setup) in nets.iter().zip(&mut setups) {
-                let Some(net) = net else { continue };
-                let Some((fold_result, this)) = finished_run(net, &mut unfinished).map_err(|e| refuse(e.to_string()))? else {
-                    break;
-                };
-                if (fold_result.dense.seed, fold_result.dense.val_fold as u64) != (seed, fold) {
+    for (seed, fold, dir) in CrossValidation(out).runs()? {
+        // The run's network, and a joint run's other sensor's (finished before it).
+        let partner = Run(&dir).partner();
+        let nets = [Some(dir.clone()), Some(partner).filter(|p| p.is_dir())];
+        let mut found = Vec::new();
+        for (net, setup) in nets.iter().zip(&mut setups) {
+            let Some(net) = net else { continue };
+            let Some((fold_result, this)) = finished_run(net, &mut unfinished).map_err(|e| refuse(e.to_string()))? else {
+                break;
+            };
+            if (fold_result.dense.seed, fold_result.dense.val_fold) != (seed, fold) {
+                return Err(refuse(format!(
+                    "{} holds the run of seed {} fold {}",
+                    net.display(),
+                    fold_result.dense.seed,
+                    fold_result.dense.val_fold
+                )));
+            }
+            match setup {
+                None => *setup = Some((this, net.clone())),
+                Some((first, first_dir)) if *first != this => {
                     return Err(refuse(format!(
-                        "{} holds the run of seed {} fold {}",
-                        net.display(),
-                        fold_result.dense.seed,
-                        fold_result.dense.val_fold
-                    )));
+                        "{} and {} were trained differently (data, held-out levels, configuration, options or pruning)",
+                        first_dir.display(),
+                        net.display()
+                    )))
                 }
-                match setup {
-                    None => *setup = Some((this, net.clone())),
-                    Some((first, first_dir)) if *first != this => {
-                        return Err(refuse(format!(
-                            "{} and {} were trained differently (data, held-out levels, configuration, options or pruning)",
-                            first_dir.display(),
-                            net.display()
-                        )))
-                    }
-                    Some(_) => {}
-                }
-                found.push((fold_result, net.clone()));
+                Some(_) => {}
             }
-            if found.len() < nets.iter().flatten().count() {
-                continue;
-            }
-            let mut found = found.into_iter();
-            let (fold_result, net) = found.next().expect("the run's own network");
-            own.push(fold_result, net);
-            if let Some((fold_result, net)) = found.next() {
-                partners.push(fold_result, net);
-            }
+            found.push((fold_result, net.clone()));
+        }
+        if found.len() < nets.iter().flatten().count() {
+            continue;
+        }
+        let mut found = found.into_iter();
+        let (fold_result, net) = found.next().expect("the run's own network");
+        own.push(fold_result, net);
+        if let Some((fold_result, net)) = found.next() {
+            partners.push(fold_result, net);
         }
     }
     let [Some((setup, _)), partner_setup] = setups else {

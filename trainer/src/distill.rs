@@ -11,7 +11,7 @@ use candle_core::{Tensor, D};
 use pvt3_models::Classifier;
 
 use crate::normalization::Normalization;
-use crate::run_dir::Run;
+use crate::run_dir::{CrossValidation, Run};
 use crate::{Error, Result};
 
 /// The teaching runs, loaded.
@@ -29,11 +29,7 @@ impl Teachers {
         let absolute = |p: &Path| std::path::absolute(p).map_err(Error::io(p));
         let out = absolute(out)?;
         let mut models = Vec::new();
-        for (_, seed_dir) in crate::cv::numbered(cv_dir, "seed")? {
-            let run = seed_dir.join(format!("fold{val_fold}"));
-            if !run.is_dir() {
-                continue;
-            }
+        for (_, _, run) in CrossValidation(cv_dir).runs()?.into_iter().filter(|(_, fold, _)| *fold == val_fold) {
             if out.starts_with(absolute(&run)?) {
                 return Err(refuse(format!("{} is this run, or the run it was pruned from: a run cannot teach itself", run.display())));
             }

@@ -9,10 +9,14 @@
 //! - `pruned/`, a run directory of its own: the pruned and fine-tuned model;
 //! - `partner/`, a joint run's (`--joint`): the other sensor's run directory.
 //!
-//! `pvt3 cv --out DIR` writes one run directory per seed and fold, [`CV_SUMMARY`] and
-//! [`CV_CURVES`] (and a joint one [`CV_PARTNER_CURVES`]).
+//! `pvt3 cv --out DIR` writes one run directory per seed and fold ([`CrossValidation`]),
+//! [`CV_SUMMARY`] and [`CV_CURVES`] (and a joint one [`CV_PARTNER_CURVES`]).
 
+use std::fmt::Display;
 use std::path::{Path, PathBuf};
+use std::str::FromStr;
+
+use crate::{Error, Result};
 
 /// The summary of a cross-validation, in its directory.
 pub const CV_SUMMARY: &str = "cv.json";
@@ -26,6 +30,42 @@ pub const CV_PARTNER_CURVES: &str = "cv-partner-curves.svg";
 /// A joint run's partner (`--joint`): inside a run directory, the other sensor's run directory;
 /// inside its `last/`, that run's resume state.
 pub const PARTNER: &str = "partner";
+
+/// A cross-validation's directory: the run of seed `S` with validation fold `K` in `seed{S}/fold{K}/`.
+#[derive(Clone, Copy, Debug)]
+pub struct CrossValidation<'a>(pub &'a Path);
+
+impl CrossValidation<'_> {
+    /// The run of `seed` with validation fold `fold`.
+    pub fn run(self, seed: u64, fold: usize) -> PathBuf {
+        self.0.join(format!("seed{seed}")).join(format!("fold{fold}"))
+    }
+
+    /// Every run directory in it, as `(seed, fold, directory)`, by seed and then fold.
+    pub fn runs(self) -> Result<Vec<(u64, usize, PathBuf)>> {
+        let mut runs = Vec::new();
+        for (seed, seed_dir) in numbered(self.0, "seed")? {
+            runs.extend(numbered(&seed_dir, "fold")?.into_iter().map(|(fold, dir)| (seed, fold, dir)));
+        }
+        Ok(runs)
+    }
+}
+
+/// The directories in `dir` named `prefix` and a number as [`CrossValidation::run`] writes it
+/// (`seed3`, `fold0`), by number.
+fn numbered<N: FromStr + Display + Ord>(dir: &Path, prefix: &str) -> Result<Vec<(N, PathBuf)>> {
+    let mut found = Vec::new();
+    for entry in std::fs::read_dir(dir).map_err(Error::io(dir))? {
+        let path = entry.map_err(Error::io(dir))?.path();
+        let name = path.file_name().and_then(|n| n.to_str()).unwrap_or_default();
+        let number = name.strip_prefix(prefix).and_then(|n| n.parse::<N>().ok());
+        if let Some(n) = number.filter(|n| format!("{prefix}{n}") == name && path.is_dir()) {
+            found.push((n, path));
+        }
+    }
+    found.sort_by(|a, b| a.0.cmp(&b.0));
+    Ok(found)
+}
 
 /// A run directory.
 #[derive(Clone, Copy, Debug)]
@@ -111,5 +151,28 @@ impl Checkpoint<'_> {
     /// `last/` only: where the run stands (epochs done, the best so far, the random state).
     pub fn state(self) -> PathBuf {
         self.0.join("state.json")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_cross_validation_lists_the_runs_it_names_by_number() {
+        let out = crate::train::tests::out_dir("cross-validation");
+        for (seed, fold) in [(10, 0), (2, 3), (2, 1)] {
+            std::fs::create_dir_all(CrossValidation(&out).run(seed, fold)).unwrap();
+        }
+        // Not runs: a name pvt3 never writes, a file, a folder that is no fold.
+        for odd in ["seed01/fold0", "seed2/fold2.old", "seedx/fold0"] {
+            std::fs::create_dir_all(out.join(odd)).unwrap();
+        }
+        std::fs::write(out.join("seed2/fold4"), "").unwrap();
+        let runs: Vec<_> =
+            CrossValidation(&out).runs().unwrap().into_iter().map(|(s, f, d)| (s, f, d.strip_prefix(&out).unwrap().to_owned())).collect();
+        let expected: Vec<_> = [(2, 1), (2, 3), (10, 0)].map(|(s, f)| (s, f, PathBuf::from(format!("seed{s}/fold{f}")))).into();
+        assert_eq!(runs, expected);
+        std::fs::remove_dir_all(&out).unwrap();
     }
 }

@@ -8,6 +8,7 @@ use pvt3_models::{Config, Rng};
 
 use super::*;
 use crate::data::Dataset;
+use crate::run_dir::CrossValidation;
 
 fn tiny_config() -> Config {
     Config {
@@ -240,7 +241,7 @@ fn distillation_learns_from_runs_of_the_same_split_and_resumes_exactly() {
     for seed in [0, 1] {
         let options = TrainOptions { seed, ..options(3) };
         let run = RunSpec { options, ..spec(&data, 3, None) };
-        train(&run, &teachers.join(format!("seed{seed}/fold0")), false, &ProgressBar::hidden()).unwrap().unwrap();
+        train(&run, &CrossValidation(&teachers).run(seed, 0), false, &ProgressBar::hidden()).unwrap().unwrap();
     }
     let taught = TrainOptions { distill: Some(teachers.display().to_string()), distill_weight: 2.0, ..options(4) };
     let a = resumes_exactly("distill", &data, taught.clone());

@@ -3,11 +3,11 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
 use pvt3_trainer::checkpoint::read_json;
 use pvt3_trainer::cv::{self, CvSummary};
 use pvt3_trainer::plot::curves;
-use pvt3_trainer::run_dir::{Run, CV_CURVES, CV_PARTNER_CURVES, CV_SUMMARY};
+use pvt3_trainer::run_dir::{CrossValidation, Run, CV_CURVES, CV_PARTNER_CURVES, CV_SUMMARY};
 
 /// Draw the training curves of a run (DIR/curves.svg), or of every run of a cross-validation
 /// and the figure of all of them (DIR/cv-curves.svg). The confusion matrix is `pvt3 eval`'s.
@@ -17,23 +17,9 @@ pub struct PlotArgs {
     pub dir: PathBuf,
 }
 
-/// The run directories of the cross-validation in `out`, `seed*/fold*` with metrics.
+/// The run directories of the cross-validation in `out` that have metrics, by seed and fold.
 fn cv_runs(out: &Path) -> Result<Vec<PathBuf>> {
-    let mut dirs = Vec::new();
-    for seed in std::fs::read_dir(out).with_context(|| format!("reading {}", out.display()))? {
-        let seed = seed?.path();
-        if !seed.file_name().and_then(|n| n.to_str()).is_some_and(|n| n.starts_with("seed")) || !seed.is_dir() {
-            continue;
-        }
-        for fold in std::fs::read_dir(&seed)? {
-            let fold = fold?.path();
-            if Run(&fold).metrics().exists() {
-                dirs.push(fold);
-            }
-        }
-    }
-    dirs.sort();
-    Ok(dirs)
+    Ok(CrossValidation(out).runs()?.into_iter().map(|(_, _, dir)| dir).filter(|dir| Run(dir).metrics().exists()).collect())
 }
 
 pub fn run(a: PlotArgs) -> Result<()> {
