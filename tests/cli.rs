@@ -129,6 +129,9 @@ fn prefix_training_calibrates_a_stopping_rule_that_the_file_carries() {
     );
     let recorded = format!("≥ {:.4} with 3 answers in a row", rule.top_probability);
     assert!(table.contains(&recorded), "the calibration training recorded: {table}");
+    // And drawn: accuracy so far, and where the rule ends touches.
+    let picture = std::fs::read_to_string(run.join("anytime-fold4.svg")).unwrap();
+    assert!(table.contains("drew") && picture.contains("touches the rule has ended"), "{table}");
     let answers_path = dir.join("answers.json");
     let report: serde_json::Value =
         serde_json::from_str(&ok(&["eval", r, "--anytime", "--json", "--answers", answers_path.to_str().unwrap()])).unwrap();

@@ -134,14 +134,22 @@ impl Prefixes {
             .unwrap_or(self.tokens)
     }
 
+    /// For each sample, the number of tokens after which `rule` stops it (all of them if never),
+    /// and whether its answer then is right.
+    pub fn stops(&self, rule: StopRule) -> Vec<(usize, bool)> {
+        (0..self.top.len())
+            .map(|i| {
+                let k = self.stops_after(i, rule);
+                (k, self.class[i][k - 1] == self.labels[i])
+            })
+            .collect()
+    }
+
     /// Accuracy and mean share of the touch when each sample stops by `rule`.
     pub fn stop_by(&self, rule: StopRule) -> Stopping {
-        let (mut right, mut used) = (0usize, 0usize);
-        for i in 0..self.top.len() {
-            let k = self.stops_after(i, rule);
-            right += usize::from(self.class[i][k - 1] == self.labels[i]);
-            used += k;
-        }
+        let stops = self.stops(rule);
+        let right = stops.iter().filter(|(_, right)| *right).count();
+        let used: usize = stops.iter().map(|(k, _)| k).sum();
         Stopping {
             rule,
             full_accuracy: self.accuracy_at(self.tokens),

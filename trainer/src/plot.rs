@@ -1,8 +1,10 @@
 //! Pictures of runs, as SVG files a browser or any viewer shows: a run's training curves
-//! ([`curves::run_figure`]), a cross-validation's runs side by side ([`curves::cv_figure`]) and a
-//! confusion matrix ([`confusion`]). Written by hand (a few hundred lines of SVG text) rather than
-//! through a plotting crate, which would bring a font stack into the trainer.
+//! ([`curves::run_figure`]), a cross-validation's runs side by side ([`curves::cv_figure`]), a
+//! confusion matrix ([`confusion`]) and what part of a touch gives ([`anytime`]). Written by
+//! hand (a few hundred lines of SVG text) rather than through a plotting crate, which would
+//! bring a font stack into the trainer.
 
+pub mod anytime;
 pub mod chart;
 pub mod confusion;
 pub mod curves;

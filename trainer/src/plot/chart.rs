@@ -31,6 +31,8 @@ pub struct Panel {
     pub y_range: Option<(f64, f64)>,
     /// A vertical line at this x, labelled.
     pub marker: Option<(f64, String)>,
+    /// Where the legend goes: top left, or bottom right for curves that rise to the top.
+    pub legend_low: bool,
 }
 
 /// Colours that stay apart for people with the common colour-vision deficiencies (Okabe & Ito).
@@ -141,22 +143,26 @@ fn draw_panel(s: &mut String, panel: &Panel, ox: f64, oy: f64) {
             );
         }
     }
+    let legend: Vec<&Series> = panel.series.iter().filter(|s| !s.faint).collect();
+    let longest = legend.iter().map(|s| s.name.chars().count()).max().unwrap_or(0);
+    let (w, h) = (16.0 + 6.5 * longest as f64 + 8.0, 14.0 * legend.len() as f64 + 4.0);
     if let Some((x, text)) = marker {
         // The label over the curves, haloed in white, on the side with room: left of a line in the
-        // right half.
+        // right half; at the top, or above a low legend (where curves rise to the top).
         let (tx, anchor) = if x > (x0 + x1) / 2.0 { (x - 3.0, "end") } else { (x + 3.0, "start") };
+        let ty = if panel.legend_low { y1 - h - 8.0 } else { y0 + 12.0 };
         let _ = writeln!(
             s,
-            r##"<text x="{tx:.1}" y="{}" text-anchor="{anchor}" fill="#555" stroke="white" stroke-width="3" paint-order="stroke">{}</text>"##,
-            y0 + 12.0,
+            r##"<text x="{tx:.1}" y="{ty}" text-anchor="{anchor}" fill="#555" stroke="white" stroke-width="3" paint-order="stroke">{}</text>"##,
             escape(text)
         );
     }
-    let legend: Vec<&Series> = panel.series.iter().filter(|s| !s.faint).collect();
-    let (lx, ly0) = (x0 + 8.0, y0 + 14.0 + if panel.marker.is_some() { 10.0 } else { 0.0 });
-    if let Some(longest) = legend.iter().map(|s| s.name.chars().count()).max() {
+    let (lx, ly0) = match panel.legend_low {
+        true => (x1 - w, y1 - h + 8.0),
+        false => (x0 + 8.0, y0 + 14.0 + if panel.marker.is_some() { 10.0 } else { 0.0 }),
+    };
+    if !legend.is_empty() {
         // A pale ground, so that the entries stay legible over the curves they name.
-        let (w, h) = (16.0 + 6.5 * longest as f64 + 8.0, 14.0 * legend.len() as f64 + 4.0);
         let _ = writeln!(s, r#"<rect x="{}" y="{}" width="{w}" height="{h}" fill="white" fill-opacity="0.85"/>"#, lx - 4.0, ly0 - 12.0);
     }
     for (k, series) in legend.iter().enumerate() {

@@ -25,7 +25,8 @@ pub fn run_figure(title: &str, m: &[EpochMetrics], selected: Option<usize>) -> S
     if !apart.is_empty() {
         losses.push(Series::line("encodings apart (joint)", COLORS[3], apart));
     }
-    let loss = Panel { title: "loss".into(), x_label: "epoch".into(), series: losses, y_range: None, marker: marker.clone() };
+    let loss =
+        Panel { title: "loss".into(), x_label: "epoch".into(), series: losses, y_range: None, marker: marker.clone(), ..Panel::default() };
     let accuracy = Panel {
         title: "accuracy".into(),
         x_label: "epoch".into(),
@@ -36,6 +37,7 @@ pub fn run_figure(title: &str, m: &[EpochMetrics], selected: Option<usize>) -> S
         ],
         y_range: Some((0.0, 1.0)),
         marker: marker.clone(),
+        ..Panel::default()
     };
     let lr = Panel {
         title: "learning rate".into(),
@@ -43,6 +45,7 @@ pub fn run_figure(title: &str, m: &[EpochMetrics], selected: Option<usize>) -> S
         series: vec![Series::line("at the epoch's last step", COLORS[6], points(m, |e| Some(e.lr)))],
         y_range: None,
         marker,
+        ..Panel::default()
     };
     figure(title, &[loss, accuracy, lr])
 }

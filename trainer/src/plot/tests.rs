@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use super::chart::COLORS;
-use super::{confusion, curves};
+use super::{anytime, confusion, curves};
 use crate::metrics::EpochMetrics;
 
 /// `svg` rendered to RGBA pixels: (width, height, pixels).
@@ -178,4 +178,32 @@ fn the_confusion_matrix_shades_each_cell_by_its_share_of_the_true_class() {
     let inked: Vec<usize> = (0..w * 24).filter(|&i| px[i * 4 + 3] > 200 && px[i * 4] < 128).map(|i| i % w).collect();
     let (left, right) = (inked.iter().min().copied().unwrap_or(0), inked.iter().max().copied().unwrap_or(w));
     assert!(!inked.is_empty() && left >= 4 && right + 4 < w, "the title's ink spans x = {left}..={right} of {w}");
+}
+
+/// Four touches of four tokens under a rule of top probability ≥ 0.8 with two answers agreeing:
+/// touch 1 is stopped after two tokens with a wrong answer the rest of it corrects, touch 2 never.
+#[test]
+fn the_anytime_picture_shows_accuracy_so_far_and_the_rule_s_wrong_stops() {
+    let prefixes = crate::anytime::Prefixes {
+        top: vec![vec![0.5, 0.9, 0.9, 0.9], vec![0.9, 0.9, 0.6, 0.7], vec![0.3, 0.5, 0.6, 0.7], vec![0.9, 0.85, 0.9, 0.9]],
+        class: vec![vec![0, 0, 0, 0], vec![2, 2, 1, 1], vec![1, 2, 2, 2], vec![3, 3, 3, 3]],
+        labels: vec![0, 1, 2, 3],
+        tokens: 4,
+    };
+    let rule = pvt3_format::StopRule { top_probability: 0.8, agreeing: 2 };
+    let [accuracy, ended] = anytime::panels(&prefixes, rule);
+    let points = |panel: &super::chart::Panel, k: usize| panel.series[k].points.clone();
+    assert_eq!(points(&accuracy, 0), vec![(25.0, 0.5), (50.0, 0.75), (75.0, 1.0), (100.0, 1.0)]);
+    // Stopped after 2, 2, 4 and 2 tokens: 62.5 % of the touch on average, three of four right.
+    assert_eq!(points(&accuracy, 1), vec![(62.5, 0.75)]);
+    assert_eq!(accuracy.marker.as_ref().map(|m| m.0), Some(62.5));
+    assert_eq!(points(&ended, 0), vec![(25.0, 0.0), (50.0, 0.75), (75.0, 0.75), (100.0, 1.0)]);
+    assert_eq!(points(&ended, 1), vec![(25.0, 0.0), (50.0, 0.5), (75.0, 0.5), (100.0, 0.75)]);
+    let image = render(&anytime::svg("anytime", &prefixes, rule), "anytime");
+    assert_eq!((image.0, image.1), (840, 330), "two panels");
+    assert!(count(&image, rgb(COLORS[0]), 0, 420) > 150, "accuracy so far");
+    assert!(count(&image, rgb(COLORS[1]), 0, 420) > 10, "the rule's dot");
+    for color in [COLORS[6], COLORS[2]] {
+        assert!(count(&image, rgb(color), 420, 840) > 150, "touches ended: {color}");
+    }
 }

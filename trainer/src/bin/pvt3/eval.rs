@@ -1,6 +1,6 @@
 //! `pvt3 eval`: a checkpoint's accuracy on a fold (by default its own data's test fold), per
 //! class and as a confusion matrix (printed, and drawn as SVG), or with `--anytime` against the
-//! share of each touch it has seen.
+//! share of each touch it has seen (printed, and drawn).
 
 use std::path::PathBuf;
 
@@ -10,7 +10,7 @@ use pvt3_trainer::anytime::{self, CalibratedOn, Stopping};
 use pvt3_trainer::checkpoint;
 use pvt3_trainer::data::{Dataset, TEST_FOLD};
 use pvt3_trainer::evaluate::{evaluate, Samples};
-use pvt3_trainer::plot::{self, confusion};
+use pvt3_trainer::plot::{self, anytime as anytime_picture, confusion};
 
 /// Accuracy of a checkpoint on a data set (by default its test fold, or all samples).
 #[derive(clap::Args)]
@@ -25,13 +25,14 @@ pub struct EvalArgs {
     pub fold: Folds,
     /// Provisional answers (PVT³): accuracy from the first 10 %, 20 % … of each touch, and
     /// what the checkpoint's stopping rule (calibrated on its validation fold, or by `pvt3 cv`
-    /// on all its runs' validation answers) does here.
+    /// on all its runs' validation answers) does here; drawn with where the rule ends touches.
     #[arg(long)]
     pub anytime: bool,
-    /// Where to draw the confusion matrix (default: confusion-fold<K>.svg, or
-    /// confusion-all.svg, in the checkpoint's directory).
-    #[arg(long, value_name = "FILE.svg", conflicts_with = "anytime")]
-    pub confusion: Option<PathBuf>,
+    /// Where to draw the picture: the confusion matrix, or with --anytime accuracy against the
+    /// share of the touch read (default: confusion-fold<K>.svg or anytime-fold<K>.svg, with
+    /// `--fold all` confusion-all.svg or anytime-all.svg, in the checkpoint's directory).
+    #[arg(long, value_name = "FILE.svg", alias = "confusion")]
+    pub picture: Option<PathBuf>,
     /// With --anytime: print one JSON object instead of the table.
     #[arg(long, requires = "anytime")]
     pub json: bool,
@@ -56,6 +57,16 @@ impl std::str::FromStr for Folds {
         match s {
             "all" => Ok(Folds::All),
             _ => s.parse().map(Folds::One).map_err(|_| format!("`{s}` is neither a fold number nor `all`")),
+        }
+    }
+}
+
+impl Folds {
+    /// The picture of `what` for these samples: `confusion-fold4.svg`, `anytime-all.svg`.
+    fn picture(self, what: &str) -> String {
+        match self {
+            Folds::One(k) => format!("{what}-fold{k}.svg"),
+            Folds::All => format!("{what}-all.svg"),
         }
     }
 }
@@ -105,7 +116,7 @@ pub fn run(a: EvalArgs) -> Result<()> {
     }
     let m = confusion::matrix(&e.labels, &e.predictions, meta.classes.len());
     println!("\nconfusion matrix (rows: true class, columns: answer)\n{}", confusion::text(&m, &meta.classes));
-    let path = a.confusion.clone().unwrap_or_else(|| a.checkpoint.join(format!("confusion-fold{fold}.svg")));
+    let path = a.picture.clone().unwrap_or_else(|| a.checkpoint.join(fold.picture("confusion")));
     let title = format!("{}: fold {fold}, {} touches, accuracy {:.4}", a.checkpoint.display(), e.labels.len(), e.accuracy);
     plot::write(&path, &confusion::svg(&m, &meta.classes, &title)).with_context(|| format!("drawing {}", path.display()))?;
     println!("drew {}", path.display());
@@ -136,6 +147,16 @@ fn anytime_report(meta: &checkpoint::Meta, model: &Classifier, data: &Dataset, s
         }
     };
     let here = prefixes.stop_by(calibrated.rule);
+    let picture = a.picture.clone().unwrap_or_else(|| a.checkpoint.join(fold.picture("anytime")));
+    let rule = calibrated.rule;
+    let title = format!(
+        "{}: fold {fold}, {} samples; rule: top probability ≥ {:.4}, {} agreeing",
+        a.checkpoint.display(),
+        samples.len(),
+        rule.top_probability,
+        rule.agreeing
+    );
+    plot::write(&picture, &anytime_picture::svg(&title, &prefixes, rule)).with_context(|| format!("drawing {}", picture.display()))?;
     let t = prefixes.tokens;
     let curve: Vec<(f64, usize, f64)> = (1..=10)
         .map(|tenth| {
@@ -147,7 +168,7 @@ fn anytime_report(meta: &checkpoint::Meta, model: &Classifier, data: &Dataset, s
         let curve: Vec<_> = curve.iter().map(|(share, k, acc)| serde_json::json!({"share": share, "tokens": k, "accuracy": acc})).collect();
         let out = serde_json::json!({
             "samples": samples.len(), "fold": fold.to_string(), "tokens": t, "curve": curve,
-            "calibrated": calibrated, "stopping": here,
+            "calibrated": calibrated, "stopping": here, "picture": picture,
         });
         println!("{out}");
         return Ok(());
@@ -176,6 +197,7 @@ fn anytime_report(meta: &checkpoint::Meta, model: &Classifier, data: &Dataset, s
         here.full_accuracy,
         here.mean_share * 100.0
     );
+    println!("drew {}", picture.display());
     Ok(())
 }
 
@@ -190,5 +212,7 @@ mod tests {
         assert_eq!(Folds::One(4).to_string(), "4");
         let err = "four".parse::<Folds>().unwrap_err();
         assert!(err.contains("`four` is neither a fold number nor `all`"), "{err}");
+        assert_eq!(Folds::One(4).picture("confusion"), "confusion-fold4.svg");
+        assert_eq!(Folds::All.picture("anytime"), "anytime-all.svg");
     }
 }
