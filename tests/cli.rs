@@ -197,6 +197,31 @@ fn cv_runs_folds_side_by_side_and_resumes_without_retraining() {
     );
     let eval = ok(&["eval", out.join("seed0/fold1").to_str().unwrap(), "--anytime"]);
     assert!(eval.contains("the validation answers of the cross-validation's 4 runs, 48 samples"), "{eval}");
+    // The cross-validation as a whole: its runs' test accuracies as cv.json has them, and the
+    // rule's change and share run by run as each run's own `eval --anytime` finds them.
+    let whole = ok(&["eval", o]);
+    let (mean, std) = (summary["mean_test_accuracy"].as_f64().unwrap(), summary["std_test_accuracy"].as_f64().unwrap());
+    assert!(whole.contains(&format!("4 runs of {o}, fold 4: accuracy {mean:.4} ± {std:.4}")), "{whole}");
+    assert!(whole.contains("their 48 answers together") && out.join("confusion-fold4.svg").exists(), "{whole}");
+    let mean_std = |v: &[f64]| {
+        let m = v.iter().sum::<f64>() / v.len() as f64;
+        (m, (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt())
+    };
+    let (mut changes, mut shares) = (Vec::new(), Vec::new());
+    for fold in 0..4 {
+        let run = out.join(format!("seed0/fold{fold}"));
+        let report: serde_json::Value = serde_json::from_str(&ok(&["eval", run.to_str().unwrap(), "--anytime", "--json"])).unwrap();
+        let here = &report["stopping"];
+        changes.push(100.0 * (here["accuracy"].as_f64().unwrap() - here["full_accuracy"].as_f64().unwrap()));
+        shares.push(100.0 * here["mean_share"].as_f64().unwrap());
+    }
+    let ((change, change_std), (share, share_std)) = (mean_std(&changes), mean_std(&shares));
+    let whole = ok(&["eval", o, "--anytime"]);
+    let expected =
+        format!("here, run by run: {change:+.1} ± {change_std:.1} points against the whole touch, at {share:.0} ± {share_std:.0} %");
+    assert!(whole.contains(&expected) && out.join("anytime-fold4.svg").exists(), "{expected}\n{whole}");
+    let err = fails(&["eval", o, "--pruned"]);
+    assert!(err.contains("holds no finished run to evaluate (seed*/fold*/pruned/result.json)"), "{err}");
     let weights = std::fs::read(out.join("seed0/fold3/model/weights.safetensors")).unwrap();
     args.push("--resume");
     let second = ok(&args);

@@ -1,21 +1,24 @@
 //! `pvt3 eval`: a checkpoint's accuracy on a fold (by default its own data's test fold), per
 //! class and as a confusion matrix (printed, and drawn as SVG), or with `--anytime` against the
-//! share of each touch it has seen (printed, and drawn).
+//! share of each touch it has seen (printed, and drawn). Given a cross-validation's directory,
+//! all its runs together ([`crate::eval_cv`]).
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use pvt3_models::Classifier;
-use pvt3_trainer::anytime::{self, CalibratedOn, Stopping};
-use pvt3_trainer::checkpoint;
+use pvt3_trainer::anytime::{self, CalibratedOn, Prefixes, Stopping};
+use pvt3_trainer::checkpoint::{self, Meta};
 use pvt3_trainer::data::{Dataset, TEST_FOLD};
 use pvt3_trainer::evaluate::{evaluate, Samples};
 use pvt3_trainer::plot::{self, anytime as anytime_picture, confusion};
+use pvt3_trainer::run_dir::CV_SUMMARY;
 
 /// Accuracy of a checkpoint on a data set (by default its test fold, or all samples).
 #[derive(clap::Args)]
 pub struct EvalArgs {
-    /// Checkpoint directory (or a run directory holding model/).
+    /// Checkpoint directory (or a run directory holding model/), or a cross-validation's
+    /// directory (with cv.json): then every finished run of it, their answers together.
     pub checkpoint: PathBuf,
     /// The data set; by default the one the checkpoint was trained on.
     #[arg(long)]
@@ -29,8 +32,9 @@ pub struct EvalArgs {
     #[arg(long)]
     pub anytime: bool,
     /// Where to draw the picture: the confusion matrix, or with --anytime accuracy against the
-    /// share of the touch read (default: confusion-fold<K>.svg or anytime-fold<K>.svg, with
-    /// `--fold all` confusion-all.svg or anytime-all.svg, in the checkpoint's directory).
+    /// share of the touch read (default: confusion-fold<K>.svg or anytime-fold<K>.svg, -all.svg
+    /// with `--fold all`, in the checkpoint's or cross-validation's directory; with --pruned
+    /// confusion-pruned-fold<K>.svg and anytime-pruned-fold<K>.svg).
     #[arg(long, value_name = "FILE.svg", alias = "confusion")]
     pub picture: Option<PathBuf>,
     /// With --anytime: print one JSON object instead of the table.
@@ -41,6 +45,17 @@ pub struct EvalArgs {
     /// stopping rules (bench/stop_rules.py).
     #[arg(long, value_name = "FILE.json", requires = "anytime")]
     pub answers: Option<PathBuf>,
+    /// Of a cross-validation: each run's pruned and fine-tuned model (its pruned/) instead.
+    #[arg(long)]
+    pub pruned: bool,
+}
+
+impl EvalArgs {
+    /// Where to draw the picture of `what` (`confusion`, `anytime`): --picture, or beside the
+    /// checkpoint.
+    pub fn picture_of(&self, what: &str) -> PathBuf {
+        self.picture.clone().unwrap_or_else(|| self.checkpoint.join(self.fold.picture(what)))
+    }
 }
 
 /// The samples `pvt3 eval` reads: one fold's, or all.
@@ -63,7 +78,7 @@ impl std::str::FromStr for Folds {
 
 impl Folds {
     /// The picture of `what` for these samples: `confusion-fold4.svg`, `anytime-all.svg`.
-    fn picture(self, what: &str) -> String {
+    pub fn picture(self, what: &str) -> String {
         match self {
             Folds::One(k) => format!("{what}-fold{k}.svg"),
             Folds::All => format!("{what}-all.svg"),
@@ -80,45 +95,80 @@ impl std::fmt::Display for Folds {
     }
 }
 
+/// A checkpoint with the data set it is evaluated on and the samples of the fold asked for.
+pub struct Loaded {
+    pub meta: Meta,
+    pub model: Classifier,
+    pub data: Dataset,
+    pub indices: Vec<usize>,
+}
+
+impl Loaded {
+    /// The checkpoint in `path`, on `data` (by default the data set it was trained on, its folds
+    /// drawn as in training), the samples of `fold`.
+    pub fn new(path: &Path, data: Option<&Path>, fold: Folds) -> Result<Self> {
+        let (meta, model, _) = checkpoint::load(path)?;
+        let own = PathBuf::from(&meta.provenance.data);
+        let data_path = data.unwrap_or(&own);
+        let data = Dataset::load_as_trained(data_path, meta.provenance.seed, meta.provenance.held_out.as_ref())
+            .with_context(|| format!("loading {}", data_path.display()))?;
+        data.check_fits(&meta.config)?;
+        let indices: Vec<usize> = match fold {
+            Folds::All => (0..data.len()).collect(),
+            Folds::One(k) => (0..data.len()).filter(|&i| data.folds[i] == k).collect(),
+        };
+        if indices.is_empty() {
+            bail!("fold {fold} of {} holds no samples", data_path.display());
+        }
+        Ok(Self { meta, model, data, indices })
+    }
+
+    pub fn samples(&self) -> Samples {
+        Samples::new(&self.data, &self.indices, &self.meta.normalization)
+    }
+}
+
 pub fn run(a: EvalArgs) -> Result<()> {
-    let (checkpoint_path, fold) = (a.checkpoint.as_path(), a.fold);
-    let (meta, model, _) = checkpoint::load(checkpoint_path)?;
-    let own = PathBuf::from(&meta.provenance.data);
-    let data_path = a.data.as_deref().unwrap_or(&own);
-    let data = Dataset::load_as_trained(data_path, meta.provenance.seed, meta.provenance.held_out.as_ref())
-        .with_context(|| format!("loading {}", data_path.display()))?;
-    data.check_fits(&meta.config)?;
-    let indices: Vec<usize> = match fold {
-        Folds::All => (0..data.len()).collect(),
-        Folds::One(k) => (0..data.len()).filter(|&i| data.folds[i] == k).collect(),
-    };
-    if indices.is_empty() {
-        bail!("fold {fold} of {} holds no samples", data_path.display());
+    if a.checkpoint.join(CV_SUMMARY).exists() {
+        return crate::eval_cv::run(&a);
     }
-    let samples = Samples::new(&data, &indices, &meta.normalization);
+    if a.pruned {
+        bail!(
+            "--pruned reads a cross-validation's pruned runs, and {} holds no {CV_SUMMARY}: give a pruned/ checkpoint itself",
+            a.checkpoint.display()
+        );
+    }
+    let fold = a.fold;
+    let run = Loaded::new(&a.checkpoint, a.data.as_deref(), fold)?;
+    let samples = run.samples();
     if a.anytime {
-        return anytime_report(&meta, &model, &data, &samples, fold, &a);
+        return anytime_report(&run, &samples, &a);
     }
-    let e = evaluate(&model, &samples)?;
-    let windows = if samples.len() > indices.len() { format!(", {} windows", samples.len()) } else { String::new() };
-    println!("{} samples (fold {fold}{windows}): accuracy {:.4}, loss {:.4}", indices.len(), e.accuracy, e.loss);
-    if let (true, Some(test)) = (fold == Folds::One(TEST_FOLD), meta.provenance.test_accuracy) {
+    let e = evaluate(&run.model, &samples)?;
+    let windows = if samples.len() > run.indices.len() { format!(", {} windows", samples.len()) } else { String::new() };
+    println!("{} samples (fold {fold}{windows}): accuracy {:.4}, loss {:.4}", run.indices.len(), e.accuracy, e.loss);
+    if let (true, Some(test)) = (fold == Folds::One(TEST_FOLD), run.meta.provenance.test_accuracy) {
         println!("(the checkpoint's own record: test accuracy {test:.4})");
     }
+    let title = format!("{}: fold {fold}, {} touches, accuracy {:.4}", a.checkpoint.display(), e.labels.len(), e.accuracy);
+    report_classes(&run.meta.classes, &e.labels, &e.predictions, &title, &a.picture_of("confusion"))
+}
+
+/// Accuracy per class and the confusion matrix of `labels` answered `predictions`, printed; the
+/// matrix drawn to `path` under `title`.
+pub fn report_classes(classes: &[String], labels: &[u32], predictions: &[u32], title: &str, path: &Path) -> Result<()> {
     println!("{:<24} {:>8} {:>8}", "class", "samples", "accuracy");
-    for (c, name) in meta.classes.iter().enumerate() {
-        let rows: Vec<usize> = (0..e.labels.len()).filter(|&r| e.labels[r] as usize == c).collect();
+    for (c, name) in classes.iter().enumerate() {
+        let rows: Vec<usize> = (0..labels.len()).filter(|&r| labels[r] as usize == c).collect();
         if rows.is_empty() {
             continue;
         }
-        let ok = rows.iter().filter(|&&r| e.predictions[r] as usize == c).count();
+        let ok = rows.iter().filter(|&&r| predictions[r] as usize == c).count();
         println!("{:<24} {:>8} {:>8.3}", name, rows.len(), ok as f64 / rows.len() as f64);
     }
-    let m = confusion::matrix(&e.labels, &e.predictions, meta.classes.len());
-    println!("\nconfusion matrix (rows: true class, columns: answer)\n{}", confusion::text(&m, &meta.classes));
-    let path = a.picture.clone().unwrap_or_else(|| a.checkpoint.join(fold.picture("confusion")));
-    let title = format!("{}: fold {fold}, {} touches, accuracy {:.4}", a.checkpoint.display(), e.labels.len(), e.accuracy);
-    plot::write(&path, &confusion::svg(&m, &meta.classes, &title)).with_context(|| format!("drawing {}", path.display()))?;
+    let m = confusion::matrix(labels, predictions, classes.len());
+    println!("\nconfusion matrix (rows: true class, columns: answer)\n{}", confusion::text(&m, classes));
+    plot::write(path, &confusion::svg(&m, classes, title)).with_context(|| format!("drawing {}", path.display()))?;
     println!("drew {}", path.display());
     Ok(())
 }
@@ -128,26 +178,50 @@ pub fn describe(s: &Stopping) -> String {
     format!("top probability ≥ {:.4} with {} answers in a row agreeing", s.rule.top_probability, s.rule.agreeing)
 }
 
+/// Accuracy after each tenth of the touch: the share, the tokens read, the accuracy.
+pub fn tenths(prefixes: &Prefixes) -> Vec<(f64, usize, f64)> {
+    (1..=10)
+        .map(|tenth| {
+            let k = (tenth * prefixes.tokens).div_ceil(10).max(1);
+            (tenth as f64 / 10.0, k, prefixes.accuracy_at(k))
+        })
+        .collect()
+}
+
+/// [`tenths`] as a table.
+pub fn print_tenths(curve: &[(f64, usize, f64)]) {
+    println!("{:>8} {:>7} {:>9}", "touch", "tokens", "accuracy");
+    for (share, k, acc) in curve {
+        println!("{:>7.0}% {k:>7} {acc:>9.4}", share * 100.0);
+    }
+}
+
+/// Draws `prefixes` stopped by `rule` to `path`.
+pub fn draw_anytime(path: &Path, title: &str, prefixes: &Prefixes, rule: pvt3_format::StopRule) -> Result<()> {
+    plot::write(path, &anytime_picture::svg(title, prefixes, rule)).with_context(|| format!("drawing {}", path.display()))
+}
+
 /// `pvt3 eval --anytime`: accuracy against the share of the touch, and the stopping rule
 /// the checkpoint records, as the exported file carries it (calibrated on its own validation
 /// fold, or by `pvt3 cv` on all its runs' validation answers), applied to `samples`.
-fn anytime_report(meta: &checkpoint::Meta, model: &Classifier, data: &Dataset, samples: &Samples, fold: Folds, a: &EvalArgs) -> Result<()> {
-    let pvt3 = model.pvt3("pvt3 eval --anytime")?;
+fn anytime_report(run: &Loaded, samples: &Samples, a: &EvalArgs) -> Result<()> {
+    let (meta, fold) = (&run.meta, a.fold);
+    let pvt3 = run.model.pvt3("pvt3 eval --anytime")?;
     let answers = anytime::answers(pvt3, samples)?;
     if let Some(path) = &a.answers {
         checkpoint::write_json_atomically(path, &answers).with_context(|| format!("writing {}", path.display()))?;
     }
-    let prefixes = anytime::Prefixes::from(&answers);
+    let prefixes = Prefixes::from(&answers);
     // The rule training recorded; a run from before there was one is calibrated here the same way.
     let calibrated = match &meta.provenance.stopping {
         Some(recorded) => recorded.clone(),
         None => {
-            let val = Samples::new(data, &data.split(meta.provenance.val_fold)?.val, &meta.normalization);
+            let val = Samples::new(&run.data, &run.data.split(meta.provenance.val_fold)?.val, &meta.normalization);
             anytime::prefixes(pvt3, &val)?.calibrate()
         }
     };
     let here = prefixes.stop_by(calibrated.rule);
-    let picture = a.picture.clone().unwrap_or_else(|| a.checkpoint.join(fold.picture("anytime")));
+    let picture = a.picture_of("anytime");
     let rule = calibrated.rule;
     let title = format!(
         "{}: fold {fold}, {} samples; rule: top probability ≥ {:.4}, {} agreeing",
@@ -156,14 +230,9 @@ fn anytime_report(meta: &checkpoint::Meta, model: &Classifier, data: &Dataset, s
         rule.top_probability,
         rule.agreeing
     );
-    plot::write(&picture, &anytime_picture::svg(&title, &prefixes, rule)).with_context(|| format!("drawing {}", picture.display()))?;
+    draw_anytime(&picture, &title, &prefixes, rule)?;
     let t = prefixes.tokens;
-    let curve: Vec<(f64, usize, f64)> = (1..=10)
-        .map(|tenth| {
-            let k = (tenth * t).div_ceil(10).max(1);
-            (tenth as f64 / 10.0, k, prefixes.accuracy_at(k))
-        })
-        .collect();
+    let curve = tenths(&prefixes);
     if a.json {
         let curve: Vec<_> = curve.iter().map(|(share, k, acc)| serde_json::json!({"share": share, "tokens": k, "accuracy": acc})).collect();
         let out = serde_json::json!({
@@ -174,10 +243,7 @@ fn anytime_report(meta: &checkpoint::Meta, model: &Classifier, data: &Dataset, s
         return Ok(());
     }
     println!("provisional answers on {} samples (fold {fold}), {t} temporal tokens per touch", samples.len());
-    println!("{:>8} {:>7} {:>9}", "touch", "tokens", "accuracy");
-    for (share, k, acc) in &curve {
-        println!("{:>7.0}% {k:>7} {acc:>9.4}", share * 100.0);
-    }
+    print_tenths(&curve);
     let on = match calibrated.calibrated_on {
         CalibratedOn::ValidationFold => format!("validation fold {}", meta.provenance.val_fold),
         CalibratedOn::CrossValidation { runs, samples } => {

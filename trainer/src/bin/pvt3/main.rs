@@ -4,6 +4,7 @@
 mod bench;
 mod cv;
 mod eval;
+mod eval_cv;
 mod export;
 mod import;
 mod info;
