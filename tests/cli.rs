@@ -176,6 +176,8 @@ fn cv_runs_folds_side_by_side_and_resumes_without_retraining() {
     args.extend(SMALL);
     let first = ok(&args);
     assert!(first.contains("mean test accuracy"), "{first}");
+    let next = format!("next: pvt3 eval {o} (all runs' test answers together");
+    assert!(first.contains(&next) && first.contains(&format!("pvt3 export {o}/seed0/fold0 -o model.onnx")), "{first}");
     let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("cv.json")).unwrap()).unwrap();
     assert_eq!(summary["runs"].as_array().unwrap().len(), 4);
     // One stopping rule, calibrated on the four runs' validation answers, in every run and in
@@ -225,7 +227,9 @@ fn cv_runs_folds_side_by_side_and_resumes_without_retraining() {
     let weights = std::fs::read(out.join("seed0/fold3/model/weights.safetensors")).unwrap();
     args.push("--resume");
     let second = ok(&args);
-    let tail = |s: &str| s.lines().last().unwrap().split(" (wall").next().unwrap().to_string();
+    // The same summary and rule, all but the wall time.
+    let tail =
+        |s: &str| s.lines().filter(|l| !l.starts_with("next:")).map(|l| l.split(" (wall").next().unwrap()).collect::<Vec<_>>().join("\n");
     assert_eq!(tail(&first), tail(&second));
     assert_eq!(weights, std::fs::read(out.join("seed0/fold3/model/weights.safetensors")).unwrap(), "not retrained");
 

@@ -1,14 +1,14 @@
 //! `pvt3 cv`: the published protocol over seeds × folds, side by side or one run per job, and a
 //! report of whatever has finished.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Result;
 use indicatif::MultiProgress;
 use pvt3_trainer::cv::{self, cross_validate, CvSummary};
 use pvt3_trainer::data::TEST_FOLD;
-use pvt3_trainer::run_dir;
+use pvt3_trainer::run_dir::{self, CrossValidation, Run};
 
 use crate::model_args::{prepare, ModelArgs};
 use crate::progress;
@@ -76,7 +76,22 @@ pub fn run(a: CvArgs) -> Result<()> {
         }
     };
     print_summary(&s, started.elapsed().as_secs_f64(), &out.join(run_dir::CV_SUMMARY));
+    print_next(&s, &out);
     Ok(())
+}
+
+/// What to do with the runs: look at all their answers, export one.
+fn print_next(s: &CvSummary, out: &Path) {
+    let Some(first) = s.runs.first().map(|r| CrossValidation(out).run(r.seed, r.val_fold)) else { return };
+    let (pruned, file) = match s.pruned_runs.is_empty() {
+        true => ("", first),
+        false => (" --pruned", Run(&first).pruned()),
+    };
+    println!(
+        "next: pvt3 eval {}{pruned} (all runs' test answers together, confusion matrix drawn; --anytime: the stopping rule run by run), pvt3 export {} -o model.onnx (one file for the robot)",
+        out.display(),
+        file.display()
+    );
 }
 
 fn print_summary(s: &CvSummary, wall: f64, summary: &std::path::Path) {
