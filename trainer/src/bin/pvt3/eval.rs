@@ -1,7 +1,7 @@
 //! `pvt3 eval`: a checkpoint's accuracy on a fold (by default its own data's test fold), per
 //! class and as a confusion matrix (printed, and drawn as SVG), or with `--anytime` against the
-//! share of each touch it has seen (printed, and drawn). Given a cross-validation's directory,
-//! all its runs together ([`crate::eval_cv`]).
+//! share of each touch it has seen (printed, and drawn). A cross-validation's directory is
+//! eval_cv.rs's: all its runs together.
 
 use std::path::{Path, PathBuf};
 
@@ -129,9 +129,6 @@ impl Loaded {
 }
 
 pub fn run(a: EvalArgs) -> Result<()> {
-    if a.checkpoint.join(CV_SUMMARY).exists() {
-        return crate::eval_cv::run(&a);
-    }
     if a.pruned {
         bail!(
             "--pruned reads a cross-validation's pruned runs, and {} holds no {CV_SUMMARY}: give a pruned/ checkpoint itself",

@@ -10,9 +10,14 @@ use anyhow::{bail, Result};
 use pvt3_trainer::anytime::{self, Prefixes};
 use pvt3_trainer::cv::mean_std;
 use pvt3_trainer::evaluate::evaluate;
-use pvt3_trainer::run_dir::{CrossValidation, Run};
+use pvt3_trainer::run_dir::{CrossValidation, Run, CV_SUMMARY};
 
 use crate::eval::{describe, draw_anytime, print_tenths, report_classes, tenths, EvalArgs, Loaded};
+
+/// Whether `pvt3 eval`'s directory is a cross-validation's (it holds cv.json).
+pub fn applies(a: &EvalArgs) -> bool {
+    a.checkpoint.join(CV_SUMMARY).exists()
+}
 
 pub fn run(a: &EvalArgs) -> Result<()> {
     if a.answers.is_some() || a.json {

@@ -79,6 +79,7 @@ fn main() -> Result<()> {
         Command::Prune(a) => prune::run(a),
         Command::Export(a) => export::export_onnx(&a.model, &a.out),
         Command::Bake(a) => export::bake(a),
+        Command::Eval(a) if eval_cv::applies(&a) => eval_cv::run(&a),
         Command::Eval(a) => eval::run(a),
         Command::Plot(a) => plot::run(a),
         Command::Bench(b) => bench::run(b),
