@@ -1,9 +1,11 @@
 //! `pvt3 eval CV_DIR`: every finished run of a cross-validation on one fold (by default the test
 //! fold), their answers together: the runs' accuracy as mean ± std and the confusion matrix of
 //! all their answers, or with `--anytime` what the stopping rule `pvt3 cv` wrote into the runs
-//! does, run by run (mean ± std, the figures docs/anytime.md gives) and pooled (drawn).
+//! does, run by run (mean ± std, the figures docs/anytime.md gives) and pooled (drawn), with the
+//! touches whose answer at the stop differs from the whole touch's in the most runs.
 //! `--pruned` reads each run's pruned model instead.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Result};
@@ -12,7 +14,7 @@ use pvt3_trainer::cv::mean_std;
 use pvt3_trainer::evaluate::evaluate;
 use pvt3_trainer::run_dir::{CrossValidation, Run, CV_SUMMARY};
 
-use crate::eval::{describe, draw_anytime, print_tenths, report_classes, tenths, EvalArgs, Loaded};
+use crate::eval::{describe, draw_anytime, print_tenths, report_classes, tenths, EvalArgs, Folds, Loaded};
 
 /// Whether `pvt3 eval`'s directory is a cross-validation's (it holds cv.json).
 pub fn applies(a: &EvalArgs) -> bool {
@@ -79,7 +81,7 @@ fn finished(a: &EvalArgs) -> Result<Vec<PathBuf>> {
 /// and all the runs' answers together, printed and drawn.
 fn anytime_report(a: &EvalArgs, runs: &[PathBuf], what: &str) -> Result<()> {
     let (mut classes, mut parts, mut changes, mut shares) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    let mut rule = None;
+    let (mut rule, mut differing) = (None, Differing::default());
     for dir in runs {
         let run = load(dir, a, &mut classes)?;
         let Some(stopping) = &run.meta.provenance.stopping else {
@@ -101,10 +103,12 @@ fn anytime_report(a: &EvalArgs, runs: &[PathBuf], what: &str) -> Result<()> {
             }
             Some(_) => {}
         }
-        let prefixes = anytime::prefixes(run.model.pvt3("pvt3 eval --anytime")?, &run.samples())?;
+        let samples = run.samples();
+        let prefixes = anytime::prefixes(run.model.pvt3("pvt3 eval --anytime")?, &samples)?;
         let here = prefixes.stop_by(stopping.rule);
         changes.push(100.0 * (here.accuracy - here.full_accuracy));
         shares.push(100.0 * here.mean_share);
+        differing.add(&run.indices, &samples.touches, &prefixes, stopping.rule);
         parts.push(prefixes);
     }
     let calibrated = rule.expect("at least one run");
@@ -124,7 +128,101 @@ fn anytime_report(a: &EvalArgs, runs: &[PathBuf], what: &str) -> Result<()> {
         calibrated.rule.top_probability, calibrated.rule.agreeing
     );
     let picture = a.picture_of(if a.pruned { "anytime-pruned" } else { "anytime" });
+    differing.print(&classes, n, fold);
     draw_anytime(&picture, &title, &pooled, calibrated.rule)?;
     println!("drew {}", picture.display());
     Ok(())
+}
+
+/// The samples whose answer at the rule's stop differs from the whole touch's, over the runs:
+/// by touch of the data set and window, and whether the stop's answer is the right one.
+#[derive(Default)]
+struct Differing(BTreeMap<(usize, usize, bool), Differs>);
+
+#[derive(Default)]
+struct Differs {
+    label: u32,
+    /// Its place among the fold's touches.
+    place: usize,
+    runs: usize,
+    /// The share of the touch read at the stop, summed over the runs.
+    read: f64,
+    /// The wrong answers (at the stop, or at the end), and how often.
+    answers: BTreeMap<u32, usize>,
+}
+
+impl Differing {
+    /// One run's: `touches` numbers each sample's touch in the order of `indices`, the touches'
+    /// places in the data set.
+    fn add(&mut self, indices: &[usize], touches: &[usize], prefixes: &Prefixes, rule: pvt3_format::StopRule) {
+        let (tokens, mut window) = (prefixes.tokens, (usize::MAX, 0));
+        for (i, &(k, right)) in prefixes.stops(rule).iter().enumerate() {
+            window = if window.0 == touches[i] { (touches[i], window.1 + 1) } else { (touches[i], 0) };
+            let label = prefixes.labels[i];
+            if right == (prefixes.class[i][tokens - 1] == label) {
+                continue;
+            }
+            let entry = self.0.entry((indices[touches[i]], window.1, right)).or_default();
+            (entry.label, entry.place) = (label, touches[i]);
+            entry.runs += 1;
+            entry.read += k as f64 / tokens as f64;
+            let wrong = if right { prefixes.class[i][tokens - 1] } else { prefixes.class[i][k - 1] };
+            *entry.answers.entry(wrong).or_default() += 1;
+        }
+    }
+
+    /// The ten that differ in the most runs.
+    fn print(&self, classes: &[String], runs: usize, fold: Folds) {
+        if self.0.is_empty() {
+            println!("in every run the rule's answers are the whole touch's");
+            return;
+        }
+        let mut rows: Vec<_> = self.0.iter().collect();
+        rows.sort_by_key(|(key, d)| (std::cmp::Reverse(d.runs), **key));
+        println!("where the rule's answer differs from the whole touch's, in the most of the {runs} runs (fold {fold}):");
+        for ((touch, window, right), d) in rows.iter().take(10) {
+            let answers: Vec<String> = d.answers.iter().map(|(c, n)| format!("{} × {n}", classes[*c as usize])).collect();
+            let verdict = match right {
+                false => format!("wrong at the stop ({}), right at the end", answers.join(", ")),
+                true => format!("right at the stop, wrong at the end ({})", answers.join(", ")),
+            };
+            let window = if *window > 0 { format!(", window {window}") } else { String::new() };
+            println!(
+                "  touch {touch} of the data set{window} (no. {} of fold {fold}, {}): {verdict}, in {} run{}, at {:.0} % of the touch",
+                d.place,
+                classes[d.label as usize],
+                d.runs,
+                if d.runs == 1 { "" } else { "s" },
+                100.0 * d.read / d.runs as f64
+            );
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Three touches, the second read as two windows; under a rule of top probability ≥ 0.8 with
+    /// two answers agreeing the first touch stops wrongly, the second's second window stops
+    /// rightly where its whole window is wrong, the third never stops.
+    #[test]
+    fn the_samples_whose_stop_differs_are_counted_by_touch_and_window_over_runs() {
+        let prefixes = Prefixes {
+            top: vec![vec![0.9, 0.9, 0.6, 0.7], vec![0.5, 0.5, 0.5, 0.5], vec![0.9, 0.9, 0.9, 0.9], vec![0.3, 0.5, 0.6, 0.7]],
+            class: vec![vec![2, 2, 1, 1], vec![0, 0, 0, 0], vec![1, 1, 1, 3], vec![1, 2, 2, 2]],
+            labels: vec![1, 1, 1, 2],
+            tokens: 4,
+        };
+        let rule = pvt3_format::StopRule { top_probability: 0.8, agreeing: 2 };
+        let mut differing = Differing::default();
+        for _ in 0..2 {
+            differing.add(&[10, 20, 30], &[0, 1, 1, 2], &prefixes, rule);
+        }
+        let found: Vec<_> = differing.0.iter().map(|(key, d)| (*key, d.place, d.runs, d.read, d.answers.clone())).collect();
+        assert_eq!(
+            found,
+            vec![((10, 0, false), 0, 2, 1.0, BTreeMap::from([(2, 2)])), ((20, 1, true), 1, 2, 1.0, BTreeMap::from([(3, 2)])),]
+        );
+    }
 }
