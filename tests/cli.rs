@@ -224,6 +224,11 @@ fn cv_runs_folds_side_by_side_and_resumes_without_retraining() {
     assert!(whole.contains(&expected) && out.join("anytime-fold4.svg").exists(), "{expected}\n{whole}");
     let err = fails(&["eval", o, "--pruned"]);
     assert!(err.contains("holds no finished run to evaluate (seed*/fold*/pruned/result.json)"), "{err}");
+    std::fs::create_dir_all(out.join("seed3/fold1")).unwrap(); // a job still training
+    let with_one_training = ok(&["eval", o]);
+    assert!(with_one_training.contains(&format!("not finished, not counted: {o}/seed3/fold1")), "{with_one_training}");
+    assert!(with_one_training.contains(&format!("4 runs of {o}, fold 4: accuracy {mean:.4}")), "{with_one_training}");
+    std::fs::remove_dir_all(out.join("seed3")).unwrap();
     let weights = std::fs::read(out.join("seed0/fold3/model/weights.safetensors")).unwrap();
     args.push("--resume");
     let second = ok(&args);

@@ -60,13 +60,15 @@ fn load(dir: &Path, a: &EvalArgs, classes: &mut Vec<String>) -> Result<Loaded> {
     Ok(run)
 }
 
-/// The checkpoints to read: each finished run of the cross-validation, or its pruned successor.
+/// The checkpoints to read: each finished run of the cross-validation, or its pruned successor;
+/// the others are named.
 fn finished(a: &EvalArgs) -> Result<Vec<PathBuf>> {
     let mut found = Vec::new();
     for (_, _, dir) in CrossValidation(&a.checkpoint).runs()? {
         let net = if a.pruned { Run(&dir).pruned() } else { dir };
-        if Run(&net).result().exists() {
-            found.push(net);
+        match Run(&net).result().exists() {
+            true => found.push(net),
+            false => println!("not finished, not counted: {}", net.display()),
         }
     }
     if found.is_empty() {
