@@ -129,8 +129,8 @@ fn anytime_report(a: &EvalArgs, runs: &[PathBuf], what: &str) -> Result<()> {
         "{dir}: {n} {what}, fold {fold}; rule: top probability ≥ {:.4}, {} agreeing",
         calibrated.rule.top_probability, calibrated.rule.agreeing
     );
-    let picture = a.picture_of(if a.pruned { "anytime-pruned" } else { "anytime" });
     differing.print(&classes, n, fold);
+    let picture = a.picture_of(if a.pruned { "anytime-pruned" } else { "anytime" });
     draw_anytime(&picture, &title, &pooled, calibrated.rule)?;
     println!("drew {}", picture.display());
     Ok(())
@@ -224,7 +224,7 @@ mod tests {
         let found: Vec<_> = differing.0.iter().map(|(key, d)| (*key, d.place, d.runs, d.read, d.answers.clone())).collect();
         assert_eq!(
             found,
-            vec![((10, 0, false), 0, 2, 1.0, BTreeMap::from([(2, 2)])), ((20, 1, true), 1, 2, 1.0, BTreeMap::from([(3, 2)])),]
+            vec![((10, 0, false), 0, 2, 1.0, BTreeMap::from([(2, 2)])), ((20, 1, true), 1, 2, 1.0, BTreeMap::from([(3, 2)]))]
         );
     }
 }
