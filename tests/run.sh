@@ -2,8 +2,10 @@
 # The tests, exactly as CI runs them (.ci/run):
 #   1. the whole workspace on this machine (cargo test --release --workspace);
 #   2. the C ABI under valgrind (x86-64): the C example's paths and every entry point's error
-#      paths, no invalid read or write, no leak; then the runtime's lints: clippy with warnings
-#      denied (every unsafe block has a SAFETY note);
+#      paths, no invalid read or write, no leak; that the README's main job (cargo build
+#      --release) needs no library built with other features than step 1's, so the two commands
+#      share one build; then the runtime's lints: clippy with warnings denied (every unsafe block
+#      has a SAFETY note);
 #   3. the robot runtime cross-built for aarch64 (64-bit ARM: Jetson Orin, Raspberry Pi 4/5) and
 #      its tests run under qemu: golden logits, bit-identical loads, threads, damaged files,
 #      streaming, every C-ABI error path, and runtime/examples/classify.c built with
