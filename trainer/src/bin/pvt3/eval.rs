@@ -193,9 +193,10 @@ pub fn print_tenths(curve: &[(f64, usize, f64)]) {
     }
 }
 
-/// Draws `prefixes` stopped by `rule` to `path`.
-pub fn draw_anytime(path: &Path, title: &str, prefixes: &Prefixes, rule: pvt3_format::StopRule) -> Result<()> {
-    plot::write(path, &anytime_picture::svg(title, prefixes, rule)).with_context(|| format!("drawing {}", path.display()))
+/// Draws `prefixes` stopped by `rule` to `path`, titled `heading` and the rule.
+pub fn draw_anytime(path: &Path, heading: &str, prefixes: &Prefixes, rule: pvt3_format::StopRule) -> Result<()> {
+    let title = format!("{heading}; rule: top probability ≥ {:.4}, {} agreeing", rule.top_probability, rule.agreeing);
+    plot::write(path, &anytime_picture::svg(&title, prefixes, rule)).with_context(|| format!("drawing {}", path.display()))
 }
 
 /// `pvt3 eval --anytime`: accuracy against the share of the touch, and the stopping rule
@@ -220,14 +221,8 @@ fn anytime_report(run: &Loaded, samples: &Samples, a: &EvalArgs) -> Result<()> {
     let here = prefixes.stop_by(calibrated.rule);
     let picture = a.picture_of("anytime");
     let rule = calibrated.rule;
-    let title = format!(
-        "{}: fold {fold}, {} samples; rule: top probability ≥ {:.4}, {} agreeing",
-        a.checkpoint.display(),
-        samples.len(),
-        rule.top_probability,
-        rule.agreeing
-    );
-    draw_anytime(&picture, &title, &prefixes, rule)?;
+    let heading = format!("{}: fold {fold}, {} samples", a.checkpoint.display(), samples.len());
+    draw_anytime(&picture, &heading, &prefixes, rule)?;
     let t = prefixes.tokens;
     let curve = tenths(&prefixes);
     if a.json {

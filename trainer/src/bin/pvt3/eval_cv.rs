@@ -125,13 +125,9 @@ fn anytime_report(a: &EvalArgs, runs: &[PathBuf], what: &str) -> Result<()> {
     println!("stopping rule: {}", describe(&calibrated));
     let ((change, change_std), (share, share_std)) = (mean_std(&changes), mean_std(&shares));
     println!("here, run by run: {change:+.1} ± {change_std:.1} points against the whole touch, at {share:.0} ± {share_std:.0} % of the touch (mean ± std over the runs)");
-    let title = format!(
-        "{dir}: {n} {what}, fold {fold}; rule: top probability ≥ {:.4}, {} agreeing",
-        calibrated.rule.top_probability, calibrated.rule.agreeing
-    );
     differing.print(&classes, n, fold);
     let picture = a.picture_of(if a.pruned { "anytime-pruned" } else { "anytime" });
-    draw_anytime(&picture, &title, &pooled, calibrated.rule)?;
+    draw_anytime(&picture, &format!("{dir}: {n} {what}, fold {fold}"), &pooled, calibrated.rule)?;
     println!("drew {}", picture.display());
     Ok(())
 }
@@ -157,14 +153,15 @@ impl Differing {
     /// One run's: `touches` numbers each sample's touch in the order of `indices`, the touches'
     /// places in the data set.
     fn add(&mut self, indices: &[usize], touches: &[usize], prefixes: &Prefixes, rule: pvt3_format::StopRule) {
-        let (tokens, mut window) = (prefixes.tokens, (usize::MAX, 0));
+        let (tokens, mut window) = (prefixes.tokens, 0);
         for (i, &(k, right)) in prefixes.stops(rule).iter().enumerate() {
-            window = if window.0 == touches[i] { (touches[i], window.1 + 1) } else { (touches[i], 0) };
+            // A touch's windows come together: its first is window 0.
+            window = if i > 0 && touches[i - 1] == touches[i] { window + 1 } else { 0 };
             let label = prefixes.labels[i];
             if right == (prefixes.class[i][tokens - 1] == label) {
                 continue;
             }
-            let entry = self.0.entry((indices[touches[i]], window.1, right)).or_default();
+            let entry = self.0.entry((indices[touches[i]], window, right)).or_default();
             (entry.label, entry.place) = (label, touches[i]);
             entry.runs += 1;
             entry.read += k as f64 / tokens as f64;
