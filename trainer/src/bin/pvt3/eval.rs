@@ -50,11 +50,17 @@ pub struct EvalArgs {
     pub pruned: bool,
 }
 
+/// The pictures `pvt3 eval` draws: the confusion matrix, and with --anytime what part of a touch
+/// gives.
+pub const CONFUSION: &str = "confusion";
+pub const ANYTIME: &str = "anytime";
+
 impl EvalArgs {
-    /// Where to draw the picture of `what` (`confusion`, `anytime`): --picture, or beside the
-    /// checkpoint.
+    /// Where to draw the picture of `what` ([`CONFUSION`], [`ANYTIME`]): --picture, or beside the
+    /// checkpoint (`-pruned` in its name with --pruned).
     pub fn picture_of(&self, what: &str) -> PathBuf {
-        self.picture.clone().unwrap_or_else(|| self.checkpoint.join(self.fold.picture(what)))
+        let what = if self.pruned { format!("{what}-pruned") } else { what.to_string() };
+        self.picture.clone().unwrap_or_else(|| self.checkpoint.join(self.fold.picture(&what)))
     }
 }
 
@@ -148,7 +154,7 @@ pub fn run(a: EvalArgs) -> Result<()> {
         println!("(the checkpoint's own record: test accuracy {test:.4})");
     }
     let title = format!("{}: fold {fold}, {} touches, accuracy {:.4}", a.checkpoint.display(), e.labels.len(), e.accuracy);
-    report_classes(&run.meta.classes, &e.labels, &e.predictions, &title, &a.picture_of("confusion"))
+    report_classes(&run.meta.classes, &e.labels, &e.predictions, &title, &a.picture_of(CONFUSION))
 }
 
 /// Accuracy per class and the confusion matrix of `labels` answered `predictions`, printed; the
@@ -219,7 +225,7 @@ fn anytime_report(run: &Loaded, samples: &Samples, a: &EvalArgs) -> Result<()> {
         }
     };
     let here = prefixes.stop_by(calibrated.rule);
-    let picture = a.picture_of("anytime");
+    let picture = a.picture_of(ANYTIME);
     let rule = calibrated.rule;
     let heading = format!("{}: fold {fold}, {} samples", a.checkpoint.display(), samples.len());
     draw_anytime(&picture, &heading, &prefixes, rule)?;
@@ -270,7 +276,7 @@ mod tests {
         assert_eq!(Folds::One(4).to_string(), "4");
         let err = "four".parse::<Folds>().unwrap_err();
         assert!(err.contains("`four` is neither a fold number nor `all`"), "{err}");
-        assert_eq!(Folds::One(4).picture("confusion"), "confusion-fold4.svg");
-        assert_eq!(Folds::All.picture("anytime"), "anytime-all.svg");
+        assert_eq!(Folds::One(4).picture(super::CONFUSION), "confusion-fold4.svg");
+        assert_eq!(Folds::All.picture(super::ANYTIME), "anytime-all.svg");
     }
 }

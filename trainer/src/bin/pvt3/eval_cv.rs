@@ -14,7 +14,7 @@ use pvt3_trainer::cv::mean_std;
 use pvt3_trainer::evaluate::evaluate;
 use pvt3_trainer::run_dir::{CrossValidation, Run, CV_SUMMARY};
 
-use crate::eval::{describe, draw_anytime, print_tenths, report_classes, tenths, EvalArgs, Folds, Loaded};
+use crate::eval::{describe, draw_anytime, print_tenths, report_classes, tenths, EvalArgs, Folds, Loaded, ANYTIME, CONFUSION};
 
 /// Whether `pvt3 eval`'s directory is a cross-validation's (it holds cv.json).
 pub fn applies(a: &EvalArgs) -> bool {
@@ -44,8 +44,7 @@ pub fn run(a: &EvalArgs) -> Result<()> {
     println!("their {} answers together:", labels.len());
     let right = labels.iter().zip(&predictions).filter(|(l, p)| l == p).count() as f64 / labels.len() as f64;
     let title = format!("{dir}: {n} {what}, fold {fold}, {} answers, accuracy {right:.4}", labels.len());
-    let name = if a.pruned { "confusion-pruned" } else { "confusion" };
-    report_classes(&classes, &labels, &predictions, &title, &a.picture_of(name))
+    report_classes(&classes, &labels, &predictions, &title, &a.picture_of(CONFUSION))
 }
 
 /// The run in `dir` on the fold asked for; its classes must be those of the runs before it
@@ -126,7 +125,7 @@ fn anytime_report(a: &EvalArgs, runs: &[PathBuf], what: &str) -> Result<()> {
     let ((change, change_std), (share, share_std)) = (mean_std(&changes), mean_std(&shares));
     println!("here, run by run: {change:+.1} ± {change_std:.1} points against the whole touch, at {share:.0} ± {share_std:.0} % of the touch (mean ± std over the runs)");
     differing.print(&classes, n, fold);
-    let picture = a.picture_of(if a.pruned { "anytime-pruned" } else { "anytime" });
+    let picture = a.picture_of(ANYTIME);
     draw_anytime(&picture, &format!("{dir}: {n} {what}, fold {fold}"), &pooled, calibrated.rule)?;
     println!("drew {}", picture.display());
     Ok(())
