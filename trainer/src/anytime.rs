@@ -97,6 +97,14 @@ pub fn answers(model: &Pvt3, samples: &Samples) -> Result<Answers> {
             }
         }
     }
+    // A touch shorter than the window answers from the tokens it fills until its end, and
+    // then keeps its last answer.
+    for (answers, filled) in probabilities.iter_mut().zip(samples.tokens_filled(model.config().tubelet)) {
+        if (1..tokens).contains(&filled) {
+            let last = answers[filled - 1].clone();
+            answers[filled..].iter_mut().for_each(|a| *a = last.clone());
+        }
+    }
     Ok(Answers { probabilities, labels: samples.labels.clone(), tokens })
 }
 
@@ -266,7 +274,8 @@ mod tests {
         let mut rng = pvt3_models::Rng::new(8);
         let n = 3;
         let x: Vec<f32> = (0..n * 60 * 12).map(|_| rng.normal()).collect();
-        let samples = Samples { x, labels: vec![0; n], sample_shape: cfg.sample_shape(), touches: (0..n).collect() };
+        let samples =
+            Samples { x, labels: vec![0; n], sample_shape: cfg.sample_shape(), touches: (0..n).collect(), filled: vec![cfg.frames; n] };
         let a = answers(&model, &samples).unwrap();
         assert_eq!(a.tokens, 4);
         let (x, _) = samples.batch(&[0, 1, 2], |_| {}).unwrap();

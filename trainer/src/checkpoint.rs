@@ -35,6 +35,10 @@ pub struct Provenance {
     /// The condition's levels held out as the test set (`--hold-out`), if any.
     #[serde(default)]
     pub held_out: Option<crate::data::HoldOut>,
+    /// The split the run trained on, which every reload takes ([`Provenance::dataset`]); `None`
+    /// in a run of a pvt3 from before it was recorded.
+    #[serde(default)]
+    pub trained_on: Option<crate::data::TrainedOn>,
     /// How the data set read its touches (`pvt3 import --per-distance`, `--per-force`): the
     /// exported file asks a robot for the same.
     #[serde(default)]
@@ -44,6 +48,28 @@ pub struct Provenance {
     /// run exports without one, and `pvt3 eval --anytime` calibrates it afresh.
     #[serde(default, deserialize_with = "current_or_none")]
     pub stopping: Option<crate::anytime::Stopping>,
+}
+
+impl Provenance {
+    /// The data set the run trained on (`data`, by default its own), split as the run recorded
+    /// it; refused when its touches are not the run's.
+    pub fn dataset(&self, data: Option<&Path>) -> Result<crate::data::Dataset> {
+        let own = PathBuf::from(&self.data);
+        crate::data::Dataset::load_as_trained(data.unwrap_or(&own), self.seed, self.held_out.as_ref(), self.trained_on.as_ref())
+    }
+
+    /// What a reload should say of a run that did not record its split: its folds are derived
+    /// again as they were drawn then.
+    pub fn split_note(&self) -> Option<String> {
+        self.trained_on.is_none().then(|| {
+            format!(
+                "note: this run, by pvt3 {}, records no split: its folds are derived again (the file's, or drawn with seed {}{})",
+                self.pvt3_version,
+                self.seed,
+                self.held_out.as_ref().map_or(String::new(), |h| format!(" around the held-out {h}"))
+            )
+        })
+    }
 }
 
 fn current_or_none<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Option<crate::anytime::Stopping>, D::Error> {
@@ -237,6 +263,7 @@ mod tests {
             options: TrainOptions::default(),
             pruning: None,
             held_out: None,
+            trained_on: None,
             reading: None,
             stopping: None,
         };

@@ -24,7 +24,8 @@ use crate::{Error, Result};
 #[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct CvSummary {
     pub data: String,
-    /// The condition's levels held out as every run's test set (`--hold-out`), if any.
+    /// The condition's levels held out as every run's test set (`--hold-out`), if any (with the
+    /// seed that drew the first seed's folds around them: each seed draws its own).
     #[serde(default)]
     pub held_out: Option<crate::data::HoldOut>,
     pub seeds: Vec<u64>,
@@ -177,11 +178,12 @@ pub fn protocol(seeds: &[u64]) -> Vec<(u64, usize)> {
 }
 
 /// Trains the (seed, validation fold) runs of `work` ([`protocol`], or one run of it) under
-/// `out`, `jobs` at a time, and summarises them. `None`: the runs paused (see
+/// `out`, `jobs` at a time, each from the spec of its seed in `specs` (`options.seed`: each seed
+/// may split the data its own way), and summarises them. `None`: the runs paused (see
 /// [`RunSpec::pause_after`]); resume to finish them.
 #[allow(clippy::too_many_arguments)]
 pub fn cross_validate(
-    spec: &RunSpec,
+    specs: &[RunSpec],
     stage: Option<&PruneStage>,
     work: &[(u64, usize)],
     out: &Path,
@@ -190,6 +192,13 @@ pub fn cross_validate(
     progress: &MultiProgress,
     style: &indicatif::ProgressStyle,
 ) -> Result<Option<CvSummary>> {
+    let spec_of = |seed: u64| {
+        specs.iter().find(|s| s.options.seed == seed).ok_or_else(|| Error::Usage(format!("no run specification for seed {seed}")))
+    };
+    let spec = spec_of(work.first().map_or(0, |w| w.0))?;
+    for &(seed, _) in work {
+        spec_of(seed)?;
+    }
     let next = AtomicUsize::new(0);
     let results: Mutex<Vec<Option<Result<Option<FoldResult>>>>> = Mutex::new(work.iter().map(|_| None).collect());
     std::thread::scope(|scope| {
@@ -201,8 +210,7 @@ pub fn cross_validate(
                 };
                 let bar = progress.add(ProgressBar::new(0).with_style(style.clone()));
                 bar.set_prefix(format!("seed {seed} fold {fold}"));
-                let run_spec =
-                    RunSpec { val_fold: fold, options: crate::options::TrainOptions { seed, ..spec.options.clone() }, ..spec.clone() };
+                let run_spec = RunSpec { val_fold: fold, ..spec_of(seed).expect("checked above").clone() };
                 let dir = CrossValidation(out).run(seed, fold);
                 let result = run_fold(&run_spec, stage, &dir, resume, &bar);
                 bar.finish();
@@ -299,14 +307,22 @@ fn summarize(data: String, seeds: &[u64], runs: Vec<RunResult>, pruned_runs: Vec
     }
 }
 
-/// What a run was trained with, besides its seed: runs reported together must agree on it.
-#[derive(PartialEq)]
+/// What a run was trained with, besides its seed (and the seed that drew its folds): runs
+/// reported together must agree on it.
 struct Setup {
     config: pvt3_models::Config,
     data: String,
     held_out: Option<crate::data::HoldOut>,
     options: crate::options::TrainOptions,
     pruning: Option<PruneStage>,
+}
+
+impl PartialEq for Setup {
+    fn eq(&self, other: &Self) -> bool {
+        let levels = |s: &Self| s.held_out.as_ref().map(|h| (h.condition.clone(), h.levels.clone()));
+        (&self.config, &self.data, &self.options, &self.pruning) == (&other.config, &other.data, &other.options, &other.pruning)
+            && levels(self) == levels(other)
+    }
 }
 
 /// Reports every finished run under `out` (`seed{S}/fold{K}/`, as `cross_validate` and separate

@@ -1,10 +1,11 @@
 //! A cross-validation's stopping rule: one rule calibrated on the validation answers of all its
 //! PVT³ runs together (each run's model on its own validation fold, thousands of samples where a
 //! single run has about 200), written into every run's provenance, so that any of them exports
-//! with it (docs/anytime.md, "Calibrated on a cross-validation"). The test fold is never read.
+//! with it (docs/anytime.md, "Calibrated on a cross-validation"). Each run's validation fold is
+//! the one it recorded ([`crate::checkpoint::Provenance::dataset`]); the test fold is never read.
 
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use crate::anytime::{Prefixes, Stopping};
 use crate::checkpoint::{self, write_json_atomically};
@@ -15,25 +16,28 @@ use crate::Result;
 
 /// Calibrates one rule ([`Prefixes::calibrate_pooled`]) on the validation answers of the runs in
 /// `dirs` (run or checkpoint directories of one configuration) and writes it into each run's
-/// provenance. `None`, and nothing written, for networks without provisional answers or no runs.
+/// provenance. `None`, and nothing written, for networks without provisional answers, no runs, or
+/// runs of different windows.
 pub fn calibrate_together(dirs: &[PathBuf]) -> Result<Option<Stopping>> {
-    let mut datasets: HashMap<(String, u64), Dataset> = HashMap::new();
+    // One data set per split the runs recorded (the seeds of a set without a fold array each
+    // draw their own).
+    let mut datasets: HashMap<String, Dataset> = HashMap::new();
     let mut answers = Vec::with_capacity(dirs.len());
     for dir in dirs {
         let (meta, model, _) = checkpoint::load(dir)?;
         let Some(pvt3) = crate::anytime::answering(&model) else { return Ok(None) };
-        let key = (meta.provenance.data.clone(), meta.provenance.seed);
-        let data = match datasets.entry(key) {
+        let p = &meta.provenance;
+        let split = p.trained_on.as_ref().map_or_else(|| format!("seed {} {:?}", p.seed, p.held_out), |t| t.folds.clone());
+        let data = match datasets.entry(format!("{} {split}", p.data)) {
             std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
-            std::collections::hash_map::Entry::Vacant(e) => {
-                let data = Dataset::load(Path::new(&e.key().0), e.key().1)?;
-                e.insert(data)
-            }
+            std::collections::hash_map::Entry::Vacant(e) => e.insert(p.dataset(None)?),
         };
-        let val = Samples::new(data, &data.split(meta.provenance.val_fold)?.val, &meta.normalization);
+        let val = Samples::new(data, &data.split(p.val_fold)?.val, &meta.normalization);
         answers.push(crate::anytime::prefixes(pvt3, &val)?);
     }
-    if answers.is_empty() {
+    // Runs whose windows differ (each seed's window is its own shortest touch that trains)
+    // answer after different tokens: each keeps the rule of its own validation fold.
+    if answers.is_empty() || answers.iter().any(|a| a.tokens != answers[0].tokens) {
         return Ok(None);
     }
     let rule = Prefixes::pooled(answers)?.calibrate_pooled(dirs.len());

@@ -12,17 +12,22 @@
 //!
 //! The published protocol: fold k validates, fold 4 tests, the other folds train. A set without a
 //! fold array gets stratified folds 0..=4 drawn from a seed. Folds are drawn by touch: the
-//! windows a model reads from one touch are never split between training and test.
+//! windows a model reads from one touch are never split between training and test. A run records
+//! the split it trained on ([`split::TrainedOn`]), and every reload takes it from there.
 
 use std::fs::File;
 use std::io::{Read, Seek};
 use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 
 use ndarray::{ArrayD, IxDyn};
 use ndarray_npy::{NpzReader, ReadNpyExt, ReadableElement};
 use pvt3_models::Rng;
 
 use crate::{Error, Result};
+
+mod split;
+pub use split::{Split, TrainedOn};
 
 /// The arrays of a data set file, as `pvt3 import` writes them and [`Dataset::load`] reads them.
 pub mod key {
@@ -105,17 +110,12 @@ pub struct Dataset {
     pub reading: Option<pvt3_format::Reading>,
     pub labels: Vec<u32>,
     pub folds: Vec<usize>,
-    /// False when the folds were drawn here because the file had none.
-    pub folds_from_file: bool,
+    /// The seed that drew the folds (the file had none, or levels are held out); `None`: the
+    /// file's own `fold` array.
+    pub fold_seed: Option<u64>,
     pub path: PathBuf,
-}
-
-/// Which samples train, validate and test.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Split {
-    pub train: Vec<usize>,
-    pub val: Vec<usize>,
-    pub test: Vec<usize>,
+    /// [`Dataset::digest`], once computed.
+    pub digest: OnceLock<String>,
 }
 
 fn data_error(path: &Path, reason: impl Into<String>) -> Error {
@@ -262,15 +262,15 @@ impl Dataset {
             ),
             None => None,
         };
-        let (folds, folds_from_file) = match fold {
+        let (folds, fold_seed) = match fold {
             Some(f) => {
                 let folds = integers(path, key::FOLD, &f, n)?;
                 if let Some(bad) = folds.iter().find(|f| **f as usize >= FOLDS) {
                     return Err(data_error(path, format!("fold {bad} is outside 0..={}", FOLDS - 1)));
                 }
-                (folds.into_iter().map(|f| f as usize).collect(), true)
+                (folds.into_iter().map(|f| f as usize).collect(), None)
             }
-            None => (stratified_folds(&labels, FOLDS, seed), false),
+            None => (stratified_folds(&labels, FOLDS, seed), Some(seed)),
         };
         Ok(Self {
             x,
@@ -283,8 +283,9 @@ impl Dataset {
             reading,
             labels: labels.to_vec(),
             folds,
-            folds_from_file,
+            fold_seed,
             path: path.to_path_buf(),
+            digest: OnceLock::new(),
         })
     }
 
@@ -310,12 +311,24 @@ impl Dataset {
         *self.sample_shape.last().expect("a sample shape has a frame axis")
     }
 
-    /// The layout of the longest window every touch holds: `sample_shape` with the shortest
-    /// touch's length.
+    /// The layout of the longest window every touch that trains or validates holds:
+    /// `sample_shape` with the shortest such touch's length. Test touches never shape the model; one
+    /// shorter than the window is answered from the tokens it fills ([`Dataset::check_fits`]).
     pub fn window_shape(&self) -> Vec<usize> {
         let mut shape = self.sample_shape.clone();
-        *shape.last_mut().expect("a frame axis") = self.lengths.iter().copied().min().unwrap_or(0);
+        let learnt = (0..self.len()).filter(|&i| self.folds[i] != TEST_FOLD);
+        *shape.last_mut().expect("a frame axis") = learnt.map(|i| self.lengths[i]).min().unwrap_or(0);
         shape
+    }
+
+    /// Whether every touch that trains or validates is as long as the longest.
+    pub fn equal_learnt_lengths(&self) -> bool {
+        (0..self.len()).filter(|&i| self.folds[i] != TEST_FOLD).all(|i| self.lengths[i] == self.max_frames())
+    }
+
+    /// The test touches shorter than `frames`.
+    pub fn short_tests(&self, frames: usize) -> Vec<usize> {
+        (0..self.len()).filter(|&i| self.folds[i] == TEST_FOLD && self.lengths[i] < frames).collect()
     }
 
     /// Whether every touch fills the file's `T` frames.
@@ -323,11 +336,14 @@ impl Dataset {
         self.lengths.iter().all(|l| *l == self.max_frames())
     }
 
-    /// Appends frames `start..start + frames` of touch `i` to `out`, in the sample layout.
+    /// Appends frames `start..start + frames` of touch `i` to `out`, in the sample layout; a
+    /// touch that ends before them is continued by its last frame (frames a prefix's answer
+    /// never reads).
     pub fn window_into(&self, i: usize, start: usize, frames: usize, out: &mut Vec<f32>) {
-        debug_assert!(start + frames <= self.lengths[i]);
+        let end = (start + frames).min(self.lengths[i]);
         for row in self.sample(i).chunks(self.max_frames()) {
-            out.extend_from_slice(&row[start..start + frames]);
+            out.extend_from_slice(&row[start..end]);
+            out.extend(std::iter::repeat_n(row[end - 1], start + frames - end));
         }
     }
 
@@ -358,14 +374,36 @@ impl Dataset {
         Ok(split)
     }
 
-    /// Loads a data set as a run was trained on it: `seed` draws folds where the file has none,
-    /// and the run's held-out levels, if any, are held out again.
-    pub fn load_as_trained(path: &Path, seed: u64, held_out: Option<&HoldOut>) -> Result<Self> {
+    /// Loads a data set as a run was trained on it: the split it recorded (refusing other
+    /// touches), or for a run of a pvt3 that recorded none, the split derived as it was then:
+    /// `seed` draws folds where the file has none, and the run's held-out levels are held out again.
+    pub fn load_as_trained(path: &Path, seed: u64, held_out: Option<&HoldOut>, recorded: Option<&TrainedOn>) -> Result<Self> {
         let mut data = Self::load(path, seed)?;
         if let Some(h) = held_out {
             data.hold_out(h)?;
         }
+        if let Some(recorded) = recorded {
+            data.take_split(recorded)?;
+        }
         Ok(data)
+    }
+
+    /// This data set with its folds drawn from `seed` where they are drawn (no fold array, or
+    /// levels held out), as each seed of a cross-validation draws its own; `None` where the folds
+    /// are the file's, the same for every seed.
+    pub fn reseeded(&self, seed: u64) -> Result<Option<Self>> {
+        if self.fold_seed.is_none() {
+            return Ok(None);
+        }
+        let mut data = self.clone();
+        match &self.held_out {
+            Some(h) => data.hold_out(&HoldOut { seed, ..h.clone() })?,
+            None => {
+                data.folds = stratified_folds(&data.labels, FOLDS, seed);
+                data.fold_seed = Some(seed);
+            }
+        }
+        Ok(Some(data))
     }
 
     /// Tests on whole levels of a condition: the touches whose condition has one of the levels
@@ -409,11 +447,14 @@ impl Dataset {
         }
         (0..self.len()).filter(|&i| held[i]).for_each(|i| self.folds[i] = TEST_FOLD);
         self.held_out = Some(h.clone());
+        self.fold_seed = Some(seed);
         Ok(())
     }
 
     /// Checks that the samples fit a model configuration: the same frame layout, and every touch
-    /// at least the model's window long (a longer touch is read a window at a time).
+    /// that trains or validates at least the model's window long (a longer touch is read a window
+    /// at a time). A test touch may be shorter: PVT³ answers it from the temporal tokens it fills,
+    /// as a robot's stream peeks when the touch ends before the window, if it fills one.
     pub fn check_fits(&self, cfg: &pvt3_models::Config) -> Result<()> {
         let expected = cfg.sample_shape();
         let (frame, model_frame) = (&self.sample_shape[..self.sample_shape.len() - 1], &expected[..expected.len() - 1]);
@@ -423,7 +464,10 @@ impl Dataset {
                 format!("samples are {:?} but the model expects {:?} ([height, width, (channels,) frames])", self.sample_shape, expected),
             ));
         }
-        if let Some(i) = (0..self.len()).find(|&i| self.lengths[i] < cfg.frames) {
+        let short_test = |i: usize| {
+            self.folds[i] == TEST_FOLD && self.lengths[i] >= cfg.tubelet && cfg.architecture() == pvt3_models::Architecture::Pvt3
+        };
+        if let Some(i) = (0..self.len()).find(|&i| self.lengths[i] < cfg.frames && !short_test(i)) {
             return Err(data_error(
                 &self.path,
                 format!(

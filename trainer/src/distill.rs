@@ -10,6 +10,7 @@ use std::path::Path;
 use candle_core::{Tensor, D};
 use pvt3_models::Classifier;
 
+use crate::data::TrainedOn;
 use crate::normalization::Normalization;
 use crate::run_dir::{CrossValidation, Run};
 use crate::{Error, Result};
@@ -20,11 +21,18 @@ pub struct Teachers {
 }
 
 impl Teachers {
-    /// Every trained run `cv_dir/seed*/fold{val_fold}/model`, each checked to read the windows
-    /// this run reads (its normalisation, fitted on its training split, equal to `normalization`)
-    /// and to answer with the same `classes`, finished, and not the run in `out` itself (or the
-    /// run it was pruned from).
-    pub fn load(cv_dir: &Path, val_fold: usize, normalization: &Normalization, classes: &[String], out: &Path) -> Result<Self> {
+    /// Every trained run `cv_dir/seed*/fold{val_fold}/model`, each checked to have trained on
+    /// this run's `split` (so that no teacher has learnt this run's test touches) and to read the
+    /// windows this run reads (its normalisation, fitted on its training split, equal to
+    /// `normalization`), to answer with the same `classes`, finished, and not the run in `out`
+    /// itself (or the run it was pruned from).
+    pub fn load(
+        cv_dir: &Path,
+        (val_fold, split): (usize, &TrainedOn),
+        normalization: &Normalization,
+        classes: &[String],
+        out: &Path,
+    ) -> Result<Self> {
         let refuse = |what: String| Error::Usage(format!("--distill {}: {what}", cv_dir.display()));
         let absolute = |p: &Path| std::path::absolute(p).map_err(Error::io(p));
         let out = absolute(out)?;
@@ -38,6 +46,9 @@ impl Teachers {
             }
             let checkpoint = Run(&run).model();
             let (meta, model, _) = crate::checkpoint::load(&checkpoint)?;
+            if let Some(why) = meta.provenance.trained_on.as_ref().and_then(|t| t.differs(split)) {
+                return Err(refuse(format!("{} trained on another split than this run's: {why}", checkpoint.display())));
+            }
             if meta.provenance.val_fold != val_fold || meta.normalization != *normalization {
                 return Err(refuse(format!(
                     "{} was trained on another split than this run's (validation fold {}, normalisation fitted on other touches)",

@@ -21,12 +21,18 @@ pub struct Samples {
     /// Each window's touch, numbered from 0 in the order of the split (rising, a touch's
     /// windows together).
     pub touches: Vec<usize>,
+    /// Each window's frames that are its touch's: all of the window's, but for a test touch
+    /// shorter than it, which is answered from the temporal tokens it fills ([`evaluate`]).
+    pub filled: Vec<usize>,
 }
 
 /// Where the windows of `frames` frames that evaluate a touch of `len` frames start: every half
 /// window from the first frame, and one more that ends at the touch's last frame; one window
-/// for a touch of exactly `frames`.
+/// for a touch of exactly `frames` or fewer.
 pub fn window_starts(len: usize, frames: usize) -> Vec<usize> {
+    if len <= frames {
+        return vec![0];
+    }
     let stride = (frames / 2).max(1);
     let last = len - frames;
     let mut starts: Vec<usize> = (0..=last).step_by(stride).collect();
@@ -88,13 +94,14 @@ impl Samples {
     ) -> Self {
         let mut sample_shape = data.sample_shape.clone();
         *sample_shape.last_mut().expect("a frame axis") = norm.frames;
-        let (mut x, mut raw, mut labels, mut touches) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        let (mut x, mut raw, mut labels, mut touches, mut filled) = (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
         let mut previous = None;
         for (i, at) in picks {
             raw.clear();
             read(i, at, &mut raw);
             norm.apply_into(&raw, &mut x);
             labels.push(data.labels[i]);
+            filled.push(data.lengths[i].min(norm.frames));
             let touch = match previous {
                 Some((p, t)) if p == i => t,
                 Some((_, t)) => t + 1,
@@ -103,7 +110,7 @@ impl Samples {
             previous = Some((i, touch));
             touches.push(touch);
         }
-        Self { x, labels, sample_shape, touches }
+        Self { x, labels, sample_shape, touches, filled }
     }
 
     pub fn len(&self) -> usize {
@@ -116,6 +123,27 @@ impl Samples {
 
     fn sample_len(&self) -> usize {
         self.sample_shape.iter().product()
+    }
+
+    /// The temporal tokens of `tubelet` frames each window fills.
+    pub fn tokens_filled(&self, tubelet: usize) -> impl Iterator<Item = usize> + '_ {
+        self.filled.iter().map(move |f| f / tubelet)
+    }
+
+    /// The rows grouped by what `model` answers them from: `None` the whole window (every row,
+    /// in order, unless a touch is shorter than the window), `Some(k)` its first `k` temporal
+    /// tokens, PVT³'s provisional answer, as a robot's stream peeks when a touch ends early.
+    fn by_answer(&self, model: &Classifier) -> Result<Vec<(Option<usize>, Vec<usize>)>> {
+        let frames = *self.sample_shape.last().expect("a frame axis");
+        if self.filled.iter().all(|f| *f == frames) {
+            return Ok(vec![(None, (0..self.len()).collect())]);
+        }
+        let tubelet = model.pvt3("a touch shorter than the model's window")?.config().tubelet;
+        let mut groups: std::collections::BTreeMap<Option<usize>, Vec<usize>> = Default::default();
+        for (r, f) in self.filled.iter().enumerate() {
+            groups.entry((*f < frames).then_some(f / tubelet)).or_default().push(r);
+        }
+        Ok(groups.into_iter().collect())
     }
 
     /// The samples at `rows` as a tensor `[rows, …sample_shape]` and a label tensor.
@@ -157,13 +185,19 @@ pub const EVAL_BATCH: usize = 100;
 
 pub fn evaluate(model: &Classifier, samples: &Samples) -> Result<Evaluation> {
     let mut loss_sum = 0.0;
-    let mut logits = Vec::with_capacity(samples.len());
-    let rows: Vec<usize> = (0..samples.len()).collect();
-    for chunk in rows.chunks(EVAL_BATCH) {
-        let (x, y) = samples.batch(chunk, |_| {})?;
-        let l = model.forward(&x, None)?;
-        loss_sum += candle_nn::loss::cross_entropy(&l, &y)?.to_scalar::<f32>()? as f64 * chunk.len() as f64;
-        logits.extend(l.to_vec2::<f32>()?);
+    let mut logits = vec![Vec::new(); samples.len()];
+    for (tokens, rows) in samples.by_answer(model)? {
+        for chunk in rows.chunks(EVAL_BATCH) {
+            let (x, y) = samples.batch(chunk, |_| {})?;
+            let l = match tokens {
+                None => model.forward(&x, None)?,
+                Some(k) => model.pvt3("a prefix")?.forward_prefix(&x, k, None)?,
+            };
+            loss_sum += candle_nn::loss::cross_entropy(&l, &y)?.to_scalar::<f32>()? as f64 * chunk.len() as f64;
+            for (&r, row) in chunk.iter().zip(l.to_vec2::<f32>()?) {
+                logits[r] = row;
+            }
+        }
     }
     let (mut predictions, mut labels) = (Vec::new(), Vec::new());
     let mut w = 0;
@@ -234,7 +268,8 @@ mod tests {
             reading: None,
             labels: vec![0],
             folds: vec![0],
-            folds_from_file: true,
+            fold_seed: None,
+            digest: Default::default(),
             path: "mem".into(),
         };
         let norm = Normalization { mean: vec![0.0; 2], std: vec![1.0; 2], frames: 20 };

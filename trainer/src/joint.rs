@@ -27,11 +27,25 @@ pub struct Partner<'a> {
 
 impl Partner<'_> {
     /// Refuses what joint learning cannot pair or compare: networks other than PVT³, encodings
-    /// of different widths, other classes, and mixup (a blend of two touches has no partner).
-    pub fn check(&self, config: &Config, classes: &[String], opts: &TrainOptions) -> Result<()> {
+    /// of different widths, other classes, and mixup (a blend of two touches has no partner);
+    /// and a partner that would train on the run's test touches: the same touches as `data`, or
+    /// a set that records the condition `data` holds levels of out without holding them out too.
+    pub fn check(&self, data: &Dataset, config: &Config, classes: &[String], opts: &TrainOptions) -> Result<()> {
         let refuse = |reason: String| Err(Error::Usage(format!("--joint {}: {reason}", self.data.path.display())));
         if opts.joint.is_none() {
             return refuse("a partner sensor without joint-learning options".into());
+        }
+        if self.data.digest() == data.digest() {
+            return refuse(format!("it holds the same touches as {}: a sensor cannot train beside itself", data.path.display()));
+        }
+        if let Some(h) = &data.held_out {
+            let holds = |p: &crate::data::HoldOut| p.condition == h.condition && p.levels == h.levels;
+            if self.data.conditions.iter().any(|c| c.name == h.condition) && !self.data.held_out.as_ref().is_some_and(holds) {
+                return refuse(format!(
+                    "it records {} too and does not hold out {h}: those touches would train the network beside",
+                    h.condition
+                ));
+            }
         }
         config.require_pvt3("--joint")?;
         self.config.require_pvt3("--joint (the other sensor's network)")?;

@@ -35,6 +35,9 @@ pub fn prune_and_fine_tune(
     bar: &ProgressBar,
 ) -> Result<Option<RunResult>> {
     let (meta, _, varmap) = checkpoint::load(parent)?;
+    if let Some(recorded) = &meta.provenance.trained_on {
+        data.check_split(recorded, &format!("the pruned run {}", parent.display()))?;
+    }
     let mut tensors = varmap_tensors(&varmap)?;
     let plan = prune::plan(&meta.config, &tensors, &stage.spec)?;
     prune::apply(&plan, &mut tensors);

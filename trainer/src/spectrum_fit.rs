@@ -53,7 +53,8 @@ mod tests {
         let l: usize = cfg.sample_shape().iter().product();
         // Channels of different levels and scales, as raw sensors have.
         let x = (0..n * l).map(|i| 5.0 * ((i / 75) % 60) as f32 + (1.0 + (i / 75 % 7) as f32) * rng.normal()).collect();
-        let train = Samples { x, labels: vec![0; n], sample_shape: cfg.sample_shape(), touches: (0..n).collect() };
+        let train =
+            Samples { x, labels: vec![0; n], sample_shape: cfg.sample_shape(), touches: (0..n).collect(), filled: vec![cfg.frames; n] };
         super::fit(&model, &varmap, &train).unwrap();
         let spectrum = model.pvt3("test").unwrap().spectrum().unwrap();
         let (x, _) = train.batch(&(0..n).collect::<Vec<_>>(), |_| {}).unwrap();

@@ -343,6 +343,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
     let last = run_dir.last();
     let resumable = checkpoint::existing_dir(&last);
     if resume && result_path.exists() {
+        check_resumed_split(spec, &run_dir.model())?;
         return read_json(&result_path).map(Some);
     }
     if !resume && (resumable.is_some() || result_path.exists()) {
@@ -355,6 +356,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
     let mut state = None;
     if let (true, Some(dir)) = (resume, &resumable) {
         // A resumed run keeps the configuration and options it started with.
+        check_resumed_split(spec, dir)?;
         let (_, meta) = checkpoint::load_meta(dir)?;
         config = meta.config;
         spec_options = meta.provenance.options;
@@ -365,15 +367,20 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
     let partner_opts = spec.partner.as_ref().map(|_| Partner::options(opts, spec.data));
     let mut partner = match (&spec.partner, &partner_opts) {
         (Some(p), Some(po)) => {
-            p.check(&main.config, &main.classes, opts)?;
+            p.check(main.data, &main.config, &main.classes, opts)?;
             let share = opts.joint.as_ref().is_some_and(|j| j.share_temporal).then_some(&main.net.learner.varmap);
             Some(Sensor::new(p.data, p.config.clone(), p.classes.clone(), (spec.val_fold, po), None, share)?)
         }
         _ => None,
     };
     if let Some(teachers) = &opts.distill {
-        main.net.learner.teachers =
-            Some(crate::distill::Teachers::load(Path::new(teachers), spec.val_fold, &main.normalization, &main.classes, out)?);
+        main.net.learner.teachers = Some(crate::distill::Teachers::load(
+            Path::new(teachers),
+            (spec.val_fold, &main.data.trained_on()),
+            &main.normalization,
+            &main.classes,
+            out,
+        )?);
     }
     let partner_dir = run_dir.partner();
     std::fs::create_dir_all(out).map_err(Error::io(out))?;
@@ -547,6 +554,31 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
     calibrate_stopping(&run_dir.model(), &main.val_set)?;
     write_json(&result_path, &result)?;
     Ok(Some(result))
+}
+
+/// Refuses to continue the run whose checkpoint is `dir` (and its partner's) on data split
+/// otherwise than it recorded, naming what differs (another file, another seed's folds, other
+/// held-out levels).
+fn check_resumed_split(spec: &RunSpec, dir: &Path) -> Result<()> {
+    let partner = spec.partner.as_ref().map(|p| (p.data, Checkpoint(dir).partner()));
+    for (data, checkpoint) in std::iter::once((spec.data, dir.to_path_buf())).chain(partner) {
+        let Some(existing) = checkpoint::existing_dir(&checkpoint) else { continue };
+        let (_, meta) = checkpoint::load_meta(&existing)?;
+        if let Some(recorded) = &meta.provenance.trained_on {
+            let held = |h: Option<&crate::data::HoldOut>| h.map_or("no held-out levels".to_string(), |h| format!("held out {h}"));
+            data.check_split(
+                recorded,
+                &format!(
+                    "the run in {} (seed {}, {}; this command: {})",
+                    existing.display(),
+                    meta.provenance.seed,
+                    held(meta.provenance.held_out.as_ref()),
+                    held(data.held_out.as_ref())
+                ),
+            )?;
+        }
+    }
+    Ok(())
 }
 
 /// Calibrates the stopping rule of provisional answers ([`crate::anytime`]) for the PVT³

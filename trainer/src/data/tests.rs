@@ -31,7 +31,7 @@ fn array<T: WritableElement + Clone>(shape: &[usize], values: Vec<T>) -> ArrayD<
 fn shipped_icub20_loads_with_its_folds() {
     let d = Dataset::load(&shipped("icub20.npz"), 0).unwrap();
     assert_eq!((d.len(), d.sample_shape.clone(), d.classes()), (1000, vec![6, 10, 75], 20));
-    assert!(d.folds_from_file);
+    assert_eq!(d.fold_seed, None);
     let s = d.split(1).unwrap();
     assert_eq!((s.train.len(), s.val.len(), s.test.len()), (600, 200, 200));
     assert!(s.val.iter().all(|i| d.folds[*i] == 1) && s.test.iter().all(|i| d.folds[*i] == 4));
@@ -58,7 +58,7 @@ fn a_set_without_folds_gets_balanced_stratified_folds() {
         w.add_array("y", &array(&[50], labels.clone())).unwrap();
     });
     let d = Dataset::load(&path, 3).unwrap();
-    assert!(!d.folds_from_file);
+    assert_eq!(d.fold_seed, Some(3));
     for f in 0..FOLDS {
         let members: Vec<usize> = (0..50).filter(|&i| d.folds[i] == f).collect();
         assert_eq!(members.len(), 10);

@@ -170,8 +170,10 @@ fn a_flat_folder_imports_classes_and_conditions_from_names() {
         assert_eq!(data.folds[i] == crate::data::TEST_FOLD, data.conditions[0].levels[i] == "210", "touch {i}");
     }
     assert_eq!(data.held_out.as_ref().unwrap().to_string(), "force=210");
-    let again = Dataset::load_as_trained(&out, 0, data.held_out.as_ref()).unwrap();
-    assert_eq!(again.folds, data.folds, "a run's folds are drawn again as it was trained");
+    let again = Dataset::load_as_trained(&out, 0, data.held_out.as_ref(), None).unwrap();
+    assert_eq!(again.folds, data.folds, "a run that recorded no split has its folds drawn again as it was trained");
+    let recorded = Dataset::load_as_trained(&out, 5, None, Some(&data.trained_on())).unwrap();
+    assert_eq!((&recorded.folds, recorded.fold_seed), (&data.folds, Some(3)), "a recorded split is taken as it is");
     let split = data.split(0).unwrap();
     assert_eq!((split.test.len(), split.val.len() + split.train.len()), (6, 12));
     let msg = |name: &str, level: &str| data.clone().hold_out(&hold(name, level, 0)).unwrap_err().to_string();

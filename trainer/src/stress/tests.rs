@@ -29,6 +29,7 @@ fn the_runtime_stays_finite_and_close_to_the_f64_reference_on_extreme_inputs() {
             options: crate::options::TrainOptions::default(),
             pruning: None,
             held_out: None,
+            trained_on: None,
             reading: None,
             stopping: None,
         },

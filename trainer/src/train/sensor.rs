@@ -128,6 +128,7 @@ impl<'a> Sensor<'a> {
                 options: opts.clone(),
                 pruning: pruning.clone(),
                 held_out: self.data.held_out.clone(),
+                trained_on: Some(self.data.trained_on()),
                 reading: self.data.reading,
                 stopping: None,
             },

@@ -10,7 +10,7 @@ use pvt3_trainer::cv::{self, cross_validate, CvSummary};
 use pvt3_trainer::data::TEST_FOLD;
 use pvt3_trainer::run_dir::{self, CrossValidation, Run};
 
-use crate::model_args::{prepare, ModelArgs};
+use crate::model_args::{prepare_seeds, ModelArgs};
 use crate::progress;
 use crate::prune_args::PruneArgs;
 
@@ -52,20 +52,21 @@ pub fn run(a: CvArgs) -> Result<()> {
     let (s, out) = match a.report {
         Some(dir) => (cv::report(&dir)?, dir),
         None => {
-            let prepared = prepare(&a.model)?;
+            let seeds = a.only.map_or_else(|| a.seeds.clone(), |(seed, _)| vec![seed]);
+            let prepared = prepare_seeds(&a.model, &seeds)?;
             let stage = a.prune.stage();
             if stage.is_some() {
-                prepared.config.require_pvt3("pruning")?;
+                prepared.iter().try_for_each(|p| p.config.require_pvt3("pruning"))?;
             }
             let multi = MultiProgress::new();
-            let spec = prepared.spec(&a.model, 0);
+            let specs: Vec<_> = prepared.iter().map(|p| p.spec(&a.model, 0)).collect();
             let s = match a.only {
-                Some(one) => match cross_validate(&spec, stage.as_ref(), &[one], &a.out, a.resume, 1, &multi, &progress::style())? {
+                Some(one) => match cross_validate(&specs, stage.as_ref(), &[one], &a.out, a.resume, 1, &multi, &progress::style())? {
                     Some(_) => Some(cv::report(&a.out)?),
                     None => None,
                 },
                 None => {
-                    cross_validate(&spec, stage.as_ref(), &cv::protocol(&a.seeds), &a.out, a.resume, a.jobs, &multi, &progress::style())?
+                    cross_validate(&specs, stage.as_ref(), &cv::protocol(&a.seeds), &a.out, a.resume, a.jobs, &multi, &progress::style())?
                 }
             };
             let Some(s) = s else {

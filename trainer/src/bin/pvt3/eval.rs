@@ -116,8 +116,10 @@ impl Loaded {
         let (meta, model, _) = checkpoint::load(path)?;
         let own = PathBuf::from(&meta.provenance.data);
         let data_path = data.unwrap_or(&own);
-        let data = Dataset::load_as_trained(data_path, meta.provenance.seed, meta.provenance.held_out.as_ref())
-            .with_context(|| format!("loading {}", data_path.display()))?;
+        if let Some(note) = meta.provenance.split_note() {
+            eprintln!("{note}");
+        }
+        let data = meta.provenance.dataset(data).with_context(|| format!("loading {} for {}", data_path.display(), path.display()))?;
         data.check_fits(&meta.config)?;
         let indices: Vec<usize> = match fold {
             Folds::All => (0..data.len()).collect(),

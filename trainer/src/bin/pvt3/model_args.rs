@@ -123,27 +123,77 @@ impl Prepared {
     }
 }
 
-/// Loads the data set and builds the model configuration for it.
+/// The data set at `path`, its folds drawn with `seed` where the file has none, and `held_out`'s
+/// levels held out; a joint partner (`partner`) holds them out where it records that condition.
+fn load(path: &Path, seed: u64, held_out: Option<&HoldOut>, partner: bool) -> Result<Dataset> {
+    let mut data = Dataset::load(path, seed)?;
+    if let Some(h) = held_out.filter(|h| !partner || data.conditions.iter().any(|c| c.name == h.condition)) {
+        data.hold_out(h)?;
+    }
+    Ok(data)
+}
+
+/// `--hold-out`, its folds drawn with `--seed`.
+fn held_out(args: &ModelArgs) -> Option<HoldOut> {
+    args.hold_out.clone().map(|(condition, levels)| HoldOut { condition, levels, seed: args.options.seed })
+}
+
+/// Loads the data set (and a joint partner's) and builds the model configuration for it.
 pub fn prepare(args: &ModelArgs) -> Result<Prepared> {
-    let held_out = args.hold_out.clone().map(|(condition, levels)| HoldOut { condition, levels, seed: args.options.seed });
-    let data = Dataset::load_as_trained(&args.data, args.options.seed, held_out.as_ref())?;
-    if let Some(h) = &held_out {
+    let h = held_out(args);
+    let data = load(&args.data, args.options.seed, h.as_ref(), false)?;
+    let partner = args.joint.as_ref().map(|p| load(p, args.options.seed, h.as_ref(), true)).transpose()?;
+    let (prepared, notes) = prepare_with(args, data, partner)?;
+    notes.iter().for_each(|n| eprintln!("{n}"));
+    Ok(prepared)
+}
+
+/// A cross-validation's preparation of each seed: where folds are drawn (no fold array, or
+/// levels held out), each seed draws its own, so that the seeds' figures vary over splits too,
+/// and the window and configuration come from that seed's touches that train. Notes are said
+/// for the first seed, and for another where they differ.
+pub fn prepare_seeds(args: &ModelArgs, seeds: &[u64]) -> Result<Vec<Prepared>> {
+    let h = held_out(args);
+    let data = load(&args.data, args.options.seed, h.as_ref(), false)?;
+    let partner = args.joint.as_ref().map(|p| load(p, args.options.seed, h.as_ref(), true)).transpose()?;
+    let mut said: Option<Vec<String>> = None;
+    let mut prepared = Vec::new();
+    for &seed in seeds {
+        let own = |d: &Dataset| -> Result<Dataset> { Ok(d.reseeded(seed)?.unwrap_or_else(|| d.clone())) };
+        let seeded = ModelArgs { options: TrainOptions { seed, ..args.options.clone() }, ..args.clone() };
+        let (p, notes) = prepare_with(&seeded, own(&data)?, partner.as_ref().map(own).transpose()?)?;
+        for note in notes.iter().filter(|n| said.as_ref().is_none_or(|first| !first.contains(n))) {
+            eprintln!("{}{note}", if said.is_some() { format!("seed {seed}: ") } else { String::new() });
+        }
+        said.get_or_insert(notes);
+        prepared.push(p);
+    }
+    Ok(prepared)
+}
+
+/// Builds the model configuration for `data` (and `partner`'s for a joint run), with what to
+/// tell the user about the choices made.
+fn prepare_with(args: &ModelArgs, data: Dataset, partner: Option<Dataset>) -> Result<(Prepared, Vec<String>)> {
+    let mut notes = Vec::new();
+    if let Some(h) = &data.held_out {
         let held = data.folds.iter().filter(|f| **f == pvt3_trainer::data::TEST_FOLD).count();
-        eprintln!(
+        notes.push(format!(
             "held out {h}: {held} touches test, the other {} train and validate (stratified folds, seed {})",
             data.len() - held,
             h.seed
-        );
+        ));
     }
     // `--model vit` turns preset `icub20` into `vit-icub20`.
     let architecture = args.architecture.unwrap_or_default();
-    // Touches of unequal length: by default the model reads windows of the shortest.
+    // Touches of unequal length: by default the model reads windows of the shortest that trains
+    // or validates.
     let window = data.window_shape();
     if !data.equal_lengths() {
         let (shortest, longest) = (window.last().copied().unwrap_or(0), data.max_frames());
-        eprintln!(
-            "touches of {shortest} to {longest} frames: unless the configuration says otherwise (--set frames=N), the model reads windows of {shortest} frames, one drawn at random from each touch every epoch, and answers for a touch with the mean probabilities of windows every half window"
-        );
+        notes.push(format!(
+            "touches of {} to {longest} frames: unless the configuration says otherwise (--set frames=N), the model reads windows of {shortest} frames (the shortest touch that trains or validates), one drawn at random from each touch every epoch, and answers for a touch with the mean probabilities of windows every half window",
+            data.lengths.iter().min().unwrap_or(&0)
+        ));
     }
     let preset = |name: &str| match architecture {
         Architecture::Pvt3 => Config::preset(name),
@@ -159,12 +209,12 @@ pub fn prepare(args: &ModelArgs) -> Result<Prepared> {
                     let shape = window.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(" × ");
                     let derived = Config::for_sensor(&window)
                         .with_context(|| format!("samples of shape {shape}: expected [height, width, (channels,) frames]"))?;
-                    eprintln!(
-                    "no preset takes samples of {shape}: derived the BioTac layout, one token per {} frames of all {} values of a frame ({} temporal tokens); `pvt3 info --json` and --config FILE to choose otherwise",
-                    derived.tubelet,
-                    derived.height * derived.width * derived.channels,
-                    derived.time_tokens()
-                );
+                    notes.push(format!(
+                        "no preset takes samples of {shape}: derived the BioTac layout, one token per {} frames of all {} values of a frame ({} temporal tokens); `pvt3 info --json` and --config FILE to choose otherwise",
+                        derived.tubelet,
+                        derived.height * derived.width * derived.channels,
+                        derived.time_tokens()
+                    ));
                     derived.for_model(architecture)
                 }
             }
@@ -199,23 +249,26 @@ pub fn prepare(args: &ModelArgs) -> Result<Prepared> {
             _ => (0..cfg.classes).map(|k| format!("class_{k}")).collect(),
         },
     };
-    if !data.folds_from_file && args.hold_out.is_none() {
-        eprintln!("note: {} has no fold array; stratified folds were drawn with seed {}", data.path.display(), args.options.seed);
+    if data.held_out.is_none() {
+        if let Some(seed) = data.fold_seed {
+            notes.push(format!("note: {} has no fold array; stratified folds were drawn with seed {seed}", data.path.display()));
+        }
+    }
+    let short = data.short_tests(cfg.frames).len();
+    if short > 0 {
+        notes.push(format!(
+            "{short} test touches are shorter than the window of {} frames: each is answered from the temporal tokens it fills, as a robot's stream answers a touch that ends early",
+            cfg.frames
+        ));
     }
     let mut options = args.options.clone();
-    let partner = match &args.joint {
-        Some(path) => {
+    let partner = match (&args.joint, partner) {
+        (Some(path), Some(partner_data)) => {
             // The other sensor: its own data and the network that fits it, the same --set and --dropout.
-            let other = ModelArgs {
-                data: path.clone(),
-                preset: None,
-                config: None,
-                class_names: None,
-                hold_out: None,
-                joint: None,
-                ..args.clone()
-            };
-            let partner = prepare(&other).with_context(|| format!("--joint {}", path.display()))?;
+            let other = ModelArgs { data: path.clone(), preset: None, config: None, class_names: None, joint: None, ..args.clone() };
+            let (partner, partner_notes) =
+                prepare_with(&other, partner_data, None).with_context(|| format!("--joint {}", path.display()))?;
+            notes.extend(partner_notes.into_iter().map(|n| format!("--joint {}: {n}", path.display())));
             options.joint = Some(Joint {
                 partner: path.display().to_string(),
                 weight: args.joint_weight,
@@ -224,9 +277,9 @@ pub fn prepare(args: &ModelArgs) -> Result<Prepared> {
             });
             Some(Box::new(partner))
         }
-        None => None,
+        _ => None,
     };
-    Ok(Prepared { data, config: cfg, classes, options, partner })
+    Ok((Prepared { data, config: cfg, classes, options, partner }, notes))
 }
 
 fn apply_overrides(cfg: Config, overrides: &[String]) -> Result<Config> {

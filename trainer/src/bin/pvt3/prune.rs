@@ -4,7 +4,6 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result};
 use pvt3_trainer::checkpoint;
-use pvt3_trainer::data::Dataset;
 use pvt3_trainer::prune::prune_and_fine_tune;
 
 use crate::progress;
@@ -31,9 +30,11 @@ pub struct PruneCommand {
 pub fn run(a: PruneCommand) -> Result<()> {
     let stage = a.prune.stage().context("give --prune-channels, --prune-frames and/or --prune-weights")?;
     let (_, meta) = checkpoint::load_meta(&a.run)?;
-    let data_path = a.data.unwrap_or_else(|| PathBuf::from(&meta.provenance.data));
-    let dataset = Dataset::load_as_trained(&data_path, meta.provenance.seed, meta.provenance.held_out.as_ref())
-        .with_context(|| format!("loading {}", data_path.display()))?;
+    let data_path = a.data.clone().unwrap_or_else(|| PathBuf::from(&meta.provenance.data));
+    if let Some(note) = meta.provenance.split_note() {
+        eprintln!("{note}");
+    }
+    let dataset = meta.provenance.dataset(a.data.as_deref()).with_context(|| format!("loading {}", data_path.display()))?;
     let bar = progress::bar("fine-tune");
     if let Some(p) = prune_and_fine_tune(&a.run, &dataset, &stage, &a.out, a.resume, &bar)? {
         bar.finish();
