@@ -102,16 +102,16 @@ fn each_seed_draws_its_folds_and_every_reload_reads_them() {
     args.extend(SMALL);
     ok(&args);
     let run = cv.join("seed1/fold0");
-    let (seed, folds) = recorded(&run.join("model"));
     let (drawn, other) = (Dataset::load(&data, 1).unwrap(), Dataset::load(&data, 0).unwrap());
-    assert_eq!((seed, &folds), (Some(1), &drawn.folds), "seed 1's run trains on seed 1's folds");
-    assert_ne!(drawn.folds, other.folds, "the seeds' folds differ, so the check above means something");
-    // Its normalisation is fitted on its own training touches.
+    assert_ne!(drawn.folds, other.folds, "the seeds' folds differ, so the checks below mean something");
+    // Its normalisation is fitted on seed 1's training touches, and eval reads seed 1's test fold.
+    let folds = drawn.folds.clone();
     let train: Vec<usize> = (0..folds.len()).filter(|&i| folds[i] != 0 && folds[i] != TEST_FOLD).collect();
     let fitted = pvt3_trainer::normalization::fit(&drawn, &train, 24);
     let norm: pvt3_trainer::normalization::Normalization = serde_json::from_value(json(&run.join("model/normalization.json"))).unwrap();
-    assert_eq!(norm, fitted);
+    assert_eq!(norm, fitted, "the normalisation of seed 1's training touches");
     eval_agrees(&run, &folds);
+    assert_eq!(recorded(&run.join("model")), (Some(1), folds.clone()), "seed 1's run records seed 1's folds");
 
     // Pruning fine-tunes on the parent's split.
     let pruned = dir.join("pruned");
@@ -157,6 +157,14 @@ fn a_fold_array_is_the_split_whatever_the_seed() {
     ok(&args);
     assert_eq!(recorded(&run.join("model")), (None, Dataset::load(&data, 0).unwrap().folds));
     eval_agrees(&run, &Dataset::load(&data, 0).unwrap().folds);
+    // A run of a pvt3 that recorded no split still loads, its folds derived again, and says so.
+    let provenance = run.join("model/provenance.json");
+    let mut older = json(&provenance);
+    older.as_object_mut().unwrap().remove("trained_on");
+    std::fs::write(&provenance, older.to_string()).unwrap();
+    let (_, stderr) = ok(&["eval", run.to_str().unwrap()]);
+    assert!(stderr.contains("records no split: its folds are derived again"), "{stderr}");
+    eval_agrees(&run, &Dataset::load(&data, 0).unwrap().folds);
     std::fs::remove_dir_all(dir).unwrap();
 }
 
@@ -171,7 +179,6 @@ fn held_out_touches_shape_and_calibrate_nothing() {
     let mut args = vec!["cv", "--data", d, "--out", cv.to_str().unwrap(), "--epochs", "2", "--jobs", "2", "--hold-out", "speed=fast"];
     args.extend(SMALL);
     let (_, stderr) = ok(&args);
-    assert!(stderr.contains("18 test touches are shorter than the window of 32 frames"), "{stderr}");
     let mut validated = 0;
     for fold in 0..4 {
         let run = cv.join(format!("seed0/fold{fold}"));
@@ -188,6 +195,7 @@ fn held_out_touches_shape_and_calibrate_nothing() {
         stopping["calibrated_on"]["cross_validation"]["samples"], validated,
         "the runs' validation touches, and no other: {stopping}"
     );
+    assert!(stderr.contains("18 test touches are shorter than the window of 32 frames"), "{stderr}");
     // The provisional answers of the short test touches, as a robot's stream gives them.
     let (stdout, _) = ok(&["eval", cv.join("seed0/fold0").to_str().unwrap(), "--anytime", "--json"]);
     let anytime: Value = serde_json::from_str(&stdout).unwrap();

@@ -19,7 +19,8 @@ use crate::prune_args::PruneArgs;
 pub struct CvArgs {
     #[command(flatten)]
     pub model: ModelArgs,
-    /// Seeds to repeat the four folds with, comma-separated.
+    /// Seeds to repeat the four folds with, comma-separated. Each seed initialises its own
+    /// networks and, on a set without a fold array (or with --hold-out), draws its own folds.
     #[arg(long, value_delimiter = ',', default_value = "0")]
     pub seeds: Vec<u64>,
     /// The cross-validation's directory: a run directory per seed and fold (OUT/seed0/fold0, …),

@@ -139,8 +139,9 @@ struct Differing(BTreeMap<(usize, usize, bool), Differs>);
 #[derive(Default)]
 struct Differs {
     label: u32,
-    /// Its place among the fold's touches.
-    place: usize,
+    /// Its place among the fold's touches, where it is the same in every run (seeds that draw
+    /// their own folds place it differently).
+    place: Option<usize>,
     runs: usize,
     /// The share of the touch read at the stop, summed over the runs.
     read: f64,
@@ -161,7 +162,11 @@ impl Differing {
                 continue;
             }
             let entry = self.0.entry((indices[touches[i]], window, right)).or_default();
-            (entry.label, entry.place) = (label, touches[i]);
+            entry.place = match entry.runs {
+                0 => Some(touches[i]),
+                _ => entry.place.filter(|p| *p == touches[i]),
+            };
+            entry.label = label;
             entry.runs += 1;
             entry.read += k as f64 / tokens as f64;
             let wrong = if right { prefixes.class[i][tokens - 1] } else { prefixes.class[i][k - 1] };
@@ -185,9 +190,9 @@ impl Differing {
                 true => format!("right at the stop, wrong at the end ({})", answers.join(", ")),
             };
             let window = if *window > 0 { format!(", window {window}") } else { String::new() };
+            let place = d.place.map_or(String::new(), |p| format!("no. {p} of fold {fold}, "));
             println!(
-                "  touch {touch} of the data set{window} (no. {} of fold {fold}, {}): {verdict}, in {} run{}, at {:.0} % of the touch",
-                d.place,
+                "  touch {touch} of the data set{window} ({place}{}): {verdict}, in {} run{}, at {:.0} % of the touch",
                 classes[d.label as usize],
                 d.runs,
                 if d.runs == 1 { "" } else { "s" },
@@ -220,7 +225,7 @@ mod tests {
         let found: Vec<_> = differing.0.iter().map(|(key, d)| (*key, d.place, d.runs, d.read, d.answers.clone())).collect();
         assert_eq!(
             found,
-            vec![((10, 0, false), 0, 2, 1.0, BTreeMap::from([(2, 2)])), ((20, 1, true), 1, 2, 1.0, BTreeMap::from([(3, 2)]))]
+            vec![((10, 0, false), Some(0), 2, 1.0, BTreeMap::from([(2, 2)])), ((20, 1, true), Some(1), 2, 1.0, BTreeMap::from([(3, 2)]))]
         );
     }
 }
