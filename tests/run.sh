@@ -18,8 +18,9 @@
 #      build profiles or the compiler changed since it was last measured (tests/robot-small.size),
 #      it must stay within 8 MiB.
 # It installs what it needs (rustup's aarch64 target and clippy; Debian's librsvg2-bin for the
-# picture tests, valgrind for the C ABI, gcc-aarch64-linux-gnu, libc6-dev-arm64-cross and
-# qemu-user, with apt-get as root) or says exactly what is missing.
+# picture tests, valgrind for the C ABI, pkgconf for the installed library's flags,
+# gcc-aarch64-linux-gnu, libc6-dev-arm64-cross and qemu-user, with apt-get as root) or says
+# exactly what is missing.
 # Times under qemu mean nothing; outputs do.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -68,6 +69,8 @@ trap 'kill "$small_pid" 2>/dev/null || true; rm -f "$log"' EXIT
 # x86-64 the C example runs under valgrind too (runtime/tests/c_abi.rs, PVT3_VALGRIND).
 need=()
 command -v rsvg-convert >/dev/null || need+=(librsvg2-bin)
+# The C example is built with the flags pkg-config reads from the installed pvt3.pc.
+command -v pkg-config >/dev/null || need+=(pkgconf)
 [ "$(uname -m)" != x86_64 ] || command -v valgrind >/dev/null || need+=(valgrind)
 install_debian ${need[@]+"${need[@]}"}
 [ "$(uname -m)" != x86_64 ] || export PVT3_VALGRIND=1

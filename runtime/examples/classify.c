@@ -4,20 +4,28 @@
  *
  * FRAMES.f32 holds BATCH windows of raw float32 values (little-endian, the model's input layout).
  * Classifies them as one batch, then streams each window frame by frame through a session, as a
- * robot would during a touch, with a provisional answer halfway, then all windows back to back as
- * one continuous stream, as a robot that keeps sliding, answering once a window. Prints, per
- * window and way ("batch", "peek", "stream" or "slide"), the window, the class index, its name and
- * probability, then all probabilities. */
+ * robot would during a touch; then streams the first half of each and takes a provisional answer,
+ * as a robot that ends a touch early, resetting the session for the next; then all windows back to
+ * back as one continuous stream, as a robot that keeps sliding, answering once a window. Prints,
+ * per window and way ("batch", "stream", "peek" or "slide"), the window, the class index, its name
+ * and probability, then all probabilities. */
 #include <stdio.h>
 #include <stdlib.h>
 
 #include "pvt3.h"
 
-/* Reports a failed call; `status` becomes 1, and main frees what it took before returning it. */
-static int fail(const char *what, int *status) {
-    fprintf(stderr, "classify: %s: %s\n", what, pvt3_last_error());
+/* Whether a call failed (`rc` is not PVT3_OK): then reports it, and `status` becomes 1; main frees
+ * what it took before returning it. */
+static int failed(int rc, const char *what, int *status) {
+    if (rc == PVT3_OK) return 0;
+    fprintf(stderr, "classify: %s: %s [%s]\n", what, pvt3_last_error(), pvt3_status_text(rc));
     *status = 1;
     return 1;
+}
+
+/* Frame `t` of `window` ([height, width, (channels,) frames]: every frames-th value) into `frame`. */
+static void frame_at(const float *window, size_t t, size_t frames, float *frame, size_t frame_len) {
+    for (size_t j = 0; j < frame_len; j++) frame[j] = window[j * frames + t];
 }
 
 static void print(const char *way, const pvt3_classifier *model, size_t i, size_t class, const float *probs, size_t classes) {
@@ -43,11 +51,11 @@ int main(int argc, char **argv) {
     float *frames = NULL, *probs = NULL, *frame = NULL;
     size_t *best = NULL;
     size_t sample_len = 0, classes = 0, frames_per_window = 0, tubelet = 0;
-    if (pvt3_classifier_load(argv[1], &model) != PVT3_OK && fail("load", &status)) goto done;
-    if (pvt3_classifier_sample_len(model, &sample_len) != PVT3_OK && fail("sample_len", &status)) goto done;
-    if (pvt3_classifier_num_classes(model, &classes) != PVT3_OK && fail("num_classes", &status)) goto done;
-    if (pvt3_classifier_frames(model, &frames_per_window) != PVT3_OK && fail("frames", &status)) goto done;
-    if (pvt3_classifier_tubelet(model, &tubelet) != PVT3_OK && fail("tubelet", &status)) goto done;
+    if (failed(pvt3_classifier_load(argv[1], &model), "load", &status)) goto done;
+    if (failed(pvt3_classifier_sample_len(model, &sample_len), "sample_len", &status)) goto done;
+    if (failed(pvt3_classifier_num_classes(model, &classes), "num_classes", &status)) goto done;
+    if (failed(pvt3_classifier_frames(model, &frames_per_window), "frames", &status)) goto done;
+    if (failed(pvt3_classifier_tubelet(model, &tubelet), "tubelet", &status)) goto done;
     size_t frame_len = sample_len / frames_per_window;
 
     FILE *f = fopen(argv[2], "rb");
@@ -64,43 +72,47 @@ int main(int argc, char **argv) {
     size_t got = fread(frames, sizeof(float), n, f);
     fclose(f);
     /* Start-up: build the plans now, so that the first classification costs what every one does. */
-    if (pvt3_classifier_prepare(model, batch, 1) != PVT3_OK && fail("prepare", &status)) goto done;
-    if (pvt3_classify(model, frames, got, batch, probs, batch * classes, best) != PVT3_OK && fail("classify", &status)) goto done;
+    if (failed(pvt3_classifier_prepare(model, batch, 1), "prepare", &status)) goto done;
+    if (failed(pvt3_classify(model, frames, got, batch, probs, batch * classes, best), "classify", &status)) goto done;
     for (size_t i = 0; i < batch; i++) print("batch", model, i, best[i], probs + i * classes, classes);
 
-    /* The window is [height, width, (channels,) frames]: frame t is every frames_per_window-th value. */
-    if (pvt3_session_new(model, &session) != PVT3_OK && fail("session_new", &status)) goto done;
+    /* Each window streamed frame by frame, as a robot records a touch: each kept frame is encoded as
+     * it arrives, and finishing runs only the temporal stage. */
+    if (failed(pvt3_session_new(model, &session), "session_new", &status)) goto done;
     for (size_t i = 0; i < batch; i++) {
-        const float *window = frames + i * sample_len;
         for (size_t t = 0; t < frames_per_window; t++) {
-            for (size_t j = 0; j < frame_len; j++) frame[j] = window[j * frames_per_window + t];
-            if (pvt3_session_push_frame(session, frame, frame_len) != PVT3_OK && fail("push_frame", &status)) goto done;
-            /* Halfway through the touch, a provisional answer from the frames so far. A robot would
-             * end the touch here when `stop` says the file's stopping rule is met. */
-            if (t + 1 == frames_per_window / 2) {
-                size_t class = 0, used = 0;
-                int stop = 0;
-                if (pvt3_session_peek(session, probs, classes, &class, &used, &stop) != PVT3_OK && fail("peek", &status)) goto done;
-                print("peek", model, i, class, probs, classes);
-            }
+            frame_at(frames + i * sample_len, t, frames_per_window, frame, frame_len);
+            if (failed(pvt3_session_push_frame(session, frame, frame_len), "push_frame", &status)) goto done;
         }
         size_t class = 0;
-        if (pvt3_session_finish(session, probs, classes, &class) != PVT3_OK && fail("finish", &status)) goto done;
+        if (failed(pvt3_session_finish(session, probs, classes, &class), "finish", &status)) goto done;
         print("stream", model, i, class, probs, classes);
+    }
+    /* Touches ended halfway: a provisional answer from the frames so far (a robot ends the touch
+     * when `stop` says the file's stopping rule is met), then the session reset for the next. */
+    for (size_t i = 0; i < batch; i++) {
+        for (size_t t = 0; t < frames_per_window / 2; t++) {
+            frame_at(frames + i * sample_len, t, frames_per_window, frame, frame_len);
+            if (failed(pvt3_session_push_frame(session, frame, frame_len), "push_frame", &status)) goto done;
+        }
+        size_t class = 0, used = 0;
+        int stop = 0;
+        if (failed(pvt3_session_peek(session, probs, classes, &class, &used, &stop), "peek", &status)) goto done;
+        print("peek", model, i, class, probs, classes);
+        if (failed(pvt3_session_reset(session), "session_reset", &status)) goto done;
     }
 
     /* The windows back to back as one stream that never ends: an answer for the latest window
      * once a window is in, then every `tokens` temporal tokens (here: once a window, so the
      * answers are the windows' own). */
-    if (pvt3_continuous_new(model, frames_per_window / tubelet, &slide) != PVT3_OK && fail("continuous_new", &status)) goto done;
+    if (failed(pvt3_continuous_new(model, frames_per_window / tubelet, &slide), "continuous_new", &status)) goto done;
     for (size_t i = 0; i < batch; i++) {
-        const float *window = frames + i * sample_len;
         for (size_t t = 0; t < frames_per_window; t++) {
-            for (size_t j = 0; j < frame_len; j++) frame[j] = window[j * frames_per_window + t];
+            frame_at(frames + i * sample_len, t, frames_per_window, frame, frame_len);
             size_t class = 0;
             int answered = 0;
-            if (pvt3_continuous_push_frame(slide, frame, frame_len, probs, classes, &class, &answered) != PVT3_OK &&
-                fail("continuous_push_frame", &status))
+            if (failed(pvt3_continuous_push_frame(slide, frame, frame_len, probs, classes, &class, &answered), "continuous_push_frame",
+                       &status))
                 goto done;
             if (answered) print("slide", model, i, class, probs, classes);
         }

@@ -1,7 +1,9 @@
 /* pvt3: tactile texture classification on the robot (C ABI of the pvt3-runtime crate).
  *
- * Link libpvt3_runtime.a (with -lm -lpthread -ldl) or libpvt3_runtime.so. Every function that
- * returns int returns PVT3_OK or an error code; pvt3_last_error() then says what went wrong.
+ * Link libpvt3_runtime.a (with -lm -lpthread -ldl) or libpvt3_runtime.so; installed by
+ * runtime/install.sh, `pkg-config --cflags --libs pvt3` gives the flags. Every function that
+ * returns int returns a pvt3_status: PVT3_OK or an error code, which pvt3_status_text() names;
+ * pvt3_last_error() then says what went wrong.
  * No call panics or aborts on bad input: null pointers, wrong lengths, non-finite values,
  * truncated or foreign files are all reported; a file damaged or altered since export is refused
  * at load (integrity digest).
@@ -9,8 +11,8 @@
  * Threads: a classifier may be used from several threads at once (pvt3_classify,
  * pvt3_classifier_prepare, pvt3_session_new, pvt3_session_new_touch, pvt3_continuous_new and the
  * getters; the Rust API's test checks every answer against one thread's), but
- * pvt3_classifier_set_kernels and pvt3_classifier_free must not run alongside any other call on
- * it. A session or a continuous stream belongs to one thread at a time. pvt3_last_error() is per
+ * pvt3_classifier_set_kernels, pvt3_classifier_set_threads and pvt3_classifier_free must not run
+ * alongside any other call on it. A session or a continuous stream belongs to one thread at a time. pvt3_last_error() is per
  * thread. */
 #ifndef PVT3_H
 #define PVT3_H
@@ -21,12 +23,22 @@
 extern "C" {
 #endif
 
-#define PVT3_OK 0
-#define PVT3_ERR_NULL 1
-#define PVT3_ERR_IO 2
-#define PVT3_ERR_MODEL 3
-#define PVT3_ERR_INPUT 4
-#define PVT3_ERR_INTERNAL 5
+/* The library's version, and the file format it reads (pvt3_version() says both at run time). */
+#define PVT3_VERSION_MAJOR 0
+#define PVT3_VERSION_MINOR 1
+#define PVT3_VERSION_PATCH 0
+#define PVT3_FORMAT_MAJOR 1
+#define PVT3_FORMAT_MINOR 1
+
+/* What every function that returns int returns (pvt3_status_text() in words). */
+typedef enum pvt3_status {
+    PVT3_OK = 0,          /* success */
+    PVT3_ERR_NULL = 1,    /* a pointer the call needs is NULL */
+    PVT3_ERR_IO = 2,      /* a file could not be read */
+    PVT3_ERR_MODEL = 3,   /* not a model this library runs: damaged, foreign, another format */
+    PVT3_ERR_INPUT = 4,   /* an argument or input the model cannot take */
+    PVT3_ERR_INTERNAL = 5 /* a fault inside the library: please report it */
+} pvt3_status;
 
 /* How plans choose their matrix-product kernels (pvt3_classifier_set_kernels). */
 #define PVT3_KERNELS_FIXED 0
@@ -42,6 +54,10 @@ typedef struct Pvt3Continuous pvt3_continuous;
  * refused with PVT3_ERR_MODEL, and so is a file with a spectral head where the library was built
  * without the `spectral` feature (the small robot build). */
 int pvt3_classifier_load(const char *path, pvt3_classifier **out);
+/* Loads a model from the `len` bytes of an .onnx file in memory (flash, a download), checked as
+ * pvt3_classifier_load checks a file; `name` (NULL: "(memory)") names it in errors. The bytes
+ * are copied: they may be freed after the call. */
+int pvt3_classifier_load_bytes(const unsigned char *bytes, size_t len, const char *name, pvt3_classifier **out);
 /* Frees a handle (NULL is ignored). */
 void pvt3_classifier_free(pvt3_classifier *c);
 /* How plans choose their matrix-product kernels from now on: PVT3_KERNELS_FIXED (the default, a
@@ -49,6 +65,11 @@ void pvt3_classifier_free(pvt3_classifier *c);
  * choice) or PVT3_KERNELS_MEASURED (timed at each plan's first call, 50-100 ms; outputs can differ
  * in the last bits between loads). Call it before sharing the classifier between threads. */
 int pvt3_classifier_set_kernels(pvt3_classifier *c, int kernels);
+/* Runs the classifier's plans on `threads` threads from now on (default 1: small models rarely
+ * gain from more). More than one needs a library built with the `threads` feature (the default
+ * build, not the small robot build): PVT3_ERR_INPUT otherwise, and for 0. Call it before sharing
+ * the classifier between threads. */
+int pvt3_classifier_set_threads(pvt3_classifier *c, size_t threads);
 /* Builds now the plan for `batch` windows and, unless streaming is 0, the stages a session runs:
  * what the first such call would otherwise build (tract's optimisation, tens of milliseconds).
  * Call it at start-up so that the first touch costs what every touch costs. */
@@ -104,6 +125,9 @@ int pvt3_session_finish(pvt3_session *s, float *probabilities, size_t probabilit
  * a file exported before format 1.1. */
 int pvt3_session_peek(pvt3_session *s, float *probabilities, size_t probabilities_len, size_t *class_out,
                       size_t *frames_out, int *stop_out);
+/* Forgets the touch in progress: the session takes a new touch from its first frame. What a robot
+ * calls when it ends a touch early on a peek (pvt3_session_finish resets the session itself). */
+int pvt3_session_reset(pvt3_session *s);
 /* Continuous classification of a stream longer than the window (a robot that keeps sliding):
  * frames go in one by one, without end; once a whole window is in, and then after every `every`
  * temporal tokens, the answer for the window ending at the latest frame comes out. Each answer
@@ -119,11 +143,14 @@ int pvt3_continuous_push_frame(pvt3_continuous *s, const float *frame, size_t fr
                                size_t probabilities_len, size_t *class_out, int *answered_out);
 /* Forgets the stream: the next answer comes after a whole new window. */
 int pvt3_continuous_reset(pvt3_continuous *s);
-/* The library's version and the file format it reads, e.g. "0.1.0 (format 1.0)"; a static string.
+/* The library's version and the file format it reads, e.g. "0.1.0 (format 1.1)"; a static string.
  * The runtime reads every file of its format's major version and refuses others (PVT3_ERR_MODEL). */
 const char *pvt3_version(void);
 /* Message of the last failed call on this thread ("" if none), valid until the next call. */
 const char *pvt3_last_error(void);
+/* What a status code means, e.g. "PVT3_ERR_INPUT: an argument or input the model cannot take (…)";
+ * a static string ("unknown pvt3 status" for another number). */
+const char *pvt3_status_text(int status);
 
 #ifdef __cplusplus
 }

@@ -83,9 +83,14 @@ impl Classifier {
     /// More than one needs the `threads` feature (on by default); without it, building a plan
     /// fails with [`Error::NoThreads`].
     pub fn with_threads(mut self, threads: usize) -> Self {
+        self.set_threads(threads);
+        self
+    }
+
+    /// [`Classifier::with_threads`] in place.
+    pub fn set_threads(&mut self, threads: usize) {
         self.threads = threads.max(1);
         self.forget_plans();
-        self
     }
 
     /// How each plan chooses its matrix-product kernels from now on ([`Kernels`]; by default

@@ -18,6 +18,23 @@ pub const PVT3_ERR_INTERNAL: c_int = 5;
 pub const PVT3_KERNELS_FIXED: c_int = 0;
 pub const PVT3_KERNELS_TRACT: c_int = 1;
 pub const PVT3_KERNELS_MEASURED: c_int = 2;
+// The library's version (the crate's) and the file format it reads, as the header's macros say
+// them (runtime/tests/c_abi.rs checks them against Cargo and `pvt3_format::FORMAT_VERSION`).
+pub const PVT3_VERSION_MAJOR: c_int = 0;
+pub const PVT3_VERSION_MINOR: c_int = 1;
+pub const PVT3_VERSION_PATCH: c_int = 0;
+pub const PVT3_FORMAT_MAJOR: c_int = 1;
+pub const PVT3_FORMAT_MINOR: c_int = 1;
+
+/// What each status code means, for `pvt3_status_text`.
+const STATUS_TEXT: [&CStr; 6] = [
+    c"PVT3_OK: success",
+    c"PVT3_ERR_NULL: a pointer the call needs is NULL",
+    c"PVT3_ERR_IO: a file could not be read",
+    c"PVT3_ERR_MODEL: the file is not a model this library runs (damaged, foreign, or of another format)",
+    c"PVT3_ERR_INPUT: an argument or input the model cannot take (length, value, order of calls)",
+    c"PVT3_ERR_INTERNAL: a fault inside the library (please report it, with pvt3_last_error())",
+];
 
 /// What C holds: the classifier and its class names as C strings.
 pub struct Pvt3Classifier {
@@ -131,9 +148,59 @@ pub unsafe extern "C" fn pvt3_classifier_load(path: *const c_char, out: *mut *mu
             return Err(null("out"));
         }
         let path = CStr::from_ptr(path).to_str().map_err(|_| (PVT3_ERR_IO, "path is not UTF-8".to_string()))?;
-        let classifier = Classifier::load(path).map_err(fail)?;
-        let names = classifier.classes().iter().map(|n| CString::new(n.replace('\0', " ")).expect("NULs replaced")).collect();
-        *out = Box::into_raw(Box::new(Pvt3Classifier { classifier, names }));
+        *out = handle(Classifier::load(path).map_err(fail)?);
+        Ok(())
+    })
+}
+
+/// A classifier as C holds it.
+fn handle(classifier: Classifier) -> *mut Pvt3Classifier {
+    let names = classifier.classes().iter().map(|n| CString::new(n.replace('\0', " ")).expect("NULs replaced")).collect();
+    Box::into_raw(Box::new(Pvt3Classifier { classifier, names }))
+}
+
+/// Loads a model from the `len` bytes of an `.onnx` file in memory (flash, a download), named
+/// `name` in errors (null: "(memory)"); on success `*out` owns a handle to free with
+/// `pvt3_classifier_free`. The bytes are not kept: they may be freed after the call.
+///
+/// # Safety
+/// `bytes` holds `len` bytes or is null; `name` is a NUL-terminated string or null; `out` is
+/// writable or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_classifier_load_bytes(
+    bytes: *const u8,
+    len: usize,
+    name: *const c_char,
+    out: *mut *mut Pvt3Classifier,
+) -> c_int {
+    guard(|| {
+        if bytes.is_null() {
+            return Err(null("bytes"));
+        }
+        let out = out.as_mut().ok_or_else(|| null("out"))?;
+        let name = if name.is_null() { "(memory)".into() } else { CStr::from_ptr(name).to_string_lossy() };
+        *out = handle(Classifier::from_bytes(std::slice::from_raw_parts(bytes, len), &name).map_err(fail)?);
+        Ok(())
+    })
+}
+
+/// Runs the classifier's plans on `threads` threads from now on (default 1). More than one needs
+/// a library built with the `threads` feature (the default build; not the small robot build).
+/// Plans built so far are dropped.
+///
+/// # Safety
+/// `c` is a live handle or null, not in use by another thread during the call.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_classifier_set_threads(c: *mut Pvt3Classifier, threads: usize) -> c_int {
+    guard(|| {
+        let c = c.as_mut().ok_or_else(|| null("classifier"))?;
+        if threads == 0 {
+            return Err((PVT3_ERR_INPUT, "threads must be at least 1".into()));
+        }
+        if threads > 1 && cfg!(not(feature = "threads")) {
+            return Err(fail(Error::NoThreads { asked: threads }));
+        }
+        c.classifier.set_threads(threads);
         Ok(())
     })
 }
@@ -536,7 +603,29 @@ pub unsafe extern "C" fn pvt3_continuous_reset(s: *mut Pvt3Continuous) -> c_int 
     })
 }
 
-/// The library's version and the file format it reads, e.g. `0.1.0 (format 1.0)`; a static string.
+/// Forgets the touch in progress, so that the session takes a new touch from its first frame: what
+/// a robot calls when it ends a touch early on a peek, instead of freeing the session and making
+/// another.
+///
+/// # Safety
+/// `s` is a live session or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_session_reset(s: *mut Pvt3Session) -> c_int {
+    guard(|| {
+        s.as_mut().ok_or_else(|| null("session"))?.session.reset();
+        Ok(())
+    })
+}
+
+/// What a status code means, e.g. `PVT3_ERR_INPUT: an argument or input …`; a static string
+/// ("unknown pvt3 status" for a code that is none of them).
+#[no_mangle]
+pub extern "C" fn pvt3_status_text(status: c_int) -> *const c_char {
+    let known = usize::try_from(status).ok().and_then(|s| STATUS_TEXT.get(s));
+    known.map_or(c"unknown pvt3 status".as_ptr(), |t| t.as_ptr())
+}
+
+/// The library's version and the file format it reads, e.g. `0.1.0 (format 1.1)`; a static string.
 #[no_mangle]
 pub extern "C" fn pvt3_version() -> *const c_char {
     static VERSION: OnceLock<CString> = OnceLock::new();

@@ -44,6 +44,7 @@ fn c_type(rust: &str) -> String {
         "usize" => "size_t",
         "f32" => "float",
         "f64" => "double",
+        "u8" => "unsigned char",
         "c_char" => "char",
         "Pvt3Classifier" => "pvt3_classifier",
         "Pvt3Session" => "pvt3_session",
@@ -90,7 +91,7 @@ fn the_header_declares_exactly_what_the_code_exports() {
         .collect();
     let code_fns: BTreeMap<_, _> = code.split("extern \"C\" fn ").skip(1).filter_map(rust_signature).collect();
     assert_eq!(header_fns, code_fns, "functions, their return and parameter types");
-    assert_eq!(code_fns.len(), 23);
+    assert_eq!(code_fns.len(), 27);
     assert_eq!(code_fns["pvt3_classify"].1[6], "size_t *", "the types are read");
     let mut header_consts: Vec<(String, String)> = header
         .split("#define ")
@@ -102,6 +103,12 @@ fn the_header_declares_exactly_what_the_code_exports() {
         })
         .filter(|(n, _)| n != "PVT3_H")
         .collect();
+    // The status enum's members, `PVT3_OK = 0, …`.
+    let statuses = header.split("typedef enum pvt3_status {").nth(1).and_then(|e| e.split('}').next()).expect("the status enum");
+    header_consts.extend(statuses.split(',').filter_map(|m| {
+        let (name, value) = m.split_once('=')?;
+        Some((name.trim().to_string(), value.trim().to_string()))
+    }));
     let mut code_consts: Vec<(String, String)> = code
         .lines()
         .filter_map(|l| l.strip_prefix("pub const "))
@@ -109,7 +116,20 @@ fn the_header_declares_exactly_what_the_code_exports() {
         .collect();
     header_consts.sort();
     code_consts.sort();
-    assert_eq!(header_consts, code_consts, "status codes");
+    assert_eq!(header_consts, code_consts, "status codes, kernel choices, versions");
+    assert_eq!(header_consts.iter().filter(|(n, _)| n.starts_with("PVT3_ERR_") || n == "PVT3_OK").count(), 6);
+}
+
+/// The version macros are the crate's version and the format's, as `pvt3_version()` says them.
+#[test]
+fn the_version_macros_are_the_crate_s_and_the_format_s() {
+    let crate_version = [env!("CARGO_PKG_VERSION_MAJOR"), env!("CARGO_PKG_VERSION_MINOR"), env!("CARGO_PKG_VERSION_PATCH")];
+    let macros = [PVT3_VERSION_MAJOR, PVT3_VERSION_MINOR, PVT3_VERSION_PATCH].map(|v| v.to_string());
+    assert_eq!(macros, crate_version);
+    let (major, minor) = pvt3_format::FORMAT_VERSION;
+    assert_eq!((PVT3_FORMAT_MAJOR, PVT3_FORMAT_MINOR), (major as c_int, minor as c_int));
+    let said = unsafe { CStr::from_ptr(pvt3_version()) }.to_str().unwrap().to_string();
+    assert_eq!(said, format!("{PVT3_VERSION_MAJOR}.{PVT3_VERSION_MINOR}.{PVT3_VERSION_PATCH} (format {major}.{minor})"));
 }
 
 #[test]
@@ -118,16 +138,29 @@ fn the_c_example_gives_the_rust_result() {
     let exe = dir.join("classify");
     // The test binary lives in target/<profile>/deps; the static library in target/<profile>/examples.
     let profile_dir = std::env::current_exe().unwrap().parent().unwrap().parent().unwrap().to_path_buf();
-    let lib = profile_dir.join("examples/libpvt3_c.a");
-    let cc = target_cc()
-        .arg(root().join("examples/classify.c"))
-        .arg("-I")
-        .arg(root().join("include"))
-        .arg(&lib)
-        .args(["-lm", "-lpthread", "-ldl", "-o"])
-        .arg(&exe)
+    let built = dir.join("built");
+    std::fs::create_dir_all(&built).unwrap();
+    std::fs::copy(profile_dir.join("examples/libpvt3_c.a"), built.join("libpvt3_runtime.a")).unwrap();
+    // Installed as a robot's build finds it (runtime/install.sh), and built with pkg-config's flags.
+    let prefix = dir.join("prefix");
+    let install = std::process::Command::new("bash")
+        .arg(root().join("install.sh"))
+        .arg(&prefix)
+        .env("PVT3_LIB_DIR", &built)
         .output()
-        .unwrap();
+        .expect("bash runs runtime/install.sh");
+    assert!(install.status.success(), "install.sh failed:\n{}", String::from_utf8_lossy(&install.stderr));
+    let pc = std::fs::read_to_string(prefix.join("lib/pkgconfig/pvt3.pc")).unwrap();
+    assert!(pc.contains(&format!("\nVersion: {}\n", env!("CARGO_PKG_VERSION"))), "{pc}");
+    let flags = std::process::Command::new("pkg-config")
+        .args(["--static", "--cflags", "--libs", "pvt3"])
+        .env("PKG_CONFIG_PATH", prefix.join("lib/pkgconfig"))
+        .output()
+        .expect("pkg-config runs (apt-get install pkgconf)");
+    assert!(flags.status.success(), "{}", String::from_utf8_lossy(&flags.stderr));
+    let flags = String::from_utf8(flags.stdout).unwrap();
+    assert!(flags.contains(&format!("-I{}", prefix.join("include").display())) && flags.contains("-lpvt3_runtime"), "{flags}");
+    let cc = target_cc().arg(root().join("examples/classify.c")).args(flags.split_whitespace()).arg("-o").arg(&exe).output().unwrap();
     assert!(cc.status.success(), "cc failed:\n{}", String::from_utf8_lossy(&cc.stderr));
 
     let (_, x) = read_npy(&golden("input.npy")).unwrap();
@@ -228,6 +261,16 @@ fn every_entry_point_reports_instead_of_crashing() {
         pvt3_continuous_free(null_mut());
 
         assert_eq!(pvt3_classifier_set_kernels(null_mut(), PVT3_KERNELS_TRACT), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classifier_set_threads(null_mut(), 2), PVT3_ERR_NULL);
+        assert_eq!(pvt3_session_reset(null_mut()), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classifier_load_bytes(null(), 10, null(), &mut c), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classifier_load_bytes(b"onnx".as_ptr(), 4, null(), null_mut()), PVT3_ERR_NULL);
+        for (status, text) in
+            [(PVT3_OK, "PVT3_OK: success"), (PVT3_ERR_INPUT, "PVT3_ERR_INPUT: an argument"), (6, "unknown"), (-1, "unknown")]
+        {
+            let said = CStr::from_ptr(pvt3_status_text(status)).to_str().unwrap();
+            assert!(said.starts_with(text), "{status}: {said}");
+        }
         assert_eq!(pvt3_classifier_prepare(null(), 1, 1), PVT3_ERR_NULL);
         let mut written = 0usize;
         assert_eq!(pvt3_read_touch(null(), probs.as_ptr(), 40, 1.0, 1.0, probs.as_mut_ptr(), 40, &mut written), PVT3_ERR_NULL);
@@ -355,6 +398,18 @@ fn every_entry_point_reports_instead_of_crashing() {
         let mut class = 99usize;
         assert_eq!(pvt3_session_finish(s, probs.as_mut_ptr(), 20, &mut class), PVT3_OK);
         assert_eq!(class, best[0], "a constant window streamed = the same window batched");
+        // A touch ended early (a robot stopping on a peek), reset: the next touch starts afresh.
+        let other = vec![3.0f32; 60];
+        for _ in 0..30 {
+            assert_eq!(pvt3_session_push_frame(s, other.as_ptr(), 60), PVT3_OK);
+        }
+        assert_eq!(pvt3_session_reset(s), PVT3_OK);
+        for _ in 0..75 {
+            assert_eq!(pvt3_session_push_frame(s, frames.as_ptr(), 60), PVT3_OK);
+        }
+        let mut again = vec![0f32; 20];
+        assert_eq!(pvt3_session_finish(s, again.as_mut_ptr(), 20, &mut class), PVT3_OK);
+        assert_eq!((class, &again[..]), (best[0], &probs[..20]), "after a reset, the next touch alone");
         pvt3_session_free(s);
 
         let dir = scratch("files");
@@ -370,6 +425,25 @@ fn every_entry_point_reports_instead_of_crashing() {
             assert_eq!(pvt3_classifier_load(p.as_ptr(), &mut c), PVT3_ERR_MODEL, "{name}: {}", last_error());
             assert!(last_error().contains(name) && last_error().contains("refused"), "{}", last_error());
         }
+        // From memory: the same model; damaged bytes refused under the name given, or "(memory)".
+        let name = CString::new("flash").unwrap();
+        assert_eq!(pvt3_classifier_load_bytes(bytes.as_ptr(), bytes.len(), name.as_ptr(), &mut c), PVT3_OK);
+        let window = vec![0.5f32; 4500];
+        let mut from_memory = [0usize; 1];
+        assert_eq!(pvt3_classify(c, window.as_ptr(), 4500, 1, probs.as_mut_ptr(), 20, from_memory.as_mut_ptr()), PVT3_OK);
+        assert_eq!(from_memory[0], best[0], "a model from memory answers as the file does");
+        // Threads: 0 refused; more than one where the library was built with the `threads` feature.
+        assert_eq!(pvt3_classifier_set_threads(c, 0), PVT3_ERR_INPUT);
+        let two = pvt3_classifier_set_threads(c, 2);
+        assert_eq!(two, if cfg!(feature = "threads") { PVT3_OK } else { PVT3_ERR_INPUT }, "{}", last_error());
+        assert_eq!(pvt3_classify(c, window.as_ptr(), 4500, 1, probs.as_mut_ptr(), 20, from_memory.as_mut_ptr()), PVT3_OK);
+        assert_eq!(from_memory[0], best[0]);
+        pvt3_classifier_free(c);
+        let half = &bytes[..bytes.len() / 2];
+        assert_eq!(pvt3_classifier_load_bytes(half.as_ptr(), half.len(), name.as_ptr(), &mut c), PVT3_ERR_MODEL);
+        assert!(last_error().contains("flash"), "{}", last_error());
+        assert_eq!(pvt3_classifier_load_bytes(half.as_ptr(), half.len(), null(), &mut c), PVT3_ERR_MODEL);
+        assert!(last_error().contains("(memory)"), "{}", last_error());
         let absent = CString::new(dir.join("absent.onnx").to_str().unwrap()).unwrap();
         assert_eq!(pvt3_classifier_load(absent.as_ptr(), &mut c), PVT3_ERR_IO);
         std::fs::remove_dir_all(dir).unwrap();
