@@ -629,8 +629,7 @@ pub extern "C" fn pvt3_status_text(status: c_int) -> *const c_char {
 #[no_mangle]
 pub extern "C" fn pvt3_version() -> *const c_char {
     static VERSION: OnceLock<CString> = OnceLock::new();
-    let (major, minor) = pvt3_format::FORMAT_VERSION;
-    VERSION.get_or_init(|| CString::new(format!("{} (format {major}.{minor})", env!("CARGO_PKG_VERSION"))).expect("no NUL")).as_ptr()
+    VERSION.get_or_init(|| CString::new(crate::version()).expect("no NUL")).as_ptr()
 }
 
 /// The message of the last failed call on this thread ("" if none); valid until the next call.

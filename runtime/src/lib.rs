@@ -46,3 +46,10 @@ pub use plan::declutter;
 pub use pvt3_format::StopRule;
 pub use reading::{read_touch, Reading, Touch, TouchReader};
 pub use stream::{Peek, Session};
+
+/// The library's version and the file format it reads, e.g. `0.1.0 (format 1.1)`: what
+/// `pvt3_version()` and `pvt3-run --version` say.
+pub fn version() -> String {
+    let (major, minor) = pvt3_format::FORMAT_VERSION;
+    format!("{} (format {major}.{minor})", env!("CARGO_PKG_VERSION"))
+}

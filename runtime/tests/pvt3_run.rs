@@ -26,6 +26,37 @@ fn classifies_every_window_of_an_npy_batch_as_the_golden_logits_do() {
     }
 }
 
+/// `--json`: one object per window, with every probability, the same answers as the lines.
+#[test]
+fn json_gives_every_probability_of_every_window() {
+    let (_, logits) = read_npy(&golden("logits.npy")).unwrap();
+    let out = pvt3_run().arg("--json").arg(golden("model.onnx")).arg(golden("input.npy")).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let lines: Vec<serde_json::Value> = String::from_utf8(out.stdout).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(lines.len(), 8);
+    for (i, (line, row)) in lines.iter().zip(logits.chunks(20)).enumerate() {
+        let best = row.iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).unwrap().0;
+        assert_eq!((line["window"].as_u64(), line["class"].as_u64()), (Some(i as u64), Some(best as u64)));
+        assert_eq!(line["label"], format!("material_{}", best + 1));
+        let probabilities: Vec<f64> = line["probabilities"].as_array().unwrap().iter().map(|p| p.as_f64().unwrap()).collect();
+        assert!(probabilities.len() == 20 && (probabilities.iter().sum::<f64>() - 1.0).abs() < 1e-5, "{line}");
+    }
+}
+
+/// `--help` and `--version` answer on standard output and succeed.
+#[test]
+fn help_and_version_succeed() {
+    for flag in ["--help", "-h"] {
+        let out = pvt3_run().arg(flag).output().unwrap();
+        assert!(out.status.success() && String::from_utf8_lossy(&out.stdout).starts_with("usage: pvt3-run"), "{flag}");
+    }
+    let out = pvt3_run().arg("--version").output().unwrap();
+    let (major, minor) = pvt3_format::FORMAT_VERSION;
+    let expected = format!("pvt3-run {} (format {major}.{minor})\n", env!("CARGO_PKG_VERSION"));
+    assert!(out.status.success());
+    assert_eq!(String::from_utf8_lossy(&out.stdout), expected);
+}
+
 #[test]
 fn wrong_input_fails_with_a_message() {
     let out = pvt3_run().arg(golden("model.onnx")).arg(golden("logits.npy")).output().unwrap();
@@ -39,6 +70,7 @@ fn wrong_input_fails_with_a_message() {
     );
     let out = pvt3_run().output().unwrap();
     assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).starts_with("usage: pvt3-run"));
     let out = pvt3_run().arg(golden("manifest.json")).arg(golden("input.npy")).output().unwrap();
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("manifest.json"));
 }

@@ -1,7 +1,8 @@
 //! `pvt3-run MODEL.onnx INPUT.npy`: classify tactile windows on the robot with the pvt3 runtime.
 //! INPUT holds one window `[height, width, (channels,) frames]` or a batch of them, raw sensor
 //! values as recorded (axes of length 1 may be left out). Prints one line per window: index,
-//! class, label, probability.
+//! class, label, probability; with `--json`, one JSON object per window with every probability.
+//! `--help` and `--version` answer on standard output.
 //!
 //! `pvt3-run --bench MODEL.onnx [THREADS [SECONDS]]` measures latency on this machine instead
 //! (one JSON line; see `bench.rs`).
@@ -14,12 +15,13 @@ use pvt3_runtime::{read_npy, Classifier};
 
 mod bench;
 
-const USAGE: &str = "usage: pvt3-run MODEL.onnx INPUT.npy
+const USAGE: &str = "usage: pvt3-run [--json] MODEL.onnx INPUT.npy
        pvt3-run --bench MODEL.onnx [THREADS [SECONDS]]
+       pvt3-run --help | --version
 
 Classifies the window(s) in INPUT (raw sensor values, [batch,] height, width, [channels,] frames;
 axes of length 1 may be left out) with the exported model, one line per window: index, class,
-label, probability.
+label, probability; --json prints one JSON object per window instead, with every probability.
 --bench measures latency instead, on THREADS threads (default 1) for about SECONDS (default 2)
 per measurement: batch 1 and 32, batch 1 with tract's own kernels and with kernels timed at load,
 the first call, and a streamed touch (per kept frame, per pruned frame, end of touch; not for a
@@ -31,11 +33,20 @@ fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let number = |i: usize, default: f64| args.get(i).map_or(Some(default), |v| v.parse::<f64>().ok().filter(|v| *v > 0.0));
     let outcome = match args.iter().map(String::as_str).collect::<Vec<_>>().as_slice() {
+        ["--help" | "-h"] => {
+            println!("{USAGE}");
+            return ExitCode::SUCCESS;
+        }
+        ["--version" | "-V"] => {
+            println!("pvt3-run {}", pvt3_runtime::version());
+            return ExitCode::SUCCESS;
+        }
         ["--bench", model, ..] if args.len() <= 4 => match (number(2, 1.0), number(3, 2.0)) {
             (Some(threads), Some(seconds)) => bench::bench(model, threads as usize, seconds).map(|report| println!("{report}")),
             _ => return usage(),
         },
-        [model, input] if !model.starts_with('-') => run(model, input),
+        [model, input] if !model.starts_with('-') => run(model, input, false),
+        ["--json", model, input] if !model.starts_with('-') => run(model, input, true),
         _ => return usage(),
     };
     match outcome {
@@ -52,13 +63,19 @@ fn usage() -> ExitCode {
     ExitCode::from(2)
 }
 
-fn run(model: &str, input: &str) -> pvt3_runtime::Result<()> {
+fn run(model: &str, input: &str, json: bool) -> pvt3_runtime::Result<()> {
     let classifier = Classifier::load(model)?;
     let (shape, values) = read_npy(std::path::Path::new(input))?;
     let batch =
         windows(&shape, classifier.sample_shape()).map_err(|reason| pvt3_runtime::Error::Npy { path: input.to_string(), reason })?;
     for (i, p) in classifier.classify_batch(&values, batch)?.iter().enumerate() {
-        println!("{i}\t{}\t{}\t{:.4}", p.class, p.label, p.probabilities[p.class]);
+        match json {
+            true => {
+                let line = serde_json::json!({"window": i, "class": p.class, "label": p.label, "probabilities": p.probabilities});
+                println!("{line}");
+            }
+            false => println!("{i}\t{}\t{}\t{:.4}", p.class, p.label, p.probabilities[p.class]),
+        }
     }
     Ok(())
 }
