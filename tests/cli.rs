@@ -329,6 +329,13 @@ fn bad_input_gets_a_clear_error() {
     let missing = dir.join("absent.npz");
     let err = fails(&["train", "--data", missing.to_str().unwrap(), "--out", dir.join("r").to_str().unwrap()]);
     assert!(err.contains("absent.npz") && err.contains("no such file or directory"), "{err}");
+    // Outside a checkout, the default data set is not there: said so, with what to do.
+    let out = Command::new(env!("CARGO_BIN_EXE_pvt3")).args(["train", "--out", "r"]).current_dir(&dir).output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("the default data set ships in a checkout of pvt3") && err.contains("--data FILE"),
+        "{err}"
+    );
     let err = fails(&["train", "--preset", "biotac20", "--out", dir.join("r").to_str().unwrap()]);
     assert!(err.contains("samples are [6, 10, 75] but the model expects [19, 1, 400]"), "{err}");
     let err = fails(&["train", "--set", "depth=3", "--out", dir.join("r").to_str().unwrap()]);

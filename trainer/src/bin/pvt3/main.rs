@@ -51,12 +51,20 @@ enum Command {
 ///   kernel on free, so training spent a quarter of its time in page faults zeroing new pages.
 ///   Keeping freed memory in the heap makes the next step reuse it.
 /// - SIGPIPE back to its default, so that `pvt3 info | head` ends quietly instead of panicking.
+///
+/// The first is glibc's (other allocators keep their own policy), the second Unix's: elsewhere
+/// (macOS, Windows, musl) the trainer builds without them.
 fn set_up_process() {
-    // SAFETY: both only adjust process-wide settings, and no other thread exists yet.
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: mallopt only adjusts glibc's allocator, and no other thread exists yet.
     unsafe {
         libc::mallopt(libc::M_MMAP_THRESHOLD, 32 << 20);
         libc::mallopt(libc::M_TRIM_THRESHOLD, 1 << 30);
         libc::mallopt(libc::M_TOP_PAD, 64 << 20);
+    }
+    #[cfg(unix)]
+    // SAFETY: restores a signal's default disposition, before any other thread exists.
+    unsafe {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
 }

@@ -16,7 +16,8 @@ use pvt3_trainer::train::RunSpec;
 #[derive(Clone, clap::Args)]
 pub struct ModelArgs {
     /// Data set: an .npz file (x, y, optional fold) or a directory of x.npy, y.npy, fold.npy.
-    #[arg(long, default_value = "data/icub20.npz")]
+    /// The default is the iCub-20 set shipped in the repository: run from its root, or say which.
+    #[arg(long, default_value = SHIPPED_DATA)]
     pub data: PathBuf,
     /// Network: PVT³, or one of the paper's baselines (RAEC as published: add `--lr 5e-4
     /// --weight-decay 0`). Takes the `vit-`/`raec-` variant of the sensor preset; only PVT³ can
@@ -75,6 +76,9 @@ pub struct ModelArgs {
     pub options: TrainOptions,
 }
 
+/// `--data`'s default: the iCub-20 set in a checkout of pvt3.
+const SHIPPED_DATA: &str = "data/icub20.npz";
+
 fn parse_hold_out(s: &str) -> std::result::Result<(String, Vec<String>), String> {
     let (name, levels) = s.split_once('=').ok_or_else(|| format!("`{s}`: expected NAME=LEVEL,…, e.g. force=210,250"))?;
     let levels: Vec<String> = levels.split(',').map(|l| l.trim().to_string()).filter(|l| !l.is_empty()).collect();
@@ -126,6 +130,12 @@ impl Prepared {
 /// The data set at `path`, its folds drawn with `seed` where the file has none, and `held_out`'s
 /// levels held out; a joint partner (`partner`) holds them out where it records that condition.
 fn load(path: &Path, seed: u64, held_out: Option<&HoldOut>, partner: bool) -> Result<Dataset> {
+    if path == Path::new(SHIPPED_DATA) && !path.exists() {
+        bail!(
+            "no {SHIPPED_DATA} here: the default data set ships in a checkout of pvt3 (run from its root, {}), or give --data FILE",
+            std::env::current_dir().map_or("not this folder".into(), |d| format!("not {}", d.display()))
+        );
+    }
     let mut data = Dataset::load(path, seed)?;
     if let Some(h) = held_out.filter(|h| !partner || data.conditions.iter().any(|c| c.name == h.condition)) {
         data.hold_out(h)?;
