@@ -639,3 +639,21 @@ fn joint_cv_trains_a_network_per_sensor_and_each_is_pruned_and_exported_alone() 
     assert_eq!(again["partner"]["runs"], partner["runs"]);
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// docs/deploy.md's onnxruntime example (runtime/examples/onnxruntime_classify.py), run as a user
+/// would on the golden model's windows: the classes and probabilities the runtime gives.
+#[test]
+fn the_onnxruntime_example_of_the_docs_classifies_as_the_runtime_does() {
+    let golden = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/golden/icub20");
+    let (model, input) = (golden.join("model.onnx"), golden.join("input.npy"));
+    let printed = onnx_check::run_script("runtime/examples/onnxruntime_classify.py", &[&model, &input]);
+    let c = pvt3_runtime::Classifier::load(&model).unwrap();
+    let (_, x) = pvt3_runtime::read_npy(&input).unwrap();
+    let expected = c.classify_batch(&x, 8).unwrap();
+    assert_eq!(printed.lines().count(), 8, "{printed}");
+    for (line, p) in printed.lines().zip(&expected) {
+        let fields: Vec<&str> = line.split('\t').collect();
+        assert_eq!((fields[1].parse::<usize>().unwrap(), fields[2]), (p.class, p.label.as_str()), "{line}");
+        assert!((fields[3].parse::<f32>().unwrap() - p.probabilities[p.class]).abs() < 1e-5, "{line}");
+    }
+}

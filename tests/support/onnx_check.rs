@@ -60,3 +60,12 @@ pub fn assert_onnxruntime_matches(model: &Path, input: (&[usize], &[f32]), expec
     assert!(out.status.success(), "{msg}");
     msg
 }
+
+/// Runs the Python script `script` (a path from the workspace's root) with `args` in the venv,
+/// and returns what it printed; panics with its output if it fails.
+pub fn run_script(script: &str, args: &[&Path]) -> String {
+    let out = Command::new(python()).arg(workspace().join(script)).args(args).output().expect("the script runs");
+    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+    assert!(out.status.success(), "{script} failed:\n{stdout}{}", String::from_utf8_lossy(&out.stderr));
+    stdout
+}
