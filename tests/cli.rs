@@ -2,7 +2,7 @@
 //! evaluate, cross-validate (side by side and resumed), inspect, and the errors a user meets.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Command;
 
 use ndarray::{Array1, ArrayD, IxDyn};
 use ndarray_npy::NpzWriter;
@@ -12,34 +12,10 @@ use pvt3_trainer::data::Dataset;
 mod csv_tree;
 #[path = "support/onnx_check.rs"]
 mod onnx_check;
+#[path = "support/pvt3_command.rs"]
+mod pvt3_command;
 
-fn pvt3(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pvt3"))
-        .args(args)
-        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
-        .output()
-        .expect("pvt3 runs")
-}
-
-fn ok(args: &[&str]) -> String {
-    let out = pvt3(args);
-    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
-    assert!(out.status.success(), "pvt3 {args:?} failed:\n{stdout}\n{}", String::from_utf8_lossy(&out.stderr));
-    stdout
-}
-
-fn fails(args: &[&str]) -> String {
-    let out = pvt3(args);
-    assert!(!out.status.success(), "pvt3 {args:?} should have failed");
-    String::from_utf8_lossy(&out.stderr).to_string()
-}
-
-fn scratch(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("pvt3-cli-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use pvt3_command::{fails, ok, pvt3, scratch};
 
 /// The first `per_fold` samples of every fold of the shipped iCub set, as an .npz.
 fn icub_slice(dir: &Path, per_fold: usize) -> PathBuf {

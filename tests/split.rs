@@ -4,36 +4,16 @@
 //! or refuses, on a set with a fold array, one without, and one with levels held out.
 
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 use ndarray::{Array1, Array3};
 use ndarray_npy::NpzWriter;
 use pvt3_trainer::data::{Dataset, TEST_FOLD};
 use serde_json::Value;
 
-fn pvt3(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pvt3")).args(args).output().expect("pvt3 runs")
-}
+#[path = "support/pvt3_command.rs"]
+mod pvt3_command;
 
-fn ok(args: &[&str]) -> (String, String) {
-    let out = pvt3(args);
-    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout).to_string(), String::from_utf8_lossy(&out.stderr).to_string());
-    assert!(out.status.success(), "pvt3 {args:?} failed:\n{stdout}\n{stderr}");
-    (stdout, stderr)
-}
-
-fn fails(args: &[&str]) -> String {
-    let out = pvt3(args);
-    assert!(!out.status.success(), "pvt3 {args:?} should have failed");
-    String::from_utf8_lossy(&out.stderr).to_string()
-}
-
-fn scratch(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("pvt3-split-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use pvt3_command::{fails, ok, scratch, succeeds};
 
 fn refs(v: &[String]) -> Vec<&str> {
     v.iter().map(String::as_str).collect()
@@ -84,7 +64,7 @@ fn recorded(dir: &Path) -> (Option<u64>, Vec<usize>) {
 
 /// `pvt3 eval RUN`'s touches and accuracy on the test fold, which must be the run's own.
 fn eval_agrees(run: &Path, folds: &[usize]) {
-    let (stdout, _) = ok(&["eval", run.to_str().unwrap()]);
+    let stdout = ok(&["eval", run.to_str().unwrap()]);
     let tests = folds.iter().filter(|f| **f == TEST_FOLD).count();
     let accuracy = json(&run.join("result.json"))["test_accuracy"].as_f64().unwrap();
     assert!(stdout.contains(&format!("{tests} samples (fold 4")), "eval reads the run's {tests} test touches: {stdout}");
@@ -162,7 +142,7 @@ fn a_fold_array_is_the_split_whatever_the_seed() {
     let mut older = json(&provenance);
     older.as_object_mut().unwrap().remove("trained_on");
     std::fs::write(&provenance, older.to_string()).unwrap();
-    let (_, stderr) = ok(&["eval", run.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&succeeds(&["eval", run.to_str().unwrap()]).stderr).to_string();
     assert!(stderr.contains("records no split: its folds are derived again"), "{stderr}");
     eval_agrees(&run, &Dataset::load(&data, 0).unwrap().folds);
     std::fs::remove_dir_all(dir).unwrap();
@@ -178,7 +158,7 @@ fn held_out_touches_shape_and_calibrate_nothing() {
     let (d, cv) = (data.to_str().unwrap(), dir.join("cv"));
     let mut args = vec!["cv", "--data", d, "--out", cv.to_str().unwrap(), "--epochs", "2", "--jobs", "2", "--hold-out", "speed=fast"];
     args.extend(SMALL);
-    let (_, stderr) = ok(&args);
+    let stderr = String::from_utf8_lossy(&succeeds(&args).stderr).to_string();
     let mut validated = 0;
     for fold in 0..4 {
         let run = cv.join(format!("seed0/fold{fold}"));
@@ -197,7 +177,7 @@ fn held_out_touches_shape_and_calibrate_nothing() {
     );
     assert!(stderr.contains("18 test touches are shorter than the window of 32 frames"), "{stderr}");
     // The provisional answers of the short test touches, as a robot's stream gives them.
-    let (stdout, _) = ok(&["eval", cv.join("seed0/fold0").to_str().unwrap(), "--anytime", "--json"]);
+    let stdout = ok(&["eval", cv.join("seed0/fold0").to_str().unwrap(), "--anytime", "--json"]);
     let anytime: Value = serde_json::from_str(&stdout).unwrap();
     assert_eq!(anytime["samples"], 18);
     std::fs::remove_dir_all(dir).unwrap();
