@@ -633,3 +633,32 @@ fn the_onnxruntime_example_of_the_docs_classifies_as_the_runtime_does() {
         assert!((fields[3].parse::<f32>().unwrap() - p.probabilities[p.class]).abs() < 1e-5, "{line}");
     }
 }
+
+/// `--json`: train, eval and cv print their result as one JSON object on standard output, the
+/// same figures their files and tables hold, and nothing else there.
+#[test]
+fn train_eval_and_cv_print_their_result_as_json() {
+    let dir = scratch("json");
+    let data = icub_slice(&dir, 10);
+    let (d, run, cv) = (data.to_str().unwrap(), dir.join("run"), dir.join("cv"));
+    let mut args = vec!["train", "--data", d, "--out", run.to_str().unwrap(), "--epochs", "1", "--json"];
+    args.extend(SMALL);
+    let trained: serde_json::Value = serde_json::from_str(&ok(&args)).expect("one JSON object");
+    let recorded: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(run.join("result.json")).unwrap()).unwrap();
+    assert_eq!(trained["run"], recorded);
+    assert_eq!(trained["checkpoint"], run.join("model").display().to_string());
+    assert!(trained["pruned"].is_null() && trained["onnx"].is_null(), "{trained}");
+    let eval: serde_json::Value = serde_json::from_str(&ok(&["eval", run.to_str().unwrap(), "--json"])).unwrap();
+    assert_eq!(eval["accuracy"], recorded["test_accuracy"]);
+    assert_eq!((eval["touches"].as_u64(), eval["fold"].as_str()), (Some(10), Some("4")));
+    let confusion = eval["confusion"].as_array().unwrap();
+    assert_eq!(confusion.len(), 20);
+    let total: u64 = confusion.iter().flat_map(|row| row.as_array().unwrap()).map(|v| v.as_u64().unwrap()).sum();
+    assert_eq!(total, 10, "every touch once in the confusion matrix");
+    let mut args = vec!["cv", "--data", d, "--out", cv.to_str().unwrap(), "--epochs", "1", "--only", "seed=0,fold=1", "--json"];
+    args.extend(SMALL);
+    let summary: serde_json::Value = serde_json::from_str(&ok(&args)).unwrap();
+    let written: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(cv.join("cv.json")).unwrap()).unwrap();
+    assert_eq!(summary, written, "what cv.json holds");
+    std::fs::remove_dir_all(dir).unwrap();
+}

@@ -46,6 +46,10 @@ pub struct CvArgs {
     /// whoever trained them. Runs still training are listed, not counted.
     #[arg(long, value_name = "OUT", conflicts_with_all = ["only", "resume"])]
     pub report: Option<PathBuf>,
+    /// Print the summary (what cv.json holds) as one JSON object on standard output instead of
+    /// the table.
+    #[arg(long)]
+    pub json: bool,
 }
 
 pub fn run(a: CvArgs) -> Result<()> {
@@ -71,12 +75,19 @@ pub fn run(a: CvArgs) -> Result<()> {
                 }
             };
             let Some(s) = s else {
-                println!("paused; continue with the same command and --resume");
+                match a.json {
+                    true => println!("{}", serde_json::json!({"paused": true})),
+                    false => println!("paused; continue with the same command and --resume"),
+                }
                 return Ok(());
             };
             (s, a.out)
         }
     };
+    if a.json {
+        println!("{}", serde_json::to_string(&s)?);
+        return Ok(());
+    }
     print_summary(&s, started.elapsed().as_secs_f64(), &out.join(run_dir::CV_SUMMARY));
     print_next(&s, &out);
     Ok(())

@@ -10,7 +10,7 @@ use pvt3_models::Classifier;
 use pvt3_trainer::anytime::{self, CalibratedOn, Prefixes, Stopping};
 use pvt3_trainer::checkpoint::{self, Meta};
 use pvt3_trainer::data::{Dataset, TEST_FOLD};
-use pvt3_trainer::evaluate::{evaluate, Samples};
+use pvt3_trainer::evaluate::{evaluate, Evaluation, Samples};
 use pvt3_trainer::plot::{self, anytime as anytime_picture, confusion};
 use pvt3_trainer::run_dir::CV_SUMMARY;
 
@@ -37,8 +37,9 @@ pub struct EvalArgs {
     /// confusion-pruned-fold<K>.svg and anytime-pruned-fold<K>.svg).
     #[arg(long, value_name = "FILE.svg", alias = "confusion")]
     pub picture: Option<PathBuf>,
-    /// With --anytime: print one JSON object instead of the table.
-    #[arg(long, requires = "anytime")]
+    /// Print one JSON object instead of the tables: the accuracy, loss, accuracy per class and
+    /// confusion matrix (with --anytime: the curve and the stopping rule).
+    #[arg(long)]
     pub json: bool,
     /// With --anytime: also write every sample's class probabilities after each temporal token
     /// to this JSON file (`probabilities[sample][token][class]`, `labels`), to study other
@@ -150,13 +151,37 @@ pub fn run(a: EvalArgs) -> Result<()> {
         return anytime_report(&run, &samples, &a);
     }
     let e = evaluate(&run.model, &samples)?;
+    let title = format!("{}: fold {fold}, {} touches, accuracy {:.4}", a.checkpoint.display(), e.labels.len(), e.accuracy);
+    if a.json {
+        return print_json(&run.meta.classes, &e, (fold, samples.len()), (&title, &a.picture_of(CONFUSION)));
+    }
     let windows = if samples.len() > run.indices.len() { format!(", {} windows", samples.len()) } else { String::new() };
     println!("{} samples (fold {fold}{windows}): accuracy {:.4}, loss {:.4}", run.indices.len(), e.accuracy, e.loss);
     if let (true, Some(test)) = (fold == Folds::One(TEST_FOLD), run.meta.provenance.test_accuracy) {
         println!("(the checkpoint's own record: test accuracy {test:.4})");
     }
-    let title = format!("{}: fold {fold}, {} touches, accuracy {:.4}", a.checkpoint.display(), e.labels.len(), e.accuracy);
     report_classes(&run.meta.classes, &e.labels, &e.predictions, &title, &a.picture_of(CONFUSION))
+}
+
+/// `pvt3 eval --json`: the evaluation `e` of `(fold, windows)` as one JSON object, its confusion
+/// matrix drawn to `picture` under `title` as the table's is.
+fn print_json(classes: &[String], e: &Evaluation, (fold, windows): (Folds, usize), (title, picture): (&str, &Path)) -> Result<()> {
+    let m = confusion::matrix(&e.labels, &e.predictions, classes.len());
+    plot::write(picture, &confusion::svg(&m, classes, title)).with_context(|| format!("drawing {}", picture.display()))?;
+    let per_class: Vec<_> = classes
+        .iter()
+        .enumerate()
+        .map(|(c, name)| {
+            let (n, right) = (m[c].iter().sum::<usize>(), m[c][c]);
+            serde_json::json!({"class": name, "samples": n, "accuracy": if n == 0 { None } else { Some(right as f64 / n as f64) }})
+        })
+        .collect();
+    let out = serde_json::json!({
+        "fold": fold.to_string(), "touches": e.labels.len(), "windows": windows, "accuracy": e.accuracy, "loss": e.loss,
+        "classes": classes, "per_class": per_class, "confusion": m, "picture": picture,
+    });
+    println!("{out}");
+    Ok(())
 }
 
 /// Accuracy per class and the confusion matrix of `labels` answered `predictions`, printed; the

@@ -27,13 +27,13 @@ pub struct BakeArgs {
 }
 
 /// Bakes (if needed) and exports `model` to `out`.
-pub fn export_onnx(model: &Path, out: &Path) -> Result<()> {
+/// Exports the checkpoint or baked file `model` to `out`; what was written, in words.
+pub fn export_onnx(model: &Path, out: &Path) -> Result<String> {
     let file = BakedFile::load(model)?;
     let onnx = pvt3_export::export(&file.baked, &file.normalization, &file.metadata())
         .with_context(|| format!("exporting {}", model.display()))?;
     pvt3_export::write(&onnx, out)?;
-    println!("wrote {}: {}", out.display(), file.baked.size_summary());
-    Ok(())
+    Ok(format!("wrote {}: {}", out.display(), file.baked.size_summary()))
 }
 
 pub fn bake(a: BakeArgs) -> Result<()> {

@@ -85,7 +85,7 @@ fn main() -> Result<()> {
         Command::Train(a) => train::run(a),
         Command::Cv(a) => cv::run(a),
         Command::Prune(a) => prune::run(a),
-        Command::Export(a) => export::export_onnx(&a.model, &a.out),
+        Command::Export(a) => export::export_onnx(&a.model, &a.out).map(|done| println!("{done}")),
         Command::Bake(a) => export::bake(a),
         Command::Eval(a) if eval_cv::applies(&a) => eval_cv::run(&a),
         Command::Eval(a) => eval::run(a),

@@ -38,7 +38,7 @@ pub fn run(a: PruneCommand) -> Result<()> {
     let bar = progress::bar("fine-tune");
     if let Some(p) = prune_and_fine_tune(&a.run, &dataset, &stage, &a.out, a.resume, &bar)? {
         bar.finish();
-        report_pruned(&p, &a.out)?;
+        println!("{}", report_pruned(&p, &a.out)?);
     }
     Ok(())
 }

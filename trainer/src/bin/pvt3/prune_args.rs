@@ -52,9 +52,9 @@ impl PruneArgs {
     }
 }
 
-pub fn report_pruned(r: &RunResult, out: &Path) -> Result<()> {
+pub fn report_pruned(r: &RunResult, out: &Path) -> Result<String> {
     let baked = BakedFile::from_checkpoint(out)?.baked;
-    println!(
+    Ok(format!(
         "pruned and fine-tuned: best epoch {} of {}, validation {:.4}, test {:.4}; baked: {}; checkpoint {}",
         r.best_epoch,
         r.epochs,
@@ -62,6 +62,5 @@ pub fn report_pruned(r: &RunResult, out: &Path) -> Result<()> {
         r.test_accuracy,
         baked.size_summary(),
         Run(out).model().display()
-    );
-    Ok(())
+    ))
 }

@@ -33,9 +33,15 @@ pub struct TrainArgs {
     /// Finally bake the model (the pruned one, if pruning was asked for) and export it as ONNX.
     #[arg(long, value_name = "FILE.onnx")]
     pub export: Option<PathBuf>,
+    /// Print the result as one JSON object on standard output (the run's result, its
+    /// checkpoint, the pruned run's and the exported file's), the lines of text on standard error.
+    #[arg(long)]
+    pub json: bool,
 }
 
 pub fn run(a: TrainArgs) -> Result<()> {
+    // With --json the lines of text go to standard error, and one JSON object to standard output.
+    let say = |line: String| if a.json { eprintln!("{line}") } else { println!("{line}") };
     let prepared = prepare(&a.model)?;
     let stage = a.prune.stage();
     if stage.is_some() || a.export.is_some() {
@@ -45,11 +51,15 @@ pub fn run(a: TrainArgs) -> Result<()> {
     let started = Instant::now();
     let r = train(&prepared.spec(&a.model, a.fold), &a.out, a.resume, &bar)?;
     bar.finish();
-    let Some(r) = r else {
-        println!("paused; continue with the same command and --resume");
-        return Ok(());
+    let paused = || {
+        say("paused; continue with the same command and --resume".into());
+        if a.json {
+            println!("{}", serde_json::json!({"paused": true}));
+        }
+        Ok(())
     };
-    println!(
+    let Some(r) = r else { return paused() };
+    say(format!(
         "best epoch {} of {}: validation accuracy {:.4}, test accuracy {:.4} ({:.0} s); checkpoint {}",
         r.best_epoch,
         r.epochs,
@@ -57,20 +67,28 @@ pub fn run(a: TrainArgs) -> Result<()> {
         r.test_accuracy,
         started.elapsed().as_secs_f64(),
         Run(&a.out).model().display()
-    );
+    ));
     let mut last = a.out.clone();
+    let mut pruned = None;
     if let Some(stage) = stage {
         let bar = progress::bar("fine-tune");
         last = Run(&a.out).pruned();
-        let Some(p) = prune_and_fine_tune(&a.out, &prepared.data, &stage, &last, a.resume, &bar)? else {
-            println!("paused; continue with the same command and --resume");
-            return Ok(());
-        };
+        let Some(p) = prune_and_fine_tune(&a.out, &prepared.data, &stage, &last, a.resume, &bar)? else { return paused() };
         bar.finish();
-        report_pruned(&p, &last)?;
+        say(report_pruned(&p, &last)?);
+        pruned = Some(p);
     }
-    if let Some(path) = a.export {
-        export_onnx(&last, &path)?;
+    if let Some(path) = &a.export {
+        say(export_onnx(&last, path)?);
+    }
+    if a.json {
+        let checkpoint = |dir: &std::path::Path| Run(dir).model().display().to_string();
+        let out = serde_json::json!({
+            "run": r, "checkpoint": checkpoint(&a.out),
+            "pruned": pruned, "pruned_checkpoint": pruned.as_ref().map(|_| checkpoint(&last)),
+            "onnx": a.export.as_ref().map(|p| p.display().to_string()),
+        });
+        println!("{out}");
     }
     Ok(())
 }
