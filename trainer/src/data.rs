@@ -321,11 +321,6 @@ impl Dataset {
         shape
     }
 
-    /// Whether every touch that trains or validates is as long as the longest.
-    pub fn equal_learnt_lengths(&self) -> bool {
-        (0..self.len()).filter(|&i| self.folds[i] != TEST_FOLD).all(|i| self.lengths[i] == self.max_frames())
-    }
-
     /// The test touches shorter than `frames`.
     pub fn short_tests(&self, frames: usize) -> Vec<usize> {
         (0..self.len()).filter(|&i| self.folds[i] == TEST_FOLD && self.lengths[i] < frames).collect()

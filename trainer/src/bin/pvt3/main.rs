@@ -130,7 +130,7 @@ mod tests {
             vec!["pvt3", "cv", "--only", "seed=1,fold=4"],
             vec!["pvt3", "cv", "--only", "seed=1,fold=0", "--seeds", "1"],
             vec!["pvt3", "cv", "--report", "runs/x", "--resume"],
-            vec!["pvt3", "eval", "runs/x", "--json"],
+            vec!["pvt3", "eval", "runs/x", "--answers", "a.json"],
         ] {
             assert!(Cli::try_parse_from(&bad).is_err(), "{bad:?}");
         }

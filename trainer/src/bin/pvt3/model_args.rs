@@ -148,14 +148,10 @@ fn held_out(args: &ModelArgs) -> Option<HoldOut> {
     args.hold_out.clone().map(|(condition, levels)| HoldOut { condition, levels, seed: args.options.seed })
 }
 
-/// Loads the data set (and a joint partner's) and builds the model configuration for it.
+/// Loads the data set (and a joint partner's) and builds the model configuration for it: one
+/// run's, its folds drawn with `--seed`.
 pub fn prepare(args: &ModelArgs) -> Result<Prepared> {
-    let h = held_out(args);
-    let data = load(&args.data, args.options.seed, h.as_ref(), false)?;
-    let partner = args.joint.as_ref().map(|p| load(p, args.options.seed, h.as_ref(), true)).transpose()?;
-    let (prepared, notes) = prepare_with(args, data, partner)?;
-    notes.iter().for_each(|n| eprintln!("{n}"));
-    Ok(prepared)
+    Ok(prepare_seeds(args, &[args.options.seed])?.remove(0))
 }
 
 /// A cross-validation's preparation of each seed: where folds are drawn (no fold array, or
