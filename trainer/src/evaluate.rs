@@ -140,8 +140,8 @@ impl Samples {
         }
         let tubelet = model.pvt3("a touch shorter than the model's window")?.config().tubelet;
         let mut groups: std::collections::BTreeMap<Option<usize>, Vec<usize>> = Default::default();
-        for (r, f) in self.filled.iter().enumerate() {
-            groups.entry((*f < frames).then_some(f / tubelet)).or_default().push(r);
+        for (r, (f, k)) in self.filled.iter().zip(self.tokens_filled(tubelet)).enumerate() {
+            groups.entry((*f < frames).then_some(k)).or_default().push(r);
         }
         Ok(groups.into_iter().collect())
     }
