@@ -2,6 +2,7 @@
 //! creates a Python venv under `target/onnx-venv` and installs onnx, onnxruntime and numpy into it,
 //! so the test command needs nothing but Python 3 on the machine.
 
+use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;
@@ -50,20 +51,17 @@ pub fn assert_onnxruntime_matches(model: &Path, input: (&[usize], &[f32]), expec
     let (x, y) = (dir.join(format!("{stem}.input.npy")), dir.join(format!("{stem}.expected.npy")));
     write_npy(&x, input.0, input.1);
     write_npy(&y, &[input.0[0], expected.len() / input.0[0]], expected);
-    let mut cmd = Command::new(python());
-    cmd.arg(workspace().join("tests/onnx_check.py")).args([model, &x, &y]).args(["--atol", &atol.to_string()]);
-    if let Some(tokens) = prefix {
-        cmd.args(["--prefix", &tokens.to_string()]);
+    let (atol, tokens) = (atol.to_string(), prefix.map(|t| t.to_string()));
+    let mut args: Vec<&OsStr> = vec![model.as_os_str(), x.as_os_str(), y.as_os_str(), "--atol".as_ref(), atol.as_ref()];
+    if let Some(tokens) = &tokens {
+        args.extend([OsStr::new("--prefix"), OsStr::new(tokens)]);
     }
-    let out = cmd.output().expect("the check runs");
-    let msg = format!("{}{}", String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
-    assert!(out.status.success(), "{msg}");
-    msg
+    run_script("tests/onnx_check.py", &args)
 }
 
 /// Runs the Python script `script` (a path from the workspace's root) with `args` in the venv,
 /// and returns what it printed; panics with its output if it fails.
-pub fn run_script(script: &str, args: &[&Path]) -> String {
+pub fn run_script<A: AsRef<OsStr>>(script: &str, args: &[A]) -> String {
     let out = Command::new(python()).arg(workspace().join(script)).args(args).output().expect("the script runs");
     let stdout = String::from_utf8_lossy(&out.stdout).to_string();
     assert!(out.status.success(), "{script} failed:\n{stdout}{}", String::from_utf8_lossy(&out.stderr));
