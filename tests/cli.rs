@@ -153,7 +153,7 @@ fn cv_runs_folds_side_by_side_and_resumes_without_retraining() {
     let first = ok(&args);
     assert!(first.contains("mean test accuracy"), "{first}");
     let next = format!("next: pvt3 eval {o} (all runs' test answers together");
-    assert!(first.contains(&next) && first.contains(&format!("pvt3 export {o}/seed0/fold0 -o model.onnx")), "{first}");
+    assert!(first.contains(&next) && first.contains(&format!("pvt3 final {o} -o model.onnx")), "{first}");
     let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("cv.json")).unwrap()).unwrap();
     assert_eq!(summary["runs"].as_array().unwrap().len(), 4);
     // One stopping rule, calibrated on the four runs' validation answers, in every run and in
@@ -444,6 +444,7 @@ fn csv_touches_of_any_length_import_cross_validate_and_export() {
         assert!(out.join(format!("seed0/fold{fold}/curves.svg")).exists(), "fold {fold}");
     }
     assert!(out.join("cv-curves.svg").exists());
+    the_final_model_trains_on_every_touch_as_the_cv_chose(&out, &summary, 30);
     let run = out.join("seed0/fold0");
     let eval = ok(&["eval", run.to_str().unwrap()]);
     assert!(eval.contains("material_2") && eval.contains("confusion matrix") && run.join("confusion-fold4.svg").exists(), "{eval}");
@@ -473,6 +474,34 @@ fn csv_touches_of_any_length_import_cross_validate_and_export() {
     }
     assert_eq!(answers, (frames.len() - 32) / 4 + 1, "after every token of 4 frames once a window is in");
     std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// `pvt3 final` on the cross-validation in `cv` (summarised by `summary`) over a set of `touches`:
+/// trained on all of them for the median of the epochs its runs selected, with the stopping rule
+/// the cross-validation wrote into its runs; the file states the cross-validation's accuracy, and
+/// `pvt3 eval` refuses to test it on the touches that trained it.
+fn the_final_model_trains_on_every_touch_as_the_cv_chose(cv: &Path, summary: &serde_json::Value, touches: u64) {
+    let onnx = cv.join("final.onnx");
+    let printed = ok(&["final", cv.to_str().unwrap(), "-o", onnx.to_str().unwrap(), "--json"]);
+    let done: serde_json::Value = serde_json::from_str(&printed).unwrap();
+    let mut selected: Vec<u64> = summary["runs"].as_array().unwrap().iter().map(|r| r["best_epoch"].as_u64().unwrap()).collect();
+    selected.sort_unstable();
+    let median = selected[selected.len() / 2];
+    assert_eq!((done["touches"].as_u64(), done["epochs"].as_u64()), (Some(touches), Some(median)), "{printed}");
+    for key in ["mean_test_accuracy", "std_test_accuracy", "ci95_test_accuracy"] {
+        assert_eq!(done["expected"][key], summary[key], "{key}");
+    }
+    let provenance = |run: &Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(run.join("model/provenance.json")).unwrap()).unwrap()
+    };
+    let (last, fold0) = (provenance(&cv.join("final")), provenance(&cv.join("seed0/fold0")));
+    assert!(last["val_fold"].is_null() && last["trained_on"]["digest"] == fold0["trained_on"]["digest"], "{last}");
+    assert_eq!(last["epoch"].as_u64(), Some(median));
+    assert!(last["stopping"].is_object() && last["stopping"] == fold0["stopping"], "the cross-validation's rule");
+    let file = String::from_utf8_lossy(&std::fs::read(&onnx).unwrap()).to_string();
+    assert!(file.contains(&format!("\"selected_epochs\":{}", done["expected"]["selected_epochs"])), "the file states what it expects");
+    let refused = fails(&["eval", cv.join("final").to_str().unwrap()]);
+    assert!(refused.contains("none is left to test it") && refused.contains(&format!("{:.4}", summary["mean_test_accuracy"].as_f64().unwrap())), "{refused}");
 }
 
 /// A scratch folder holding `flat/`: CSV touches of 3 classes, `touches` each, side by side and

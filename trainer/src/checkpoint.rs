@@ -22,10 +22,14 @@ use crate::{Error, Result};
 pub struct Provenance {
     pub pvt3_version: String,
     pub data: String,
-    pub val_fold: usize,
+    /// The fold that chose the epoch; `None` for a final model, which every touch trained
+    /// ([`crate::final_model`]).
+    pub val_fold: Option<usize>,
     pub seed: u64,
-    /// The selected (best-validation) epoch, 1-based.
+    /// The selected (best-validation) epoch, 1-based; a final model's last.
     pub epoch: usize,
+    /// NaN (`null`) where nothing validated.
+    #[serde(deserialize_with = "nan_from_null")]
     pub val_accuracy: f64,
     pub test_accuracy: Option<f64>,
     pub options: TrainOptions,
@@ -48,6 +52,10 @@ pub struct Provenance {
     /// run exports without one, and `pvt3 eval --anytime` calibrates it afresh.
     #[serde(default, deserialize_with = "current_or_none")]
     pub stopping: Option<crate::anytime::Stopping>,
+    /// A final model's: the accuracy the cross-validation it follows measured, since no touch
+    /// is left to test it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub expected: Option<crate::final_model::Expected>,
 }
 
 impl Provenance {
@@ -56,6 +64,23 @@ impl Provenance {
     pub fn dataset(&self, data: Option<&Path>) -> Result<crate::data::Dataset> {
         let own = PathBuf::from(&self.data);
         crate::data::Dataset::load_as_trained(data.unwrap_or(&own), self.seed, self.held_out.as_ref(), self.trained_on.as_ref())
+    }
+
+    /// Refuses to test a final model on the touches that trained it (every one of its data
+    /// set's), naming the accuracy its cross-validation measured instead.
+    pub fn check_testable_on(&self, data: &crate::data::Dataset) -> Result<()> {
+        let own = self.trained_on.as_ref().is_some_and(|t| t.digest == data.digest());
+        match (self.val_fold, own) {
+            (None, true) => Err(Error::Usage(format!(
+                "a final model: every touch of {} trained it, so none is left to test it (give --data with other touches){}",
+                self.data,
+                self.expected.as_ref().map_or(String::new(), |e| format!(
+                    "; the cross-validation {} measured {:.4} ± {:.4} over {} runs",
+                    e.cv, e.mean_test_accuracy, e.std_test_accuracy, e.runs
+                ))
+            ))),
+            _ => Ok(()),
+        }
     }
 
     /// What a reload should say of a run that did not record its split: its folds are derived
@@ -70,6 +95,12 @@ impl Provenance {
             )
         })
     }
+}
+
+/// Reads a number, or `null` as NaN: how JSON writes a figure that was not measured (a final
+/// model's validation accuracy, a run's test accuracy without test touches).
+pub fn nan_from_null<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
+    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 fn current_or_none<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Option<crate::anytime::Stopping>, D::Error> {
@@ -255,7 +286,7 @@ mod tests {
         let p = Provenance {
             pvt3_version: "test".into(),
             data: "d".into(),
-            val_fold: 0,
+            val_fold: Some(0),
             seed: 0,
             epoch: 1,
             val_accuracy: 0.5,
@@ -266,6 +297,7 @@ mod tests {
             trained_on: None,
             reading: None,
             stopping: None,
+            expected: None,
         };
         let mut json = serde_json::to_value(&p).unwrap();
         json["stopping"] = serde_json::json!({"threshold": 0.9, "full_accuracy": 0.9, "accuracy": 0.9, "mean_share": 0.5});

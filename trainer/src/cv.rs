@@ -210,7 +210,7 @@ pub fn cross_validate(
                 };
                 let bar = progress.add(ProgressBar::new(0).with_style(style.clone()));
                 bar.set_prefix(format!("seed {seed} fold {fold}"));
-                let run_spec = RunSpec { val_fold: fold, ..spec_of(seed).expect("checked above").clone() };
+                let run_spec = RunSpec { val_fold: Some(fold), ..spec_of(seed).expect("checked above").clone() };
                 let dir = CrossValidation(out).run(seed, fold);
                 let result = run_fold(&run_spec, stage, &dir, resume, &bar);
                 bar.finish();
@@ -344,12 +344,12 @@ pub fn report(out: &Path) -> Result<CvSummary> {
             let Some((fold_result, this)) = finished_run(net, &mut unfinished).map_err(|e| refuse(e.to_string()))? else {
                 break;
             };
-            if (fold_result.dense.seed, fold_result.dense.val_fold) != (seed, fold) {
+            if (fold_result.dense.seed, fold_result.dense.val_fold) != (seed, Some(fold)) {
                 return Err(refuse(format!(
-                    "{} holds the run of seed {} fold {}",
+                    "{} holds the run of seed {} {}",
                     net.display(),
                     fold_result.dense.seed,
-                    fold_result.dense.val_fold
+                    fold_result.dense.val_fold.map_or("trained on every touch".into(), |k| format!("fold {k}"))
                 )));
             }
             match setup {
@@ -448,7 +448,7 @@ mod tests {
     #[test]
     fn pruned_runs_are_summarised_per_seed_as_the_dense_ones() {
         let run = |seed, val_fold, test_accuracy| RunResult {
-            val_fold,
+            val_fold: Some(val_fold),
             seed,
             best_epoch: 1,
             val_accuracy: 0.9,

@@ -32,7 +32,7 @@ pub fn calibrate_together(dirs: &[PathBuf]) -> Result<Option<Stopping>> {
             std::collections::hash_map::Entry::Occupied(e) => e.into_mut(),
             std::collections::hash_map::Entry::Vacant(e) => e.insert(p.dataset(None)?),
         };
-        let val = Samples::new(data, &data.split(p.val_fold)?.val, &meta.normalization);
+        let val = Samples::new(data, &data.split_for(p.val_fold)?.val, &meta.normalization);
         answers.push(crate::anytime::prefixes(pvt3, &val)?);
     }
     // Runs whose windows differ (each seed's window is its own shortest touch that trains)

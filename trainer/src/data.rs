@@ -355,6 +355,15 @@ impl Dataset {
         self.labels.iter().max().map_or(0, |m| *m as usize + 1)
     }
 
+    /// A run's split: with a validation fold, [`Dataset::split`]; without one (a final model),
+    /// every touch trains and none validates or tests.
+    pub fn split_for(&self, val_fold: Option<usize>) -> Result<Split> {
+        match val_fold {
+            Some(k) => self.split(k),
+            None => Ok(Split { train: (0..self.len()).collect(), val: Vec::new(), test: Vec::new() }),
+        }
+    }
+
     /// The published protocol for validation fold `val_fold`: test on fold 4, train on the rest.
     pub fn split(&self, val_fold: usize) -> Result<Split> {
         if val_fold >= TEST_FOLD {

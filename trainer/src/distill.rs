@@ -28,12 +28,16 @@ impl Teachers {
     /// itself (or the run it was pruned from).
     pub fn load(
         cv_dir: &Path,
-        (val_fold, split): (usize, &TrainedOn),
+        (val_fold, split): (Option<usize>, &TrainedOn),
         normalization: &Normalization,
         classes: &[String],
         out: &Path,
     ) -> Result<Self> {
         let refuse = |what: String| Error::Usage(format!("--distill {}: {what}", cv_dir.display()));
+        // A final model's normalisation is fitted on every touch, a teacher's on its own split.
+        let Some(val_fold) = val_fold else {
+            return Err(refuse("a final model (every touch trains it) has no split a teacher could share".into()));
+        };
         let absolute = |p: &Path| std::path::absolute(p).map_err(Error::io(p));
         let out = absolute(out)?;
         let mut models = Vec::new();
@@ -49,9 +53,9 @@ impl Teachers {
             if let Some(why) = meta.provenance.trained_on.as_ref().and_then(|t| t.differs(split)) {
                 return Err(refuse(format!("{} trained on another split than this run's: {why}", checkpoint.display())));
             }
-            if meta.provenance.val_fold != val_fold || meta.normalization != *normalization {
+            if meta.provenance.val_fold != Some(val_fold) || meta.normalization != *normalization {
                 return Err(refuse(format!(
-                    "{} was trained on another split than this run's (validation fold {}, normalisation fitted on other touches)",
+                    "{} was trained on another split than this run's (validation fold {:?}, normalisation fitted on other touches)",
                     checkpoint.display(),
                     meta.provenance.val_fold
                 )));

@@ -12,6 +12,7 @@ pub mod distill;
 pub mod error;
 pub mod evaluate;
 pub mod extrapolation;
+pub mod final_model;
 pub mod import;
 pub mod info;
 pub mod joint;

@@ -10,7 +10,8 @@
 //! - `partner/`, a joint run's (`--joint`): the other sensor's run directory.
 //!
 //! `pvt3 cv --out DIR` writes one run directory per seed and fold ([`CrossValidation`]),
-//! [`CV_SUMMARY`] and [`CV_CURVES`] (and a joint one [`CV_PARTNER_CURVES`]).
+//! [`CV_SUMMARY`] and [`CV_CURVES`] (and a joint one [`CV_PARTNER_CURVES`]); `pvt3 final` adds
+//! the run directory [`FINAL`].
 
 use std::fmt::Display;
 use std::path::{Path, PathBuf};
@@ -26,6 +27,10 @@ pub const CV_CURVES: &str = "cv-curves.svg";
 
 /// A joint cross-validation's (`--joint`): the figure of the other sensor's runs.
 pub const CV_PARTNER_CURVES: &str = "cv-partner-curves.svg";
+
+/// A cross-validation's final model (`pvt3 final`): inside its directory, the run directory of
+/// the model trained on every touch as the cross-validation chose.
+pub const FINAL: &str = "final";
 
 /// A joint run's partner (`--joint`): inside a run directory, the other sensor's run directory;
 /// inside its `last/`, that run's resume state.

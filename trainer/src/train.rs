@@ -21,7 +21,7 @@ use pvt3_spec::prune::PruneSpec;
 use pvt3_spec::weights::Tensors;
 use serde::{Deserialize, Serialize};
 
-use crate::checkpoint::{self, read_json, write_json, write_json_atomically};
+use crate::checkpoint::{self, nan_from_null, read_json, write_json, write_json_atomically};
 use crate::data::Dataset;
 use crate::evaluate::{log_uniform_factor, Samples};
 use crate::joint::Partner;
@@ -37,10 +37,14 @@ use sensor::{rows_by_class, Sensor, Tally, Validated};
 /// The outcome of a finished run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RunResult {
-    pub val_fold: usize,
+    /// `None`: a final model, which every touch trained.
+    pub val_fold: Option<usize>,
     pub seed: u64,
     pub best_epoch: usize,
+    /// NaN (`null`) where nothing validated or tested.
+    #[serde(deserialize_with = "nan_from_null")]
     pub val_accuracy: f64,
+    #[serde(deserialize_with = "nan_from_null")]
     pub test_accuracy: f64,
     pub epochs: usize,
     pub wall_seconds: f64,
@@ -62,8 +66,11 @@ struct RunState {
 #[derive(Clone, Debug, Serialize, Deserialize)]
 struct Best {
     epoch: usize,
+    #[serde(deserialize_with = "nan_from_null")]
     val_accuracy: f64,
+    #[serde(deserialize_with = "nan_from_null")]
     val_loss: f64,
+    #[serde(deserialize_with = "nan_from_null")]
     test_accuracy: f64,
 }
 
@@ -72,7 +79,9 @@ struct Best {
 pub struct RunSpec<'a> {
     pub data: &'a Dataset,
     pub config: Config,
-    pub val_fold: usize,
+    /// The fold that validates (chooses the epoch); `None`: a final model, which every touch
+    /// trains and whose last epoch is kept ([`crate::final_model`]).
+    pub val_fold: Option<usize>,
     pub options: TrainOptions,
     pub classes: Vec<String>,
     /// Stop after this many epochs in this call, leaving the run to be resumed.
@@ -583,8 +592,13 @@ fn check_resumed_split(spec: &RunSpec, dir: &Path) -> Result<()> {
 
 /// Calibrates the stopping rule of provisional answers ([`crate::anytime`]) for the PVT³
 /// checkpoint in `dir` on the validation samples, into its provenance (which the exporter
-/// writes into the file). Other networks give no provisional answers.
+/// writes into the file). Other networks give no provisional answers, and a run with nothing to
+/// validate is calibrated by no one here.
 fn calibrate_stopping(dir: &Path, val_set: &Samples) -> Result<()> {
+    if val_set.is_empty() {
+        // A final model takes its cross-validation's rule (`crate::final_model`).
+        return Ok(());
+    }
     let (mut meta, model, _) = checkpoint::load(dir)?;
     let Some(pvt3) = crate::anytime::answering(&model) else { return Ok(()) };
     meta.provenance.stopping = Some(crate::anytime::prefixes(pvt3, val_set)?.calibrate());

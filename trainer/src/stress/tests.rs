@@ -21,7 +21,7 @@ fn the_runtime_stays_finite_and_close_to_the_f64_reference_on_extreme_inputs() {
         provenance: Provenance {
             pvt3_version: "test".into(),
             data: "tests/golden/icub20".into(),
-            val_fold: 0,
+            val_fold: Some(0),
             seed: 0,
             epoch: 0,
             val_accuracy: 0.0,
@@ -32,6 +32,7 @@ fn the_runtime_stays_finite_and_close_to_the_f64_reference_on_extreme_inputs() {
             trained_on: None,
             reading: None,
             stopping: None,
+            expected: None,
         },
     };
     let scratch = std::env::temp_dir().join(format!("pvt3-stress-test-{}", std::process::id()));

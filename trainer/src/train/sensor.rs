@@ -58,12 +58,12 @@ impl<'a> Sensor<'a> {
         data: &'a Dataset,
         config: Config,
         classes: Vec<String>,
-        (val_fold, opts): (usize, &TrainOptions),
+        (val_fold, opts): (Option<usize>, &TrainOptions),
         start: Option<&Tensors>,
         share: Option<&VarMap>,
     ) -> Result<Self> {
         data.check_fits(&config)?;
-        let split: Split = data.split(val_fold)?;
+        let split: Split = data.split_for(val_fold)?;
         let normalization = crate::normalization::fit(data, &split.train, config.frames);
         let train_set = Samples::new(data, &split.train, &normalization);
         let crops = opts.aug_stretch > 0.0 || split.train.iter().any(|&i| data.lengths[i] > config.frames);
@@ -106,7 +106,7 @@ impl<'a> Sensor<'a> {
 
     pub(super) fn meta(
         &self,
-        val_fold: usize,
+        val_fold: Option<usize>,
         opts: &TrainOptions,
         pruning: &Option<PruneSpec>,
         epoch: usize,
@@ -131,26 +131,31 @@ impl<'a> Sensor<'a> {
                 trained_on: Some(self.data.trained_on()),
                 reading: self.data.reading,
                 stopping: None,
+                expected: None,
             },
         }
     }
 
     /// The end of an epoch: the network (its weight average, when averaging) evaluated on
     /// validation; when it improved on `best`, on the test touches too and checkpointed into
-    /// `model`.
+    /// `model`. With nothing to validate (a final model) every epoch is checkpointed, so the
+    /// last is kept.
     pub(super) fn validate(
         &mut self,
         epoch: usize,
         best: &mut Option<Best>,
         model: &Path,
-        run: (usize, &TrainOptions, &Option<PruneSpec>),
+        run: (Option<usize>, &TrainOptions, &Option<PruneSpec>),
     ) -> Result<Validated> {
         if let Some(average) = &mut self.net.average {
             average.swap()?;
         }
-        let val = evaluate(&self.net.learner.model, &self.val_set)?;
-        let improved =
-            best.as_ref().is_none_or(|b| val.accuracy > b.val_accuracy || (val.accuracy == b.val_accuracy && val.loss < b.val_loss));
+        let val = match self.val_set.is_empty() {
+            true => crate::evaluate::Evaluation { loss: f64::NAN, accuracy: f64::NAN, predictions: Vec::new(), labels: Vec::new() },
+            false => evaluate(&self.net.learner.model, &self.val_set)?,
+        };
+        let improved = self.val_set.is_empty()
+            || best.as_ref().is_none_or(|b| val.accuracy > b.val_accuracy || (val.accuracy == b.val_accuracy && val.loss < b.val_loss));
         let mut test_accuracy = None;
         if improved {
             let test = if self.test_set.is_empty() { None } else { Some(evaluate(&self.net.learner.model, &self.test_set)?.accuracy) };

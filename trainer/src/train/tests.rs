@@ -106,7 +106,7 @@ pub(crate) fn spec(data: &Dataset, epochs: usize, pause_after: Option<usize>) ->
     RunSpec {
         data,
         config: tiny_config(),
-        val_fold: 0,
+        val_fold: Some(0),
         options: options(epochs),
         classes: vec!["up".into(), "down".into()],
         pause_after,
@@ -251,7 +251,7 @@ fn distillation_learns_from_runs_of_the_same_split_and_resumes_exactly() {
     assert_ne!(metrics(&a), metrics(&alone), "the teachers change the training");
 
     let refused = |val_fold: usize, data: &Dataset, tag: &str| {
-        let run = RunSpec { val_fold, options: taught.clone(), ..spec(data, 4, None) };
+        let run = RunSpec { val_fold: Some(val_fold), options: taught.clone(), ..spec(data, 4, None) };
         train(&run, &out_dir(tag), false, &ProgressBar::hidden()).unwrap_err().to_string()
     };
     let none = refused(1, &data, "distill-fold1");

@@ -8,7 +8,7 @@ use anyhow::Result;
 use indicatif::MultiProgress;
 use pvt3_trainer::cv::{self, cross_validate, CvSummary};
 use pvt3_trainer::data::TEST_FOLD;
-use pvt3_trainer::run_dir::{self, CrossValidation, Run};
+use pvt3_trainer::run_dir;
 
 use crate::model_args::{prepare_seeds, ModelArgs};
 use crate::progress;
@@ -93,17 +93,15 @@ pub fn run(a: CvArgs) -> Result<()> {
     Ok(())
 }
 
-/// What to do with the runs: look at all their answers, export one.
+/// What to do with the runs: look at all their answers, train the model to ship.
 fn print_next(s: &CvSummary, out: &Path) {
-    let Some(first) = s.runs.first().map(|r| CrossValidation(out).run(r.seed, r.val_fold)) else { return };
-    let (pruned, file) = match s.pruned_runs.is_empty() {
-        true => ("", first),
-        false => (" --pruned", Run(&first).pruned()),
-    };
+    if s.runs.is_empty() {
+        return;
+    }
+    let pruned = if s.pruned_runs.is_empty() { "" } else { " --pruned" };
     println!(
-        "next: pvt3 eval {}{pruned} (all runs' test answers together, confusion matrix drawn; --anytime: the stopping rule run by run), pvt3 export {} -o model.onnx (one file for the robot)",
+        "next: pvt3 eval {0}{pruned} (all runs' test answers together, confusion matrix drawn; --anytime: the stopping rule run by run), pvt3 final {0} -o model.onnx (the file for the robot, trained on every touch as these runs chose)",
         out.display(),
-        file.display()
     );
 }
 
@@ -127,7 +125,9 @@ fn print_runs(s: &CvSummary, wall: f64, summary: &std::path::Path) {
         let pruned = s.pruned_runs.get(i).map_or(String::new(), |p| format!("{:.4}", p.test_accuracy));
         println!(
             "{:>6} {:>5} {:>6} {:>8.4} {:>8.4} {:>8.0} {:>12}",
-            r.seed, r.val_fold, r.best_epoch, r.val_accuracy, r.test_accuracy, r.wall_seconds, pruned
+            r.seed,
+            r.val_fold.map_or("-".into(), |k| k.to_string()),
+            r.best_epoch, r.val_accuracy, r.test_accuracy, r.wall_seconds, pruned
         );
     }
     if let (Some(m), Some(sd)) = (s.pruned_mean_test_accuracy, s.pruned_std_test_accuracy) {

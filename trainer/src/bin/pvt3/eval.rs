@@ -122,6 +122,7 @@ impl Loaded {
         }
         let data = meta.provenance.dataset(data).with_context(|| format!("loading {} for {}", data_path.display(), path.display()))?;
         data.check_fits(&meta.config)?;
+        meta.provenance.check_testable_on(&data)?;
         let indices: Vec<usize> = match fold {
             Folds::All => (0..data.len()).collect(),
             Folds::One(k) => (0..data.len()).filter(|&i| data.folds[i] == k).collect(),
@@ -247,7 +248,7 @@ fn anytime_report(run: &Loaded, samples: &Samples, a: &EvalArgs) -> Result<()> {
     let calibrated = match &meta.provenance.stopping {
         Some(recorded) => recorded.clone(),
         None => {
-            let val = Samples::new(&run.data, &run.data.split(meta.provenance.val_fold)?.val, &meta.normalization);
+            let val = Samples::new(&run.data, &run.data.split_for(meta.provenance.val_fold)?.val, &meta.normalization);
             anytime::prefixes(pvt3, &val)?.calibrate()
         }
     };
@@ -270,7 +271,10 @@ fn anytime_report(run: &Loaded, samples: &Samples, a: &EvalArgs) -> Result<()> {
     println!("provisional answers on {} samples (fold {fold}), {t} temporal tokens per touch", samples.len());
     print_tenths(&curve);
     let on = match calibrated.calibrated_on {
-        CalibratedOn::ValidationFold => format!("validation fold {}", meta.provenance.val_fold),
+        CalibratedOn::ValidationFold => match meta.provenance.val_fold {
+            Some(k) => format!("validation fold {k}"),
+            None => "the validation fold".into(),
+        },
         CalibratedOn::CrossValidation { runs, samples } => {
             format!("the validation answers of the cross-validation's {runs} runs, {samples} samples")
         }

@@ -6,6 +6,7 @@ mod cv;
 mod eval;
 mod eval_cv;
 mod export;
+mod final_model;
 mod import;
 mod info;
 mod model_args;
@@ -35,6 +36,7 @@ enum Command {
     Import(import::ImportArgs),
     Train(train::TrainArgs),
     Cv(cv::CvArgs),
+    Final(final_model::FinalArgs),
     Prune(prune::PruneCommand),
     Export(export::ExportArgs),
     Bake(export::BakeArgs),
@@ -84,6 +86,7 @@ fn main() -> Result<()> {
         Command::Import(a) => import::run(a),
         Command::Train(a) => train::run(a),
         Command::Cv(a) => cv::run(a),
+        Command::Final(a) => final_model::run(a),
         Command::Prune(a) => prune::run(a),
         Command::Export(a) => export::export_onnx(&a.model, &a.out).map(|done| println!("{done}")),
         Command::Bake(a) => export::bake(a),

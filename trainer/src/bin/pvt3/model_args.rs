@@ -116,7 +116,7 @@ impl Prepared {
         RunSpec {
             data: &self.data,
             config: self.config.clone(),
-            val_fold,
+            val_fold: Some(val_fold),
             options: self.options.clone(),
             classes: self.classes.clone(),
             pause_after: args.pause_after,

@@ -1,0 +1,176 @@
+//! The model a user ships: trained on every labelled touch with what a cross-validation of the
+//! same options chose, the median of the epochs its runs selected by validation, its pruning and
+//! fine-tuning, its stopping rule. No touch is left to validate or test it, so the
+//! cross-validation is its measurement: its provenance (and the exported file's) states the
+//! accuracy the cross-validation measured, with its interval ([`Expected`]).
+
+use std::path::{Path, PathBuf};
+
+use indicatif::ProgressBar;
+use serde::{Deserialize, Serialize};
+
+use crate::anytime::Stopping;
+use crate::checkpoint::{self, read_json, write_json_atomically, Meta};
+use crate::cv::CvSummary;
+use crate::data::Dataset;
+use crate::prune::{prune_and_fine_tune, PruneStage};
+use crate::run_dir::{Checkpoint, CrossValidation, Run, CV_SUMMARY};
+use crate::train::{train, RunSpec};
+use crate::{Error, Result};
+
+/// What a final model is expected to score: the cross-validation's test accuracy over its runs.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Expected {
+    /// The cross-validation's directory.
+    pub cv: String,
+    pub seeds: Vec<u64>,
+    pub runs: usize,
+    /// Of the pruned and fine-tuned runs, where the cross-validation pruned.
+    pub pruned: bool,
+    pub mean_test_accuracy: f64,
+    pub std_test_accuracy: f64,
+    /// Student's t over the seeds' means; `None` with one seed.
+    pub ci95_test_accuracy: Option<[f64; 2]>,
+    /// The epochs the runs selected by validation (of their fine-tuning, when pruned), whose
+    /// median the final model trained.
+    pub selected_epochs: Vec<usize>,
+}
+
+/// A final model as a cross-validation chose it.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    /// The first run's trained checkpoint: configuration, options, classes, data set.
+    pub meta: Meta,
+    /// Epochs of training (the median the runs selected) and the expected accuracy.
+    pub epochs: usize,
+    pub expected: Expected,
+    /// The stopping rule the cross-validation wrote into its runs.
+    pub stopping: Option<Stopping>,
+    /// With pruning: the stage, its fine-tuning the median the pruned runs selected, and theirs.
+    pub pruned: Option<(PruneStage, Expected, Option<Stopping>)>,
+}
+
+impl Plan {
+    /// Reads the cross-validation in `cv` (its `cv.json` and first run), refusing one with runs
+    /// still training, or whose runs learnt from other runs (`--distill`) or sensors (`--joint`):
+    /// their teachers and partners would need final models too.
+    pub fn read(cv: &Path) -> Result<Self> {
+        let summary: CvSummary = read_json(&cv.join(CV_SUMMARY))?;
+        let refuse = |why: String| Error::Usage(format!("a final model of {}: {why}", cv.display()));
+        if !summary.unfinished.is_empty() {
+            return Err(refuse(format!("{} runs are still training ({})", summary.unfinished.len(), summary.unfinished.join(", "))));
+        }
+        let first = summary.runs.first().ok_or_else(|| refuse("it has no finished run".into()))?;
+        let fold = first.val_fold.ok_or_else(|| refuse("its runs are final models themselves".into()))?;
+        let run = CrossValidation(cv).run(first.seed, fold);
+        let (_, meta) = checkpoint::load_meta(&Run(&run).model())?;
+        let options = &meta.provenance.options;
+        if options.distill.is_some() || options.joint.is_some() || summary.partner.is_some() {
+            return Err(refuse("its runs learnt from other runs or another sensor (--distill, --joint), which a final model cannot".into()));
+        }
+        let expected = |pruned: bool| {
+            let (runs, mean, std, ci95) = match pruned {
+                false => (&summary.runs, Some(summary.mean_test_accuracy), Some(summary.std_test_accuracy), summary.ci95_test_accuracy),
+                true => (
+                    &summary.pruned_runs,
+                    summary.pruned_mean_test_accuracy,
+                    summary.pruned_std_test_accuracy,
+                    summary.pruned_ci95_test_accuracy,
+                ),
+            };
+            Expected {
+                cv: cv.display().to_string(),
+                seeds: summary.seeds.clone(),
+                runs: runs.len(),
+                pruned,
+                mean_test_accuracy: mean.unwrap_or(f64::NAN),
+                std_test_accuracy: std.unwrap_or(f64::NAN),
+                ci95_test_accuracy: ci95,
+                selected_epochs: runs.iter().map(|r| r.best_epoch).collect(),
+            }
+        };
+        let dense = expected(false);
+        let pruned = match &summary.pruning {
+            Some(stage) => {
+                let pruned = expected(true);
+                let (_, pruned_meta) = checkpoint::load_meta(&Run(&Run(&run).pruned()).model())?;
+                let stage = PruneStage { epochs: median(&pruned.selected_epochs), ..stage.clone() };
+                Some((stage, pruned, pruned_meta.provenance.stopping))
+            }
+            None => None,
+        };
+        Ok(Self { epochs: median(&dense.selected_epochs), stopping: meta.provenance.stopping.clone(), expected: dense, meta, pruned })
+    }
+
+    /// The data set the cross-validation trained on (`data`, by default its own), every touch
+    /// of it: refused when its touches are not the cross-validation's.
+    pub fn dataset(&self, data: Option<&Path>) -> Result<Dataset> {
+        let p = &self.meta.provenance;
+        let own = PathBuf::from(&p.data);
+        let path = data.unwrap_or(&own);
+        let data = Dataset::load(path, p.seed)?;
+        if let Some(recorded) = &p.trained_on {
+            if data.digest() != recorded.digest {
+                return Err(Error::Usage(format!(
+                    "{} holds other touches than the cross-validation {} trained on (digest {}, recorded {})",
+                    path.display(),
+                    self.expected.cv,
+                    data.digest(),
+                    recorded.digest
+                )));
+            }
+        }
+        Ok(data)
+    }
+
+    /// Trains the final model into the run directory `out` (and with pruning, prunes and
+    /// fine-tunes it into `out/pruned`), writes the cross-validation's stopping rule and
+    /// expected accuracy into it, and returns the checkpoint to ship.
+    pub fn train(&self, data: &Dataset, out: &Path, resume: bool, bar: &ProgressBar) -> Result<PathBuf> {
+        let meta = &self.meta;
+        let spec = RunSpec {
+            data,
+            config: meta.config.clone(),
+            val_fold: None,
+            options: crate::options::TrainOptions { epochs: self.epochs, ..meta.provenance.options.clone() },
+            classes: meta.classes.clone(),
+            pause_after: None,
+            start: None,
+            pruning: None,
+            partner: None,
+        };
+        train(&spec, out, resume, bar)?;
+        let dense = Run(out).model();
+        stamp(&dense, &self.stopping, &self.expected)?;
+        let Some((stage, expected, stopping)) = &self.pruned else { return Ok(dense) };
+        let pruned = Run(out).pruned();
+        prune_and_fine_tune(&dense, data, stage, &pruned, resume, bar)?;
+        stamp(&Run(&pruned).model(), stopping, expected)?;
+        Ok(Run(&pruned).model())
+    }
+}
+
+/// The median of `epochs`, the upper of the middle two of an even count.
+fn median(epochs: &[usize]) -> usize {
+    let mut sorted = epochs.to_vec();
+    sorted.sort_unstable();
+    sorted.get(sorted.len() / 2).copied().unwrap_or(0)
+}
+
+/// Writes the stopping rule and the expected accuracy into the checkpoint `dir`'s provenance.
+fn stamp(dir: &Path, stopping: &Option<Stopping>, expected: &Expected) -> Result<()> {
+    let (checkpoint_dir, mut meta) = checkpoint::load_meta(dir)?;
+    meta.provenance.stopping = stopping.clone();
+    meta.provenance.expected = Some(expected.clone());
+    write_json_atomically(&Checkpoint(&checkpoint_dir).provenance(), &meta.provenance)
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn the_median_takes_the_upper_middle() {
+        assert_eq!(super::median(&[30, 10, 20]), 20);
+        assert_eq!(super::median(&[40, 10, 30, 20]), 30);
+        assert_eq!(super::median(&[]), 0);
+    }
+}
