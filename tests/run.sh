@@ -7,20 +7,24 @@
 #      share one build; then the runtime's lints: clippy with warnings denied (every unsafe block
 #      has a SAFETY note);
 #   3. the robot runtime cross-built for aarch64 (64-bit ARM: Jetson Orin, Raspberry Pi 4/5) and
-#      its tests run under qemu: golden logits, bit-identical loads, threads, damaged files,
-#      streaming, every C-ABI error path, and runtime/examples/classify.c built with
-#      aarch64-linux-gnu-gcc and run. What needs onnxruntime or candle stays on the host.
+#      its tests that show it computes what x86-64 does run under qemu: golden logits,
+#      bit-identical loads, the kernels, damaged files, streaming, every C-ABI error path, the
+#      Rust example, and runtime/examples/classify.c built with aarch64-linux-gnu-gcc and run. What needs onnxruntime or candle stays on the host.
 #      It is built without default features, as the small robot build is (no `threads`, no
 #      rayon, no `spectral`: docs/deploy.md), so both supported feature sets are tested: all of
 #      them on the host, the small one on aarch64;
-#   4. the small robot library's size (tests/robot-small.sh, in the background from the start):
+#   4. other platforms: the trainer checked (cargo check) for Windows (x86_64-pc-windows-gnu, with
+#      Debian's mingw-w64) and macOS (aarch64-apple-darwin, its assembly by clang); the runtime and
+#      pvt3-run built as static musl binaries for x86-64 and aarch64, each run on the golden
+#      windows (the aarch64 one under qemu) and held to the host build's answers;
+#   5. the small robot library's size (tests/robot-small.sh, in the background from the start):
 #      built as docs/deploy.md says whenever the runtime, the format, its dependency tree, the
 #      build profiles or the compiler changed since it was last measured (tests/robot-small.size),
 #      it must stay within 8 MiB.
-# It installs what it needs (rustup's aarch64 target and clippy; Debian's librsvg2-bin for the
-# picture tests, valgrind for the C ABI, pkgconf for the installed library's flags,
-# gcc-aarch64-linux-gnu, libc6-dev-arm64-cross and qemu-user, with apt-get as root) or says
-# exactly what is missing.
+# It installs what it needs (rustup's aarch64, Windows, macOS and musl targets and clippy; Debian's
+# librsvg2-bin for the picture tests, valgrind for the C ABI, pkgconf for the installed library's
+# flags, gcc-aarch64-linux-gnu, libc6-dev-arm64-cross and qemu-user, gcc-mingw-w64-x86-64, clang
+# and musl-tools, with apt-get as root) or says exactly what is missing.
 # Times under qemu mean nothing; outputs do.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -136,10 +140,54 @@ export PVT3_TARGET_RUNNER="$CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER"
 export TARGET_CC=aarch64-linux-gnu-gcc
 # Code compiled only off x86-64 gets no clippy above: at least no warning may pass here.
 export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUSTFLAGS="-D warnings"
-# Under an emulator a benchmark measures nothing and takes minutes: its report's form is tested
-# on the host.
+# Under the emulator runs what shows that the ARM build computes what x86-64 computes: the golden
+# logits with every kernel choice, bit-identical answers across loads, the kernels, streaming,
+# the readers, the C and Rust examples. Left to the host, where they run in seconds rather than
+# minutes under qemu: a benchmark (under an emulator it measures nothing; its report's form is
+# tested on the host), and tests of logic and robustness that no arithmetic of the target
+# changes: the continuous stream's answer at every frame (the streaming equality stays), one
+# classifier shared by four threads, and the thousands of hostile files (damaged_files stays).
+qemu_skips=(bench_reports_batch_and_streaming_latencies every_answer_is_the_batch_classification_of_the_latest_window
+  a_classifier_shared_by_threads_answers_each_as_it_answers_one re_signed_damaged_models_are_refused_or_run_and_never_panic
+  damaged_npy_inputs_are_refused_and_never_panic)
 cargo_test --release --target "$target" -p pvt3-runtime -p pvt3-format --no-default-features -- \
-  --skip bench_reports_batch_and_streaming_latencies
+  $(printf -- '--skip %s ' "${qemu_skips[@]}")
+
+step "other platforms: the trainer checked for Windows and macOS; the runtime and pvt3-run built static with musl for x86-64 and aarch64"
+need=()
+command -v x86_64-w64-mingw32-gcc >/dev/null || need+=(gcc-mingw-w64-x86-64) # build scripts' C and assembly for Windows
+command -v clang >/dev/null || need+=(clang) # for macOS: a build script's assembly (psm) takes clang's -arch
+command -v musl-gcc >/dev/null || need+=(musl-tools) # tract's x86-64 assembly kernels, built for musl
+install_debian ${need[@]+"${need[@]}"}
+for t in x86_64-pc-windows-gnu aarch64-apple-darwin x86_64-unknown-linux-musl aarch64-unknown-linux-musl; do
+  rustup target list --installed | grep -qx "$t" || rustup target add "$t" || missing "the Rust target $t (rustup target add $t)"
+done
+cargo check --release --target x86_64-pc-windows-gnu -p pvt3-trainer --bins
+CC_aarch64_apple_darwin=clang cargo check --release --target aarch64-apple-darwin -p pvt3-trainer --bins
+# Built to show that they link statically and compute what the host build computes, never timed:
+# unoptimised and without debug information, in a fraction of the release build's time.
+export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_MUSL_LINKER=aarch64-linux-gnu-gcc CC_aarch64_unknown_linux_musl=aarch64-linux-gnu-gcc
+golden=(tests/golden/icub20/model.onnx tests/golden/icub20/input.npy)
+target/release/pvt3-run --json "${golden[@]}" >target/golden-host.jsonl
+for t in x86_64-unknown-linux-musl aarch64-unknown-linux-musl; do
+  cargo build --target "$t" -p pvt3-runtime --lib --bin pvt3-run --config profile.dev.debug=false
+  bin=target/$t/debug/pvt3-run
+  if readelf -l "$bin" | grep -q INTERP; then
+    echo "tests/run.sh: $bin asks for a dynamic loader: not a static binary" >&2
+    exit 1
+  fi
+  runner=()
+  [ "$t" = x86_64-unknown-linux-musl ] || runner=(qemu-aarch64)
+  ${runner[@]+"${runner[@]}"} "$bin" --json "${golden[@]}" >"target/golden-$t.jsonl"
+  python3 - "target/golden-$t.jsonl" target/golden-host.jsonl <<'EOF'
+import json, sys
+static, host = ([json.loads(line) for line in open(path)] for path in sys.argv[1:])
+assert len(static) == len(host) == 8, (len(static), len(host))
+worst = max(abs(a - b) for s, h in zip(static, host) for a, b in zip(s["probabilities"], h["probabilities"]))
+assert worst <= 1e-6 and all(s["class"] == h["class"] for s, h in zip(static, host)), worst
+print(f"{sys.argv[1]}: the golden windows' probabilities within {worst:.1e} of the host build's, every class the same")
+EOF
+done
 
 step "the small robot library: at most 8 MiB (docs/deploy.md)"
 if ! wait "$small_pid"; then
