@@ -120,6 +120,17 @@ impl Plan {
                 )));
             }
         }
+        // The cross-validation answered test touches shorter than its window from the tokens they
+        // fill; a final model trains on each touch, and a window needs the whole of one.
+        let frames = self.meta.config.frames;
+        let short: Vec<usize> = (0..data.len()).filter(|&i| data.lengths[i] < frames).collect();
+        if let Some(&first) = short.first() {
+            return Err(Error::Usage(format!(
+                "{} touches are shorter than the cross-validation's window of {frames} frames (the first: {}), and a final model trains on whole windows: leave them out, or cross-validate a shorter window (--set frames=N)",
+                short.len(),
+                data.touch_name(first)
+            )));
+        }
         Ok(data)
     }
 
