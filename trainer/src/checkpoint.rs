@@ -74,10 +74,7 @@ impl Provenance {
             (None, true) => Err(Error::Usage(format!(
                 "a final model: every touch of {} trained it, so none is left to test it (give --data with other touches){}",
                 self.data,
-                self.expected.as_ref().map_or(String::new(), |e| format!(
-                    "; the cross-validation {} measured {:.4} ± {:.4} over {} runs",
-                    e.cv, e.mean_test_accuracy, e.std_test_accuracy, e.runs
-                ))
+                self.expected.as_ref().map_or(String::new(), |e| format!("; expected: {e}"))
             ))),
             _ => Ok(()),
         }

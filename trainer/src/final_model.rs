@@ -36,6 +36,22 @@ pub struct Expected {
     pub selected_epochs: Vec<usize>,
 }
 
+/// The expected accuracy in words, as `pvt3 final` and `pvt3 eval`'s refusal say it.
+impl std::fmt::Display for Expected {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{:.4} ± {:.4}", self.mean_test_accuracy, self.std_test_accuracy)?;
+        if let Some([lo, hi]) = self.ci95_test_accuracy {
+            write!(f, ", 95 % interval of the mean [{lo:.4}, {hi:.4}]")?;
+        }
+        let seeds = match self.seeds.len() {
+            1 => " (one seed: no interval)".to_string(),
+            n => format!(" ({n} seeds)"),
+        };
+        let pruned = if self.pruned { "pruned " } else { "" };
+        write!(f, ", the test accuracy of the cross-validation {}'s {} {pruned}runs{seeds}", self.cv, self.runs)
+    }
+}
+
 /// A final model as a cross-validation chose it.
 #[derive(Clone, Debug)]
 pub struct Plan {

@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use anyhow::Result;
-use pvt3_trainer::final_model::{Expected, Plan};
+use pvt3_trainer::final_model::Plan;
 use pvt3_trainer::run_dir::FINAL;
 
 use crate::export::export_onnx;
@@ -63,7 +63,7 @@ pub fn run(a: FinalArgs) -> Result<()> {
     let exported = export_onnx(&model, &a.out)?;
     let expected = plan.pruned.as_ref().map_or(&plan.expected, |(_, e, _)| e);
     say(exported);
-    say(format!("expected accuracy: {}", describe(expected)));
+    say(format!("expected accuracy: {expected}"));
     if a.json {
         let out = serde_json::json!({
             "checkpoint": model.display().to_string(), "onnx": a.out.display().to_string(),
@@ -76,21 +76,4 @@ pub fn run(a: FinalArgs) -> Result<()> {
 
 fn list(epochs: &[usize]) -> String {
     epochs.iter().map(|e| e.to_string()).collect::<Vec<_>>().join(", ")
-}
-
-/// The expected accuracy in words, as `pvt3 cv` reports it.
-pub fn describe(e: &Expected) -> String {
-    let interval = e.ci95_test_accuracy.map_or(String::new(), |[lo, hi]| format!(", 95 % interval of the mean [{lo:.4}, {hi:.4}]"));
-    let seeds = match e.seeds.len() {
-        1 => " (one seed: no interval)".to_string(),
-        n => format!(" ({n} seeds)"),
-    };
-    format!(
-        "{:.4} ± {:.4}{interval}, the test accuracy of the cross-validation {}'s {} {}runs{seeds}",
-        e.mean_test_accuracy,
-        e.std_test_accuracy,
-        e.cv,
-        e.runs,
-        if e.pruned { "pruned " } else { "" }
-    )
 }
