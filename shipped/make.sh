@@ -18,7 +18,7 @@ pvt3=${PVT3:-target/release/pvt3}
 [ -x "$pvt3" ] || cargo build --release -p pvt3-trainer
 out=runs/shipped
 python=target/onnx-venv/bin/python
-[ -x "$python" ] || { echo "shipped/make.sh: needs the tests' venv (cargo test --release --workspace makes it)" >&2; exit 1; }
+[ -x "$python" ] || { echo "shipped/make.sh: needs the tests' venv (cargo test --profile ci --workspace makes it)" >&2; exit 1; }
 
 # One run of a row: cv --only seed=S,fold=0 into DIR, resumed if begun.
 run() {

@@ -8,9 +8,9 @@
 #
 # Its inputs are what decides it: the runtime's and the format's sources and manifests, the
 # crates and features of the runtime's dependency tree as the lock file pins them, the build
-# profiles, the compiler. tests/robot-small.size records the digest of those inputs and the size
-# measured last; each measurement rewrites it (commit it). A crate the trainer alone uses changes
-# none of them.
+# profiles it inherits (release, robot, robot-small: not the tests' `ci` or `robot-syms`), the
+# compiler. tests/robot-small.size records the digest of those inputs and the size measured last;
+# each measurement rewrites it (commit it). A crate the trainer alone uses changes none of them.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 record=tests/robot-small.size
@@ -23,7 +23,7 @@ inputs() {
     git ls-files -z runtime/src runtime/Cargo.toml format/src format/Cargo.toml | xargs -0 sha256sum
     # The workspace's own crates print their absolute path, which differs between clones.
     cargo tree -q --locked -p pvt3-runtime --no-default-features -e normal,features --prefix none | sed "s# ($PWD/# (#" | sort -u
-    awk '/^\[/ { p = /^\[profile/ } p' Cargo.toml
+    awk '/^\[/ { p = /^\[profile\.(release|robot|robot-small)[].]/ } p' Cargo.toml
   } | sha256sum | cut -c1-64
 }
 

@@ -1,15 +1,17 @@
 #!/usr/bin/env bash
 # The tests, exactly as CI runs them (.ci/run):
-#   1. the whole workspace on this machine (cargo test --release --workspace);
+#   1. the whole workspace on this machine (cargo test --profile ci --workspace: the release
+#      build with tract-core unoptimised, Cargo.toml's `ci`);
 #   2. the C ABI under valgrind (x86-64): the C example's paths and every entry point's error
-#      paths, no invalid read or write, no leak; that the README's main job (cargo build
-#      --release) needs no library built with other features than step 1's, so the two commands
-#      share one build; then the runtime's lints: clippy with warnings denied (every unsafe block
-#      has a SAFETY note);
+#      paths, no invalid read or write, no leak; then the runtime's lints: clippy with warnings
+#      denied (every unsafe block has a SAFETY note);
 #   3. the robot runtime cross-built for aarch64 (64-bit ARM: Jetson Orin, Raspberry Pi 4/5) and
 #      its tests that show it computes what x86-64 does run under qemu: golden logits,
 #      bit-identical loads, the kernels, damaged files, streaming, every C-ABI error path, the
-#      Rust example, and runtime/examples/classify.c built with aarch64-linux-gnu-gcc and run. What needs onnxruntime or candle stays on the host.
+#      Rust example built, and runtime/examples/classify.c built with aarch64-linux-gnu-gcc and
+#      run. What needs onnxruntime or candle stays on the host. The tests run under qemu beside
+#      step 4's builds, which use the other core (a separate target directory, so neither waits
+#      for the other's lock);
 #      It is built without default features, as the small robot build is (no `threads`, no
 #      rayon, no `spectral`: docs/deploy.md), so both supported feature sets are tested: all of
 #      them on the host, the small one on aarch64;
@@ -80,14 +82,14 @@ command -v pkg-config >/dev/null || need+=(pkgconf)
 install_debian ${need[@]+"${need[@]}"}
 [ "$(uname -m)" != x86_64 ] || export PVT3_VALGRIND=1
 
-step "host: cargo test --release --workspace"
-cargo_test --release --workspace
+step "host: cargo test --profile ci --workspace"
+cargo_test --profile ci --workspace
 
 if [ -n "${PVT3_VALGRIND:-}" ]; then
   step "C ABI under valgrind: every entry point's error paths, no invalid access, no leak"
   # The test binary the host step built (the same command, so nothing is built again: with
   # `-p pvt3-runtime` alone its dependencies' features differ, and tract would be rebuilt).
-  c_abi=$(cargo test -q --release --workspace --no-run --message-format=json 2>/dev/null |
+  c_abi=$(cargo test -q --profile ci --workspace --no-run --message-format=json 2>/dev/null |
     python3 -c 'import json, sys
 for line in sys.stdin:
     m = json.loads(line)
@@ -98,29 +100,9 @@ for line in sys.stdin:
   unset PVT3_VALGRIND
 fi
 
-step "the README's main job reuses this build: cargo build --release needs no crate built otherwise"
-# trainer/Cargo.toml turns on the features the tests' dev-dependencies turn on, so that the main job
-# and the tests build candle, tract and the pvt3 crates once. Every library the main job builds
-# must have been built by the tests with the same features; where not, say which.
-lib_features() { cargo "$@" --message-format=json 2>/dev/null | python3 -c 'import json, sys
-for line in sys.stdin:
-    m = json.loads(line)
-    if m.get("reason") == "compiler-artifact" and "lib" in m["target"]["kind"]:
-        print(m["package_id"].rsplit("#", 1)[-1], ",".join(sorted(m["features"])) or "-")' | LC_ALL=C sort -u; }
-tests_features=$(lib_features test -q --release --workspace --no-run)
-parted=$(LC_ALL=C comm -23 <(lib_features build --release) - <<<"$tests_features")
-if [ -n "$parted" ]; then
-  echo "tests/run.sh: the main job (cargo build --release) builds crates with features the tests' build does not:" >&2
-  while read -r crate main; do
-    echo "  $crate: main job $main; tests $(awk -v c="$crate" '$1 == c { print $2 }' <<<"$tests_features" | paste -sd' ')" >&2
-  done <<<"$parted"
-  echo "turn the tests' features on in trainer/Cargo.toml's list" >&2
-  exit 1
-fi
-
 step "runtime lints: cargo clippy -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings"
 cargo clippy --version >/dev/null 2>&1 || rustup component add clippy || missing "clippy (rustup component add clippy)"
-cargo clippy --release -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings
+cargo clippy --profile ci -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings
 
 step "aarch64: the cross toolchain and qemu"
 target=aarch64-unknown-linux-gnu
@@ -132,30 +114,40 @@ command -v qemu-aarch64 >/dev/null || need+=(qemu-user)
 install_debian ${need[@]+"${need[@]}"}
 rustup target list --installed | grep -qx "$target" || rustup target add "$target" || missing "the Rust target $target (rustup target add $target)"
 
-step "aarch64: cargo test --release --target $target -p pvt3-runtime -p pvt3-format --no-default-features (under qemu)"
-export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc
-export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER="qemu-aarch64 -L $sysroot"
-# The tests run the C example and pvt3-run through the same emulator, built by the same compiler.
-export PVT3_TARGET_RUNNER="$CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER"
-export TARGET_CC=aarch64-linux-gnu-gcc
-# Code compiled only off x86-64 gets no clippy above: at least no warning may pass here.
-export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUSTFLAGS="-D warnings"
+step "aarch64: cargo test --profile ci --target $target -p pvt3-runtime -p pvt3-format --no-default-features --no-run"
+# The aarch64 build's compiler, linker and runner, for its build and its tests alone (subshells):
+# the other platforms' builds below name their own.
+aarch64_env() {
+  export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc
+  export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER="qemu-aarch64 -L $sysroot"
+  # The tests run the C example and pvt3-run through the same emulator, built by the same compiler.
+  export PVT3_TARGET_RUNNER="$CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER"
+  export TARGET_CC=aarch64-linux-gnu-gcc
+  # Code compiled only off x86-64 gets no clippy above: at least no warning may pass here.
+  export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUSTFLAGS="-D warnings"
+}
+aarch64_tests=(--profile ci --target "$target" -p pvt3-runtime -p pvt3-format --no-default-features)
+(aarch64_env && cargo test "${aarch64_tests[@]}" --no-run)
+
+step "aarch64: the tests under qemu, in the background beside the other platforms' builds"
 # Under the emulator runs what shows that the ARM build computes what x86-64 computes: the golden
 # logits with every kernel choice, bit-identical answers across loads, the kernels, streaming,
-# the readers, the C and Rust examples. Left to the host, where they run in seconds rather than
-# minutes under qemu: a benchmark (under an emulator it measures nothing; its report's form is
-# tested on the host), and tests of logic and robustness that no arithmetic of the target
-# changes: the continuous stream's answer at every frame (the streaming equality stays), one
-# classifier shared by four threads, and the thousands of hostile files (damaged_files stays).
+# the readers, the C example. Left to the host, where they run in seconds rather than minutes
+# under qemu: a benchmark (under an emulator it measures nothing; its report's form is tested on
+# the host), and tests of logic and robustness that no arithmetic of the target changes: the
+# continuous stream's answer at every frame (the streaming equality stays), the Rust example's
+# 79 answers (built for aarch64 above; its arithmetic is the golden tests'), one classifier shared
+# by four threads, and the thousands of hostile files (damaged_files stays).
 qemu_skips=(bench_reports_batch_and_streaming_latencies every_answer_is_the_batch_classification_of_the_latest_window
-  a_classifier_shared_by_threads_answers_each_as_it_answers_one re_signed_damaged_models_are_refused_or_run_and_never_panic
-  damaged_npy_inputs_are_refused_and_never_panic)
-cargo_test --release --target "$target" -p pvt3-runtime -p pvt3-format --no-default-features -- \
-  $(printf -- '--skip %s ' "${qemu_skips[@]}")
+  the_example_answers_as_the_runtime_does a_classifier_shared_by_threads_answers_each_as_it_answers_one
+  re_signed_damaged_models_are_refused_or_run_and_never_panic damaged_npy_inputs_are_refused_and_never_panic)
+qemu_log=target/aarch64-tests.log
+(aarch64_env && cargo_test "${aarch64_tests[@]}" -- $(printf -- '--skip %s ' "${qemu_skips[@]}")) >"$qemu_log" 2>&1 &
+qemu_pid=$!
+trap 'kill "$small_pid" "$qemu_pid" 2>/dev/null || true; rm -f "$log"' EXIT
+echo "(its output follows the other platforms' step)"
 
 step "other platforms: the trainer checked for Windows and macOS; the runtime and pvt3-run built static with musl for x86-64 and aarch64"
-# The aarch64 step's compiler and runner were for it alone: each target below names its own.
-unset TARGET_CC PVT3_TARGET_RUNNER
 need=()
 command -v x86_64-w64-mingw32-gcc >/dev/null || need+=(gcc-mingw-w64-x86-64) # build scripts' C and assembly for Windows
 command -v clang >/dev/null || need+=(clang) # for macOS: a build script's assembly (psm) takes clang's -arch
@@ -164,8 +156,11 @@ install_debian ${need[@]+"${need[@]}"}
 for t in x86_64-pc-windows-gnu aarch64-apple-darwin x86_64-unknown-linux-musl aarch64-unknown-linux-musl; do
   rustup target list --installed | grep -qx "$t" || rustup target add "$t" || missing "the Rust target $t (rustup target add $t)"
 done
-cargo check --release --target x86_64-pc-windows-gnu -p pvt3-trainer --bins
-CC_aarch64_apple_darwin=clang cargo check --release --target aarch64-apple-darwin -p pvt3-trainer --bins
+# Their own target directory, so that neither these builds nor the aarch64 tests' cargo waits for
+# the other's lock on target/.
+platforms=(--target-dir target/platforms)
+CC_aarch64_apple_darwin=clang cargo check "${platforms[@]}" --profile ci --target x86_64-pc-windows-gnu --target aarch64-apple-darwin \
+  -p pvt3-trainer --bins
 # Built to show that they link statically and compute what the host build computes, never timed:
 # unoptimised and without debug information, in a fraction of the release build's time; all but
 # tract's kernels crate, which unoptimised answers wrongly on aarch64 (the golden windows'
@@ -173,11 +168,11 @@ CC_aarch64_apple_darwin=clang cargo check --release --target aarch64-apple-darwi
 # within 3e-8, as the optimised builds are).
 export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_MUSL_LINKER=aarch64-linux-gnu-gcc CC_aarch64_unknown_linux_musl=aarch64-linux-gnu-gcc
 golden=(tests/golden/icub20/model.onnx tests/golden/icub20/input.npy)
-target/release/pvt3-run --json "${golden[@]}" >target/golden-host.jsonl
+target/ci/pvt3-run --json "${golden[@]}" >target/golden-host.jsonl
+cargo build "${platforms[@]}" --target x86_64-unknown-linux-musl --target aarch64-unknown-linux-musl -p pvt3-runtime --lib --bin pvt3-run \
+  --config profile.dev.debug=false --config 'profile.dev.package.tract-linalg.opt-level=1'
 for t in x86_64-unknown-linux-musl aarch64-unknown-linux-musl; do
-  cargo build --target "$t" -p pvt3-runtime --lib --bin pvt3-run --config profile.dev.debug=false \
-    --config 'profile.dev.package.tract-linalg.opt-level=1'
-  bin=target/$t/debug/pvt3-run
+  bin=target/platforms/$t/debug/pvt3-run
   if readelf -l "$bin" | grep -q INTERP; then
     echo "tests/run.sh: $bin asks for a dynamic loader: not a static binary" >&2
     exit 1
@@ -194,6 +189,12 @@ assert worst <= 1e-6 and all(s["class"] == h["class"] for s, h in zip(static, ho
 print(f"{sys.argv[1]}: the golden windows' probabilities within {worst:.1e} of the host build's, every class the same")
 EOF
 done
+
+step "aarch64: the tests under qemu (run beside the step above)"
+qemu_status=0
+wait "$qemu_pid" || qemu_status=$?
+cat "$qemu_log"
+[ "$qemu_status" = 0 ] || { echo "tests/run.sh: the aarch64 tests failed under qemu" >&2; exit 1; }
 
 step "the small robot library: at most 8 MiB (docs/deploy.md)"
 if ! wait "$small_pid"; then
