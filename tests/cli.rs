@@ -363,7 +363,7 @@ fn train_prune_fine_tune_and_bake_make_a_smaller_model() {
     let (meta, model, _) = pvt3_trainer::checkpoint::load(&run.join("pruned")).unwrap();
     let d = Dataset::load(&data, 0).unwrap();
     let test: Vec<usize> = (0..d.len()).filter(|&i| d.folds[i] == 4).take(8).collect();
-    let samples = pvt3_trainer::evaluate::Samples::new(&d, &test, &meta.normalization);
+    let samples = pvt3_trainer::data::windows::Samples::new(&d, &test, &meta.normalization);
     let (x, _) = samples.batch(&(0..8).collect::<Vec<_>>(), |_| {}).unwrap();
     let expected = model.forward(&x, None).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap();
     let raw: Vec<f32> = test.iter().flat_map(|&i| d.sample(i).to_vec()).collect();

@@ -87,8 +87,8 @@ fn each_seed_draws_its_folds_and_every_reload_reads_them() {
     // Its normalisation is fitted on seed 1's training touches, and eval reads seed 1's test fold.
     let folds = drawn.folds.clone();
     let train: Vec<usize> = (0..folds.len()).filter(|&i| folds[i] != 0 && folds[i] != TEST_FOLD).collect();
-    let fitted = pvt3_trainer::normalization::fit(&drawn, &train, 24);
-    let norm: pvt3_trainer::normalization::Normalization = serde_json::from_value(json(&run.join("model/normalization.json"))).unwrap();
+    let fitted = pvt3_trainer::data::normalization::fit(&drawn, &train, 24);
+    let norm: pvt3_trainer::data::normalization::Normalization = serde_json::from_value(json(&run.join("model/normalization.json"))).unwrap();
     assert_eq!(norm, fitted, "the normalisation of seed 1's training touches");
     eval_agrees(&run, &folds);
     assert_eq!(recorded(&run.join("model")), (Some(1), folds.clone()), "seed 1's run records seed 1's folds");

@@ -76,9 +76,8 @@ fn expand_over_batch(g: &mut Graph, token: &str, batch: &str, rest: &[usize]) ->
 fn check(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<()> {
     let c = &m.config;
     c.validate().map_err(|e| Error::Inconsistent(e.to_string()))?;
-    let channels = c.sample_shape().iter().product::<usize>() / c.frames;
-    if norm.mean.len() != channels || norm.std.len() != channels || norm.frames != c.frames {
-        return Err(Error::Inconsistent(format!("normalisation does not fit {channels} channels × {} frames", c.frames)));
+    if !norm.fits(c) {
+        return Err(Error::Inconsistent(format!("normalisation does not fit {} channels × {} frames", c.sensor_channels(), c.frames)));
     }
     if meta.classes.len() != c.classes {
         return Err(Error::Inconsistent(format!("{} class names for {} classes", meta.classes.len(), c.classes)));

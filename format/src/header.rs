@@ -99,6 +99,41 @@ impl StopRule {
         }
         (self.agreeing == 0).then(|| "no answer to agree (agreeing = 0)".to_string())
     }
+
+    /// The stopping decision, written once for the runtime's streams and the trainer's
+    /// calibration and replay: a touch stops after its `k`-th temporal token when the answer then,
+    /// `class` with `probability`, is at least [`StopRule::top_probability`] sure and
+    /// [`answers_agree`] over the last [`StopRule::agreeing`] tokens.
+    pub fn stops<E>(&self, k: usize, class: usize, probability: f32, class_after: impl FnMut(usize) -> Result<usize, E>) -> Result<bool, E> {
+        let sure = probability >= self.top_probability;
+        if !sure {
+            return Ok(false);
+        }
+        answers_agree(self.agreeing, k, class, class_after)
+    }
+}
+
+/// The rule in words, as reports and pictures give it.
+impl std::fmt::Display for StopRule {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "top probability ≥ {:.4} with {} answers in a row agreeing", self.top_probability, self.agreeing)
+    }
+}
+
+/// Whether the answers after each of the last `agreeing` tokens up to the `k`-th name `class`,
+/// the `k`-th's: `class_after(j)` gives the class answered after `j` tokens, asked for `j` from
+/// `k + 1 − agreeing` to `k − 1` in order, until one differs. False while fewer than `agreeing`
+/// tokens are in.
+pub fn answers_agree<E>(agreeing: usize, k: usize, class: usize, mut class_after: impl FnMut(usize) -> Result<usize, E>) -> Result<bool, E> {
+    if k < agreeing {
+        return Ok(false);
+    }
+    for j in k + 1 - agreeing..k {
+        if class_after(j)? != class {
+            return Ok(false);
+        }
+    }
+    Ok(true)
 }
 
 impl Header {
@@ -217,6 +252,26 @@ mod tests {
 
     fn parse(entries: &[(&'static str, String)]) -> Result<Header, HeaderError> {
         Header::parse(entries.iter().map(|(k, v)| (*k, v.as_str())))
+    }
+
+    #[test]
+    fn a_touch_stops_when_sure_and_the_last_answers_agree() {
+        let rule = StopRule { top_probability: 0.8, agreeing: 3 };
+        // The classes after tokens 1, 2, 3, …: 2, 1, 1, 1.
+        let classes = [2, 1, 1, 1];
+        let mut asked = Vec::new();
+        let mut after = |j: usize| -> Result<usize, ()> {
+            asked.push(j);
+            Ok(classes[j - 1])
+        };
+        assert_eq!(rule.stops(2, 1, 0.99, &mut after), Ok(false), "fewer tokens than answers to agree");
+        assert_eq!(rule.stops(3, 1, 0.99, &mut after), Ok(false), "the first answer differs");
+        assert_eq!(rule.stops(4, 1, 0.99, &mut after), Ok(true));
+        assert_eq!(rule.stops(4, 1, 0.79, &mut after), Ok(false), "not sure enough");
+        assert_eq!(rule.stops(4, 1, f32::NAN, &mut after), Ok(false));
+        assert_eq!(asked, [1, 2, 3], "only the answers before, until one differs; none when not sure");
+        assert_eq!(rule.stops(4, 1, 0.99, |_| Err("no answer")), Err("no answer"));
+        assert_eq!(rule.to_string(), "top probability ≥ 0.8000 with 3 answers in a row agreeing");
     }
 
     #[test]

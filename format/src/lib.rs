@@ -9,7 +9,7 @@ mod header;
 pub mod onnx;
 
 pub use digest::{digest, verify, Integrity};
-pub use header::{top_class, Dims, Header, HeaderError, Reading, StopRule, FORMAT_VERSION};
+pub use header::{answers_agree, top_class, Dims, Header, HeaderError, Reading, StopRule, FORMAT_VERSION};
 
 /// Input: raw sensor frames `[batch, height, width, (channels,) frames]`.
 pub const INPUT: &str = "frames";

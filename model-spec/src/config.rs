@@ -71,6 +71,12 @@ pub fn spectral_bins(frames: usize) -> usize {
     frames / 2 + 1
 }
 
+/// The refusal of what PVT³ alone does (pruning, baking, export, provisional answers), asked of
+/// an `other` network: said once for the configuration and the trained model alike.
+pub fn pvt3_only(what: &str, other: Architecture) -> Error {
+    Error::Config(format!("{what}: PVT³ models only, and this is a {other} model"))
+}
+
 impl Config {
     pub fn architecture(&self) -> Architecture {
         self.network.architecture()
@@ -180,7 +186,7 @@ impl Config {
     pub fn require_pvt3(&self, what: &str) -> Result<()> {
         match self.architecture() {
             Architecture::Pvt3 => Ok(()),
-            other => Err(Error::Config(format!("{what}: PVT³ models only, and this is a {other} model"))),
+            other => Err(pvt3_only(what, other)),
         }
     }
 

@@ -4,6 +4,8 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::config::Config;
+
 /// `(x - mean[c]) / std[c]` for every channel `c`; samples are laid out `[channels…, frames]`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Normalization {
@@ -13,6 +15,13 @@ pub struct Normalization {
 }
 
 impl Normalization {
+    /// Whether this normalises the windows `config` reads: a mean and a deviation for each of its
+    /// sensor channels, fitted for its frames.
+    pub fn fits(&self, config: &Config) -> bool {
+        let channels = config.sensor_channels();
+        self.mean.len() == channels && self.std.len() == channels && self.frames == config.frames
+    }
+
     /// Appends the normalised `sample` to `out`.
     pub fn apply_into(&self, sample: &[f32], out: &mut Vec<f32>) {
         for (c, row) in sample.chunks(self.frames).enumerate() {

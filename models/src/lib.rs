@@ -5,13 +5,12 @@
 //! transformer across frames (the ViViT factorised encoder), and classified from the temporal CLS
 //! token. Trainable *channel-selection* masks (attention q/k/v channels, feed-forward units) and a
 //! *frame-selection* mask let training find what can be pruned. The paper's baselines, ViT and
-//! RAEC, live beside it so that one trainer fits all three ([`Classifier`]).
+//! RAEC, live beside it so that one trainer fits all three ([`Model`]).
 //!
 //! What the model is without a tensor library (configuration, cost model, pruning, baking, the
 //! f64 reference) lives in `pvt3-spec`; this crate is its candle form for training.
 
 pub mod attention;
-pub mod classifier;
 pub mod dense;
 pub mod dropout;
 pub mod error;
@@ -24,6 +23,7 @@ pub mod head;
 pub mod init;
 pub mod layer_norm;
 pub mod lstm;
+pub mod model;
 pub mod pvt3;
 pub mod raec;
 pub mod spectrum;
@@ -31,7 +31,7 @@ pub mod transformer;
 pub mod vit;
 pub mod weights;
 
-pub use classifier::Classifier;
+pub use model::Model;
 pub use error::{Error, Result};
 pub use pvt3::Pvt3;
 pub use pvt3_spec::{Architecture, Config, Network, Pvt3Config, RaecConfig, Rng, VitConfig};

@@ -186,8 +186,8 @@ impl Session {
     /// touch ended there. With every frame in, it is what [`Session::finish`] answers.
     /// [`Error::NoTokenYet`] before the first token is complete; [`Error::NoPrefixes`] for a file
     /// exported before format 1.1. The stopping rule reads the answers after the tokens just
-    /// before too: those not asked for are computed here (a session that peeks after every token
-    /// runs one temporal stage per peek).
+    /// before too, until one differs: those not asked for are computed here (a session that peeks
+    /// after every token runs one temporal stage per peek).
     pub fn peek(&mut self) -> Result<Peek> {
         if !self.stages.prefixes {
             return Err(Error::NoPrefixes);
@@ -199,14 +199,8 @@ impl Session {
         let prediction = self.temporal(tokens)?;
         self.remember(tokens, prediction.class);
         let stop = match self.stages.stop_rule {
-            Some(rule) if prediction.probabilities[prediction.class] >= rule.top_probability && tokens >= rule.agreeing => {
-                let mut agree = true;
-                for before in tokens + 1 - rule.agreeing..tokens {
-                    agree &= self.class_after(before)? == prediction.class;
-                }
-                agree
-            }
-            _ => false,
+            Some(rule) => rule.stops(tokens, prediction.class, prediction.probabilities[prediction.class], |j| self.class_after(j))?,
+            None => false,
         };
         Ok(Peek { prediction, frames: tokens * self.stages.tubelet(), stop })
     }

@@ -10,11 +10,11 @@
 //! samples and the agreement length can be chosen too ([`Prefixes::calibrate_pooled`]). The
 //! exporter writes the rule into the file (`pvt3.stop_rule`).
 
-use pvt3_format::StopRule;
+use pvt3_format::{answers_agree, StopRule};
 use pvt3_models::Pvt3;
 use serde::{Deserialize, Serialize};
 
-use crate::evaluate::{Samples, EVAL_BATCH};
+use crate::{data::windows::Samples, evaluate::EVAL_BATCH};
 use crate::Result;
 
 /// Answers in a row that must agree on the class before a touch stops: a single confident
@@ -77,7 +77,7 @@ pub struct Answers {
 }
 
 /// The PVT³ network of `model`, which gives provisional answers; `None` for another network.
-pub fn answering(model: &pvt3_models::Classifier) -> Option<&Pvt3> {
+pub fn answering(model: &pvt3_models::Model) -> Option<&Pvt3> {
     model.pvt3("provisional answers").ok()
 }
 
@@ -124,9 +124,25 @@ impl From<&Answers> for Prefixes {
     }
 }
 
+/// A sample's classes after each token as [`pvt3_format::StopRule::stops`] asks for them.
+fn answered(class: &[u32]) -> impl FnMut(usize) -> std::result::Result<usize, std::convert::Infallible> + '_ {
+    |j| Ok(class[j - 1] as usize)
+}
+
 impl Prefixes {
     fn samples(&self) -> f64 {
         self.top.len().max(1) as f64
+    }
+
+    /// Accuracy after each tenth of the touch: the share, the tokens read (at least one), the
+    /// accuracy.
+    pub fn tenths(&self) -> Vec<(f64, usize, f64)> {
+        (1..=10)
+            .map(|tenth| {
+                let k = (tenth * self.tokens).div_ceil(10).max(1);
+                (tenth as f64 / 10.0, k, self.accuracy_at(k))
+            })
+            .collect()
     }
 
     /// Accuracy from the first `k` tokens alone.
@@ -137,9 +153,7 @@ impl Prefixes {
     /// The number of tokens after which sample `i` stops by `rule` (all of them if never).
     fn stops_after(&self, i: usize, rule: StopRule) -> usize {
         let (top, class) = (&self.top[i], &self.class[i]);
-        (rule.agreeing..=self.tokens)
-            .find(|&k| top[k - 1] >= rule.top_probability && class[k - rule.agreeing..k].iter().all(|c| *c == class[k - 1]))
-            .unwrap_or(self.tokens)
+        (1..=self.tokens).find(|&k| rule.stops(k, class[k - 1] as usize, top[k - 1], answered(class)) == Ok(true)).unwrap_or(self.tokens)
     }
 
     /// For each sample, the number of tokens after which `rule` stops it (all of them if never),
@@ -200,7 +214,7 @@ impl Prefixes {
         for i in 0..n {
             let mut record = f32::NEG_INFINITY;
             for k in agreeing..=last {
-                let agreed = self.class[i][k - agreeing..k].iter().all(|c| *c == self.class[i][k - 1]);
+                let agreed = answers_agree(agreeing, k, self.class[i][k - 1] as usize, answered(&self.class[i])) == Ok(true);
                 if agreed && self.top[i][k - 1] > record {
                     record = self.top[i][k - 1];
                     moves.push((record, i, k));
@@ -315,6 +329,22 @@ mod tests {
         let c = p.calibrate();
         assert_eq!(c.rule.agreeing, AGREEING);
         assert!(c.accuracy == 1.0 && c.rule.top_probability <= 0.95, "{c:?}");
+    }
+
+    #[test]
+    fn each_tenth_reads_the_tokens_that_cover_it_and_at_least_one() {
+        let p = Prefixes {
+            top: vec![vec![0.9; 4]; 2],
+            class: vec![vec![1, 0, 0, 0], vec![1, 1, 0, 1]],
+            labels: vec![0, 1],
+            tokens: 4,
+        };
+        let t = p.tenths();
+        assert_eq!(t.len(), 10);
+        assert_eq!(t[0], (0.1, 1, 0.5), "a tenth of four tokens reads one");
+        assert_eq!(t[2], (0.3, 2, 1.0), "three tenths read 1.2 tokens' worth: two");
+        assert_eq!(t[5], (0.6, 3, 0.5));
+        assert_eq!(t[9], (1.0, 4, 1.0));
     }
 
     /// The definition `calibrate_with` sweeps: try every top probability seen, from 1 down, and

@@ -8,11 +8,11 @@ use std::path::{Path, PathBuf};
 
 use candle_nn::VarMap;
 use pvt3_models::weights::{load_weights, save_weights};
-use pvt3_models::{Classifier, Config};
+use pvt3_models::{Model, Config};
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
-use crate::normalization::Normalization;
+use crate::data::normalization::Normalization;
 use crate::options::TrainOptions;
 use crate::run_dir::{Checkpoint, Run};
 use crate::{Error, Result};
@@ -240,11 +240,10 @@ pub fn load_meta(path: &Path) -> Result<(PathBuf, Meta)> {
     let normalization: Normalization = read_json(&files.normalization())?;
     let classes: Vec<String> = read_json(&files.classes())?;
     let provenance: Provenance = read_json(&files.provenance())?;
-    let channels = config.sample_shape().iter().product::<usize>() / config.frames;
-    if normalization.mean.len() != channels || normalization.std.len() != channels || normalization.frames != config.frames {
+    if !normalization.fits(&config) {
         return Err(checkpoint_error(
             &dir,
-            format!("normalization.json does not fit the configuration ({channels} channels × {} frames)", config.frames),
+            format!("normalization.json does not fit the configuration ({} channels × {} frames)", config.sensor_channels(), config.frames),
         ));
     }
     if classes.len() != config.classes {
@@ -257,9 +256,9 @@ pub fn load_meta(path: &Path) -> Result<(PathBuf, Meta)> {
 }
 
 /// Loads a checkpoint: its metadata and the model with its weights.
-pub fn load(path: &Path) -> Result<(Meta, Classifier, VarMap)> {
+pub fn load(path: &Path) -> Result<(Meta, Model, VarMap)> {
     let (dir, meta) = load_meta(path)?;
-    let (model, varmap) = Classifier::init(&meta.config, 0)?;
+    let (model, varmap) = Model::init(&meta.config, 0)?;
     load_weights(&varmap, &Checkpoint(&dir).weights())?;
     Ok((meta, model, varmap))
 }

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 use crate::anytime::{Prefixes, Stopping};
 use crate::checkpoint::{self, write_json_atomically};
 use crate::data::Dataset;
-use crate::evaluate::Samples;
+use crate::data::windows::Samples;
 use crate::run_dir::Checkpoint;
 use crate::Result;
 

@@ -14,6 +14,10 @@
 //! fold array gets stratified folds 0..=4 drawn from a seed. Folds are drawn by touch: the
 //! windows a model reads from one touch are never split between training and test. A run records
 //! the split it trained on ([`split::TrainedOn`]), and every reload takes it from there.
+//!
+//! The data wing: a sample goes one way, from a file ([`Dataset`], or CSV folders through
+//! [`import`]) to a split's windows normalised by the training split's fit ([`normalization`],
+//! [`windows`]) to an augmented batch ([`augment`]) to the learner ([`crate::train`]).
 
 use std::fs::File;
 use std::io::{Read, Seek};
@@ -26,7 +30,11 @@ use pvt3_models::Rng;
 
 use crate::{Error, Result};
 
+pub mod augment;
+pub mod import;
+pub mod normalization;
 mod split;
+pub mod windows;
 pub use split::{Split, TrainedOn};
 
 /// The arrays of a data set file, as `pvt3 import` writes them and [`Dataset::load`] reads them.

@@ -8,16 +8,16 @@
 use std::path::Path;
 
 use candle_core::{Tensor, D};
-use pvt3_models::Classifier;
+use pvt3_models::Model;
 
 use crate::data::TrainedOn;
-use crate::normalization::Normalization;
+use crate::data::normalization::Normalization;
 use crate::run_dir::{CrossValidation, Run};
 use crate::{Error, Result};
 
 /// The teaching runs, loaded.
 pub struct Teachers {
-    models: Vec<Classifier>,
+    models: Vec<Model>,
 }
 
 impl Teachers {

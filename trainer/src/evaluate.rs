@@ -1,171 +1,11 @@
-//! Evaluation: loss, accuracy and predictions of a model on normalised windows, in batches.
-//!
-//! A touch longer than the model's window is read as windows (see [`window_starts`]); its answer
-//! is the mean of their probabilities. Training instead draws one window at random from each
-//! touch every epoch ([`Samples::cropped`]), an augmentation of where the touch is read.
+//! Evaluation: loss, accuracy and predictions of a model on normalised windows
+//! ([`Samples`]), in batches; a touch read as several windows answers with the mean of their
+//! probabilities.
 
-use candle_core::{Device, Tensor};
-use pvt3_models::{Classifier, Rng};
+use pvt3_models::Model;
 
-use crate::data::Dataset;
-use crate::normalization::Normalization;
+use crate::data::windows::Samples;
 use crate::Result;
-
-/// Normalised windows of one split, ready to batch.
-#[derive(Clone, Debug)]
-pub struct Samples {
-    pub x: Vec<f32>,
-    /// Each window's label.
-    pub labels: Vec<u32>,
-    pub sample_shape: Vec<usize>,
-    /// Each window's touch, numbered from 0 in the order of the split (rising, a touch's
-    /// windows together).
-    pub touches: Vec<usize>,
-    /// Each window's frames that are its touch's: all of the window's, but for a test touch
-    /// shorter than it, which is answered from the temporal tokens it fills ([`evaluate`]).
-    pub filled: Vec<usize>,
-}
-
-/// Where the windows of `frames` frames that evaluate a touch of `len` frames start: every half
-/// window from the first frame, and one more that ends at the touch's last frame; one window
-/// for a touch of exactly `frames` or fewer.
-pub fn window_starts(len: usize, frames: usize) -> Vec<usize> {
-    if len <= frames {
-        return vec![0];
-    }
-    let stride = (frames / 2).max(1);
-    let last = len - frames;
-    let mut starts: Vec<usize> = (0..=last).step_by(stride).collect();
-    if starts.last() != Some(&last) {
-        starts.push(last);
-    }
-    starts
-}
-
-impl Samples {
-    /// The `indices` touches of `data`, each read as its evaluation windows ([`window_starts`])
-    /// of the `norm.frames` frames the model reads, normalised.
-    pub fn new(data: &Dataset, indices: &[usize], norm: &Normalization) -> Self {
-        let picks = indices.iter().flat_map(|&i| window_starts(data.lengths[i], norm.frames).into_iter().map(move |s| (i, s)));
-        Self::from_windows(data, picks, norm, |i, start, raw| data.window_into(i, start, norm.frames, raw))
-    }
-
-    /// One window of each of the `indices` touches, where `rng` draws it (the whole touch, and
-    /// no draw, when it is exactly one window long). With `stretch` > 0 each window is also read
-    /// at a random speed, as if the touch had been made faster or slower: it spans `r` times the
-    /// model's frames of the touch, `r` log-uniform in [1 / (1 + stretch), 1 + stretch] (at most
-    /// the whole touch), resampled to the model's frames ([`pvt3_runtime::resample`]).
-    pub fn cropped(data: &Dataset, indices: &[usize], norm: &Normalization, stretch: f64, rng: &mut Rng) -> Self {
-        if stretch > 0.0 {
-            // Each touch's window as (first frame, source frames per model frame), drawn in order.
-            let picks: Vec<(usize, (f64, f64))> = indices
-                .iter()
-                .map(|&i| {
-                    let len = data.lengths[i];
-                    let r = log_uniform_factor(stretch, rng).min(len as f64 / norm.frames as f64);
-                    (i, (rng.uniform() as f64 * (len as f64 - r * norm.frames as f64), r))
-                })
-                .collect();
-            return Self::from_windows(data, picks, norm, |i, (start, r), raw| {
-                let len = data.lengths[i];
-                raw.resize(data.sample_len() / data.max_frames() * norm.frames, 0.0);
-                for (row, out) in data.sample(i).chunks(data.max_frames()).zip(raw.chunks_mut(norm.frames)) {
-                    pvt3_runtime::resample::resample_into(&row[..len], start, r, out);
-                }
-            });
-        }
-        let picks: Vec<(usize, usize)> = indices
-            .iter()
-            .map(|&i| {
-                let spare = data.lengths[i] - norm.frames;
-                (i, if spare == 0 { 0 } else { rng.below(spare + 1) })
-            })
-            .collect();
-        Self::from_windows(data, picks, norm, |i, start, raw| data.window_into(i, start, norm.frames, raw))
-    }
-
-    /// The windows `picks` names, each a touch and where in it, read into an empty buffer by `read`
-    /// and normalised; a touch's windows come together.
-    fn from_windows<W>(
-        data: &Dataset,
-        picks: impl IntoIterator<Item = (usize, W)>,
-        norm: &Normalization,
-        mut read: impl FnMut(usize, W, &mut Vec<f32>),
-    ) -> Self {
-        let mut sample_shape = data.sample_shape.clone();
-        *sample_shape.last_mut().expect("a frame axis") = norm.frames;
-        let (mut x, mut raw, mut labels, mut touches, mut filled) = (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
-        let mut previous = None;
-        for (i, at) in picks {
-            raw.clear();
-            read(i, at, &mut raw);
-            norm.apply_into(&raw, &mut x);
-            labels.push(data.labels[i]);
-            filled.push(data.lengths[i].min(norm.frames));
-            let touch = match previous {
-                Some((p, t)) if p == i => t,
-                Some((_, t)) => t + 1,
-                None => 0,
-            };
-            previous = Some((i, touch));
-            touches.push(touch);
-        }
-        Self { x, labels, sample_shape, touches, filled }
-    }
-
-    pub fn len(&self) -> usize {
-        self.labels.len()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.labels.is_empty()
-    }
-
-    fn sample_len(&self) -> usize {
-        self.sample_shape.iter().product()
-    }
-
-    /// The temporal tokens of `tubelet` frames each window fills.
-    pub fn tokens_filled(&self, tubelet: usize) -> impl Iterator<Item = usize> + '_ {
-        self.filled.iter().map(move |f| f / tubelet)
-    }
-
-    /// The rows grouped by what `model` answers them from: `None` the whole window (every row,
-    /// in order, unless a touch is shorter than the window), `Some(k)` its first `k` temporal
-    /// tokens, PVT³'s provisional answer, as a robot's stream peeks when a touch ends early.
-    fn by_answer(&self, model: &Classifier) -> Result<Vec<(Option<usize>, Vec<usize>)>> {
-        let frames = *self.sample_shape.last().expect("a frame axis");
-        if self.filled.iter().all(|f| *f == frames) {
-            return Ok(vec![(None, (0..self.len()).collect())]);
-        }
-        let tubelet = model.pvt3("a touch shorter than the model's window")?.config().tubelet;
-        let mut groups: std::collections::BTreeMap<Option<usize>, Vec<usize>> = Default::default();
-        for (r, (f, k)) in self.filled.iter().zip(self.tokens_filled(tubelet)).enumerate() {
-            groups.entry((*f < frames).then_some(k)).or_default().push(r);
-        }
-        Ok(groups.into_iter().collect())
-    }
-
-    /// The samples at `rows` as a tensor `[rows, …sample_shape]` and a label tensor.
-    pub fn batch(&self, rows: &[usize], transform: impl FnMut(&mut [f32])) -> Result<(Tensor, Tensor)> {
-        let l = self.sample_len();
-        let mut x = Vec::with_capacity(rows.len() * l);
-        for &r in rows {
-            x.extend_from_slice(&self.x[r * l..(r + 1) * l]);
-        }
-        x.chunks_mut(l).for_each(transform);
-        let mut shape = vec![rows.len()];
-        shape.extend_from_slice(&self.sample_shape);
-        let labels: Vec<u32> = rows.iter().map(|&r| self.labels[r]).collect();
-        Ok((Tensor::from_vec(x, shape, &Device::Cpu)?, Tensor::new(labels, &Device::Cpu)?))
-    }
-}
-
-/// A random factor of an augmentation, log-uniform in [1 / (1 + spread), 1 + spread]: as likely
-/// to halve as to double. One draw of `rng`.
-pub(crate) fn log_uniform_factor(spread: f64, rng: &mut Rng) -> f64 {
-    ((1.0 + spread).ln() * (2.0 * rng.uniform() as f64 - 1.0)).exp()
-}
 
 /// What a model did on a set of touches.
 #[derive(Clone, Debug)]
@@ -183,10 +23,10 @@ pub struct Evaluation {
 
 pub const EVAL_BATCH: usize = 100;
 
-pub fn evaluate(model: &Classifier, samples: &Samples) -> Result<Evaluation> {
+pub fn evaluate(model: &Model, samples: &Samples) -> Result<Evaluation> {
     let mut loss_sum = 0.0;
     let mut logits = vec![Vec::new(); samples.len()];
-    for (tokens, rows) in samples.by_answer(model)? {
+    for (tokens, rows) in by_answer(samples, model)? {
         for chunk in rows.chunks(EVAL_BATCH) {
             let (x, y) = samples.batch(chunk, |_| {})?;
             let l = match tokens {
@@ -233,58 +73,30 @@ fn touch_answer(windows: &[Vec<f32>]) -> u32 {
     argmax(&mean)
 }
 
+/// The rows grouped by what `model` answers them from: `None` the whole window (every row,
+/// in order, unless a touch is shorter than the window), `Some(k)` its first `k` temporal
+/// tokens, PVT³'s provisional answer, as a robot's stream peeks when a touch ends early.
+fn by_answer(samples: &Samples, model: &Model) -> Result<Vec<(Option<usize>, Vec<usize>)>> {
+    let frames = *samples.sample_shape.last().expect("a frame axis");
+    if samples.filled.iter().all(|f| *f == frames) {
+        return Ok(vec![(None, (0..samples.len()).collect())]);
+    }
+    let tubelet = model.pvt3("a touch shorter than the model's window")?.config().tubelet;
+    let mut groups: std::collections::BTreeMap<Option<usize>, Vec<usize>> = Default::default();
+    for (r, (f, k)) in samples.filled.iter().zip(samples.tokens_filled(tubelet)).enumerate() {
+        groups.entry((*f < frames).then_some(k)).or_default().push(r);
+    }
+    Ok(groups.into_iter().collect())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn windows_cover_the_touch_every_half_window_and_end_at_its_end() {
-        assert_eq!(window_starts(75, 75), vec![0]);
-        assert_eq!(window_starts(10, 4), vec![0, 2, 4, 6]);
-        assert_eq!(window_starts(11, 4), vec![0, 2, 4, 6, 7]);
-        assert_eq!(window_starts(5, 1), vec![0, 1, 2, 3, 4]);
-    }
 
     #[test]
     fn a_touch_answers_with_its_windows_mean_probability() {
         // Two windows: one sure of class 0, one mildly for class 1; the mean favours class 0.
         assert_eq!(touch_answer(&[vec![5.0, 0.0], vec![0.0, 0.5]]), 0);
         assert_eq!(touch_answer(&[vec![0.0, 0.2]]), 1);
-    }
-
-    #[test]
-    fn stretched_windows_read_the_touch_at_another_speed() {
-        // One touch of two channels, a ramp of 100 frames (the second the ramp's negative); the
-        // model reads 20. A stretched window is a ramp still, its slope the speed it was read at.
-        let ramp: Vec<f32> = (0..100).map(|t| t as f32).chain((0..100).map(|t| -(t as f32))).collect();
-        let data = Dataset {
-            x: ramp,
-            sample_shape: vec![2, 1, 100],
-            lengths: vec![100],
-            class_names: None,
-            sources: None,
-            conditions: Vec::new(),
-            held_out: None,
-            reading: None,
-            labels: vec![0],
-            folds: vec![0],
-            fold_seed: None,
-            digest: Default::default(),
-            path: "mem".into(),
-        };
-        let norm = Normalization { mean: vec![0.0; 2], std: vec![1.0; 2], frames: 20 };
-        let mut rng = Rng::new(3);
-        let mut slopes = Vec::new();
-        for _ in 0..30 {
-            let s = Samples::cropped(&data, &[0], &norm, 1.0, &mut rng);
-            assert_eq!((s.x.len(), s.sample_shape.as_slice()), (40, &[2, 1, 20][..]));
-            let slope = (s.x[19] - s.x[0]) / 19.0;
-            assert!((0.5 - 1e-4..=2.0 + 1e-4).contains(&slope), "{slope}");
-            assert!(s.x[..20].windows(2).all(|w| (w[1] - w[0] - slope).abs() < 1e-3), "a straight ramp: {:?}", &s.x[..20]);
-            assert!(s.x[..20].iter().all(|v| (0.0..=99.0).contains(v)), "read from within the touch");
-            assert!(s.x[20..].iter().zip(&s.x[..20]).all(|(b, a)| (a + b).abs() < 1e-4), "every channel alike");
-            slopes.push(slope);
-        }
-        assert!(slopes.iter().any(|s| *s < 0.8) && slopes.iter().any(|s| *s > 1.25), "{slopes:?}");
     }
 }

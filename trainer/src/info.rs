@@ -3,13 +3,13 @@
 
 use std::fmt::Write;
 
-use pvt3_models::{Classifier, Config, Network};
+use pvt3_models::{Model, Config, Network};
 
 use crate::Result;
 
 pub fn report(cfg: &Config) -> Result<String> {
     cfg.validate()?;
-    let (_, varmap) = Classifier::init(cfg, 0)?;
+    let (_, varmap) = Model::init(cfg, 0)?;
     let vars = varmap.data().lock().expect("varmap lock poisoned").clone();
     let mut names: Vec<&String> = vars.keys().collect();
     names.sort();

@@ -4,15 +4,15 @@
 
 use candle_core::{Device, Tensor};
 use candle_nn::VarMap;
-use pvt3_models::Classifier;
+use pvt3_models::Model;
 use pvt3_spec::names;
 
-use crate::evaluate::Samples;
+use crate::data::windows::Samples;
 use crate::Result;
 
 /// Sets `spectral.scale` and `spectral.shift` of a PVT³ model with a spectral head from the
 /// features of `train`; does nothing for other models.
-pub fn fit(model: &Classifier, varmap: &VarMap, train: &Samples) -> Result<()> {
+pub fn fit(model: &Model, varmap: &VarMap, train: &Samples) -> Result<()> {
     let Some((pvt3, spectrum)) = model.pvt3("the spectral head").ok().and_then(|m| Some((m, m.spectrum()?))) else {
         return Ok(());
     };
@@ -38,16 +38,16 @@ pub fn fit(model: &Classifier, varmap: &VarMap, train: &Samples) -> Result<()> {
 
 #[cfg(test)]
 mod tests {
-    use pvt3_models::{Classifier, Config, Rng};
+    use pvt3_models::{Model, Config, Rng};
 
-    use crate::evaluate::Samples;
+    use crate::data::windows::Samples;
 
     /// After fitting, the standardised features of the training samples have mean 0 and
     /// standard deviation 1, feature by feature.
     #[test]
     fn standardises_the_training_features() {
         let cfg = Config { network: pvt3_models::Pvt3Config { spectral_bands: 6 }.into(), ..Config::icub20() };
-        let (model, varmap) = Classifier::init(&cfg, 3).unwrap();
+        let (model, varmap) = Model::init(&cfg, 3).unwrap();
         let mut rng = Rng::new(4);
         let n = 40;
         let l: usize = cfg.sample_shape().iter().product();

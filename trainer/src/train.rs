@@ -15,7 +15,7 @@ use candle_core::backprop::GradStore;
 use candle_core::{DType, Device, Tensor, Var, D};
 use candle_nn::VarMap;
 use indicatif::ProgressBar;
-use pvt3_models::{Classifier, Config, Rng};
+use pvt3_models::{Model, Config, Rng};
 use pvt3_spec::names::Role;
 use pvt3_spec::prune::PruneSpec;
 use pvt3_spec::weights::Tensors;
@@ -23,10 +23,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::checkpoint::{self, nan_from_null, read_json, write_json, write_json_atomically};
 use crate::data::Dataset;
-use crate::evaluate::{log_uniform_factor, Samples};
+use crate::data::augment::{augment, extrapolation, mixup};
+use crate::data::windows::Samples;
 use crate::joint::Partner;
 use crate::metrics::EpochMetrics;
-use crate::normalization::Normalization;
 use crate::optim::{is_weight_matrix, AdamW};
 use crate::options::TrainOptions;
 use crate::run_dir::{Checkpoint, Run};
@@ -106,7 +106,7 @@ fn smoothed_cross_entropy(logits: &Tensor, labels: &Tensor, eps: f64) -> Result<
 
 /// A model with its optimiser: what one training step needs.
 pub struct Learner {
-    pub model: Classifier,
+    pub model: Model,
     pub varmap: VarMap,
     pub optimizer: AdamW,
     /// The selection masks, for the L1 penalty.
@@ -122,7 +122,7 @@ pub struct Learner {
 impl Learner {
     /// A seeded model, or one starting from `start` weights.
     pub fn new(config: &Config, opts: &TrainOptions, start: Option<&Tensors>) -> Result<Self> {
-        let (model, varmap) = Classifier::init(config, opts.seed)?;
+        let (model, varmap) = Model::init(config, opts.seed)?;
         if let Some(start) = start {
             pvt3_models::weights::set_vars(&varmap, start, Path::new("(start weights)"))?;
         }
@@ -134,7 +134,7 @@ impl Learner {
     /// (`--joint-share-temporal`). Its optimiser updates only its own variables; the shared ones
     /// are updated by `shared`'s learner, with the gradients of both networks' losses.
     pub fn sharing(config: &Config, opts: &TrainOptions, shared: &VarMap, prefix: &str) -> Result<Self> {
-        let (_, seeded) = Classifier::init(config, opts.seed)?;
+        let (_, seeded) = Model::init(config, opts.seed)?;
         let (own, varmap) = (VarMap::new(), VarMap::new());
         {
             let shared = shared.data().lock().expect("varmap lock poisoned");
@@ -155,12 +155,12 @@ impl Learner {
                 };
             }
         }
-        let model = Classifier::new(config, candle_nn::VarBuilder::from_varmap(&varmap, DType::F32, &Device::Cpu))?;
+        let model = Model::new(config, candle_nn::VarBuilder::from_varmap(&varmap, DType::F32, &Device::Cpu))?;
         Self::with(model, varmap, &own, opts)
     }
 
     /// `model` over `varmap`, trained by an optimiser of the variables of `own`.
-    fn with(model: Classifier, varmap: VarMap, own: &VarMap, opts: &TrainOptions) -> Result<Self> {
+    fn with(model: Model, varmap: VarMap, own: &VarMap, opts: &TrainOptions) -> Result<Self> {
         let masks = vars_where(&varmap, is_mask).into_iter().map(|v| v.as_tensor().clone()).collect();
         let optimizer = AdamW::new(own, opts.weight_decay, |n, v| if is_mask(n, v) { opts.mask_lr } else { 1.0 })?;
         let matrices = vars_where(own, is_weight_matrix);
@@ -200,12 +200,12 @@ impl Learner {
             }
         }
         let extrapolated = if opts.extrapolate > 0.0 {
-            Some(crate::extrapolation::extrapolate(x, y, opts.extrapolate, opts.extrapolate_levels, rng)?)
+            Some(extrapolation::extrapolate(x, y, opts.extrapolate, opts.extrapolate_levels, rng)?)
         } else {
             None
         };
         let x = extrapolated.as_ref().unwrap_or(x);
-        let mixed = if opts.mixup > 0.0 { Some(crate::mixup::mix(x, y, opts.mixup, rng)?) } else { None };
+        let mixed = if opts.mixup > 0.0 { Some(mixup::mix(x, y, opts.mixup, rng)?) } else { None };
         let x = mixed.as_ref().map_or(x, |m| &m.x);
         let prefix = opts.prefix_training > 0.0 && rng.uniform() < opts.prefix_training as f32;
         let (logits, extra, pooled) = if prefix || pooled {
@@ -301,45 +301,6 @@ fn vars_where(varmap: &VarMap, keep: fn(&str, &Var) -> bool) -> Vec<Var> {
     let mut names: Vec<&String> = vars.iter().filter(|(n, v)| keep(n, v)).map(|(n, _)| n).collect();
     names.sort();
     names.into_iter().map(|n| vars[n].clone()).collect()
-}
-
-fn augment(sample: &mut [f32], norm: &Normalization, opts: &TrainOptions, rng: &mut Rng) {
-    let frames = norm.frames;
-    if opts.aug_scale > 0.0 || opts.aug_channel_scale > 0.0 {
-        // The raw readings times k, in normalised units: k z + (k - 1) mean / std, per channel;
-        // k one factor for the window times one of the channel's own.
-        let window = if opts.aug_scale > 0.0 { log_uniform_factor(opts.aug_scale, rng) as f32 } else { 1.0 };
-        for (row, (m, s)) in sample.chunks_mut(frames).zip(norm.mean.iter().zip(&norm.std)) {
-            let own = if opts.aug_channel_scale > 0.0 { log_uniform_factor(opts.aug_channel_scale, rng) as f32 } else { 1.0 };
-            let k = window * own;
-            let lift = (k - 1.0) * m / s;
-            row.iter_mut().for_each(|v| *v = k * *v + lift);
-        }
-    }
-    if opts.aug_vibration > 0.0 {
-        // Each channel's variation about its mean over the window, times one factor for all.
-        let k = log_uniform_factor(opts.aug_vibration, rng) as f32;
-        for row in sample.chunks_mut(frames) {
-            let mean = row.iter().sum::<f32>() / frames as f32;
-            row.iter_mut().for_each(|v| *v = mean + k * (*v - mean));
-        }
-    }
-    if opts.aug_shift > 0 {
-        let span = 2 * opts.aug_shift + 1;
-        let shift = rng.below(span) as isize - opts.aug_shift as isize;
-        let last = frames as isize - 1;
-        for row in sample.chunks_mut(frames) {
-            let original = row.to_vec();
-            for (t, v) in row.iter_mut().enumerate() {
-                *v = original[(t as isize - shift).clamp(0, last) as usize];
-            }
-        }
-    }
-    let gain = 1.0 + opts.aug_gain as f32 * (2.0 * rng.uniform() - 1.0);
-    let noise = opts.aug_noise as f32;
-    for v in sample.iter_mut() {
-        *v = *v * gain + if noise > 0.0 { noise * rng.normal() } else { 0.0 };
-    }
 }
 
 /// Trains one split into `out`; with `resume`, continues the run found there. `None` means the

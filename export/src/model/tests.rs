@@ -21,7 +21,7 @@ fn golden(file: &str) -> PathBuf {
 }
 
 fn identity_normalization(cfg: &Config) -> Normalization {
-    let channels = cfg.sample_shape().iter().product::<usize>() / cfg.frames;
+    let channels = cfg.sensor_channels();
     Normalization { mean: vec![0.0; channels], std: vec![1.0; channels], frames: cfg.frames }
 }
 

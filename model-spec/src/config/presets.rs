@@ -77,18 +77,24 @@ impl Config {
         }
     }
 
-    /// A sensor preset (`icub20`, `biotac20`, `gelsight`), optionally prefixed `vit-` or `raec-`.
+    /// A preset by the name a user gives: a sensor's ([`PRESETS`]), optionally prefixed `vit-` or
+    /// `raec-` for that baseline.
     pub fn preset(name: &str) -> Result<Self> {
         let (model, sensor) = match name.split_once('-') {
             Some(("vit", sensor)) => (Architecture::Vit, sensor),
             Some(("raec", sensor)) => (Architecture::Raec, sensor),
             _ => (Architecture::Pvt3, name),
         };
+        Self::sensor_preset(sensor, model).map_err(|_| Error::UnknownPreset(name.to_string()))
+    }
+
+    /// The preset of `sensor` ([`PRESETS`]) for the network `model`.
+    pub fn sensor_preset(sensor: &str, model: Architecture) -> Result<Self> {
         let cfg = match sensor {
             "icub20" => Self::icub20(),
             "biotac20" => Self::biotac20(),
             "gelsight" => Self::gelsight(),
-            _ => return Err(Error::UnknownPreset(name.to_string())),
+            _ => return Err(Error::UnknownPreset(sensor.to_string())),
         };
         Ok(cfg.for_model(model))
     }

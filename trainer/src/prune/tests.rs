@@ -8,7 +8,7 @@ use pvt3_spec::prune::{PruneSpec, Scope};
 use pvt3_spec::reference;
 
 use super::*;
-use crate::evaluate::Samples;
+use crate::data::windows::Samples;
 use crate::train::tests::{out_dir, spec, tiny_data};
 
 #[test]

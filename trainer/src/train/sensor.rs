@@ -13,8 +13,8 @@ use super::{Best, Learner};
 use crate::average::WeightAverage;
 use crate::checkpoint::{self, Meta, Provenance};
 use crate::data::{Dataset, Split};
-use crate::evaluate::{evaluate, Samples};
-use crate::normalization::Normalization;
+use crate::{data::windows::Samples, evaluate::evaluate};
+use crate::data::normalization::Normalization;
 use crate::options::TrainOptions;
 use crate::run_dir::Checkpoint;
 use crate::Result;
@@ -64,7 +64,7 @@ impl<'a> Sensor<'a> {
     ) -> Result<Self> {
         data.check_fits(&config)?;
         let split: Split = data.split_for(val_fold)?;
-        let normalization = crate::normalization::fit(data, &split.train, config.frames);
+        let normalization = crate::data::normalization::fit(data, &split.train, config.frames);
         let train_set = Samples::new(data, &split.train, &normalization);
         let crops = opts.aug_stretch > 0.0 || split.train.iter().any(|&i| data.lengths[i] > config.frames);
         let val_set = Samples::new(data, &split.val, &normalization);

@@ -153,7 +153,7 @@ fn print_runs(s: &CvSummary, wall: f64, summary: &std::path::Path) {
         if let Some(st) = stopping {
             println!(
                 "stopping rule, written into every one of the {runs}: {}; on their validation answers accuracy {:.4} against {:.4} for the whole touch, {:.0} % of the touch used",
-                crate::eval::describe(st),
+                st.rule,
                 st.accuracy,
                 st.full_accuracy,
                 st.mean_share * 100.0

@@ -6,11 +6,11 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
-use pvt3_models::Classifier;
-use pvt3_trainer::anytime::{self, CalibratedOn, Prefixes, Stopping};
+use pvt3_models::Model;
+use pvt3_trainer::anytime::{self, CalibratedOn, Prefixes};
 use pvt3_trainer::checkpoint::{self, Meta};
 use pvt3_trainer::data::{Dataset, TEST_FOLD};
-use pvt3_trainer::evaluate::{evaluate, Evaluation, Samples};
+use pvt3_trainer::{data::windows::Samples, evaluate::{evaluate, Evaluation}};
 use pvt3_trainer::plot::{self, anytime as anytime_picture, confusion};
 use pvt3_trainer::run_dir::CV_SUMMARY;
 
@@ -105,7 +105,7 @@ impl std::fmt::Display for Folds {
 /// A checkpoint with the data set it is evaluated on and the samples of the fold asked for.
 pub struct Loaded {
     pub meta: Meta,
-    pub model: Classifier,
+    pub model: Model,
     pub data: Dataset,
     pub indices: Vec<usize>,
 }
@@ -204,22 +204,7 @@ pub fn report_classes(classes: &[String], labels: &[u32], predictions: &[u32], t
     Ok(())
 }
 
-/// A stopping rule in words.
-pub fn describe(s: &Stopping) -> String {
-    format!("top probability ≥ {:.4} with {} answers in a row agreeing", s.rule.top_probability, s.rule.agreeing)
-}
-
-/// Accuracy after each tenth of the touch: the share, the tokens read, the accuracy.
-pub fn tenths(prefixes: &Prefixes) -> Vec<(f64, usize, f64)> {
-    (1..=10)
-        .map(|tenth| {
-            let k = (tenth * prefixes.tokens).div_ceil(10).max(1);
-            (tenth as f64 / 10.0, k, prefixes.accuracy_at(k))
-        })
-        .collect()
-}
-
-/// [`tenths`] as a table.
+/// [`Prefixes::tenths`] as a table.
 pub fn print_tenths(curve: &[(f64, usize, f64)]) {
     println!("{:>8} {:>7} {:>9}", "touch", "tokens", "accuracy");
     for (share, k, acc) in curve {
@@ -258,7 +243,7 @@ fn anytime_report(run: &Loaded, samples: &Samples, a: &EvalArgs) -> Result<()> {
     let heading = format!("{}: fold {fold}, {} samples", a.checkpoint.display(), samples.len());
     draw_anytime(&picture, &heading, &prefixes, rule)?;
     let t = prefixes.tokens;
-    let curve = tenths(&prefixes);
+    let curve = prefixes.tenths();
     if a.json {
         let curve: Vec<_> = curve.iter().map(|(share, k, acc)| serde_json::json!({"share": share, "tokens": k, "accuracy": acc})).collect();
         let out = serde_json::json!({
@@ -281,7 +266,7 @@ fn anytime_report(run: &Loaded, samples: &Samples, a: &EvalArgs) -> Result<()> {
     };
     println!(
         "stopping rule: {} ({on}: accuracy {:.4} against {:.4} for the whole touch, {:.0} % of the touch used)",
-        describe(&calibrated),
+        calibrated.rule,
         calibrated.accuracy,
         calibrated.full_accuracy,
         calibrated.mean_share * 100.0

@@ -14,7 +14,7 @@ use pvt3_trainer::cv::mean_std;
 use pvt3_trainer::evaluate::evaluate;
 use pvt3_trainer::run_dir::{CrossValidation, Run, CV_SUMMARY};
 
-use crate::eval::{describe, draw_anytime, print_tenths, report_classes, tenths, EvalArgs, Folds, Loaded, ANYTIME, CONFUSION};
+use crate::eval::{draw_anytime, print_tenths, report_classes, EvalArgs, Folds, Loaded, ANYTIME, CONFUSION};
 
 /// Whether `pvt3 eval`'s directory is a cross-validation's (it holds cv.json).
 pub fn applies(a: &EvalArgs) -> bool {
@@ -120,8 +120,8 @@ fn anytime_report(a: &EvalArgs, runs: &[PathBuf], what: &str) -> Result<()> {
         pooled.labels.len(),
         pooled.tokens
     );
-    print_tenths(&tenths(&pooled));
-    println!("stopping rule: {}", describe(&calibrated));
+    print_tenths(&pooled.tenths());
+    println!("stopping rule: {}", calibrated.rule);
     let ((change, change_std), (share, share_std)) = (mean_std(&changes), mean_std(&shares));
     println!("here, run by run: {change:+.1} ± {change_std:.1} points against the whole touch, at {share:.0} ± {share_std:.0} % of the touch (mean ± std over the runs)");
     differing.print(&classes, n, fold);

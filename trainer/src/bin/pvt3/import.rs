@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
-use pvt3_trainer::import::{read_folder, ImportOptions, NamePattern};
+use pvt3_trainer::data::import::{read_folder, ImportOptions, NamePattern};
 
 /// Read a folder of CSV recordings (one folder per class, one CSV file per touch, a header row,
 /// touches of any length) into a data set.

@@ -8,7 +8,7 @@ use pvt3_models::Architecture;
 use pvt3_trainer::checkpoint::BakedFile;
 use pvt3_trainer::info::report;
 
-use crate::model_args::resolve_config;
+use pvt3_trainer::configure::resolve_config;
 
 /// Parameters, multiply-adds and tensor shapes of a preset, a JSON config or a checkpoint.
 #[derive(clap::Args)]

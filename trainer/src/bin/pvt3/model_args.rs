@@ -1,12 +1,11 @@
-//! Which data and which model: the options `train` and `cv` share, and how they become a
-//! configuration (a preset, a JSON file, a checkpoint's, or one derived for a new sensor shape)
-//! with `--set` overrides.
+//! Which data and which model: the options `train` and `cv` share, the data they load and the
+//! configuration the library chooses for it ([`pvt3_trainer::configure`]).
 
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use pvt3_models::{Architecture, Config};
-use pvt3_trainer::checkpoint;
+use pvt3_trainer::configure::{configure, Configured, ModelChoice};
 use pvt3_trainer::data::{Dataset, HoldOut};
 use pvt3_trainer::joint::Partner;
 use pvt3_trainer::options::{Joint, TrainOptions};
@@ -79,6 +78,20 @@ pub struct ModelArgs {
 /// `--data`'s default: the iCub-20 set in a checkout of pvt3.
 const SHIPPED_DATA: &str = "data/icub20.npz";
 
+impl ModelArgs {
+    /// What these options ask of the model ([`configure`]).
+    fn choice(&self) -> ModelChoice {
+        ModelChoice {
+            architecture: self.architecture.unwrap_or_default(),
+            preset: self.preset.clone(),
+            config: self.config.clone(),
+            overrides: self.overrides.clone(),
+            dropout: self.dropout,
+            class_names: self.class_names.clone(),
+        }
+    }
+}
+
 fn parse_hold_out(s: &str) -> std::result::Result<(String, Vec<String>), String> {
     let (name, levels) = s.split_once('=').ok_or_else(|| format!("`{s}`: expected NAME=LEVEL,…, e.g. force=210,250"))?;
     let levels: Vec<String> = levels.split(',').map(|l| l.trim().to_string()).filter(|l| !l.is_empty()).collect();
@@ -86,19 +99,6 @@ fn parse_hold_out(s: &str) -> std::result::Result<(String, Vec<String>), String>
         return Err(format!("`{s}`: expected NAME=LEVEL,…, e.g. force=210,250"));
     }
     Ok((name.trim().to_string(), levels))
-}
-
-/// A preset name, a JSON file, or a checkpoint directory.
-pub fn resolve_config(model: &str) -> Result<Config> {
-    let path = Path::new(model);
-    if path.is_dir() {
-        return Ok(checkpoint::load_meta(path)?.1.config);
-    }
-    if path.is_file() {
-        let text = std::fs::read_to_string(path).with_context(|| format!("reading {model}"))?;
-        return serde_json::from_str(&text).with_context(|| format!("{model} is not a model configuration"));
-    }
-    Ok(Config::preset(model)?)
 }
 
 /// A loaded data set with the model configuration and class names for it, and with `--joint`
@@ -180,93 +180,7 @@ pub fn prepare_seeds(args: &ModelArgs, seeds: &[u64]) -> Result<Vec<Prepared>> {
 /// Builds the model configuration for `data` (and `partner`'s for a joint run), with what to
 /// tell the user about the choices made.
 fn prepare_with(args: &ModelArgs, data: Dataset, partner: Option<Dataset>) -> Result<(Prepared, Vec<String>)> {
-    let mut notes = Vec::new();
-    if let Some(h) = &data.held_out {
-        let held = data.folds.iter().filter(|f| **f == pvt3_trainer::data::TEST_FOLD).count();
-        notes.push(format!(
-            "held out {h}: {held} touches test, the other {} train and validate (stratified folds, seed {})",
-            data.len() - held,
-            h.seed
-        ));
-    }
-    // `--model vit` turns preset `icub20` into `vit-icub20`.
-    let architecture = args.architecture.unwrap_or_default();
-    // Touches of unequal length: by default the model reads windows of the shortest that trains
-    // or validates.
-    let window = data.window_shape();
-    if !data.equal_lengths() {
-        let (shortest, longest) = (window.last().copied().unwrap_or(0), data.max_frames());
-        notes.push(format!(
-            "touches of {} to {longest} frames: unless the configuration says otherwise (--set frames=N), the model reads windows of {shortest} frames (the shortest touch that trains or validates), one drawn at random from each touch every epoch, and answers for a touch with the mean probabilities of windows every half window",
-            data.lengths.iter().min().unwrap_or(&0)
-        ));
-    }
-    let preset = |name: &str| match architecture {
-        Architecture::Pvt3 => Config::preset(name),
-        model => Config::preset(&format!("{}-{name}", model.name())),
-    };
-    let mut cfg = match (&args.preset, &args.config) {
-        (Some(p), _) => preset(p)?,
-        (None, Some(path)) => resolve_config(&path.display().to_string())?,
-        (None, None) => {
-            match pvt3_spec::config::PRESETS.iter().map(|p| preset(p).expect("known preset")).find(|c| c.sample_shape() == window) {
-                Some(cfg) => cfg,
-                None => {
-                    let shape = window.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(" × ");
-                    let derived = Config::for_sensor(&window)
-                        .with_context(|| format!("samples of shape {shape}: expected [height, width, (channels,) frames]"))?;
-                    notes.push(format!(
-                        "no preset takes samples of {shape}: derived the BioTac layout, one token per {} frames of all {} values of a frame ({} temporal tokens); `pvt3 info --json` and --config FILE to choose otherwise",
-                        derived.tubelet,
-                        derived.height * derived.width * derived.channels,
-                        derived.time_tokens()
-                    ));
-                    derived.for_model(architecture)
-                }
-            }
-        }
-    };
-    cfg.classes = data.classes();
-    cfg = apply_overrides(cfg, &args.overrides)?;
-    cfg.dropout = args.dropout.unwrap_or(cfg.dropout);
-    cfg.validate()?;
-    let prefix = args.options.prefix_training;
-    if !(0.0..=1.0).contains(&prefix) {
-        bail!("--prefix-training {prefix}: a probability, from 0 to 1");
-    }
-    if prefix > 0.0 {
-        cfg.require_pvt3("--prefix-training")?;
-    }
-    let floor = args.options.lr_floor;
-    if !(0.0..=1.0).contains(&floor) {
-        bail!("--lr-floor {floor}: a share of the peak learning rate, from 0 to 1");
-    }
-    let classes = match &args.class_names {
-        Some(path) => {
-            let text = std::fs::read_to_string(path).with_context(|| format!("reading class names from {}", path.display()))?;
-            let names: Vec<String> = text.lines().map(str::trim).filter(|l| !l.is_empty()).map(String::from).collect();
-            if names.len() != cfg.classes {
-                bail!("{} names {} classes, the data has {}", path.display(), names.len(), cfg.classes);
-            }
-            names
-        }
-        None => match &data.class_names {
-            Some(names) if names.len() == cfg.classes => names.clone(),
-            _ => (0..cfg.classes).map(|k| format!("class_{k}")).collect(),
-        },
-    };
-    if data.held_out.is_none() {
-        if let Some(seed) = data.fold_seed {
-            notes.push(format!("note: {} has no fold array; stratified folds were drawn with seed {seed}", data.path.display()));
-        }
-    }
-    let short = data.short_tests(cfg.frames).len();
-    if short > 0 {
-        notes.push(format!(
-            "{short} test touches are shorter than the window of {} frames: each is answered from the temporal tokens it fills, as a robot's stream answers a touch that ends early",
-            cfg.frames
-        ));
-    }
+    let Configured { config, classes, mut notes } = configure(&data, &args.choice(), &args.options)?;
     let mut options = args.options.clone();
     let partner = match (&args.joint, partner) {
         (Some(path), Some(partner_data)) => {
@@ -285,43 +199,6 @@ fn prepare_with(args: &ModelArgs, data: Dataset, partner: Option<Dataset>) -> Re
         }
         _ => None,
     };
-    Ok((Prepared { data, config: cfg, classes, options, partner }, notes))
+    Ok((Prepared { data, config, classes, options, partner }, notes))
 }
 
-fn apply_overrides(cfg: Config, overrides: &[String]) -> Result<Config> {
-    let mut value = serde_json::to_value(&cfg)?;
-    for o in overrides {
-        let (key, raw) = o.split_once('=').with_context(|| format!("--set {o}: expected FIELD=VALUE"))?;
-        let fields = value.as_object_mut().expect("a config is a JSON object");
-        if !fields.contains_key(key) {
-            let mut known: Vec<&str> = fields.keys().map(String::as_str).collect();
-            known.sort_unstable();
-            bail!("--set {o}: unknown field `{key}`; a {} model's fields are {known:?}", cfg.architecture());
-        }
-        let parsed = serde_json::from_str(raw).with_context(|| format!("--set {o}: `{raw}` is not a number, true or false"))?;
-        fields.insert(key.to_string(), parsed);
-    }
-    serde_json::from_value(value).context("the overridden configuration does not parse")
-}
-
-#[cfg(test)]
-mod tests {
-    use pvt3_models::Config;
-
-    #[test]
-    fn set_reaches_the_network_s_own_fields_and_names_the_unknown() {
-        let raec = Config::preset("raec-biotac20").unwrap();
-        let set = super::apply_overrides(raec.clone(), &["decoder_from_state=true".into(), "latent=20".into()]).unwrap();
-        let r = set.raec().unwrap();
-        assert!(r.decoder_from_state);
-        assert_eq!(r.latent, 20);
-        let err = super::apply_overrides(raec, &["decoder=true".into()]).unwrap_err().to_string();
-        assert!(err.contains("unknown field `decoder`") && err.contains("decoder_from_state"), "{err}");
-        // PVT³'s own field, and not RAEC's.
-        let biotac = Config::preset("biotac20").unwrap();
-        let set = super::apply_overrides(biotac.clone(), &["spectral_bands=16".into()]).unwrap();
-        assert_eq!(set.spectral_bands(), 16);
-        let err = super::apply_overrides(biotac, &["latent=20".into()]).unwrap_err().to_string();
-        assert!(err.contains("unknown field `latent`; a pvt3 model's fields"), "{err}");
-    }
-}

@@ -1,5 +1,6 @@
 //! Every network the trainer can fit, behind one type: PVT³ and the paper's two baselines (ViT
-//! and RAEC), chosen by [`Config::network`]. Pruning, baking and export are PVT³'s alone.
+//! and RAEC), chosen by [`Config::network`]. Pruning, baking and export are PVT³'s alone. (The
+//! robot's `pvt3_runtime::Classifier` runs an exported file; this is the trainable model.)
 
 use candle_core::Tensor;
 use candle_nn::{VarBuilder, VarMap};
@@ -9,13 +10,13 @@ use crate::vit::Vit;
 use crate::{Architecture, Config, Pvt3, Result, Rng};
 
 #[derive(Clone, Debug)]
-pub enum Classifier {
+pub enum Model {
     Pvt3(Pvt3),
     Vit(Vit),
     Raec(Raec),
 }
 
-impl Classifier {
+impl Model {
     pub fn new(cfg: &Config, vb: VarBuilder) -> Result<Self> {
         Ok(match cfg.architecture() {
             Architecture::Pvt3 => Self::Pvt3(Pvt3::new(cfg, vb)?),
@@ -48,8 +49,8 @@ impl Classifier {
     pub fn pvt3(&self, what: &str) -> Result<&Pvt3> {
         match self {
             Self::Pvt3(m) => Ok(m),
-            Self::Vit(_) => Err(pvt3_spec::Error::Config(format!("{what}: PVT³ models only, and this is a ViT")).into()),
-            Self::Raec(_) => Err(pvt3_spec::Error::Config(format!("{what}: PVT³ models only, and this is a RAEC")).into()),
+            Self::Vit(_) => Err(pvt3_spec::config::pvt3_only(what, Architecture::Vit).into()),
+            Self::Raec(_) => Err(pvt3_spec::config::pvt3_only(what, Architecture::Raec).into()),
         }
     }
 }
@@ -58,7 +59,7 @@ impl Classifier {
 mod tests {
     use candle_core::{Device, Tensor};
 
-    use super::Classifier;
+    use super::Model;
     use crate::{Config, Pvt3Config, Rng};
 
     /// Gradients reach every parameter (masks included) of every network, through the full
@@ -74,7 +75,7 @@ mod tests {
             Config { frames: 40, ..Config::preset("raec-biotac20").unwrap() },
         ];
         for cfg in configs {
-            let (model, varmap) = Classifier::init(&cfg, 1).unwrap();
+            let (model, varmap) = Model::init(&cfg, 1).unwrap();
             let mut rng = Rng::new(2);
             let mut shape = vec![4];
             shape.extend(cfg.sample_shape());

@@ -1,5 +1,6 @@
 //! Fitting the per-channel normalisation on the training split only (the plain
-//! [`Normalization`] data lives in the models crate, beside the model it feeds).
+//! [`Normalization`] it fills is the file contract's, in `pvt3-spec`, which the exporter writes
+//! into the model).
 
 pub use pvt3_spec::normalization::Normalization;
 

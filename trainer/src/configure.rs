@@ -1,0 +1,199 @@
+//! Choosing the model for a data set: a preset (by name, or the one whose input fits the data), a
+//! JSON file, a checkpoint's, or a configuration derived for a new sensor's shape; `--set`
+//! overrides and dropout; the class names; and the options that only make sense for some models.
+//! What was chosen for the user is said in notes, which the command line prints.
+
+use std::path::{Path, PathBuf};
+
+use pvt3_models::{Architecture, Config};
+
+use crate::checkpoint;
+use crate::data::{Dataset, TEST_FOLD};
+use crate::options::TrainOptions;
+use crate::{Error, Result};
+
+/// What the user asked of the model: the network, and where its configuration comes from.
+#[derive(Clone, Debug, Default)]
+pub struct ModelChoice {
+    /// PVT³ or a baseline; a sensor preset is taken in this network's variant.
+    pub architecture: Architecture,
+    /// A preset by name ([`Config::preset`]); by default the one whose input fits the data.
+    pub preset: Option<String>,
+    /// A configuration file, or a checkpoint directory ([`resolve_config`]).
+    pub config: Option<PathBuf>,
+    /// `FIELD=VALUE` overrides of the configuration ([`apply_overrides`]).
+    pub overrides: Vec<String>,
+    /// Dropout while training, instead of the configuration's.
+    pub dropout: Option<f64>,
+    /// A file of class names, one per line, instead of the data's.
+    pub class_names: Option<PathBuf>,
+}
+
+/// The model chosen for a data set.
+#[derive(Clone, Debug)]
+pub struct Configured {
+    pub config: Config,
+    pub classes: Vec<String>,
+    /// What was chosen or found for the user, one sentence each.
+    pub notes: Vec<String>,
+}
+
+/// A preset name, a JSON file, or a checkpoint directory.
+pub fn resolve_config(model: &str) -> Result<Config> {
+    let path = Path::new(model);
+    if path.is_dir() {
+        return Ok(checkpoint::load_meta(path)?.1.config);
+    }
+    if path.is_file() {
+        let text = std::fs::read_to_string(path).map_err(Error::io(path))?;
+        return serde_json::from_str(&text).map_err(|e| Error::Usage(format!("{model} is not a model configuration: {e}")));
+    }
+    Ok(Config::preset(model)?)
+}
+
+/// The model for `data` as `choice` asks, checked with the training `options` it will train with.
+pub fn configure(data: &Dataset, choice: &ModelChoice, options: &TrainOptions) -> Result<Configured> {
+    let mut notes = Vec::new();
+    if let Some(h) = &data.held_out {
+        let held = data.folds.iter().filter(|f| **f == TEST_FOLD).count();
+        notes.push(format!(
+            "held out {h}: {held} touches test, the other {} train and validate (stratified folds, seed {})",
+            data.len() - held,
+            h.seed
+        ));
+    }
+    // Touches of unequal length: by default the model reads windows of the shortest that trains
+    // or validates.
+    if !data.equal_lengths() {
+        let (shortest, longest) = (data.window_shape().last().copied().unwrap_or(0), data.max_frames());
+        notes.push(format!(
+            "touches of {} to {longest} frames: unless the configuration says otherwise (--set frames=N), the model reads windows of {shortest} frames (the shortest touch that trains or validates), one drawn at random from each touch every epoch, and answers for a touch with the mean probabilities of windows every half window",
+            data.lengths.iter().min().unwrap_or(&0)
+        ));
+    }
+    let mut cfg = base_config(data, choice, &mut notes)?;
+    cfg.classes = data.classes();
+    cfg = apply_overrides(cfg, &choice.overrides)?;
+    cfg.dropout = choice.dropout.unwrap_or(cfg.dropout);
+    cfg.validate()?;
+    check_options(&cfg, options)?;
+    let classes = class_names(data, choice.class_names.as_deref(), cfg.classes)?;
+    if data.held_out.is_none() {
+        if let Some(seed) = data.fold_seed {
+            notes.push(format!("note: {} has no fold array; stratified folds were drawn with seed {seed}", data.path.display()));
+        }
+    }
+    let short = data.short_tests(cfg.frames).len();
+    if short > 0 {
+        notes.push(format!(
+            "{short} test touches are shorter than the window of {} frames: each is answered from the temporal tokens it fills, as a robot's stream answers a touch that ends early",
+            cfg.frames
+        ));
+    }
+    Ok(Configured { config: cfg, classes, notes })
+}
+
+/// The configuration before overrides: the preset named (in the chosen network's variant), the
+/// file given, else the preset whose window is the data's, else one derived for the data's shape.
+fn base_config(data: &Dataset, choice: &ModelChoice, notes: &mut Vec<String>) -> Result<Config> {
+    let architecture = choice.architecture;
+    let preset = |name: &str| match architecture {
+        Architecture::Pvt3 => Config::preset(name),
+        model => Config::sensor_preset(name, model),
+    };
+    if let Some(p) = &choice.preset {
+        return Ok(preset(p)?);
+    }
+    if let Some(path) = &choice.config {
+        return resolve_config(&path.display().to_string());
+    }
+    let window = data.window_shape();
+    let fitting = pvt3_spec::config::PRESETS.iter().map(|p| Config::sensor_preset(p, architecture).expect("known preset"));
+    if let Some(cfg) = fitting.into_iter().find(|c| c.sample_shape() == window) {
+        return Ok(cfg);
+    }
+    let shape = window.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(" × ");
+    let derived = Config::for_sensor(&window)
+        .ok_or_else(|| Error::Usage(format!("samples of shape {shape}: expected [height, width, (channels,) frames]")))?;
+    notes.push(format!(
+        "no preset takes samples of {shape}: derived the BioTac layout, one token per {} frames of all {} values of a frame ({} temporal tokens); `pvt3 info --json` and --config FILE to choose otherwise",
+        derived.tubelet,
+        derived.sensor_channels(),
+        derived.time_tokens()
+    ));
+    Ok(derived.for_model(architecture))
+}
+
+/// The options that only some models or values allow.
+fn check_options(cfg: &Config, options: &TrainOptions) -> Result<()> {
+    let prefix = options.prefix_training;
+    if !(0.0..=1.0).contains(&prefix) {
+        return Err(Error::Usage(format!("--prefix-training {prefix}: a probability, from 0 to 1")));
+    }
+    if prefix > 0.0 {
+        cfg.require_pvt3("--prefix-training")?;
+    }
+    let floor = options.lr_floor;
+    if !(0.0..=1.0).contains(&floor) {
+        return Err(Error::Usage(format!("--lr-floor {floor}: a share of the peak learning rate, from 0 to 1")));
+    }
+    Ok(())
+}
+
+/// The names of `classes` classes: the file's, one per line, else the data's own (as `pvt3
+/// import` writes them), else `class_0`, `class_1`, ….
+fn class_names(data: &Dataset, file: Option<&Path>, classes: usize) -> Result<Vec<String>> {
+    let Some(path) = file else {
+        return Ok(match &data.class_names {
+            Some(names) if names.len() == classes => names.clone(),
+            _ => (0..classes).map(|k| format!("class_{k}")).collect(),
+        });
+    };
+    let text = std::fs::read_to_string(path).map_err(Error::io(path))?;
+    let names: Vec<String> = text.lines().map(str::trim).filter(|l| !l.is_empty()).map(String::from).collect();
+    if names.len() != classes {
+        return Err(Error::Usage(format!("{} names {} classes, the data has {classes}", path.display(), names.len())));
+    }
+    Ok(names)
+}
+
+/// `cfg` with each `FIELD=VALUE` of `overrides` set, the value read as JSON (a number, true or
+/// false); a field the configuration does not have is refused, naming the ones it has.
+pub fn apply_overrides(cfg: Config, overrides: &[String]) -> Result<Config> {
+    let usage = |s: String| Error::Usage(s);
+    let mut value = serde_json::to_value(&cfg).map_err(|e| usage(format!("the configuration does not serialise: {e}")))?;
+    for o in overrides {
+        let (key, raw) = o.split_once('=').ok_or_else(|| usage(format!("--set {o}: expected FIELD=VALUE")))?;
+        let fields = value.as_object_mut().expect("a config is a JSON object");
+        if !fields.contains_key(key) {
+            let mut known: Vec<&str> = fields.keys().map(String::as_str).collect();
+            known.sort_unstable();
+            return Err(usage(format!("--set {o}: unknown field `{key}`; a {} model's fields are {known:?}", cfg.architecture())));
+        }
+        let parsed = serde_json::from_str(raw).map_err(|_| usage(format!("--set {o}: `{raw}` is not a number, true or false")))?;
+        fields.insert(key.to_string(), parsed);
+    }
+    serde_json::from_value(value).map_err(|e| usage(format!("the overridden configuration does not parse: {e}")))
+}
+
+#[cfg(test)]
+mod tests {
+    use pvt3_models::Config;
+
+    #[test]
+    fn set_reaches_the_network_s_own_fields_and_names_the_unknown() {
+        let raec = Config::preset("raec-biotac20").unwrap();
+        let set = super::apply_overrides(raec.clone(), &["decoder_from_state=true".into(), "latent=20".into()]).unwrap();
+        let r = set.raec().unwrap();
+        assert!(r.decoder_from_state);
+        assert_eq!(r.latent, 20);
+        let err = super::apply_overrides(raec, &["decoder=true".into()]).unwrap_err().to_string();
+        assert!(err.contains("unknown field `decoder`") && err.contains("decoder_from_state"), "{err}");
+        // PVT³'s own field, and not RAEC's.
+        let biotac = Config::preset("biotac20").unwrap();
+        let set = super::apply_overrides(biotac.clone(), &["spectral_bands=16".into()]).unwrap();
+        assert_eq!(set.spectral_bands(), 16);
+        let err = super::apply_overrides(biotac, &["latent=20".into()]).unwrap_err().to_string();
+        assert!(err.contains("unknown field `latent`; a pvt3 model's fields"), "{err}");
+    }
+}

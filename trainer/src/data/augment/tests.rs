@@ -1,0 +1,95 @@
+//! Each augmentation of a window changes what it says it changes, and nothing else.
+
+use pvt3_models::Rng;
+
+use super::*;
+
+#[test]
+fn scaling_multiplies_the_raw_readings_of_every_channel_alike() {
+    let opts = TrainOptions { aug_scale: 1.0, aug_gain: 0.0, aug_noise: 0.0, ..TrainOptions::default() };
+    let norm = Normalization { mean: vec![100.0, -4.0], std: vec![10.0, 2.0], frames: 3 };
+    let raw = [90.0, 100.0, 130.0, -6.0, -4.0, 0.0];
+    let mut sample = Vec::new();
+    norm.apply_into(&raw, &mut sample);
+    let mut rng = Rng::new(5);
+    let mut factors = Vec::new();
+    for _ in 0..40 {
+        let mut s = sample.clone();
+        augment(&mut s, &norm, &opts, &mut rng);
+        // Back to raw readings: each is the original times one factor k in [1/2, 2].
+        let back: Vec<f32> = s.iter().enumerate().map(|(i, z)| z * norm.std[i / 3] + norm.mean[i / 3]).collect();
+        let k = back[0] / raw[0];
+        assert!((0.5..=2.0).contains(&k), "{k}");
+        for (b, r) in back.iter().zip(raw) {
+            assert!((b - k * r).abs() < 1e-3, "{back:?} is not {k} × {raw:?}");
+        }
+        factors.push(k);
+    }
+    assert!(factors.iter().any(|k| *k < 0.8) && factors.iter().any(|k| *k > 1.25), "{factors:?}");
+}
+
+#[test]
+fn channel_scaling_multiplies_each_channels_raw_readings_by_a_factor_of_its_own() {
+    let opts = TrainOptions { aug_channel_scale: 0.2, aug_gain: 0.0, aug_noise: 0.0, ..TrainOptions::default() };
+    let norm = Normalization { mean: vec![100.0, -4.0, 50.0], std: vec![10.0, 2.0, 5.0], frames: 3 };
+    let raw = [90.0, 100.0, 130.0, -6.0, -4.0, -1.0, 40.0, 55.0, 60.0];
+    let mut sample = Vec::new();
+    norm.apply_into(&raw, &mut sample);
+    let mut rng = Rng::new(5);
+    let mut apart = 0;
+    for _ in 0..40 {
+        let mut s = sample.clone();
+        augment(&mut s, &norm, &opts, &mut rng);
+        let back: Vec<f32> = s.iter().enumerate().map(|(i, z)| z * norm.std[i / 3] + norm.mean[i / 3]).collect();
+        let factors: Vec<f32> = (0..3).map(|c| back[3 * c] / raw[3 * c]).collect();
+        for (c, k) in factors.iter().enumerate() {
+            assert!((1.0 / 1.2 - 1e-4..=1.2 + 1e-4).contains(k), "{k}");
+            for t in 0..3 {
+                let (b, r) = (back[3 * c + t], raw[3 * c + t]);
+                assert!((b - k * r).abs() < 1e-3, "channel {c}: {back:?} is not {k} × {raw:?}");
+            }
+        }
+        apart += usize::from((factors[0] - factors[2]).abs() > 0.02);
+    }
+    assert!(apart > 20, "the channels' factors differ: {apart} of 40");
+}
+
+#[test]
+fn vibration_scales_each_channel_about_its_window_mean_and_keeps_the_level() {
+    let opts = TrainOptions { aug_vibration: 1.0, aug_gain: 0.0, aug_noise: 0.0, ..TrainOptions::default() };
+    let norm = Normalization { mean: vec![0.0; 2], std: vec![1.0; 2], frames: 4 };
+    let sample = [1.0, 3.0, 2.0, 6.0, -1.0, -1.0, 1.0, 5.0];
+    let mut rng = Rng::new(9);
+    let mut factors = Vec::new();
+    for _ in 0..40 {
+        let mut s = sample;
+        augment(&mut s, &norm, &opts, &mut rng);
+        let k = (s[1] - s[0]) / (sample[1] - sample[0]);
+        assert!((0.5..=2.0).contains(&k), "{k}");
+        for (row, original) in s.chunks(4).zip(sample.chunks(4)) {
+            let (mean, was) = (row.iter().sum::<f32>() / 4.0, original.iter().sum::<f32>() / 4.0);
+            assert!((mean - was).abs() < 1e-5, "the level is kept: {mean} against {was}");
+            for (v, o) in row.iter().zip(original) {
+                assert!((v - mean - k * (o - was)).abs() < 1e-5, "{row:?} is not {original:?} about its mean × {k}");
+            }
+        }
+        factors.push(k);
+    }
+    assert!(factors.iter().any(|k| *k < 0.8) && factors.iter().any(|k| *k > 1.25), "{factors:?}");
+}
+
+#[test]
+fn time_shift_moves_frames_and_repeats_the_edge() {
+    let opts = TrainOptions { aug_shift: 2, aug_gain: 0.0, aug_noise: 0.0, ..TrainOptions::default() };
+    let mut rng = Rng::new(1);
+    let mut seen = std::collections::BTreeSet::new();
+    for _ in 0..50 {
+        let mut sample: Vec<f32> = (0..10).map(|t| t as f32).collect(); // two channels of 5 frames
+        augment(&mut sample, &Normalization { mean: vec![0.0; 2], std: vec![1.0; 2], frames: 5 }, &opts, &mut rng);
+        let shift = 2 - sample[2] as isize;
+        let expected: Vec<f32> = (0..10).map(|i| ((i % 5) as isize - shift).clamp(0, 4) as f32 + (i / 5 * 5) as f32).collect();
+        assert_eq!(sample, expected);
+        seen.insert(shift);
+    }
+    assert_eq!(seen.into_iter().collect::<Vec<_>>(), vec![-2, -1, 0, 1, 2]);
+}
