@@ -85,8 +85,9 @@ install_debian ${need[@]+"${need[@]}"}
 step "host: cargo test --profile ci --workspace"
 cargo_test --profile ci --workspace
 
+valgrind_pid=
 if [ -n "${PVT3_VALGRIND:-}" ]; then
-  step "C ABI under valgrind: every entry point's error paths, no invalid access, no leak"
+  step "C ABI under valgrind: every entry point's error paths, no invalid access, no leak (in the background, beside clippy and the aarch64 build)"
   # The test binary the host step built (the same command, so nothing is built again: with
   # `-p pvt3-runtime` alone its dependencies' features differ, and tract would be rebuilt).
   c_abi=$(cargo test -q --profile ci --workspace --no-run --message-format=json 2>/dev/null |
@@ -95,8 +96,13 @@ for line in sys.stdin:
     m = json.loads(line)
     if m.get("reason") == "compiler-artifact" and m["target"]["name"] == "c_abi" and m.get("executable"):
         print(m["executable"])')
-  valgrind -q --error-exitcode=99 --leak-check=full --errors-for-leak-kinds=definite,indirect --show-leak-kinds=definite,indirect \
-    "$c_abi" --test-threads 1 every_entry_point_reports_instead_of_crashing 2>&1 | tee -a "$log"
+  # One thread for most of a minute: the builds below use the other core.
+  valgrind_log=target/valgrind.log
+  (valgrind -q --error-exitcode=99 --leak-check=full --errors-for-leak-kinds=definite,indirect --show-leak-kinds=definite,indirect \
+    "$c_abi" --test-threads 1 every_entry_point_reports_instead_of_crashing 2>&1 | tee -a "$log") >"$valgrind_log" &
+  valgrind_pid=$!
+  trap 'kill "$small_pid" "$valgrind_pid" 2>/dev/null || true; rm -f "$log"' EXIT
+  echo "(its output follows the aarch64 build)"
   unset PVT3_VALGRIND
 fi
 
@@ -128,6 +134,14 @@ aarch64_env() {
 }
 aarch64_tests=(--profile ci --target "$target" -p pvt3-runtime -p pvt3-format --no-default-features)
 (aarch64_env && cargo test "${aarch64_tests[@]}" --no-run)
+
+if [ -n "$valgrind_pid" ]; then
+  step "C ABI under valgrind (run beside the steps above)"
+  valgrind_status=0
+  wait "$valgrind_pid" || valgrind_status=$?
+  cat "$valgrind_log"
+  [ "$valgrind_status" = 0 ] || { echo "tests/run.sh: the C ABI failed under valgrind" >&2; exit 1; }
+fi
 
 step "aarch64: the tests under qemu, in the background beside the other platforms' builds"
 # Under the emulator runs what shows that the ARM build computes what x86-64 computes: the golden

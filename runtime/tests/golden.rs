@@ -58,7 +58,7 @@ fn the_default_kernels_give_bit_identical_outputs_across_loads_and_runs() {
     let first = Classifier::load(golden("model.onnx")).unwrap();
     let expected = answers(&first, &x);
     assert_eq!(answers(&first, &x), expected, "a second run of one load");
-    for load in 0..3 {
+    for load in 0..2 {
         let again = Classifier::load(golden("model.onnx")).unwrap();
         if load == 0 {
             again.prepare(&[8, 1], true).unwrap();
