@@ -47,7 +47,16 @@ install_debian() {
 }
 # Every test run's output goes here too, for the summary at the end.
 log=$(mktemp)
-trap 'rm -f "$log"' EXIT
+# The steps run in the background, killed if the script stops early.
+background=()
+trap 'kill ${background[@]+"${background[@]}"} 2>/dev/null || true; rm -f "$log"' EXIT
+# Waits for a background step started above, prints its output, and stops with `failed` if it failed.
+joined() {
+  local pid=$1 output=$2 failed=$3 status=0
+  wait "$pid" || status=$?
+  cat "$output"
+  [ "$status" = 0 ] || { echo "tests/run.sh: $failed" >&2; exit 1; }
+}
 cargo_test() { cargo test "$@" 2>&1 | tee -a "$log"; }
 
 # The runtime's x86-64 kernels are tested for every instruction set they are written for, and a
@@ -70,7 +79,7 @@ mkdir -p target
 small_log=target/robot-small-size.log
 bash tests/robot-small.sh check >"$small_log" 2>&1 &
 small_pid=$!
-trap 'kill "$small_pid" 2>/dev/null || true; rm -f "$log"' EXIT
+background+=("$small_pid")
 
 # The picture tests render the SVG files they draw with librsvg and look at the pixels; on
 # x86-64 the C example runs under valgrind too (runtime/tests/c_abi.rs, PVT3_VALGRIND).
@@ -101,7 +110,7 @@ for line in sys.stdin:
   (valgrind -q --error-exitcode=99 --leak-check=full --errors-for-leak-kinds=definite,indirect --show-leak-kinds=definite,indirect \
     "$c_abi" --test-threads 1 every_entry_point_reports_instead_of_crashing 2>&1 | tee -a "$log") >"$valgrind_log" &
   valgrind_pid=$!
-  trap 'kill "$small_pid" "$valgrind_pid" 2>/dev/null || true; rm -f "$log"' EXIT
+  background+=("$valgrind_pid")
   echo "(its output follows the aarch64 build)"
   unset PVT3_VALGRIND
 fi
@@ -137,10 +146,7 @@ aarch64_tests=(--profile ci --target "$target" -p pvt3-runtime -p pvt3-format --
 
 if [ -n "$valgrind_pid" ]; then
   step "C ABI under valgrind (run beside the steps above)"
-  valgrind_status=0
-  wait "$valgrind_pid" || valgrind_status=$?
-  cat "$valgrind_log"
-  [ "$valgrind_status" = 0 ] || { echo "tests/run.sh: the C ABI failed under valgrind" >&2; exit 1; }
+  joined "$valgrind_pid" "$valgrind_log" "the C ABI failed under valgrind"
 fi
 
 step "aarch64: the tests under qemu, in the background beside the other platforms' builds"
@@ -158,7 +164,7 @@ qemu_skips=(bench_reports_batch_and_streaming_latencies every_answer_is_the_batc
 qemu_log=target/aarch64-tests.log
 (aarch64_env && cargo_test "${aarch64_tests[@]}" -- $(printf -- '--skip %s ' "${qemu_skips[@]}")) >"$qemu_log" 2>&1 &
 qemu_pid=$!
-trap 'kill "$small_pid" "$qemu_pid" 2>/dev/null || true; rm -f "$log"' EXIT
+background+=("$qemu_pid")
 echo "(its output follows the other platforms' step)"
 
 step "other platforms: the trainer checked for Windows and macOS; the runtime and pvt3-run built static with musl for x86-64 and aarch64"
@@ -205,18 +211,10 @@ EOF
 done
 
 step "aarch64: the tests under qemu (run beside the step above)"
-qemu_status=0
-wait "$qemu_pid" || qemu_status=$?
-cat "$qemu_log"
-[ "$qemu_status" = 0 ] || { echo "tests/run.sh: the aarch64 tests failed under qemu" >&2; exit 1; }
+joined "$qemu_pid" "$qemu_log" "the aarch64 tests failed under qemu"
 
 step "the small robot library: at most 8 MiB (docs/deploy.md)"
-if ! wait "$small_pid"; then
-  cat "$small_log" >&2
-  echo "tests/run.sh: the small robot library's size check failed (bash tests/robot-small.sh measure)" >&2
-  exit 1
-fi
-cat "$small_log"
+joined "$small_pid" "$small_log" "the small robot library's size check failed (bash tests/robot-small.sh measure)"
 
 # One closing line for all harnesses, host and aarch64 (cargo's own runs end with doc-test
 # harnesses that hold no test).
