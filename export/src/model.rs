@@ -129,13 +129,19 @@ fn value_info(name: &str, dims: &[Option<usize>]) -> ValueInfoProto {
 /// gets the temporal stage over the tokens so far, a provisional answer.
 pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<ModelProto> {
     check(m, norm, meta)?;
+    let mut g = Graph::default();
+    token_seams(&mut g, m);
+    let rows = spatial_stage(&mut g, m, norm);
+    temporal_stage(&mut g, m, norm, &rows);
+    Ok(signed_model(g, m, meta))
+}
+
+/// The kept tokens' raw frames (`TOKEN_FRAMES`) cut from the input, and each one's place among
+/// the kept tokens (`TOKEN_INDEX`).
+fn token_seams(g: &mut Graph, m: &BakedPvt3) {
     let c = &m.config;
-    let (n, d, eps) = (c.num_patches(), c.dim, c.layer_norm_eps);
     let (t, tk, tt) = (c.time_tokens(), m.kept_tokens.len(), c.tubelet);
     let (h, w, ch) = (c.height, c.width, c.channels);
-    let mut g = Graph::default();
-    let sample = c.sample_shape();
-
     // The kept tokens' raw frames: [b, h, w, (c,) f] → [b, h, w, c, t, tt] → gather → [b·tk, tt, h, w, c].
     let split = g.i64s("split_tokens", &[6], [0, h, w, ch, t, tt].map(|v| v as i64).to_vec());
     let mut x = g.op(Op::Reshape, &[INPUT, &split]);
@@ -148,7 +154,7 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
     let x = g.op(Op::Reshape, &[&x, &per_token]);
     g.node(Op::Identity, &[&x], vec![], Some(TOKEN_FRAMES));
     let input_shape = g.op(Op::Shape, &[INPUT]);
-    let batch = first_dim(&mut g, &input_shape);
+    let batch = first_dim(g, &input_shape);
     let kept_row = g.i64s("kept_row", &[1, tk], (0..tk as i64).collect());
     let rows = g.i64s("rows", &[1], vec![tk as i64]);
     let b_tk = g.node(Op::Concat, &[&batch, &rows], vec![int("axis", 0)], None);
@@ -156,20 +162,26 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
     let flat = g.i64s("flat", &[1], vec![-1]);
     let index = g.op(Op::Reshape, &[&index, &flat]);
     g.node(Op::Identity, &[&index], vec![], Some(TOKEN_INDEX));
+}
 
+/// The spatial stage, from `TOKEN_FRAMES` and `TOKEN_INDEX` to `TOKEN_ENCODINGS`. Returns the
+/// name of the shape `[-1, dim]` of its rows, which the temporal stage reads too.
+fn spatial_stage(g: &mut Graph, m: &BakedPvt3, norm: &Normalization) -> String {
+    let c = &m.config;
+    let (n, d, eps, tk) = (c.num_patches(), c.dim, c.layer_norm_eps, m.kept_tokens.len());
     // Spatial stage. Everything written to the residual stream is centred (see `layers`), so
     // every pre-norm is a root-mean-square norm: the patch embedding, the CLS tokens, the
     // position embedding, each block's outputs, and the encodings handed to the temporal stage.
-    let x = embed(&mut g, TOKEN_FRAMES, m, norm);
+    let x = embed(g, TOKEN_FRAMES, m, norm);
     let scales = g.f32s("frame_scale", &[tk], m.token_scale.clone());
     let scale = g.node(Op::Gather, &[&scales, TOKEN_INDEX], vec![int("axis", 0)], None);
     let column = g.i64s("column", &[3], vec![-1, 1, 1]);
     let scale = g.op(Op::Reshape, &[&scale, &column]);
     let embedded = g.op(Op::Mul, &[&x, &scale]);
     let token_shape = g.op(Op::Shape, &[TOKEN_FRAMES]);
-    let count = first_dim(&mut g, &token_shape);
+    let count = first_dim(g, &token_shape);
     let space_cls = g.f32s("space_cls", &[1, 1, d], centre_rows(&m.space_cls, d));
-    let cls = expand_over_batch(&mut g, &space_cls, &count, &[1, d]);
+    let cls = expand_over_batch(g, &space_cls, &count, &[1, d]);
     let tokens = g.node(Op::Concat, &[&cls, &embedded], vec![int("axis", 1)], None);
     let positions = g.f32s("pos_embed", &[tk, n + 1, d], centre_rows(&m.pos_embed, d));
     let pos = g.node(Op::Gather, &[&positions, TOKEN_INDEX], vec![int("axis", 0)], None);
@@ -179,23 +191,30 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
     let flat = g.i64s("rows", &[2], vec![-1, d as i64]);
     let tokens = g.op(Op::Reshape, &[&tokens, &flat]);
     let space = Rows { layout: Layout::TokenMajor, tokens: n + 1, key_bias: None };
-    let cls = transformer_cls(&mut g, &tokens, space, &m.space, eps, "space");
-    let cls = rms_norm(&mut g, &cls, eps);
-    let encoded = linear(&mut g, &cls, &centred(&norm_affine(&m.space.norm)), "space_norm");
+    let cls = transformer_cls(g, &tokens, space, &m.space, eps, "space");
+    let cls = rms_norm(g, &cls, eps);
+    let encoded = linear(g, &cls, &centred(&norm_affine(&m.space.norm)), "space_norm");
     g.node(Op::Identity, &[&encoded], vec![], Some(TOKEN_ENCODINGS));
+    flat
+}
 
+/// The temporal stage, from `TOKEN_ENCODINGS` (and `TOKEN_BIAS`) to `LOGITS` and
+/// `PROBABILITIES`; `flat` names the shape of the spatial stage's rows.
+fn temporal_stage(g: &mut Graph, m: &BakedPvt3, norm: &Normalization, flat: &str) {
+    let c = &m.config;
+    let (d, eps, t, tk) = (c.dim, c.layer_norm_eps, c.time_tokens(), m.kept_tokens.len());
     // Temporal stage.
     let per_sample = g.i64s("per_sample", &[3], vec![-1, tk as i64, d as i64]);
     let frames = g.op(Op::Reshape, &[TOKEN_ENCODINGS, &per_sample]);
     let frames_shape = g.op(Op::Shape, &[&frames]);
-    let batch = first_dim(&mut g, &frames_shape);
+    let batch = first_dim(g, &frames_shape);
     // The sequence: the CLS token, then every time token in order, a pruned one as its constant
     // encoding. The constants come first, [CLS, pruned…, kept…], and one gather orders them.
     let pruned: Vec<usize> = (0..t).filter(|k| !m.kept_tokens.contains(k)).collect();
     let mut constants = centre_rows(&m.temporal_cls, d);
     constants.extend(pruned.iter().flat_map(|&k| centre_rows(&m.pruned_encodings[k * d..(k + 1) * d], d)));
     let constants = g.f32s("temporal_constants", &[1, 1 + pruned.len(), d], constants);
-    let constants = expand_over_batch(&mut g, &constants, &batch, &[1 + pruned.len(), d]);
+    let constants = expand_over_batch(g, &constants, &batch, &[1 + pruned.len(), d]);
     let mut sequence = g.node(Op::Concat, &[&constants, &frames], vec![int("axis", 1)], None);
     if tk < t {
         let place = |k: usize| match m.kept_tokens.binary_search(&k) {
@@ -205,21 +224,28 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
         let order = g.i64s("token_order", &[t + 1], std::iter::once(0).chain((0..t).map(|k| place(k) as i64)).collect());
         sequence = g.node(Op::Gather, &[&sequence, &order], vec![int("axis", 1)], None);
     }
-    let sequence = g.op(Op::Reshape, &[&sequence, &flat]);
+    let sequence = g.op(Op::Reshape, &[&sequence, flat]);
     // The key bias, zeros here, is a seam: a runtime feeds −∞ for the tokens not yet received.
     let zeros = g.f32s("no_key_bias", &[1, 1, 1, t + 1], vec![0.0; t + 1]);
     g.node(Op::Identity, &[&zeros], vec![], Some(TOKEN_BIAS));
     let temporal = Rows { layout: Layout::SequenceMajor, tokens: t + 1, key_bias: Some(TOKEN_BIAS) };
-    let pooled = transformer_cls(&mut g, &sequence, temporal, &m.temporal, eps, "temporal");
-    let pooled = layer_norm(&mut g, &pooled, &m.temporal.norm, eps, "temporal_norm");
-    let normed = layer_norm(&mut g, &pooled, &m.head_norm, eps, "head_norm");
-    let mut logits = linear(&mut g, &normed, &m.head, "head");
+    let pooled = transformer_cls(g, &sequence, temporal, &m.temporal, eps, "temporal");
+    let pooled = layer_norm(g, &pooled, &m.temporal.norm, eps, "temporal_norm");
+    let normed = layer_norm(g, &pooled, &m.head_norm, eps, "head_norm");
+    let mut logits = linear(g, &normed, &m.head, "head");
     if let Some(s) = &m.spectrum {
-        let spectral = spectral_logits(&mut g, m, s, norm);
+        let spectral = spectral_logits(g, m, s, norm);
         logits = g.op(Op::Add, &[&logits, &spectral]);
     }
     g.node(Op::Identity, &[&logits], vec![], Some(LOGITS));
     g.node(Op::Softmax, &[&logits], vec![int("axis", -1)], Some(PROBABILITIES));
+}
+
+/// The graph `g` as a model with its inputs, outputs and metadata, signed.
+fn signed_model(g: Graph, m: &BakedPvt3, meta: &Metadata) -> ModelProto {
+    let c = &m.config;
+    let (h, w, ch, tt, d) = (c.height, c.width, c.channels, c.tubelet, c.dim);
+    let sample = c.sample_shape();
     let kept_frames: Vec<usize> = m.kept_tokens.iter().flat_map(|k| k * tt..(k + 1) * tt).collect();
 
     let mut input_dims = vec![None];
@@ -246,7 +272,7 @@ pub fn export(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<Mo
     };
     // Last: the digest of everything above, which the runtime checks before it reads the file.
     model.sign();
-    Ok(model)
+    model
 }
 
 /// Writes the model to `path` through a temporary file and a rename.

@@ -113,6 +113,18 @@ pub fn prefixes(model: &Pvt3, samples: &Samples) -> Result<Prefixes> {
     Ok(Prefixes::from(&answers(model, samples)?))
 }
 
+/// The stopping rule the checkpoint `meta` carries; one trained before there was a rule is
+/// calibrated here as training calibrates it, on its validation fold of `data`.
+pub fn carried_rule(model: &Pvt3, meta: &crate::checkpoint::Meta, data: &crate::data::Dataset) -> Result<Stopping> {
+    match &meta.provenance.stopping {
+        Some(carried) => Ok(carried.clone()),
+        None => {
+            let val = Samples::new(data, &data.split_for(meta.provenance.val_fold)?.val, &meta.normalization);
+            Ok(prefixes(model, &val)?.calibrate())
+        }
+    }
+}
+
 impl From<&Answers> for Prefixes {
     fn from(a: &Answers) -> Self {
         let best = |p: &Vec<f32>| {

@@ -133,7 +133,7 @@ fn check_options(cfg: &Config, options: &TrainOptions) -> Result<()> {
     if prefix > 0.0 {
         cfg.require_pvt3("--prefix-training")?;
     }
-    let floor = options.lr_floor;
+    let floor = options.optimization.lr_floor;
     if !(0.0..=1.0).contains(&floor) {
         return Err(Error::Usage(format!("--lr-floor {floor}: a share of the peak learning rate, from 0 to 1")));
     }

@@ -403,7 +403,7 @@ fn finished_run(dir: &Path, unfinished: &mut Vec<String>) -> Result<Option<(Fold
         true => {
             let (_, pmeta) = crate::checkpoint::load_meta(&pruned).map_err(damaged)?;
             let o = &pmeta.provenance.options;
-            let stage = pmeta.provenance.pruning.map(|spec| PruneStage { spec, epochs: o.epochs, lr: o.lr });
+            let stage = pmeta.provenance.pruning.map(|spec| PruneStage { spec, epochs: o.optimization.epochs, lr: o.optimization.lr });
             (Some(read_json::<RunResult>(&Run(&pruned).result()).map_err(damaged)?), stage)
         }
         false if pruned.exists() => {

@@ -81,8 +81,10 @@ impl Plan {
         let run = CrossValidation(cv).run(first.seed, fold);
         let (_, meta) = checkpoint::load_meta(&Run(&run).model())?;
         let options = &meta.provenance.options;
-        if options.distill.is_some() || options.joint.is_some() || summary.partner.is_some() {
-            return Err(refuse("its runs learnt from other runs or another sensor (--distill, --joint), which a final model cannot".into()));
+        if options.distillation.teachers.is_some() || options.joint.is_some() || summary.partner.is_some() {
+            return Err(refuse(
+                "its runs learnt from other runs or another sensor (--distill, --joint), which a final model cannot".into(),
+            ));
         }
         let expected = |pruned: bool| {
             let (runs, mean, std, ci95) = match pruned {
@@ -159,7 +161,10 @@ impl Plan {
             data,
             config: meta.config.clone(),
             val_fold: None,
-            options: crate::options::TrainOptions { epochs: self.epochs, ..meta.provenance.options.clone() },
+            options: crate::options::TrainOptions {
+                optimization: crate::options::Optimization { epochs: self.epochs, ..meta.provenance.options.optimization.clone() },
+                ..meta.provenance.options.clone()
+            },
             classes: meta.classes.clone(),
             pause_after: None,
             start: None,

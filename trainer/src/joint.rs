@@ -58,10 +58,10 @@ impl Partner<'_> {
         if classes != self.classes.as_slice() {
             return refuse(format!("it names the classes {:?}, and this data set {:?}; pairs are made by class", self.classes, classes));
         }
-        if opts.mixup > 0.0 {
+        if opts.augmentation.mixup > 0.0 {
             return refuse("--mixup blends touches of two classes, which have no partner; train with one or the other".into());
         }
-        if opts.distill.is_some() {
+        if opts.distillation.teachers.is_some() {
             return refuse("--distill teaches one sensor's network by its own runs; train with one or the other".into());
         }
         Ok(())

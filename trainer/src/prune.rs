@@ -10,7 +10,7 @@ use pvt3_spec::prune::{self, PruneSpec};
 
 use crate::checkpoint;
 use crate::data::Dataset;
-use crate::options::TrainOptions;
+use crate::options::{HeldZeros, Optimization, TrainOptions};
 use crate::train::{train, RunResult, RunSpec};
 use crate::Result;
 
@@ -45,12 +45,15 @@ pub fn prune_and_fine_tune(
     if stage.spec.weights > 0.0 {
         prune::random_weights(&mut tensors, stage.spec.weights, parent_options.seed ^ RANDOM_WEIGHTS_SEED)?;
     }
-    let options = TrainOptions {
+    let optimization = Optimization {
         epochs: stage.epochs,
         lr: stage.lr,
-        warmup_epochs: parent_options.warmup_epochs.min(1),
-        hold_pruned: true,
-        hold_zero_weights: stage.spec.weights > 0.0,
+        warmup_epochs: parent_options.optimization.warmup_epochs.min(1),
+        ..parent_options.optimization
+    };
+    let options = TrainOptions {
+        optimization,
+        held: HeldZeros { pruned: true, zero_weights: stage.spec.weights > 0.0 },
         // A model of a joint run is pruned and fine-tuned alone.
         joint: None,
         ..parent_options

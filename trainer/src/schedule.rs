@@ -9,6 +9,16 @@ pub struct Schedule {
 }
 
 impl Schedule {
+    /// The schedule of a run of `steps_per_epoch` steps an epoch with the options `opts`.
+    pub fn new(opts: &crate::options::Optimization, steps_per_epoch: usize) -> Self {
+        Schedule {
+            peak: opts.lr,
+            floor: opts.lr * opts.lr_floor,
+            warmup_steps: opts.warmup_epochs * steps_per_epoch,
+            total_steps: opts.epochs * steps_per_epoch,
+        }
+    }
+
     /// The learning rate for optimiser step `step` (0-based).
     pub fn at(&self, step: usize) -> f64 {
         if step < self.warmup_steps {

@@ -9,36 +9,36 @@ pub mod mixup;
 use pvt3_models::Rng;
 
 use super::normalization::Normalization;
-use crate::options::TrainOptions;
+use crate::options::Augmentation;
 
 /// One normalised training window (`norm.frames` frames a channel, channels in rows) changed in
 /// place as `opts` asks: its raw readings scaled per window and per channel, its variation about
 /// each channel's mean scaled, shifted in time (edge frames repeated), then a gain and Gaussian
 /// noise; each draw from `rng`, in that order.
-pub fn augment(sample: &mut [f32], norm: &Normalization, opts: &TrainOptions, rng: &mut Rng) {
+pub fn augment(sample: &mut [f32], norm: &Normalization, opts: &Augmentation, rng: &mut Rng) {
     let frames = norm.frames;
-    if opts.aug_scale > 0.0 || opts.aug_channel_scale > 0.0 {
+    if opts.scale > 0.0 || opts.channel_scale > 0.0 {
         // The raw readings times k, in normalised units: k z + (k - 1) mean / std, per channel;
         // k one factor for the window times one of the channel's own.
-        let window = if opts.aug_scale > 0.0 { log_uniform_factor(opts.aug_scale, rng) as f32 } else { 1.0 };
+        let window = if opts.scale > 0.0 { log_uniform_factor(opts.scale, rng) as f32 } else { 1.0 };
         for (row, (m, s)) in sample.chunks_mut(frames).zip(norm.mean.iter().zip(&norm.std)) {
-            let own = if opts.aug_channel_scale > 0.0 { log_uniform_factor(opts.aug_channel_scale, rng) as f32 } else { 1.0 };
+            let own = if opts.channel_scale > 0.0 { log_uniform_factor(opts.channel_scale, rng) as f32 } else { 1.0 };
             let k = window * own;
             let lift = (k - 1.0) * m / s;
             row.iter_mut().for_each(|v| *v = k * *v + lift);
         }
     }
-    if opts.aug_vibration > 0.0 {
+    if opts.vibration > 0.0 {
         // Each channel's variation about its mean over the window, times one factor for all.
-        let k = log_uniform_factor(opts.aug_vibration, rng) as f32;
+        let k = log_uniform_factor(opts.vibration, rng) as f32;
         for row in sample.chunks_mut(frames) {
             let mean = row.iter().sum::<f32>() / frames as f32;
             row.iter_mut().for_each(|v| *v = mean + k * (*v - mean));
         }
     }
-    if opts.aug_shift > 0 {
-        let span = 2 * opts.aug_shift + 1;
-        let shift = rng.below(span) as isize - opts.aug_shift as isize;
+    if opts.shift > 0 {
+        let span = 2 * opts.shift + 1;
+        let shift = rng.below(span) as isize - opts.shift as isize;
         let last = frames as isize - 1;
         for row in sample.chunks_mut(frames) {
             let original = row.to_vec();
@@ -47,8 +47,8 @@ pub fn augment(sample: &mut [f32], norm: &Normalization, opts: &TrainOptions, rn
             }
         }
     }
-    let gain = 1.0 + opts.aug_gain as f32 * (2.0 * rng.uniform() - 1.0);
-    let noise = opts.aug_noise as f32;
+    let gain = 1.0 + opts.gain as f32 * (2.0 * rng.uniform() - 1.0);
+    let noise = opts.noise as f32;
     for v in sample.iter_mut() {
         *v = *v * gain + if noise > 0.0 { noise * rng.normal() } else { 0.0 };
     }

@@ -196,100 +196,10 @@ fn time_like(name: &str) -> bool {
 
 /// Reads `dir` as one folder per class of CSV touches.
 pub fn read_folder(dir: &Path, opts: &ImportOptions) -> Result<Imported> {
-    let entries = |d: &Path| -> Result<Vec<PathBuf>> {
-        let mut v: Vec<PathBuf> = std::fs::read_dir(d)
-            .map_err(Error::io(d))?
-            .map(|e| e.map(|e| e.path()))
-            .collect::<std::io::Result<_>>()
-            .map_err(Error::io(d))?;
-        v.sort();
-        Ok(v)
-    };
-    let csvs = |d: &Path| -> Result<Vec<PathBuf>> {
-        Ok(entries(d)?.into_iter().filter(|p| p.is_file() && p.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"))).collect())
-    };
-    // Every touch's file, class name and condition values.
-    let mut files: Vec<(PathBuf, String, Vec<String>)> = Vec::new();
-    let read_name = |path: &Path, pattern: &NamePattern| -> Result<Vec<String>> {
-        let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-        pattern.read(&stem).ok_or_else(|| import_error(path, None, format!("its name `{stem}` does not match --name {pattern}")))
-    };
-    // Whether the names give the class, the touches then side by side in `dir`.
-    let flat = opts.name.as_ref().is_some_and(|p| p.fields().contains(&CLASS_FIELD));
-    match &opts.name {
-        Some(pattern) if flat => {
-            let found = csvs(dir)?;
-            if found.is_empty() {
-                return Err(import_error(
-                    dir,
-                    None,
-                    format!("holds no .csv file (--name {pattern} names the class, so the touches lie side by side in this folder)"),
-                ));
-            }
-            for path in found {
-                let mut values = read_name(&path, pattern)?;
-                let class = values.remove(pattern.fields().iter().position(|f| *f == CLASS_FIELD).expect("the class field"));
-                files.push((path, class, values));
-            }
-        }
-        _ => {
-            let class_dirs: Vec<PathBuf> = entries(dir)?.into_iter().filter(|p| p.is_dir()).collect();
-            if class_dirs.is_empty() {
-                return Err(import_error(
-                    dir,
-                    None,
-                    "holds no class folder (expected one folder per class, each with one CSV file per touch, or --name with a {class} field)",
-                ));
-            }
-            for class_dir in class_dirs {
-                let found = csvs(&class_dir)?;
-                if found.is_empty() {
-                    return Err(import_error(&class_dir, None, "an empty class: this folder holds no .csv file"));
-                }
-                let class = class_dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-                for path in found {
-                    let values = match &opts.name {
-                        Some(pattern) => read_name(&path, pattern)?,
-                        None => Vec::new(),
-                    };
-                    files.push((path, class.clone(), values));
-                }
-            }
-        }
-    }
-    let classes: Vec<String> = files.iter().map(|(_, c, _)| c.clone()).collect::<std::collections::BTreeSet<_>>().into_iter().collect();
-    for class in &classes {
-        let count = files.iter().filter(|(_, c, _)| c == class).count();
-        if count < FOLDS {
-            let too_few = format!(
-                "{count} touches, too few to split: each of the {FOLDS} folds (training, validation, test) needs one of every class"
-            );
-            return Err(if flat {
-                import_error(dir, None, format!("class `{class}`: {too_few}"))
-            } else {
-                import_error(&dir.join(class), None, too_few)
-            });
-        }
-    }
-    let mut header: Option<(PathBuf, Vec<String>)> = None;
-    let mut touches = Vec::new();
-    let mut condition_values = Vec::new();
-    for (path, class, values) in files {
-        let (names, touch) = read_file(&path, classes.binary_search(&class).expect("a known class"))?;
-        match &header {
-            None => header = Some((path.clone(), names)),
-            Some((first, h)) if *h != names => {
-                return Err(import_error(
-                    &path,
-                    Some(1),
-                    format!("its header differs from {}'s: {:?} against {:?}", first.display(), names, h),
-                ));
-            }
-            Some(_) => {}
-        }
-        touches.push(touch);
-        condition_values.push(values);
-    }
+    let (files, flat) = list_touches(dir, opts)?;
+    let classes: Vec<String> = files.iter().map(|f| f.class.clone()).collect::<std::collections::BTreeSet<_>>().into_iter().collect();
+    check_enough_touches(dir, &files, &classes, flat)?;
+    let (names, touches, condition_values) = read_touches(files, &classes)?;
     let conditions = match &opts.name {
         Some(pattern) => pattern
             .conditions()
@@ -299,7 +209,6 @@ pub fn read_folder(dir: &Path, opts: &ImportOptions) -> Result<Imported> {
             .collect(),
         None => Vec::new(),
     };
-    let (_, names) = header.expect("at least one touch was read");
     let (chosen, left_out) = choose_columns(&names, &touches, opts)?;
     let channels: Vec<String> = chosen.iter().map(|&c| names[c].clone()).collect();
     if let Some((h, w)) = opts.grid {
@@ -316,26 +225,8 @@ pub fn read_folder(dir: &Path, opts: &ImportOptions) -> Result<Imported> {
     if let Some(problem) = reading.and_then(|r| r.problem()) {
         return Err(Error::Usage(format!("--per-distance/--per-force: {problem}")));
     }
-    // Each touch's value of a condition, as a number (what the robot would know of the touch).
-    let known = |option: &str, given: &Option<(String, f64)>| -> Result<Vec<Option<f64>>> {
-        let Some((name, _)) = given else { return Ok(vec![None; touches.len()]) };
-        let condition = conditions.iter().find(|c| c.name == *name).ok_or_else(|| {
-            let known: Vec<&String> = conditions.iter().map(|c| &c.name).collect();
-            Error::Usage(format!("{option} {name}: no such condition; --name records {known:?}"))
-        })?;
-        condition
-            .levels
-            .iter()
-            .zip(&touches)
-            .map(|(v, t)| {
-                v.parse::<f64>()
-                    .map(Some)
-                    .map_err(|_| import_error(&t.path, None, format!("{option} {name}: its {name} `{v}` is not a number")))
-            })
-            .collect()
-    };
-    let speeds = known("--per-distance", &opts.per_distance)?;
-    let forces = known("--per-force", &opts.per_force)?;
+    let speeds = known_values("--per-distance", &opts.per_distance, &conditions, &touches)?;
+    let forces = known_values("--per-force", &opts.per_force, &conditions, &touches)?;
     let mut out = Imported {
         touches: Vec::new(),
         labels: Vec::new(),
@@ -348,26 +239,168 @@ pub fn read_folder(dir: &Path, opts: &ImportOptions) -> Result<Imported> {
         reading,
     };
     for (n, t) in touches.into_iter().enumerate() {
-        let mut frames = vec![Vec::with_capacity(t.rows.len()); chosen.len()];
-        for (row, line) in t.rows.iter().zip(&t.lines) {
-            for (k, &c) in chosen.iter().enumerate() {
-                let v = row[c].ok_or_else(|| import_error(&t.path, Some(*line), format!("column `{}` is not a number here", names[c])))?;
-                frames[k].push(v as f32);
-            }
-        }
-        if let Some(reading) = &reading {
-            // Read as the robot will read its touches: the runtime's own function.
-            let touch = Touch { speed: speeds[n], force: forces[n] };
-            let read =
-                read_touch(&frames.concat(), frames.len(), reading, touch).map_err(|e| import_error(&t.path, None, e.to_string()))?;
-            let len = read.len() / frames.len();
-            frames = read.chunks(len).map(<[f32]>::to_vec).collect();
-        }
-        out.touches.push(frames);
+        let touch = Touch { speed: speeds[n], force: forces[n] };
+        out.touches.push(chosen_frames(&t, (&chosen, &names), reading.as_ref().map(|r| (r, touch)))?);
         out.labels.push(t.class as u32);
         out.sources.push(t.path.strip_prefix(dir).unwrap_or(&t.path).display().to_string());
     }
     Ok(out)
+}
+
+/// A touch's file, found by [`list_touches`]: its class name and its condition values.
+struct Listed {
+    path: PathBuf,
+    class: String,
+    values: Vec<String>,
+}
+
+/// The CSV files of `dir`, sorted: one folder per class, or side by side when `--name` names
+/// the class (`flat`, the second value).
+fn list_touches(dir: &Path, opts: &ImportOptions) -> Result<(Vec<Listed>, bool)> {
+    let mut files = Vec::new();
+    let read_name = |path: &Path, pattern: &NamePattern| -> Result<Vec<String>> {
+        let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        pattern.read(&stem).ok_or_else(|| import_error(path, None, format!("its name `{stem}` does not match --name {pattern}")))
+    };
+    // Whether the names give the class, the touches then side by side in `dir`.
+    let flat = opts.name.as_ref().is_some_and(|p| p.fields().contains(&CLASS_FIELD));
+    match &opts.name {
+        Some(pattern) if flat => {
+            let found = csv_files(dir)?;
+            if found.is_empty() {
+                return Err(import_error(
+                    dir,
+                    None,
+                    format!("holds no .csv file (--name {pattern} names the class, so the touches lie side by side in this folder)"),
+                ));
+            }
+            for path in found {
+                let mut values = read_name(&path, pattern)?;
+                let class = values.remove(pattern.fields().iter().position(|f| *f == CLASS_FIELD).expect("the class field"));
+                files.push(Listed { path, class, values });
+            }
+        }
+        _ => {
+            let class_dirs: Vec<PathBuf> = sorted_entries(dir)?.into_iter().filter(|p| p.is_dir()).collect();
+            if class_dirs.is_empty() {
+                return Err(import_error(
+                    dir,
+                    None,
+                    "holds no class folder (expected one folder per class, each with one CSV file per touch, or --name with a {class} field)",
+                ));
+            }
+            for class_dir in class_dirs {
+                let found = csv_files(&class_dir)?;
+                if found.is_empty() {
+                    return Err(import_error(&class_dir, None, "an empty class: this folder holds no .csv file"));
+                }
+                let class = class_dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+                for path in found {
+                    let values = match &opts.name {
+                        Some(pattern) => read_name(&path, pattern)?,
+                        None => Vec::new(),
+                    };
+                    files.push(Listed { path, class: class.clone(), values });
+                }
+            }
+        }
+    }
+    Ok((files, flat))
+}
+
+/// The entries of folder `d`, sorted.
+fn sorted_entries(d: &Path) -> Result<Vec<PathBuf>> {
+    let mut v: Vec<PathBuf> =
+        std::fs::read_dir(d).map_err(Error::io(d))?.map(|e| e.map(|e| e.path())).collect::<std::io::Result<_>>().map_err(Error::io(d))?;
+    v.sort();
+    Ok(v)
+}
+
+/// The `.csv` files of folder `d`, sorted.
+fn csv_files(d: &Path) -> Result<Vec<PathBuf>> {
+    Ok(sorted_entries(d)?.into_iter().filter(|p| p.is_file() && p.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"))).collect())
+}
+
+/// Refuses a class with fewer touches than folds, naming its folder (or `dir`, when `flat`).
+fn check_enough_touches(dir: &Path, files: &[Listed], classes: &[String], flat: bool) -> Result<()> {
+    for class in classes {
+        let count = files.iter().filter(|f| f.class == *class).count();
+        if count < FOLDS {
+            let too_few = format!(
+                "{count} touches, too few to split: each of the {FOLDS} folds (training, validation, test) needs one of every class"
+            );
+            return Err(if flat {
+                import_error(dir, None, format!("class `{class}`: {too_few}"))
+            } else {
+                import_error(&dir.join(class), None, too_few)
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Every listed touch read, in order: the columns' names (one header for all), the touches and
+/// their condition values.
+fn read_touches(files: Vec<Listed>, classes: &[String]) -> Result<(Vec<String>, Vec<TouchFile>, Vec<Vec<String>>)> {
+    let mut header: Option<(PathBuf, Vec<String>)> = None;
+    let mut touches = Vec::new();
+    let mut condition_values = Vec::new();
+    for Listed { path, class, values } in files {
+        let (names, touch) = read_file(&path, classes.binary_search(&class).expect("a known class"))?;
+        match &header {
+            None => header = Some((path.clone(), names)),
+            Some((first, h)) if *h != names => {
+                return Err(import_error(
+                    &path,
+                    Some(1),
+                    format!("its header differs from {}'s: {:?} against {:?}", first.display(), names, h),
+                ));
+            }
+            Some(_) => {}
+        }
+        touches.push(touch);
+        condition_values.push(values);
+    }
+    let (_, names) = header.expect("at least one touch was read");
+    Ok((names, touches, condition_values))
+}
+
+/// Each touch's value of the condition `given` names (`option` its flag), as a number: what the
+/// robot would know of the touch. `None` for every touch when no condition is given.
+fn known_values(option: &str, given: &Option<(String, f64)>, conditions: &[Condition], touches: &[TouchFile]) -> Result<Vec<Option<f64>>> {
+    let Some((name, _)) = given else { return Ok(vec![None; touches.len()]) };
+    let condition = conditions.iter().find(|c| c.name == *name).ok_or_else(|| {
+        let known: Vec<&String> = conditions.iter().map(|c| &c.name).collect();
+        Error::Usage(format!("{option} {name}: no such condition; --name records {known:?}"))
+    })?;
+    condition
+        .levels
+        .iter()
+        .zip(touches)
+        .map(|(v, t)| {
+            v.parse::<f64>()
+                .map(Some)
+                .map_err(|_| import_error(&t.path, None, format!("{option} {name}: its {name} `{v}` is not a number")))
+        })
+        .collect()
+}
+
+/// A touch's chosen columns (`chosen` of the columns `names`) as channels of frames; with a
+/// reading, read as the robot will read its touches (the runtime's own function).
+fn chosen_frames(t: &TouchFile, (chosen, names): (&[usize], &[String]), reading: Option<(&Reading, Touch)>) -> Result<Vec<Vec<f32>>> {
+    let mut frames = vec![Vec::with_capacity(t.rows.len()); chosen.len()];
+    for (row, line) in t.rows.iter().zip(&t.lines) {
+        for (k, &c) in chosen.iter().enumerate() {
+            let v = row[c].ok_or_else(|| import_error(&t.path, Some(*line), format!("column `{}` is not a number here", names[c])))?;
+            frames[k].push(v as f32);
+        }
+    }
+    if let Some((reading, touch)) = reading {
+        let read = read_touch(&frames.concat(), frames.len(), reading, touch).map_err(|e| import_error(&t.path, None, e.to_string()))?;
+        let len = read.len() / frames.len();
+        frames = read.chunks(len).map(<[f32]>::to_vec).collect();
+    }
+    Ok(frames)
 }
 
 /// One CSV touch: its header and rows; a ragged row is an error naming its line.

@@ -16,7 +16,7 @@ fn pruned_entries_stay_zero_and_the_baked_model_matches() {
     let data = tiny_data();
     let (dense, pruned) = (out_dir("prune-dense"), out_dir("prune-ft"));
     let mut s = spec(&data, 8, None);
-    s.options.l1 = 0.05;
+    s.options.pruning.l1 = 0.05;
     train(&s, &dense, false, &ProgressBar::hidden()).unwrap().unwrap();
     let stage = PruneStage { spec: PruneSpec { channels: 50.0, frames: 50.0, scope: Scope::Local, weights: 0.0 }, epochs: 4, lr: 1e-3 };
     let r = prune_and_fine_tune(&dense, &data, &stage, &pruned, false, &ProgressBar::hidden()).unwrap().unwrap();

@@ -1,7 +1,7 @@
 //! One sensor's network in a run (a joint run trains two): what its epochs read, its learner,
 //! its validation and checkpoints, its resume state.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use candle_core::{Tensor, D};
 use candle_nn::VarMap;
@@ -12,17 +12,22 @@ use pvt3_spec::weights::Tensors;
 use super::{Best, Learner};
 use crate::average::WeightAverage;
 use crate::checkpoint::{self, Meta, Provenance};
-use crate::data::{Dataset, Split};
-use crate::{data::windows::Samples, evaluate::evaluate};
 use crate::data::normalization::Normalization;
+use crate::data::{Dataset, Split};
 use crate::options::TrainOptions;
 use crate::run_dir::Checkpoint;
+use crate::run_dir::Run;
 use crate::Result;
+use crate::{data::windows::Samples, evaluate::evaluate};
 
 /// One sensor's network in a run and what its epochs read: its split as windows, normalised,
 /// its learner and weight average. A joint run (`--joint`) trains two side by side.
 pub(super) struct Sensor<'a> {
     pub(super) data: &'a Dataset,
+    /// Its options: a joint run's other sensor records the run's data set as its partner.
+    pub(super) options: TrainOptions,
+    /// Its run directory: the run's, or a joint run's `partner/` in it.
+    pub(super) dir: PathBuf,
     pub(super) config: Config,
     pub(super) classes: Vec<String>,
     pub(super) normalization: Normalization,
@@ -53,20 +58,21 @@ impl Net {
 }
 
 impl<'a> Sensor<'a> {
-    /// With `share`, the network's temporal transformer is that learner's ([`Learner::sharing`]).
+    /// Its network starts from `start`'s weights, or seeded; with `share`, its temporal
+    /// transformer is that learner's ([`Learner::sharing`]).
     pub(super) fn new(
         data: &'a Dataset,
         config: Config,
         classes: Vec<String>,
         (val_fold, opts): (Option<usize>, &TrainOptions),
-        start: Option<&Tensors>,
-        share: Option<&VarMap>,
+        dir: &Path,
+        (start, share): (Option<&Tensors>, Option<&VarMap>),
     ) -> Result<Self> {
         data.check_fits(&config)?;
         let split: Split = data.split_for(val_fold)?;
         let normalization = crate::data::normalization::fit(data, &split.train, config.frames);
         let train_set = Samples::new(data, &split.train, &normalization);
-        let crops = opts.aug_stretch > 0.0 || split.train.iter().any(|&i| data.lengths[i] > config.frames);
+        let crops = opts.augmentation.stretch > 0.0 || split.train.iter().any(|&i| data.lengths[i] > config.frames);
         let val_set = Samples::new(data, &split.val, &normalization);
         let test_set = Samples::new(data, &split.test, &normalization);
         let learner = match share {
@@ -75,12 +81,27 @@ impl<'a> Sensor<'a> {
         };
         // With weight averaging, the average of the weights as they start.
         let average = if opts.ema > 0.0 { Some(WeightAverage::new(&learner.varmap, opts.ema)?) } else { None };
-        Ok(Self { data, net: Net { learner, average }, config, classes, normalization, split, train_set, crops, val_set, test_set })
+        let (options, dir) = (opts.clone(), dir.to_path_buf());
+        Ok(Self {
+            data,
+            options,
+            dir,
+            net: Net { learner, average },
+            config,
+            classes,
+            normalization,
+            split,
+            train_set,
+            crops,
+            val_set,
+            test_set,
+        })
     }
 
     /// This epoch's training windows, when they are drawn anew each epoch (see `crops`).
-    pub(super) fn epoch_windows(&self, opts: &TrainOptions, rng: &mut Rng) -> Option<Samples> {
-        self.crops.then(|| Samples::cropped(self.data, &self.split.train, &self.normalization, opts.aug_stretch, rng))
+    pub(super) fn epoch_windows(&self, rng: &mut Rng) -> Option<Samples> {
+        let stretch = self.options.augmentation.stretch;
+        self.crops.then(|| Samples::cropped(self.data, &self.split.train, &self.normalization, stretch, rng))
     }
 
     /// The weights, optimiser state and weight average of the checkpoint `dir` (a `last/`).
@@ -104,15 +125,7 @@ impl<'a> Sensor<'a> {
         Ok(())
     }
 
-    pub(super) fn meta(
-        &self,
-        val_fold: Option<usize>,
-        opts: &TrainOptions,
-        pruning: &Option<PruneSpec>,
-        epoch: usize,
-        val: f64,
-        test: Option<f64>,
-    ) -> Meta {
+    pub(super) fn meta(&self, val_fold: Option<usize>, pruning: &Option<PruneSpec>, epoch: usize, val: f64, test: Option<f64>) -> Meta {
         Meta {
             config: self.config.clone(),
             normalization: self.normalization.clone(),
@@ -121,11 +134,11 @@ impl<'a> Sensor<'a> {
                 pvt3_version: env!("CARGO_PKG_VERSION").to_string(),
                 data: self.data.path.display().to_string(),
                 val_fold,
-                seed: opts.seed,
+                seed: self.options.seed,
                 epoch,
                 val_accuracy: val,
                 test_accuracy: test,
-                options: opts.clone(),
+                options: self.options.clone(),
                 pruning: pruning.clone(),
                 held_out: self.data.held_out.clone(),
                 trained_on: Some(self.data.trained_on()),
@@ -138,14 +151,13 @@ impl<'a> Sensor<'a> {
 
     /// The end of an epoch: the network (its weight average, when averaging) evaluated on
     /// validation; when it improved on `best`, on the test touches too and checkpointed into
-    /// `model`. With nothing to validate (a final model) every epoch is checkpointed, so the
+    /// its run's `model/`. With nothing to validate (a final model) every epoch is checkpointed, so the
     /// last is kept.
     pub(super) fn validate(
         &mut self,
         epoch: usize,
         best: &mut Option<Best>,
-        model: &Path,
-        run: (Option<usize>, &TrainOptions, &Option<PruneSpec>),
+        (val_fold, pruning): (Option<usize>, &Option<PruneSpec>),
     ) -> Result<Validated> {
         if let Some(average) = &mut self.net.average {
             average.swap()?;
@@ -160,8 +172,7 @@ impl<'a> Sensor<'a> {
         if improved {
             let test = if self.test_set.is_empty() { None } else { Some(evaluate(&self.net.learner.model, &self.test_set)?.accuracy) };
             test_accuracy = test;
-            let (val_fold, opts, pruning) = run;
-            checkpoint::save(model, &self.net.learner.varmap, &self.meta(val_fold, opts, pruning, epoch, val.accuracy, test))?;
+            checkpoint::save(&Run(&self.dir).model(), &self.net.learner.varmap, &self.meta(val_fold, pruning, epoch, val.accuracy, test))?;
             *best = Some(Best { epoch, val_accuracy: val.accuracy, val_loss: val.loss, test_accuracy: test.unwrap_or(f64::NAN) });
         }
         if let Some(average) = &mut self.net.average {

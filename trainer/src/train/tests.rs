@@ -3,11 +3,13 @@
 
 use std::path::PathBuf;
 
+use candle_core::{Device, Tensor};
 use indicatif::ProgressBar;
 use pvt3_models::{Config, Rng};
 
 use super::*;
 use crate::data::Dataset;
+use crate::options::{Augmentation, Distillation, HeldZeros, Optimization, Pruning};
 use crate::run_dir::CrossValidation;
 
 fn tiny_config() -> Config {
@@ -64,36 +66,43 @@ pub(crate) fn tiny_data() -> Dataset {
 
 fn options(epochs: usize) -> TrainOptions {
     TrainOptions {
-        epochs,
-        batch_size: 8,
-        lr: 5e-3,
-        lr_floor: 0.01,
-        warmup_epochs: 1,
-        weight_decay: 0.01,
-        label_smoothing: 0.1,
-        clip_grad: 1.0,
-        aug_gain: 0.1,
-        aug_noise: 0.05,
-        aug_shift: 0,
-        aug_scale: 0.0,
-        aug_channel_scale: 0.0,
-        aug_vibration: 0.0,
-        aug_stretch: 0.0,
-        mixup: 0.0,
-        extrapolate: 0.0,
-        extrapolate_levels: false,
-        distill: None,
-        distill_weight: 1.0,
+        optimization: Optimization {
+            epochs,
+            batch_size: 8,
+            lr: 5e-3,
+            lr_floor: 0.01,
+            warmup_epochs: 1,
+            weight_decay: 0.01,
+            label_smoothing: 0.1,
+            clip_grad: 1.0,
+        },
+        augmentation: Augmentation {
+            gain: 0.1,
+            noise: 0.05,
+            shift: 0,
+            scale: 0.0,
+            channel_scale: 0.0,
+            vibration: 0.0,
+            stretch: 0.0,
+            mixup: 0.0,
+            extrapolate: 0.0,
+            extrapolate_levels: false,
+        },
         ema: 0.0,
         seed: 5,
-        l1: 0.0,
-        mask_lr: 1.0,
-        random_prune: 0.0,
+        pruning: Pruning { l1: 0.0, mask_lr: 1.0, random_prune: 0.0 },
         prefix_training: 0.0,
+        distillation: Distillation { teachers: None, weight: 1.0 },
         joint: None,
-        hold_pruned: false,
-        hold_zero_weights: false,
+        held: HeldZeros::default(),
     }
+}
+
+/// `options(epochs)` changed by `change`.
+fn options_with(epochs: usize, change: impl FnOnce(&mut TrainOptions)) -> TrainOptions {
+    let mut options = options(epochs);
+    change(&mut options);
+    options
 }
 
 pub(crate) fn out_dir(tag: &str) -> PathBuf {
@@ -136,11 +145,17 @@ fn learns_a_separable_problem_and_writes_a_checkpoint() {
     let r = train(&spec(&data, 30, None), &dir, false, &ProgressBar::hidden()).unwrap().unwrap();
     assert!(r.test_accuracy >= 0.9, "{r:?}");
     assert_eq!(metrics(&dir).len(), 30);
-    let (meta, _, _) = crate::checkpoint::load(&dir).unwrap();
+    let (mut meta, model, _) = crate::checkpoint::load(&dir).unwrap();
     assert_eq!(meta.classes, vec!["up", "down"]);
     assert_eq!(meta.provenance.epoch, r.best_epoch);
     let split = data.split(0).unwrap();
     assert_eq!(meta.normalization, crate::data::normalization::fit(&data, &split.train, 8), "fitted on the training split only");
+    // The stopping rule calibrated on the validation fold, and found again for a run without one.
+    let pvt3 = crate::anytime::answering(&model).unwrap();
+    let carried = meta.provenance.stopping.clone().expect("calibrated");
+    assert_eq!(crate::anytime::carried_rule(pvt3, &meta, &data).unwrap(), carried);
+    meta.provenance.stopping = None;
+    assert_eq!(crate::anytime::carried_rule(pvt3, &meta, &data).unwrap(), carried, "calibrated as training calibrates");
     let again = train(&spec(&data, 30, None), &dir, false, &ProgressBar::hidden()).unwrap_err().to_string();
     assert!(again.contains("already holds a run; pass --resume"), "{again}");
     std::fs::remove_dir_all(dir).unwrap();
@@ -167,7 +182,7 @@ fn a_seed_fixes_the_run_and_a_paused_run_resumes_exactly() {
 /// Trains `options` for `epochs` twice, once paused after 2 epochs and resumed: the two must
 /// agree bit for bit. Returns the uninterrupted run's directory.
 fn resumes_exactly(tag: &str, data: &Dataset, options: TrainOptions) -> PathBuf {
-    resumes_exactly_as(tag, &RunSpec { options: options.clone(), ..spec(data, options.epochs, None) })
+    resumes_exactly_as(tag, &RunSpec { options: options.clone(), ..spec(data, options.optimization.epochs, None) })
 }
 
 /// [`resumes_exactly`] for any run: `base` trained twice, once paused after 2 epochs and resumed;
@@ -228,7 +243,7 @@ fn weight_averaging_resumes_exactly_and_checkpoints_the_average() {
 /// Same-class extrapolation draws from the run's own generator too: a run resumes bit for bit.
 #[test]
 fn extrapolation_resumes_exactly() {
-    let dir = resumes_exactly("extrapolate", &tiny_data(), TrainOptions { extrapolate: 0.5, ..options(4) });
+    let dir = resumes_exactly("extrapolate", &tiny_data(), options_with(4, |o| o.augmentation.extrapolate = 0.5));
     std::fs::remove_dir_all(dir).unwrap();
 }
 
@@ -244,7 +259,7 @@ fn distillation_learns_from_runs_of_the_same_split_and_resumes_exactly() {
         let run = RunSpec { options, ..spec(&data, 3, None) };
         train(&run, &CrossValidation(&teachers).run(seed, 0), false, &ProgressBar::hidden()).unwrap().unwrap();
     }
-    let taught = TrainOptions { distill: Some(teachers.display().to_string()), distill_weight: 2.0, ..options(4) };
+    let taught = options_with(4, |o| o.distillation = Distillation { teachers: Some(teachers.display().to_string()), weight: 2.0 });
     let a = resumes_exactly("distill", &data, taught.clone());
     let alone = out_dir("distill-alone");
     train(&spec(&data, 4, None), &alone, false, &ProgressBar::hidden()).unwrap().unwrap();
@@ -275,11 +290,11 @@ fn distillation_learns_from_runs_of_the_same_split_and_resumes_exactly() {
 #[test]
 fn mixup_learns_and_resumes_exactly() {
     let data = tiny_data();
-    let a = resumes_exactly("mixup", &data, TrainOptions { mixup: 0.4, ..options(4) });
+    let a = resumes_exactly("mixup", &data, options_with(4, |o| o.augmentation.mixup = 0.4));
     std::fs::remove_dir_all(a).unwrap();
     let dir = out_dir("mixup-learn");
     let r = train(
-        &RunSpec { options: TrainOptions { mixup: 0.4, ..options(30) }, ..spec(&data, 30, None) },
+        &RunSpec { options: options_with(30, |o| o.augmentation.mixup = 0.4), ..spec(&data, 30, None) },
         &dir,
         false,
         &ProgressBar::hidden(),
@@ -309,7 +324,7 @@ fn random_pruning_regularises_without_leaving_zeros_behind() {
     let data = tiny_data();
     let dir = out_dir("random-prune");
     let mut s = spec(&data, 30, None);
-    s.options.random_prune = 0.05;
+    s.options.pruning.random_prune = 0.05;
     let r = train(&s, &dir, false, &ProgressBar::hidden()).unwrap().unwrap();
     // A width-8 model is fragile: 5 % of its weights gone each step costs accuracy, but it learns.
     assert!(r.test_accuracy >= 0.75, "{r:?}");
@@ -392,9 +407,15 @@ fn a_joint_run_refuses_encodings_of_other_widths_other_classes_mixup_and_distill
     let renamed = Partner { classes: vec!["smooth".into(), "rough".into()], ..base.partner.clone().unwrap() };
     let err = refused(RunSpec { partner: Some(renamed), ..base.clone() });
     assert!(err.contains("pairs are made by class"), "{err}");
-    let err = refused(RunSpec { options: TrainOptions { mixup: 0.2, ..base.options.clone() }, ..base.clone() });
+    let err = refused(RunSpec {
+        options: TrainOptions { augmentation: Augmentation { mixup: 0.2, ..base.options.augmentation.clone() }, ..base.options.clone() },
+        ..base.clone()
+    });
     assert!(err.contains("--mixup"), "{err}");
-    let err = refused(RunSpec { options: TrainOptions { distill: Some("runs/any".into()), ..base.options.clone() }, ..base });
+    let err = refused(RunSpec {
+        options: TrainOptions { distillation: Distillation { teachers: Some("runs/any".into()), weight: 1.0 }, ..base.options.clone() },
+        ..base
+    });
     assert!(err.contains("--joint tiny-other") && err.contains("--distill"), "{err}");
 }
 

@@ -229,14 +229,7 @@ fn anytime_report(run: &Loaded, samples: &Samples, a: &EvalArgs) -> Result<()> {
         checkpoint::write_json_atomically(path, &answers).with_context(|| format!("writing {}", path.display()))?;
     }
     let prefixes = Prefixes::from(&answers);
-    // The rule training recorded; a run from before there was one is calibrated here the same way.
-    let calibrated = match &meta.provenance.stopping {
-        Some(recorded) => recorded.clone(),
-        None => {
-            let val = Samples::new(&run.data, &run.data.split_for(meta.provenance.val_fold)?.val, &meta.normalization);
-            anytime::prefixes(pvt3, &val)?.calibrate()
-        }
-    };
+    let calibrated = anytime::carried_rule(pvt3, meta, &run.data)?;
     let here = prefixes.stop_by(calibrated.rule);
     let picture = a.picture_of(ANYTIME);
     let rule = calibrated.rule;

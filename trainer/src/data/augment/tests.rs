@@ -3,10 +3,11 @@
 use pvt3_models::Rng;
 
 use super::*;
+use crate::options::TrainOptions;
 
 #[test]
 fn scaling_multiplies_the_raw_readings_of_every_channel_alike() {
-    let opts = TrainOptions { aug_scale: 1.0, aug_gain: 0.0, aug_noise: 0.0, ..TrainOptions::default() };
+    let opts = Augmentation { scale: 1.0, gain: 0.0, noise: 0.0, ..TrainOptions::default().augmentation };
     let norm = Normalization { mean: vec![100.0, -4.0], std: vec![10.0, 2.0], frames: 3 };
     let raw = [90.0, 100.0, 130.0, -6.0, -4.0, 0.0];
     let mut sample = Vec::new();
@@ -30,7 +31,7 @@ fn scaling_multiplies_the_raw_readings_of_every_channel_alike() {
 
 #[test]
 fn channel_scaling_multiplies_each_channels_raw_readings_by_a_factor_of_its_own() {
-    let opts = TrainOptions { aug_channel_scale: 0.2, aug_gain: 0.0, aug_noise: 0.0, ..TrainOptions::default() };
+    let opts = Augmentation { channel_scale: 0.2, gain: 0.0, noise: 0.0, ..TrainOptions::default().augmentation };
     let norm = Normalization { mean: vec![100.0, -4.0, 50.0], std: vec![10.0, 2.0, 5.0], frames: 3 };
     let raw = [90.0, 100.0, 130.0, -6.0, -4.0, -1.0, 40.0, 55.0, 60.0];
     let mut sample = Vec::new();
@@ -56,7 +57,7 @@ fn channel_scaling_multiplies_each_channels_raw_readings_by_a_factor_of_its_own(
 
 #[test]
 fn vibration_scales_each_channel_about_its_window_mean_and_keeps_the_level() {
-    let opts = TrainOptions { aug_vibration: 1.0, aug_gain: 0.0, aug_noise: 0.0, ..TrainOptions::default() };
+    let opts = Augmentation { vibration: 1.0, gain: 0.0, noise: 0.0, ..TrainOptions::default().augmentation };
     let norm = Normalization { mean: vec![0.0; 2], std: vec![1.0; 2], frames: 4 };
     let sample = [1.0, 3.0, 2.0, 6.0, -1.0, -1.0, 1.0, 5.0];
     let mut rng = Rng::new(9);
@@ -80,7 +81,7 @@ fn vibration_scales_each_channel_about_its_window_mean_and_keeps_the_level() {
 
 #[test]
 fn time_shift_moves_frames_and_repeats_the_edge() {
-    let opts = TrainOptions { aug_shift: 2, aug_gain: 0.0, aug_noise: 0.0, ..TrainOptions::default() };
+    let opts = Augmentation { shift: 2, gain: 0.0, noise: 0.0, ..TrainOptions::default().augmentation };
     let mut rng = Rng::new(1);
     let mut seen = std::collections::BTreeSet::new();
     for _ in 0..50 {
