@@ -162,48 +162,15 @@ impl Builder<'_> {
             Op::Dft => bail!("the DFT op: this runtime was built without the `spectral` feature"),
             Op::MatMul => {
                 arity(2..=2)?;
-                let (a, b) = (rank, self.fact(inputs[1])?.rank());
-                ensure!(a >= 2 && b >= 2, "a product of vectors");
-                // tract's einsum trusts its operands' shapes: the summed axes must agree, and the
-                // leading ones be equal or 1, or it would index out of bounds as it runs.
-                let (sa, sb) = (self.shape(x)?, self.shape(inputs[1])?);
-                ensure!(sa[a - 1] == sb[b - 2], "a product of {sa:?} and {sb:?}");
-                let lead = |s: &[usize], r: usize, i: usize| if i + r >= a.max(b) { s[i + r - a.max(b)] } else { 1 };
-                for i in 0..a.max(b) - 2 {
-                    let (da, db) = (lead(&sa, a, i), lead(&sb, b, i));
-                    ensure!(da == db || da == 1 || db == 1, "a product of {sa:?} and {sb:?}");
-                }
-                let c = a.max(b);
-                let prefix = |skip: usize| ('a'..).take(c - 2).skip(skip).collect::<String>();
-                let expr = format!("{}mk,{}kn->{}mn", prefix(c - a), prefix(c - b), prefix(0));
-                let dt = self.fact(x)?.datum_type;
-                self.wire(name, EinSum { axes: expr.parse()?, operating_dt: dt, q_params: None }, &inputs)
+                self.matmul(name, &inputs, rank)
             }
             Op::Transpose => {
                 arity(1..=1)?;
-                let perm: Vec<usize> = match node.ints("perm") {
-                    Some(p) => p.iter().map(|a| Self::axis(*a, rank)).collect::<TractResult<_>>()?,
-                    None => (0..rank).rev().collect(),
-                };
-                ensure!(perm.len() == rank && (0..rank).all(|a| perm.contains(&a)), "permutation {perm:?} of rank {rank}");
-                let mut wire = x;
-                for (i, op) in perm_to_ops(&perm).into_iter().enumerate() {
-                    wire = self.wire(format!("{name}.{i}"), op, &[wire])?;
-                }
-                Ok(wire)
+                self.transpose(node, name, &inputs, rank)
             }
             Op::Reshape => {
                 arity(2..=2)?;
-                ensure!(node.int("allowzero", 0) == 0, "allowzero");
-                let from: TVec<TDim> = self.shape(x)?.iter().map(|d| d.to_dim()).collect();
-                let to = self.konst(inputs[1])?;
-                ensure!(to.iter().all(|d| *d >= -1) && to.iter().filter(|d| **d == -1).count() <= 1, "a shape {to:?}");
-                let to: TVec<TDim> = to.iter().map(|d| d.to_dim()).collect();
-                let mut wire = x;
-                for (i, op) in to_axis_ops_with_onnx_rules(&from, &to, false)?.into_iter().enumerate() {
-                    wire = self.wire(format!("{name}.{i}"), op, &[wire])?;
-                }
-                Ok(wire)
+                self.reshape(node, name, &inputs)
             }
             Op::Expand => {
                 arity(2..=2)?;
@@ -216,22 +183,7 @@ impl Builder<'_> {
             }
             Op::Gather => {
                 arity(2..=2)?;
-                ensure!(self.fact(inputs[1])?.datum_type == i64::datum_type(), "indices that are not int64");
-                let axis = Self::axis(node.int("axis", 0), rank)?;
-                // tract's gather indexes unchecked: constant indices are checked here, and the
-                // only others a file may have are an input's (a stage's `token_index`), which the
-                // plan checks against the bound the runtime feeds it (`plan::check_gathers`).
-                let d = self.shape(x)?[axis] as i64;
-                if self.fact(inputs[1])?.konst.is_some() {
-                    let bad = self.konst(inputs[1])?.into_iter().find(|i| !(-d..d).contains(i));
-                    ensure!(bad.is_none(), "index {} of an axis of length {d}", bad.unwrap_or_default());
-                } else {
-                    ensure!(
-                        self.model.node(inputs[1].node).op_is::<tract_core::ops::source::TypedSource>(),
-                        "indices computed from other tensors"
-                    );
-                }
-                self.wire(name, Gather::new(axis), &inputs)
+                self.gather(node, name, &inputs, rank)
             }
             Op::Concat => self.wire(name, TypedConcat::new(Self::axis(node.int("axis", 0), rank)?), &inputs),
             Op::Shape => {
@@ -242,46 +194,11 @@ impl Builder<'_> {
             }
             Op::Slice => {
                 arity(3..=5)?;
-                let (starts, ends) = (self.konst(inputs[1])?, self.konst(inputs[2])?);
-                let axes = match inputs.get(3) {
-                    Some(a) => self.konst(*a)?,
-                    None => (0..starts.len() as i64).collect(),
-                };
-                if let Some(steps) = inputs.get(4) {
-                    ensure!(self.konst(*steps)?.iter().all(|s| *s == 1), "steps other than 1");
-                }
-                ensure!(starts.len() == ends.len() && ends.len() == axes.len(), "starts, ends and axes of different lengths");
-                let shape = self.shape(x)?;
-                let mut wire = x;
-                for (i, ((s, e), a)) in starts.iter().zip(&ends).zip(&axes).enumerate() {
-                    let axis = Self::axis(*a, rank)?;
-                    let d = shape[axis] as i64;
-                    let clamp = |v: i64| (if v < 0 { v + d } else { v }).clamp(0, d) as usize;
-                    let (start, end) = (clamp(*s), clamp(*e));
-                    wire = self.wire(format!("{name}.{i}"), Slice::new(axis, start, end.max(start)), &[wire])?;
-                }
-                Ok(wire)
+                self.slice(name, &inputs, rank)
             }
             Op::ReduceSum | Op::ReduceMean => {
                 arity(1..=2)?;
-                let axes = match (inputs.get(1), node.ints("axes")) {
-                    (Some(a), _) => self.konst(*a)?,
-                    (None, Some(a)) => a.to_vec(),
-                    (None, None) => (0..rank as i64).collect(),
-                };
-                let mut axes = axes.iter().map(|a| Self::axis(*a, rank)).collect::<TractResult<Vec<_>>>()?;
-                axes.sort();
-                axes.dedup();
-                let mut wire = match op {
-                    Op::ReduceMean => self.mean(&name, x, &axes)?,
-                    _ => self.wire(format!("{name}.sum"), Reduce::new(axes.iter().copied().collect(), Reducer::Sum), &[x])?,
-                };
-                if node.int("keepdims", 1) == 0 {
-                    for a in axes.iter().rev() {
-                        wire = self.wire(format!("{name}.rm{a}"), AxisOp::Rm(*a), &[wire])?;
-                    }
-                }
-                Ok(wire)
+                self.reduce(node, name, &inputs, rank, op)
             }
             Op::Softmax => {
                 arity(1..=1)?;
@@ -293,6 +210,122 @@ impl Builder<'_> {
                 self.layer_norm(node, &inputs, rank)
             }
         }
+    }
+
+    /// `MatMul` as tract's einsum, its operands' shapes checked.
+    fn matmul(&mut self, name: String, inputs: &[OutletId], rank: usize) -> TractResult<OutletId> {
+        let x = inputs[0];
+        let (a, b) = (rank, self.fact(inputs[1])?.rank());
+        ensure!(a >= 2 && b >= 2, "a product of vectors");
+        // tract's einsum trusts its operands' shapes: the summed axes must agree, and the
+        // leading ones be equal or 1, or it would index out of bounds as it runs.
+        let (sa, sb) = (self.shape(x)?, self.shape(inputs[1])?);
+        ensure!(sa[a - 1] == sb[b - 2], "a product of {sa:?} and {sb:?}");
+        let lead = |s: &[usize], r: usize, i: usize| if i + r >= a.max(b) { s[i + r - a.max(b)] } else { 1 };
+        for i in 0..a.max(b) - 2 {
+            let (da, db) = (lead(&sa, a, i), lead(&sb, b, i));
+            ensure!(da == db || da == 1 || db == 1, "a product of {sa:?} and {sb:?}");
+        }
+        let c = a.max(b);
+        let prefix = |skip: usize| ('a'..).take(c - 2).skip(skip).collect::<String>();
+        let expr = format!("{}mk,{}kn->{}mn", prefix(c - a), prefix(c - b), prefix(0));
+        let dt = self.fact(x)?.datum_type;
+        self.wire(name, EinSum { axes: expr.parse()?, operating_dt: dt, q_params: None }, inputs)
+    }
+
+    /// `Transpose` as tract's axis moves.
+    fn transpose(&mut self, node: &Node, name: String, inputs: &[OutletId], rank: usize) -> TractResult<OutletId> {
+        let x = inputs[0];
+        let perm: Vec<usize> = match node.ints("perm") {
+            Some(p) => p.iter().map(|a| Self::axis(*a, rank)).collect::<TractResult<_>>()?,
+            None => (0..rank).rev().collect(),
+        };
+        ensure!(perm.len() == rank && (0..rank).all(|a| perm.contains(&a)), "permutation {perm:?} of rank {rank}");
+        let mut wire = x;
+        for (i, op) in perm_to_ops(&perm).into_iter().enumerate() {
+            wire = self.wire(format!("{name}.{i}"), op, &[wire])?;
+        }
+        Ok(wire)
+    }
+
+    /// `Reshape` to a constant shape, as tract's axis operations by ONNX's rules.
+    fn reshape(&mut self, node: &Node, name: String, inputs: &[OutletId]) -> TractResult<OutletId> {
+        let x = inputs[0];
+        ensure!(node.int("allowzero", 0) == 0, "allowzero");
+        let from: TVec<TDim> = self.shape(x)?.iter().map(|d| d.to_dim()).collect();
+        let to = self.konst(inputs[1])?;
+        ensure!(to.iter().all(|d| *d >= -1) && to.iter().filter(|d| **d == -1).count() <= 1, "a shape {to:?}");
+        let to: TVec<TDim> = to.iter().map(|d| d.to_dim()).collect();
+        let mut wire = x;
+        for (i, op) in to_axis_ops_with_onnx_rules(&from, &to, false)?.into_iter().enumerate() {
+            wire = self.wire(format!("{name}.{i}"), op, &[wire])?;
+        }
+        Ok(wire)
+    }
+
+    /// `Gather` along an axis, its constant indices checked here.
+    fn gather(&mut self, node: &Node, name: String, inputs: &[OutletId], rank: usize) -> TractResult<OutletId> {
+        let x = inputs[0];
+        ensure!(self.fact(inputs[1])?.datum_type == i64::datum_type(), "indices that are not int64");
+        let axis = Self::axis(node.int("axis", 0), rank)?;
+        // tract's gather indexes unchecked: constant indices are checked here, and the
+        // only others a file may have are an input's (a stage's `token_index`), which the
+        // plan checks against the bound the runtime feeds it (`plan::check_gathers`).
+        let d = self.shape(x)?[axis] as i64;
+        if self.fact(inputs[1])?.konst.is_some() {
+            let bad = self.konst(inputs[1])?.into_iter().find(|i| !(-d..d).contains(i));
+            ensure!(bad.is_none(), "index {} of an axis of length {d}", bad.unwrap_or_default());
+        } else {
+            ensure!(self.model.node(inputs[1].node).op_is::<tract_core::ops::source::TypedSource>(), "indices computed from other tensors");
+        }
+        self.wire(name, Gather::new(axis), inputs)
+    }
+
+    /// `Slice` by constant starts, ends and axes (steps of 1), one tract slice an axis.
+    fn slice(&mut self, name: String, inputs: &[OutletId], rank: usize) -> TractResult<OutletId> {
+        let x = inputs[0];
+        let (starts, ends) = (self.konst(inputs[1])?, self.konst(inputs[2])?);
+        let axes = match inputs.get(3) {
+            Some(a) => self.konst(*a)?,
+            None => (0..starts.len() as i64).collect(),
+        };
+        if let Some(steps) = inputs.get(4) {
+            ensure!(self.konst(*steps)?.iter().all(|s| *s == 1), "steps other than 1");
+        }
+        ensure!(starts.len() == ends.len() && ends.len() == axes.len(), "starts, ends and axes of different lengths");
+        let shape = self.shape(x)?;
+        let mut wire = x;
+        for (i, ((s, e), a)) in starts.iter().zip(&ends).zip(&axes).enumerate() {
+            let axis = Self::axis(*a, rank)?;
+            let d = shape[axis] as i64;
+            let clamp = |v: i64| (if v < 0 { v + d } else { v }).clamp(0, d) as usize;
+            let (start, end) = (clamp(*s), clamp(*e));
+            wire = self.wire(format!("{name}.{i}"), Slice::new(axis, start, end.max(start)), &[wire])?;
+        }
+        Ok(wire)
+    }
+
+    /// `ReduceSum` or `ReduceMean` (`op`) over constant axes, their axes kept or removed.
+    fn reduce(&mut self, node: &Node, name: String, inputs: &[OutletId], rank: usize, op: Op) -> TractResult<OutletId> {
+        let x = inputs[0];
+        let axes = match (inputs.get(1), node.ints("axes")) {
+            (Some(a), _) => self.konst(*a)?,
+            (None, Some(a)) => a.to_vec(),
+            (None, None) => (0..rank as i64).collect(),
+        };
+        let mut axes = axes.iter().map(|a| Self::axis(*a, rank)).collect::<TractResult<Vec<_>>>()?;
+        axes.sort();
+        axes.dedup();
+        let mut wire = match op {
+            Op::ReduceMean => self.mean(&name, x, &axes)?,
+            _ => self.wire(format!("{name}.sum"), Reduce::new(axes.iter().copied().collect(), Reducer::Sum), &[x])?,
+        };
+        if node.int("keepdims", 1) == 0 {
+            for a in axes.iter().rev() {
+                wire = self.wire(format!("{name}.rm{a}"), AxisOp::Rm(*a), &[wire])?;
+            }
+        }
+        Ok(wire)
     }
 
     /// The mean of `x` over `axes` (kept, of length 1): their sum divided by their count, as

@@ -89,28 +89,7 @@ pub fn bench(path: &str, threads: usize, seconds: f64) -> Result<serde_json::Val
     let frames = *c.sample_shape().last().expect("a frame axis");
     let frame_len = len / frames;
     let touch: Vec<Vec<f32>> = (0..frames).map(|t| (0..frame_len).map(|j| one[j * frames + t]).collect()).collect();
-    // A continuous stream answering after every token (`Classifier::continuous`): the frames of
-    // the window over and over, timed once a whole window is in.
-    let mut continuous = c.continuous(1)?;
-    for frame in &touch {
-        continuous.push_frame(frame)?;
-    }
-    let (mut answers, mut spent) = (Vec::new(), 0.0);
-    let start = Instant::now();
-    for frame in touch.iter().cycle() {
-        if answers.len() >= 20 && start.elapsed() >= budget {
-            break;
-        }
-        let s = Instant::now();
-        let answered = continuous.push_frame(frame)?.is_some();
-        let e = s.elapsed().as_secs_f64();
-        spent += e;
-        if answered {
-            answers.push(e);
-        }
-    }
-    let continuous_per_token_us = spent / answers.len() as f64 * 1e6;
-    let (continuous_answer_median, _) = quantiles(answers);
+    let (continuous_answer_median, continuous_per_token_us) = continuous_costs(&c, &touch, budget)?;
     let whole = json!({
         "model": path,
         "threads": threads,
@@ -134,7 +113,42 @@ pub fn bench(path: &str, threads: usize, seconds: f64) -> Result<serde_json::Val
         // A spectral head exported before it streamed reads the whole window: not streamed.
         return Ok(whole);
     }
-    // A streamed touch.
+    let stream = stream_costs(&c, &touch, budget)?;
+    let mut all = whole;
+    all.as_object_mut().expect("an object").extend(stream.as_object().expect("an object").clone());
+    Ok(all)
+}
+
+/// A continuous stream answering after every token (`Classifier::continuous`): the frames of
+/// `touch` over and over, timed once a whole window is in. The median cost of an answer and the
+/// cost per token, in microseconds.
+fn continuous_costs(c: &Classifier, touch: &[Vec<f32>], budget: Duration) -> Result<(f64, f64)> {
+    let mut continuous = c.continuous(1)?;
+    for frame in touch {
+        continuous.push_frame(frame)?;
+    }
+    let (mut answers, mut spent) = (Vec::new(), 0.0);
+    let start = Instant::now();
+    for frame in touch.iter().cycle() {
+        if answers.len() >= 20 && start.elapsed() >= budget {
+            break;
+        }
+        let s = Instant::now();
+        let answered = continuous.push_frame(frame)?.is_some();
+        let e = s.elapsed().as_secs_f64();
+        spent += e;
+        if answered {
+            answers.push(e);
+        }
+    }
+    let continuous_per_token_us = spent / answers.len() as f64 * 1e6;
+    let (continuous_answer_median, _) = quantiles(answers);
+    Ok((continuous_answer_median, continuous_per_token_us))
+}
+
+/// A streamed touch (`Classifier::session`): each kept frame's spatial encoding, each pruned
+/// frame's drop, the end of the touch, and provisional answers at 10 %, 50 % and 100 % of it.
+fn stream_costs(c: &Classifier, touch: &[Vec<f32>], budget: Duration) -> Result<serde_json::Value> {
     let mut session = c.session()?;
     let (mut kept, mut dropped, mut finish) = (Vec::new(), Vec::new(), Vec::new());
     let kept_frames = c.kept_frames().to_vec();
@@ -156,7 +170,7 @@ pub fn bench(path: &str, threads: usize, seconds: f64) -> Result<serde_json::Val
         finish.push(s.elapsed().as_secs_f64());
     }
     // Provisional answers at 10 %, 50 % and 100 % of a touch's temporal tokens (`Session::peek`).
-    let tokens = frames / c.tubelet();
+    let tokens = touch.len() / c.tubelet();
     let mut peek_us = serde_json::Map::new();
     for percent in [10, 50, 100] {
         let k = (percent * tokens).div_ceil(100).max(1);
@@ -184,7 +198,5 @@ pub fn bench(path: &str, threads: usize, seconds: f64) -> Result<serde_json::Val
         "stream_compute_per_touch_us": per_touch,
         "stream_peek_us": peek_us,
     });
-    let mut all = whole;
-    all.as_object_mut().expect("an object").extend(stream.as_object().expect("an object").clone());
-    Ok(all)
+    Ok(stream)
 }
