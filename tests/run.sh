@@ -9,25 +9,25 @@
 #      its tests that show it computes what x86-64 does run under qemu: golden logits,
 #      bit-identical loads, the kernels, damaged files, streaming, every C-ABI error path, the
 #      Rust example built, and runtime/examples/classify.c built with aarch64-linux-gnu-gcc and
-#      run. What needs onnxruntime or candle stays on the host. The tests run under qemu beside
-#      step 4's builds, which use the other core (a separate target directory, so neither waits
-#      for the other's lock);
+#      run. What needs onnxruntime or candle stays on the host.
 #      It is built without default features, as the small robot build is (no `threads`, no
 #      rayon, no `spectral`: docs/deploy.md), so both supported feature sets are tested: all of
 #      them on the host, the small one on aarch64;
 #   4. other platforms: the trainer checked (cargo check) for Windows (x86_64-pc-windows-gnu, with
 #      Debian's mingw-w64) and macOS (aarch64-apple-darwin, its assembly by clang); the runtime and
 #      pvt3-run built as static musl binaries for x86-64 and aarch64, each run on the golden
-#      windows (the aarch64 one under qemu) and held to the host build's answers;
+#      windows (the aarch64 one under qemu) and held to the host build's answers. In the
+#      background from the end of step 1's build, in a target directory of its own (so that
+#      neither cargo waits for the other's lock): it takes the CPU the other steps leave;
 #   5. the small robot library's size (tests/robot-small.sh, in the background from the start):
 #      built as docs/deploy.md says whenever the runtime, the format, its dependency tree, the
 #      build profiles or the compiler changed since it was last measured (tests/robot-small.size),
 #      it must stay within 8 MiB.
-# It installs what it needs (rustup's aarch64, Windows, macOS and musl targets and clippy; Debian's
-# librsvg2-bin for the picture tests, valgrind for the C ABI, pkgconf for the installed library's
-# flags, gcc-aarch64-linux-gnu, libc6-dev-arm64-cross and qemu-user, gcc-mingw-w64-x86-64, clang
-# and musl-tools, with apt-get as root) or says exactly what is missing.
-# Times under qemu mean nothing; outputs do.
+# It installs what it needs, all at the start (rustup's aarch64, Windows, macOS and musl targets
+# and clippy; Debian's librsvg2-bin for the picture tests, valgrind for the C ABI, pkgconf for the
+# installed library's flags, gcc-aarch64-linux-gnu, libc6-dev-arm64-cross and qemu-user,
+# gcc-mingw-w64-x86-64, clang and musl-tools, with apt-get as root) or says exactly what is
+# missing. Each step's heading gives its start in seconds; times under qemu mean nothing, outputs do.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -81,17 +81,80 @@ bash tests/robot-small.sh check >"$small_log" 2>&1 &
 small_pid=$!
 background+=("$small_pid")
 
+step "what the tests need: Debian's packages and rustup's targets"
+target=aarch64-unknown-linux-gnu
+sysroot=/usr/aarch64-linux-gnu
+need=()
 # The picture tests render the SVG files they draw with librsvg and look at the pixels; on
 # x86-64 the C example runs under valgrind too (runtime/tests/c_abi.rs, PVT3_VALGRIND).
-need=()
 command -v rsvg-convert >/dev/null || need+=(librsvg2-bin)
 # The C example is built with the flags pkg-config reads from the installed pvt3.pc.
 command -v pkg-config >/dev/null || need+=(pkgconf)
 [ "$(uname -m)" != x86_64 ] || command -v valgrind >/dev/null || need+=(valgrind)
+# aarch64: the cross compiler, the arm64 libc to link against (and its loader, for qemu), qemu.
+command -v aarch64-linux-gnu-gcc >/dev/null || need+=(gcc-aarch64-linux-gnu)
+[ -e "$sysroot/lib/crt1.o" ] || need+=(libc6-dev-arm64-cross)
+command -v qemu-aarch64 >/dev/null || need+=(qemu-user)
+# Other platforms: build scripts' C and assembly for Windows; for macOS, a build script's
+# assembly (psm) takes clang's -arch; tract's x86-64 assembly kernels, built for musl.
+command -v x86_64-w64-mingw32-gcc >/dev/null || need+=(gcc-mingw-w64-x86-64)
+command -v clang >/dev/null || need+=(clang)
+command -v musl-gcc >/dev/null || need+=(musl-tools)
 install_debian ${need[@]+"${need[@]}"}
 [ "$(uname -m)" != x86_64 ] || export PVT3_VALGRIND=1
+cargo clippy --version >/dev/null 2>&1 || rustup component add clippy || missing "clippy (rustup component add clippy)"
+for t in "$target" x86_64-pc-windows-gnu aarch64-apple-darwin x86_64-unknown-linux-musl aarch64-unknown-linux-musl; do
+  rustup target list --installed | grep -qx "$t" || rustup target add "$t" || missing "the Rust target $t (rustup target add $t)"
+done
 
-step "host: cargo test --profile ci --workspace"
+# Step 4, run in the background once the host build is done (see the top).
+other_platforms() {
+  # The trainer checked for Windows and macOS.
+  local platforms=(--target-dir target/platforms)
+  CC_aarch64_apple_darwin=clang cargo check "${platforms[@]}" --profile ci --target x86_64-pc-windows-gnu --target aarch64-apple-darwin \
+    -p pvt3-trainer --bins
+  # The runtime and pvt3-run built to show that they link statically and compute what the host
+  # build computes, never timed: unoptimised, without debug information or incremental caches,
+  # in a fraction of the release build's time; all but tract's kernels crate, which unoptimised
+  # answers wrongly on aarch64 (the golden windows' probabilities 0.039 off the host's under
+  # qemu, with or without debug assertions; at opt-level 1 within 3e-8, as the optimised builds are).
+  export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_MUSL_LINKER=aarch64-linux-gnu-gcc CC_aarch64_unknown_linux_musl=aarch64-linux-gnu-gcc
+  local golden=(tests/golden/icub20/model.onnx tests/golden/icub20/input.npy)
+  target/ci/pvt3-run --json "${golden[@]}" >target/golden-host.jsonl
+  cargo build "${platforms[@]}" --target x86_64-unknown-linux-musl --target aarch64-unknown-linux-musl -p pvt3-runtime --lib --bin pvt3-run \
+    --config profile.dev.debug=false --config profile.dev.incremental=false --config 'profile.dev.package.tract-linalg.opt-level=1'
+  local t bin runner
+  for t in x86_64-unknown-linux-musl aarch64-unknown-linux-musl; do
+    bin=target/platforms/$t/debug/pvt3-run
+    if readelf -l "$bin" | grep -q INTERP; then
+      echo "tests/run.sh: $bin asks for a dynamic loader: not a static binary" >&2
+      return 1
+    fi
+    runner=()
+    [ "$t" = x86_64-unknown-linux-musl ] || runner=(qemu-aarch64)
+    ${runner[@]+"${runner[@]}"} "$bin" --json "${golden[@]}" >"target/golden-$t.jsonl"
+    python3 - "target/golden-$t.jsonl" target/golden-host.jsonl <<'EOF'
+import json, sys
+static, host = ([json.loads(line) for line in open(path)] for path in sys.argv[1:])
+assert len(static) == len(host) == 8, (len(static), len(host))
+worst = max(abs(a - b) for s, h in zip(static, host) for a, b in zip(s["probabilities"], h["probabilities"]))
+assert worst <= 1e-6 and all(s["class"] == h["class"] for s, h in zip(static, host)), worst
+print(f"{sys.argv[1]}: the golden windows' probabilities within {worst:.1e} of the host build's, every class the same")
+EOF
+  done
+}
+
+step "host: cargo test --profile ci --workspace (built, then run)"
+cargo test --profile ci --workspace --no-run
+
+step "other platforms, in the background: the trainer checked for Windows and macOS; the runtime and pvt3-run built static with musl for x86-64 and aarch64"
+platforms_log=target/other-platforms.log
+(set -e; other_platforms) >"$platforms_log" 2>&1 &
+platforms_pid=$!
+background+=("$platforms_pid")
+echo "(its output follows the aarch64 tests)"
+
+step "host: the tests"
 cargo_test --profile ci --workspace
 
 valgrind_pid=
@@ -116,22 +179,11 @@ for line in sys.stdin:
 fi
 
 step "runtime lints: cargo clippy -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings"
-cargo clippy --version >/dev/null 2>&1 || rustup component add clippy || missing "clippy (rustup component add clippy)"
 cargo clippy --profile ci -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings
-
-step "aarch64: the cross toolchain and qemu"
-target=aarch64-unknown-linux-gnu
-sysroot=/usr/aarch64-linux-gnu
-need=()
-command -v aarch64-linux-gnu-gcc >/dev/null || need+=(gcc-aarch64-linux-gnu)
-[ -e "$sysroot/lib/crt1.o" ] || need+=(libc6-dev-arm64-cross) # the arm64 libc to link against (and its loader, for qemu)
-command -v qemu-aarch64 >/dev/null || need+=(qemu-user)
-install_debian ${need[@]+"${need[@]}"}
-rustup target list --installed | grep -qx "$target" || rustup target add "$target" || missing "the Rust target $target (rustup target add $target)"
 
 step "aarch64: cargo test --profile ci --target $target -p pvt3-runtime -p pvt3-format --no-default-features --no-run"
 # The aarch64 build's compiler, linker and runner, for its build and its tests alone (subshells):
-# the other platforms' builds below name their own.
+# the other platforms' builds name their own.
 aarch64_env() {
   export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc
   export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER="qemu-aarch64 -L $sysroot"
@@ -149,69 +201,27 @@ if [ -n "$valgrind_pid" ]; then
   joined "$valgrind_pid" "$valgrind_log" "the C ABI failed under valgrind"
 fi
 
-step "aarch64: the tests under qemu, in the background beside the other platforms' builds"
+step "aarch64: the tests under qemu"
 # Under the emulator runs what shows that the ARM build computes what x86-64 computes: the golden
-# logits with every kernel choice, bit-identical answers across loads, the kernels, streaming,
-# the readers, the C example. Left to the host, where they run in seconds rather than minutes
-# under qemu: a benchmark (under an emulator it measures nothing; its report's form is tested on
-# the host), and tests of logic and robustness that no arithmetic of the target changes: the
-# continuous stream's answer at every frame (the streaming equality stays), the Rust example's
-# 79 answers (built for aarch64 above; its arithmetic is the golden tests'), one classifier shared
-# by four threads, and the thousands of hostile files (damaged_files stays).
+# logits with every kernel choice, bit-identical answers across loads (two loads there, three on
+# the host), the kernels, streaming, the readers, the C example (which streams, peeks at and
+# slides over two of the golden windows there, all eight on the host, and holds each to the batch
+# answer; so `stream`'s own eight-window equality runs on the host alone). Left to the host, where
+# they run in seconds rather than minutes under qemu: a benchmark (under an emulator it measures
+# nothing; its report's form is tested on the host), and tests of logic and robustness that no
+# arithmetic of the target changes: the continuous stream's answer at every frame and its reset,
+# the Rust example's 79 answers (built for aarch64 above; its arithmetic is the golden tests'),
+# pvt3-run's JSON lines (its answers stay), one classifier shared by four threads, and the
+# thousands of hostile files (damaged_files stays).
 qemu_skips=(bench_reports_batch_and_streaming_latencies every_answer_is_the_batch_classification_of_the_latest_window
-  the_example_answers_as_the_runtime_does a_classifier_shared_by_threads_answers_each_as_it_answers_one
+  a_reset_stream_waits_for_a_whole_window_and_misuse_is_an_error streaming_frame_by_frame_equals_the_whole_window
+  the_example_answers_as_the_runtime_does json_gives_every_probability_of_every_window
+  a_classifier_shared_by_threads_answers_each_as_it_answers_one
   re_signed_damaged_models_are_refused_or_run_and_never_panic damaged_npy_inputs_are_refused_and_never_panic)
-qemu_log=target/aarch64-tests.log
-(aarch64_env && cargo_test "${aarch64_tests[@]}" -- $(printf -- '--skip %s ' "${qemu_skips[@]}")) >"$qemu_log" 2>&1 &
-qemu_pid=$!
-background+=("$qemu_pid")
-echo "(its output follows the other platforms' step)"
+(aarch64_env && cargo_test "${aarch64_tests[@]}" -- $(printf -- '--skip %s ' "${qemu_skips[@]}"))
 
-step "other platforms: the trainer checked for Windows and macOS; the runtime and pvt3-run built static with musl for x86-64 and aarch64"
-need=()
-command -v x86_64-w64-mingw32-gcc >/dev/null || need+=(gcc-mingw-w64-x86-64) # build scripts' C and assembly for Windows
-command -v clang >/dev/null || need+=(clang) # for macOS: a build script's assembly (psm) takes clang's -arch
-command -v musl-gcc >/dev/null || need+=(musl-tools) # tract's x86-64 assembly kernels, built for musl
-install_debian ${need[@]+"${need[@]}"}
-for t in x86_64-pc-windows-gnu aarch64-apple-darwin x86_64-unknown-linux-musl aarch64-unknown-linux-musl; do
-  rustup target list --installed | grep -qx "$t" || rustup target add "$t" || missing "the Rust target $t (rustup target add $t)"
-done
-# Their own target directory, so that neither these builds nor the aarch64 tests' cargo waits for
-# the other's lock on target/.
-platforms=(--target-dir target/platforms)
-CC_aarch64_apple_darwin=clang cargo check "${platforms[@]}" --profile ci --target x86_64-pc-windows-gnu --target aarch64-apple-darwin \
-  -p pvt3-trainer --bins
-# Built to show that they link statically and compute what the host build computes, never timed:
-# unoptimised and without debug information, in a fraction of the release build's time; all but
-# tract's kernels crate, which unoptimised answers wrongly on aarch64 (the golden windows'
-# probabilities 0.039 off the host's under qemu, with or without debug assertions; at opt-level 1
-# within 3e-8, as the optimised builds are).
-export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_MUSL_LINKER=aarch64-linux-gnu-gcc CC_aarch64_unknown_linux_musl=aarch64-linux-gnu-gcc
-golden=(tests/golden/icub20/model.onnx tests/golden/icub20/input.npy)
-target/ci/pvt3-run --json "${golden[@]}" >target/golden-host.jsonl
-cargo build "${platforms[@]}" --target x86_64-unknown-linux-musl --target aarch64-unknown-linux-musl -p pvt3-runtime --lib --bin pvt3-run \
-  --config profile.dev.debug=false --config 'profile.dev.package.tract-linalg.opt-level=1'
-for t in x86_64-unknown-linux-musl aarch64-unknown-linux-musl; do
-  bin=target/platforms/$t/debug/pvt3-run
-  if readelf -l "$bin" | grep -q INTERP; then
-    echo "tests/run.sh: $bin asks for a dynamic loader: not a static binary" >&2
-    exit 1
-  fi
-  runner=()
-  [ "$t" = x86_64-unknown-linux-musl ] || runner=(qemu-aarch64)
-  ${runner[@]+"${runner[@]}"} "$bin" --json "${golden[@]}" >"target/golden-$t.jsonl"
-  python3 - "target/golden-$t.jsonl" target/golden-host.jsonl <<'EOF'
-import json, sys
-static, host = ([json.loads(line) for line in open(path)] for path in sys.argv[1:])
-assert len(static) == len(host) == 8, (len(static), len(host))
-worst = max(abs(a - b) for s, h in zip(static, host) for a, b in zip(s["probabilities"], h["probabilities"]))
-assert worst <= 1e-6 and all(s["class"] == h["class"] for s, h in zip(static, host)), worst
-print(f"{sys.argv[1]}: the golden windows' probabilities within {worst:.1e} of the host build's, every class the same")
-EOF
-done
-
-step "aarch64: the tests under qemu (run beside the step above)"
-joined "$qemu_pid" "$qemu_log" "the aarch64 tests failed under qemu"
+step "other platforms (run beside the steps above)"
+joined "$platforms_pid" "$platforms_log" "another platform's build failed"
 
 step "the small robot library: at most 8 MiB (docs/deploy.md)"
 joined "$small_pid" "$small_log" "the small robot library's size check failed (bash tests/robot-small.sh measure)"

@@ -10,7 +10,7 @@ use std::ptr::{null, null_mut};
 
 use pvt3_runtime::ffi::*;
 use pvt3_runtime::{read_npy, Classifier};
-use support::{golden, root, scratch, target_cc, target_command};
+use support::{golden, root, scratch, streamed_windows, target_cc, target_command};
 
 /// Removes `/* … */` comments and folds white space.
 fn strip_c_comments(text: &str) -> String {
@@ -163,16 +163,19 @@ fn the_c_example_gives_the_rust_result() {
     let cc = target_cc().arg(root().join("examples/classify.c")).args(flags.split_whitespace()).arg("-o").arg(&exe).output().unwrap();
     assert!(cc.status.success(), "cc failed:\n{}", String::from_utf8_lossy(&cc.stderr));
 
+    // The example classifies, streams, peeks at and slides over the first `windows` windows.
+    let windows = streamed_windows();
     let (_, x) = read_npy(&golden("input.npy")).unwrap();
+    let x = &x[..windows * 4500];
     let raw = dir.join("input.f32");
     std::fs::write(&raw, x.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>()).unwrap();
-    let out = target_command(&exe).arg(golden("model.onnx")).arg(&raw).arg("8").output().unwrap();
+    let out = target_command(&exe).arg(golden("model.onnx")).arg(&raw).arg(windows.to_string()).output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let c = Classifier::load(golden("model.onnx")).unwrap();
-    let rust = c.classify_batch(&x, 8).unwrap();
+    let rust = c.classify_batch(x, windows).unwrap();
     // What a session answers halfway through each touch (37 of 75 frames).
     let mut session = c.session().unwrap();
-    let halfway: Vec<_> = (0..8)
+    let halfway: Vec<_> = (0..windows)
         .map(|w| {
             for t in 0..37 {
                 session.push_frame(&(0..60).map(|i| x[w * 4500 + i * 75 + t]).collect::<Vec<_>>()).unwrap();
@@ -183,10 +186,10 @@ fn the_c_example_gives_the_rust_result() {
         })
         .collect();
     let stdout = String::from_utf8(out.stdout).unwrap();
-    assert_eq!(stdout.lines().count(), 32);
-    // Sliding on over the eight windows back to back, answering once a window: the windows' own.
+    assert_eq!(stdout.lines().count(), 4 * windows);
+    // Sliding on over the windows back to back, answering once a window: the windows' own.
     for (way, expected) in [("batch", &rust), ("stream", &rust), ("peek", &halfway), ("slide", &rust)] {
-        assert_eq!(stdout.lines().filter(|l| l.starts_with(way)).count(), 8, "{way}");
+        assert_eq!(stdout.lines().filter(|l| l.starts_with(way)).count(), windows, "{way}");
         for (line, p) in stdout.lines().filter(|l| l.starts_with(way)).zip(expected) {
             let fields: Vec<&str> = line.split('\t').collect();
             assert_eq!(fields[2].parse::<usize>().unwrap(), p.class);

@@ -24,10 +24,33 @@ pub fn scratch(tag: &str) -> PathBuf {
     dir
 }
 
+/// The emulator command line that runs the target's binaries (`PVT3_TARGET_RUNNER`, e.g.
+/// `qemu-aarch64 -L /usr/aarch64-linux-gnu`), when the tests run for another architecture.
+fn target_runner() -> Option<String> {
+    std::env::var("PVT3_TARGET_RUNNER").ok().filter(|r| !r.trim().is_empty())
+}
+
+/// Whether the tests run under an emulator, where a plan built or a frame streamed costs a
+/// hundred times what it does natively: there they show the target's arithmetic on fewer
+/// windows and loads than the host's run (tests/run.sh).
+pub fn emulated() -> bool {
+    target_runner().is_some()
+}
+
+/// How many of the golden input's eight windows a test streams frame by frame: two under an
+/// emulator, all eight on the host.
+pub fn streamed_windows() -> usize {
+    if emulated() {
+        2
+    } else {
+        8
+    }
+}
+
 /// A command running `program`, a binary built for the target: through `PVT3_TARGET_RUNNER`
-/// (an emulator command line, e.g. `qemu-aarch64 -L /usr/aarch64-linux-gnu`) when it is set.
+/// when it is set.
 pub fn target_command(program: impl AsRef<Path>) -> Command {
-    match std::env::var("PVT3_TARGET_RUNNER").ok().filter(|r| !r.trim().is_empty()) {
+    match target_runner() {
         Some(runner) => {
             let mut words = runner.split_whitespace();
             let mut c = Command::new(words.next().unwrap());
