@@ -114,15 +114,19 @@ other_platforms() {
   CC_aarch64_apple_darwin=clang cargo check "${platforms[@]}" --profile ci --target x86_64-pc-windows-gnu --target aarch64-apple-darwin \
     -p pvt3-trainer --bins
   # The runtime and pvt3-run built to show that they link statically and compute what the host
-  # build computes, never timed: unoptimised, without debug information or incremental caches,
-  # in a fraction of the release build's time; all but tract's kernels crate, which unoptimised
-  # answers wrongly on aarch64 (the golden windows' probabilities 0.039 off the host's under
-  # qemu, with or without debug assertions; at opt-level 1 within 3e-8, as the optimised builds are).
+  # build computes, never timed: as the small robot build (docs/deploy.md) without default
+  # features (one thread a plan, no spectral head: a static robot binary is a small one), and
+  # unoptimised, without debug information, debug assertions, overflow checks or incremental
+  # caches (164 s of CPU a target against 263 with them and the default features); all but
+  # tract's kernels crate, which unoptimised answers wrongly on aarch64 (the golden windows'
+  # probabilities 0.039 off the host's under qemu, with or without debug assertions; at opt-level
+  # 1 within 3e-8, as the optimised builds are).
   export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_MUSL_LINKER=aarch64-linux-gnu-gcc CC_aarch64_unknown_linux_musl=aarch64-linux-gnu-gcc
   local golden=(tests/golden/icub20/model.onnx tests/golden/icub20/input.npy)
   target/ci/pvt3-run --json "${golden[@]}" >target/golden-host.jsonl
-  cargo build "${platforms[@]}" --target x86_64-unknown-linux-musl --target aarch64-unknown-linux-musl -p pvt3-runtime --lib --bin pvt3-run \
-    --config profile.dev.debug=false --config profile.dev.incremental=false --config 'profile.dev.package.tract-linalg.opt-level=1'
+  local dev=(debug=false debug-assertions=false overflow-checks=false incremental=false 'package.tract-linalg.opt-level=1')
+  cargo build "${platforms[@]}" --target x86_64-unknown-linux-musl --target aarch64-unknown-linux-musl -p pvt3-runtime --no-default-features \
+    --lib --bin pvt3-run $(printf -- "--config profile.dev.%s " "${dev[@]}")
   local t bin runner
   for t in x86_64-unknown-linux-musl aarch64-unknown-linux-musl; do
     bin=target/platforms/$t/debug/pvt3-run
