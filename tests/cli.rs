@@ -14,6 +14,8 @@ mod csv_tree;
 mod onnx_check;
 #[path = "support/pvt3_command.rs"]
 mod pvt3_command;
+#[path = "support/workspace.rs"]
+mod workspace;
 
 use pvt3_command::{fails, ok, pvt3, scratch};
 
@@ -25,7 +27,7 @@ fn icub_slice(dir: &Path, per_fold: usize) -> PathBuf {
 /// `per_fold` samples of every fold of the shipped set `name`, every `stride`-th from the first,
 /// as an .npz in `dir`.
 fn slice(name: &str, dir: &Path, per_fold: usize, stride: usize) -> PathBuf {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../data/{name}.npz"));
+    let root = workspace::workspace().join(format!("data/{name}.npz"));
     let d = Dataset::load(&root, 0).unwrap();
     let mut picked = Vec::new();
     for f in 0..5 {
@@ -399,7 +401,7 @@ fn copy_dir(from: &Path, to: &Path) {
 /// with the very weights an uninterrupted run of today's pvt3 gives.
 #[test]
 fn a_run_written_before_the_house_change_resumes_bit_for_bit() {
-    let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/run-9809af1-paused");
+    let fixture = workspace::workspace().join("tests/fixtures/run-9809af1-paused");
     let dir = scratch("old-run");
     let (old, fresh) = (dir.join("old"), dir.join("fresh"));
     copy_dir(&fixture, &old);
@@ -649,7 +651,7 @@ fn joint_cv_trains_a_network_per_sensor_and_each_is_pruned_and_exported_alone() 
 /// would on the golden model's windows: the classes and probabilities the runtime gives.
 #[test]
 fn the_onnxruntime_example_of_the_docs_classifies_as_the_runtime_does() {
-    let golden = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/golden/icub20");
+    let golden = workspace::workspace().join("tests/golden/icub20");
     let (model, input) = (golden.join("model.onnx"), golden.join("input.npy"));
     let printed = onnx_check::run_script("runtime/examples/onnxruntime_classify.py", &[&model, &input]);
     let c = pvt3_runtime::Classifier::load(&model).unwrap();

@@ -15,9 +15,11 @@ use pvt3_spec::weights::read_tensors;
 
 #[path = "support/spectral_case.rs"]
 mod spectral_case;
+#[path = "support/workspace.rs"]
+mod workspace;
 
 fn golden(file: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/golden/icub20").join(file)
+    workspace::workspace().join("tests/golden/icub20").join(file)
 }
 
 fn scratch(tag: &str) -> PathBuf {
@@ -57,7 +59,7 @@ fn tract_onnx_agrees(path: &Path, c: &Classifier, x: &[f32], batch: usize) {
 #[test]
 fn a_file_exported_before_the_configuration_split_runs_as_today_s() {
     let (path, x, _) = golden_onnx();
-    let old = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/fixtures/model-09687eb.onnx");
+    let old = workspace::workspace().join("tests/fixtures/model-09687eb.onnx");
     let (before, _) = Classifier::load(&old).unwrap().run(&x, 8).unwrap();
     let (today, _) = Classifier::load(&path).unwrap().run(&x, 8).unwrap();
     assert_eq!(before, today);

@@ -3,14 +3,13 @@
 //! runtime, touch for touch, and the touch the README's first command classifies is that test
 //! fold's first.
 
-use std::path::{Path, PathBuf};
-
 use pvt3_trainer::data::{Dataset, TEST_FOLD};
 use sha2::{Digest, Sha256};
 
-fn workspace() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
-}
+#[path = "support/workspace.rs"]
+mod workspace;
+
+use workspace::workspace;
 
 /// A row of shipped/README.md's table: the file, its touches answered right of those tested, its
 /// SHA-256.

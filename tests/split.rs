@@ -12,6 +12,8 @@ use serde_json::Value;
 
 #[path = "support/pvt3_command.rs"]
 mod pvt3_command;
+#[path = "support/workspace.rs"]
+mod workspace;
 
 use pvt3_command::{fails, ok, scratch, succeeds};
 

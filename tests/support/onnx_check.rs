@@ -7,17 +7,15 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;
 
-fn workspace() -> PathBuf {
-    // Every crate of the workspace is one level below its root.
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("..").canonicalize().expect("workspace root")
-}
+use crate::workspace::workspace;
+
 
 /// The venv's python, created once (test binaries run one after another; the venv is kept
 /// across runs).
 fn python() -> &'static Path {
     static PYTHON: OnceLock<PathBuf> = OnceLock::new();
     PYTHON.get_or_init(|| {
-        let venv = workspace().join("target/onnx-venv");
+        let venv = workspace().canonicalize().expect("workspace root").join("target/onnx-venv");
         let python = venv.join("bin/python");
         let ready = venv.join("ready");
         if !ready.exists() {

@@ -1,15 +1,11 @@
 //! Running the `pvt3` command from the end-to-end tests: from the workspace's root, as a user of a
 //! checkout would, with its output checked.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::{Command, Output};
 
 pub fn pvt3(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pvt3"))
-        .args(args)
-        .current_dir(Path::new(env!("CARGO_MANIFEST_DIR")).join(".."))
-        .output()
-        .expect("pvt3 runs")
+    Command::new(env!("CARGO_BIN_EXE_pvt3")).args(args).current_dir(crate::workspace::workspace()).output().expect("pvt3 runs")
 }
 
 /// Runs `pvt3 args`, which must succeed: its whole output.
