@@ -210,8 +210,11 @@ fn start(sensors: &mut [Sensor], spec: &RunSpec, opts: &TrainOptions, state: Opt
             state
         }
         None => {
-            for sensor in sensors.iter().filter(|_| spec.start.is_none()) {
-                crate::spectrum_fit::fit(&sensor.net.learner.model, &sensor.net.learner.varmap, &sensor.train_set)?;
+            // A run from given weights (fine-tuning) keeps its spectral heads as they are.
+            if spec.start.is_none() {
+                for sensor in sensors.iter() {
+                    crate::spectrum_fit::fit(&sensor.net.learner.model, &sensor.net.learner.varmap, &sensor.train_set)?;
+                }
             }
             for sensor in sensors.iter() {
                 let _ = std::fs::remove_file(Run(&sensor.dir).metrics());
