@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::OnceLock;
 
-use crate::workspace::workspace;
+use super::workspace::workspace;
 
 
 /// The venv's python, created once (test binaries run one after another; the venv is kept

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use std::process::{Command, Output};
 
 pub fn pvt3(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_pvt3")).args(args).current_dir(crate::workspace::workspace()).output().expect("pvt3 runs")
+    Command::new(env!("CARGO_BIN_EXE_pvt3")).args(args).current_dir(super::workspace::workspace()).output().expect("pvt3 runs")
 }
 
 /// Runs `pvt3 args`, which must succeed: its whole output.

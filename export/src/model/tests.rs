@@ -15,6 +15,8 @@ use super::*;
 mod onnx_check;
 #[path = "../../../tests/support/spectral_case.rs"]
 mod spectral_case;
+#[path = "../../../tests/support/workspace.rs"]
+mod workspace;
 
 fn golden(file: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../tests/golden/icub20").join(file)
