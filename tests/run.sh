@@ -1,33 +1,37 @@
 #!/usr/bin/env bash
 # The tests, exactly as CI runs them (.ci/run):
+#   0. what they need, installed in the background beside step 1's build (rustup's musl, Windows
+#      and macOS targets and clippy; Debian's librsvg2-bin for the picture tests, valgrind for the
+#      C ABI, pkgconf for the installed library's flags, gcc-aarch64-linux-gnu,
+#      libc6-dev-arm64-cross, musl-dev:arm64 and qemu-user, gcc-mingw-w64-x86-64, clang and
+#      musl-tools, with apt-get as root), or it says exactly what is missing;
 #   1. the whole workspace on this machine (cargo test --profile ci --workspace: the release
-#      build with tract-core unoptimised, Cargo.toml's `ci`);
+#      build with tract-core unoptimised and the runtime at opt-level 1, Cargo.toml's `ci`);
 #   2. the C ABI under valgrind (x86-64): the C example's paths and every entry point's error
-#      paths, no invalid read or write, no leak; then the runtime's lints: clippy with warnings
-#      denied (every unsafe block has a SAFETY note);
-#   3. the robot runtime cross-built for aarch64 (64-bit ARM: Jetson Orin, Raspberry Pi 4/5) and
-#      its tests that show it computes what x86-64 does run under qemu: golden logits,
-#      bit-identical loads, the kernels, damaged files, streaming, every C-ABI error path, the
-#      Rust example built, and runtime/examples/classify.c built with aarch64-linux-gnu-gcc and
-#      run. What needs onnxruntime or candle stays on the host.
-#      It is built without default features, as the small robot build is (no `threads`, no
-#      rayon, no `spectral`: docs/deploy.md), so both supported feature sets are tested: all of
-#      them on the host, the small one on aarch64;
+#      paths, no invalid read or write, no leak;
+#   3. the robot runtime cross-built for aarch64 (64-bit ARM: Jetson Orin, Raspberry Pi 4/5) as
+#      static musl binaries, and its tests that show it computes what x86-64 does run under
+#      qemu: golden logits, bit-identical loads, the kernels, damaged files, streaming, every
+#      C-ABI error path, the Rust example built, and runtime/examples/classify.c built with
+#      aarch64-linux-gnu-gcc (given musl's arm64 headers and libraries) and run; then the
+#      pvt3-run those tests built is checked static and held to the host build's answers on the
+#      golden windows. What needs onnxruntime or candle stays on the host. It is built without
+#      default features, as the small robot build is (no `threads`, no rayon, no `spectral`:
+#      docs/deploy.md), so both supported feature sets are tested: all of them on the host, the
+#      small one on aarch64. musl or glibc changes one line of the runtime (runtime/src/heap.rs,
+#      glibc's allocator tuning, tested on the host);
 #   4. other platforms: the trainer checked (cargo check) for Windows (x86_64-pc-windows-gnu, with
-#      Debian's mingw-w64) and macOS (aarch64-apple-darwin, its assembly by clang); the runtime and
-#      pvt3-run built as static musl binaries for x86-64 and aarch64, each run on the golden
-#      windows (the aarch64 one under qemu) and held to the host build's answers. In the
+#      Debian's mingw-w64) and macOS (aarch64-apple-darwin, its assembly by clang); the runtime's
+#      lints, clippy with warnings denied (every unsafe block has a SAFETY note), on the Windows
+#      build the check half did; the runtime and pvt3-run built as static musl binaries for
+#      x86-64, run on the golden windows and held to the host build's answers. In the
 #      background from the end of step 1's build, in a target directory of its own (so that
 #      neither cargo waits for the other's lock): it takes the CPU the other steps leave;
 #   5. the small robot library's size (tests/robot-small.sh, in the background from the start):
 #      built as docs/deploy.md says whenever the runtime, the format, its dependency tree, the
 #      build profiles or the compiler changed since it was last measured (tests/robot-small.size),
 #      it must stay within 8 MiB.
-# It installs what it needs, all at the start (rustup's aarch64, Windows, macOS and musl targets
-# and clippy; Debian's librsvg2-bin for the picture tests, valgrind for the C ABI, pkgconf for the
-# installed library's flags, gcc-aarch64-linux-gnu, libc6-dev-arm64-cross and qemu-user,
-# gcc-mingw-w64-x86-64, clang and musl-tools, with apt-get as root) or says exactly what is
-# missing. Each step's heading gives its start in seconds; times under qemu mean nothing, outputs do.
+# Each step's heading gives its start in seconds; times under qemu mean nothing, outputs do.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -39,6 +43,10 @@ install_debian() {
   [ $# -gt 0 ] || return 0
   if [ "$(id -u)" = 0 ] && command -v apt-get >/dev/null; then
     echo "installing $*"
+    # A package of another architecture (musl-dev:arm64) needs that architecture known to dpkg.
+    if [[ " $* " == *:arm64\ * ]] && ! dpkg --print-foreign-architectures | grep -qx arm64; then
+      dpkg --add-architecture arm64
+    fi
     apt-get update -qq
     DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends "$@" >/dev/null
   else
@@ -81,63 +89,53 @@ bash tests/robot-small.sh check >"$small_log" 2>&1 &
 small_pid=$!
 background+=("$small_pid")
 
-step "what the tests need: Debian's packages and rustup's targets"
-target=aarch64-unknown-linux-gnu
-sysroot=/usr/aarch64-linux-gnu
-need=()
-# The picture tests render the SVG files they draw with librsvg and look at the pixels; on
-# x86-64 the C example runs under valgrind too (runtime/tests/c_abi.rs, PVT3_VALGRIND).
-command -v rsvg-convert >/dev/null || need+=(librsvg2-bin)
-# The C example is built with the flags pkg-config reads from the installed pvt3.pc.
-command -v pkg-config >/dev/null || need+=(pkgconf)
-[ "$(uname -m)" != x86_64 ] || command -v valgrind >/dev/null || need+=(valgrind)
-# aarch64: the cross compiler, the arm64 libc to link against (and its loader, for qemu), qemu.
-command -v aarch64-linux-gnu-gcc >/dev/null || need+=(gcc-aarch64-linux-gnu)
-[ -e "$sysroot/lib/crt1.o" ] || need+=(libc6-dev-arm64-cross)
-command -v qemu-aarch64 >/dev/null || need+=(qemu-user)
-# Other platforms: build scripts' C and assembly for Windows; for macOS, a build script's
-# assembly (psm) takes clang's -arch; tract's x86-64 assembly kernels, built for musl.
-command -v x86_64-w64-mingw32-gcc >/dev/null || need+=(gcc-mingw-w64-x86-64)
-command -v clang >/dev/null || need+=(clang)
-command -v musl-gcc >/dev/null || need+=(musl-tools)
-install_debian ${need[@]+"${need[@]}"}
-[ "$(uname -m)" != x86_64 ] || export PVT3_VALGRIND=1
-cargo clippy --version >/dev/null 2>&1 || rustup component add clippy || missing "clippy (rustup component add clippy)"
-for t in "$target" x86_64-pc-windows-gnu aarch64-apple-darwin x86_64-unknown-linux-musl aarch64-unknown-linux-musl; do
-  rustup target list --installed | grep -qx "$t" || rustup target add "$t" || missing "the Rust target $t (rustup target add $t)"
-done
+# Step 0: what the tests need, installed in the background while the host build compiles (the
+# host build needs none of it: it spends CPU while apt-get and rustup mostly wait on the network).
+what_the_tests_need() {
+  local need=()
+  # The picture tests render the SVG files they draw with librsvg and look at the pixels; on
+  # x86-64 the C example runs under valgrind too (runtime/tests/c_abi.rs, PVT3_VALGRIND).
+  command -v rsvg-convert >/dev/null || need+=(librsvg2-bin)
+  # The C example is built with the flags pkg-config reads from the installed pvt3.pc.
+  command -v pkg-config >/dev/null || need+=(pkgconf)
+  [ "$(uname -m)" != x86_64 ] || command -v valgrind >/dev/null || need+=(valgrind)
+  # aarch64: the cross compiler and the arm64 C library it expects beside it, musl's arm64
+  # headers and static libraries (the tests and the C example are static musl binaries), qemu.
+  command -v aarch64-linux-gnu-gcc >/dev/null || need+=(gcc-aarch64-linux-gnu)
+  [ -e /usr/aarch64-linux-gnu/lib/crt1.o ] || need+=(libc6-dev-arm64-cross)
+  [ -e /usr/lib/aarch64-linux-musl/libc.a ] || need+=(musl-dev:arm64)
+  command -v qemu-aarch64 >/dev/null || need+=(qemu-user)
+  # Other platforms: build scripts' C and assembly for Windows; for macOS, a build script's
+  # assembly (psm) takes clang's -arch; tract's x86-64 assembly kernels, built for musl (whose
+  # musl-gcc specs file, retargeted, also builds the C example for aarch64).
+  command -v x86_64-w64-mingw32-gcc >/dev/null || need+=(gcc-mingw-w64-x86-64)
+  command -v clang >/dev/null || need+=(clang)
+  command -v musl-gcc >/dev/null || need+=(musl-tools)
+  install_debian ${need[@]+"${need[@]}"}
+  cargo clippy --version >/dev/null 2>&1 || rustup component add clippy || missing "clippy (rustup component add clippy)"
+  local t
+  for t in "$target" x86_64-pc-windows-gnu aarch64-apple-darwin x86_64-unknown-linux-musl; do
+    rustup target list --installed | grep -qx "$t" || rustup target add "$t" || missing "the Rust target $t (rustup target add $t)"
+  done
+}
+target=aarch64-unknown-linux-musl
+step "what the tests need: Debian's packages and rustup's targets (in the background, beside the host build)"
+need_log=target/what-the-tests-need.log
+(set -e; what_the_tests_need) >"$need_log" 2>&1 &
+need_pid=$!
+background+=("$need_pid")
 
-# Step 4, run in the background once the host build is done (see the top).
-other_platforms() {
-  # The trainer checked for Windows and macOS.
-  local platforms=(--target-dir target/platforms)
-  CC_aarch64_apple_darwin=clang cargo check "${platforms[@]}" --profile ci --target x86_64-pc-windows-gnu --target aarch64-apple-darwin \
-    -p pvt3-trainer --bins
-  # The runtime and pvt3-run built to show that they link statically and compute what the host
-  # build computes, never timed: as the small robot build (docs/deploy.md) without default
-  # features (one thread a plan, no spectral head: a static robot binary is a small one), and
-  # unoptimised, without debug information, debug assertions, overflow checks or incremental
-  # caches (164 s of CPU a target against 263 with them and the default features); all but
-  # tract's kernels crate, which unoptimised answers wrongly on aarch64 (the golden windows'
-  # probabilities 0.039 off the host's under qemu, with or without debug assertions; at opt-level
-  # 1 within 3e-8, as the optimised builds are).
-  export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_MUSL_LINKER=aarch64-linux-gnu-gcc CC_aarch64_unknown_linux_musl=aarch64-linux-gnu-gcc
-  local golden=(tests/golden/icub20/model.onnx tests/golden/icub20/input.npy)
-  target/ci/pvt3-run --json "${golden[@]}" >target/golden-host.jsonl
-  local dev=(debug=false debug-assertions=false overflow-checks=false incremental=false 'package.tract-linalg.opt-level=1')
-  cargo build "${platforms[@]}" --target x86_64-unknown-linux-musl --target aarch64-unknown-linux-musl -p pvt3-runtime --no-default-features \
-    --lib --bin pvt3-run $(printf -- "--config profile.dev.%s " "${dev[@]}")
-  local t bin runner
-  for t in x86_64-unknown-linux-musl aarch64-unknown-linux-musl; do
-    bin=target/platforms/$t/debug/pvt3-run
-    if readelf -l "$bin" | grep -q INTERP; then
-      echo "tests/run.sh: $bin asks for a dynamic loader: not a static binary" >&2
-      return 1
-    fi
-    runner=()
-    [ "$t" = x86_64-unknown-linux-musl ] || runner=(qemu-aarch64)
-    ${runner[@]+"${runner[@]}"} "$bin" --json "${golden[@]}" >"target/golden-$t.jsonl"
-    python3 - "target/golden-$t.jsonl" target/golden-host.jsonl <<'EOF'
+# A static binary of pvt3-run (run through the emulator named after it, if any) answers the
+# golden windows as the host build does (target/golden-host.jsonl, written after the host build).
+same_as_host() {
+  local bin=$1 out=target/golden-$(basename "$(dirname "$(dirname "$1")")").jsonl
+  shift
+  if readelf -l "$bin" | grep -q INTERP; then
+    echo "tests/run.sh: $bin asks for a dynamic loader: not a static binary" >&2
+    return 1
+  fi
+  "$@" "$bin" --json "${golden[@]}" >"$out"
+  python3 - "$out" target/golden-host.jsonl <<'EOF'
 import json, sys
 static, host = ([json.loads(line) for line in open(path)] for path in sys.argv[1:])
 assert len(static) == len(host) == 8, (len(static), len(host))
@@ -145,13 +143,42 @@ worst = max(abs(a - b) for s, h in zip(static, host) for a, b in zip(s["probabil
 assert worst <= 1e-6 and all(s["class"] == h["class"] for s, h in zip(static, host)), worst
 print(f"{sys.argv[1]}: the golden windows' probabilities within {worst:.1e} of the host build's, every class the same")
 EOF
-  done
+}
+golden=(tests/golden/icub20/model.onnx tests/golden/icub20/input.npy)
+
+# Step 4, run in the background once the host build is done (see the top), in one target
+# directory and one profile, so that the build scripts and procedural macros, built for this
+# machine, are built once for all three: `dev` without debug information, debug assertions,
+# overflow checks or incremental caches; tract's kernels crate optimised (opt-level 1), which
+# unoptimised answers wrongly on aarch64 (the golden windows' probabilities 0.039 off the host's
+# under qemu, with or without debug assertions; at opt-level 1 within 3e-8, as the optimised
+# builds are).
+other_platforms() {
+  local platforms=(--target-dir target/platforms) dev=(debug=false debug-assertions=false overflow-checks=false incremental=false 'package.tract-linalg.opt-level=1')
+  platforms+=($(printf -- "--config profile.dev.%s " "${dev[@]}"))
+  # The trainer checked for Windows and macOS.
+  CC_aarch64_apple_darwin=clang cargo check "${platforms[@]}" --target x86_64-pc-windows-gnu --target aarch64-apple-darwin -p pvt3-trainer --bins
+  # The runtime's lints: clippy with warnings denied (every unsafe block has a SAFETY note), on
+  # the Windows build the check above has half done (the same code as Linux's but for the
+  # allocator's tuning, runtime/src/heap.rs, which the aarch64 build's denied warnings cover).
+  cargo clippy "${platforms[@]}" --target x86_64-pc-windows-gnu -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings
+  # The runtime and pvt3-run built to show that they link statically and compute what the host
+  # build computes, never timed: as the small robot build (docs/deploy.md) without default
+  # features (one thread a plan, no spectral head: a static robot binary is a small one). The
+  # aarch64 one is the aarch64 tests' own build (step 3).
+  cargo build "${platforms[@]}" --target x86_64-unknown-linux-musl -p pvt3-runtime --no-default-features --lib --bin pvt3-run
+  same_as_host target/platforms/x86_64-unknown-linux-musl/debug/pvt3-run
 }
 
 step "host: cargo test --profile ci --workspace (built, then run)"
 cargo test --profile ci --workspace --no-run
+target/ci/pvt3-run --json "${golden[@]}" >target/golden-host.jsonl
 
-step "other platforms, in the background: the trainer checked for Windows and macOS; the runtime and pvt3-run built static with musl for x86-64 and aarch64"
+step "what the tests need (installed beside the host build)"
+joined "$need_pid" "$need_log" "what the tests need could not be installed"
+[ "$(uname -m)" != x86_64 ] || export PVT3_VALGRIND=1
+
+step "other platforms, in the background: the trainer checked for Windows and macOS, the runtime's lints, the runtime and pvt3-run built static with musl for x86-64"
 platforms_log=target/other-platforms.log
 (set -e; other_platforms) >"$platforms_log" 2>&1 &
 platforms_pid=$!
@@ -163,7 +190,7 @@ cargo_test --profile ci --workspace
 
 valgrind_pid=
 if [ -n "${PVT3_VALGRIND:-}" ]; then
-  step "C ABI under valgrind: every entry point's error paths, no invalid access, no leak (in the background, beside clippy and the aarch64 build)"
+  step "C ABI under valgrind: every entry point's error paths, no invalid access, no leak (in the background, beside the aarch64 build)"
   # The test binary the host step built (the same command, so nothing is built again: with
   # `-p pvt3-runtime` alone its dependencies' features differ, and tract would be rebuilt).
   c_abi=$(cargo test -q --profile ci --workspace --no-run --message-format=json 2>/dev/null |
@@ -182,20 +209,29 @@ for line in sys.stdin:
   unset PVT3_VALGRIND
 fi
 
-step "runtime lints: cargo clippy -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings"
-cargo clippy --profile ci -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings
-
 step "aarch64: cargo test --profile ci --target $target -p pvt3-runtime -p pvt3-format --no-default-features --no-run"
 # The aarch64 build's compiler, linker and runner, for its build and its tests alone (subshells):
-# the other platforms' builds name their own.
+# the other platforms' builds name their own. Static musl binaries, so the emulator needs no
+# arm64 loader: Rust's links with musl's own start files and C library (rustup's target); the C
+# example (and tract's assembly) with aarch64-linux-gnu-gcc given musl's arm64 headers and
+# libraries (Debian's musl-dev:arm64) by the specs file Debian's musl-gcc gives gcc on x86-64,
+# retargeted, and unwinding with the unwinder Rust's musl target ships (gcc's, built for glibc,
+# asks for glibc's _dl_find_object). (rustc warns that a static musl target builds no shared
+# library: the static one and the Rust library are what the tests use.)
 aarch64_env() {
-  export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_LINKER=aarch64-linux-gnu-gcc
-  export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER="qemu-aarch64 -L $sysroot"
-  # The tests run the C example and pvt3-run through the same emulator, built by the same compiler.
-  export PVT3_TARGET_RUNNER="$CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUNNER"
-  export TARGET_CC=aarch64-linux-gnu-gcc
-  # Code compiled only off x86-64 gets no clippy above: at least no warning may pass here.
-  export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_GNU_RUSTFLAGS="-D warnings"
+  local cc=$PWD/target/aarch64-linux-musl-gcc
+  local unwind
+  unwind=$(rustc --print sysroot)/lib/rustlib/$target/lib/self-contained/libunwind.a
+  sed -e 's/x86_64/aarch64/g' -e "s|%:if-exists(libgcc_eh.a%s)|$unwind|" /usr/lib/x86_64-linux-musl/musl-gcc.specs >"$cc.specs"
+  printf '#!/bin/sh\nexec aarch64-linux-gnu-gcc "$@" -specs "%s" -static\n' "$cc.specs" >"$cc"
+  chmod +x "$cc"
+  export TARGET_CC=$cc
+  export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_MUSL_LINKER=aarch64-linux-gnu-gcc
+  export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_MUSL_RUNNER=qemu-aarch64
+  # The tests run the C example and pvt3-run through the same emulator.
+  export PVT3_TARGET_RUNNER=qemu-aarch64
+  # Code compiled only off x86-64 gets no clippy: at least no warning may pass here.
+  export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_MUSL_RUSTFLAGS="-D warnings"
 }
 aarch64_tests=(--profile ci --target "$target" -p pvt3-runtime -p pvt3-format --no-default-features)
 (aarch64_env && cargo test "${aarch64_tests[@]}" --no-run)
@@ -223,6 +259,9 @@ qemu_skips=(bench_reports_batch_and_streaming_latencies every_answer_is_the_batc
   a_classifier_shared_by_threads_answers_each_as_it_answers_one
   re_signed_damaged_models_are_refused_or_run_and_never_panic damaged_npy_inputs_are_refused_and_never_panic)
 (aarch64_env && cargo_test "${aarch64_tests[@]}" -- $(printf -- '--skip %s ' "${qemu_skips[@]}"))
+
+step "aarch64: pvt3-run, as the tests built it, is static and answers the golden windows as the host build does"
+same_as_host "target/$target/ci/pvt3-run" qemu-aarch64
 
 step "other platforms (run beside the steps above)"
 joined "$platforms_pid" "$platforms_log" "another platform's build failed"
