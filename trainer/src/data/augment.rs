@@ -1,5 +1,6 @@
 //! Augmentation of training windows. Each window is changed alone as it is batched ([`augment`]:
-//! a firmer or lighter press, a stronger or weaker vibration, a shift in time, a gain and noise);
+//! a firmer or lighter press, a stronger or weaker vibration, a shift in time, the other sliding
+//! direction, a gain and noise);
 //! a batch as a whole is blended with itself ([`mixup`]) or pushed beyond its touches
 //! ([`extrapolation`]) in the learner's forward pass.
 
@@ -13,8 +14,9 @@ use crate::options::Augmentation;
 
 /// One normalised training window (`norm.frames` frames a channel, channels in rows) changed in
 /// place as `opts` asks: its raw readings scaled per window and per channel, its variation about
-/// each channel's mean scaled, shifted in time (edge frames repeated), then a gain and Gaussian
-/// noise; each draw from `rng`, in that order.
+/// each channel's mean scaled, shifted in time (edge frames repeated), reversed in time, then a
+/// gain and Gaussian noise; each draw from `rng`, in that order (an option that is off draws
+/// nothing).
 pub fn augment(sample: &mut [f32], norm: &Normalization, opts: &Augmentation, rng: &mut Rng) {
     let frames = norm.frames;
     if opts.scale > 0.0 || opts.channel_scale > 0.0 {
@@ -46,6 +48,9 @@ pub fn augment(sample: &mut [f32], norm: &Normalization, opts: &Augmentation, rn
                 *v = original[(t as isize - shift).clamp(0, last) as usize];
             }
         }
+    }
+    if opts.reverse > 0.0 && f64::from(rng.uniform()) < opts.reverse {
+        sample.chunks_mut(frames).for_each(|row| row.reverse());
     }
     let gain = 1.0 + opts.gain as f32 * (2.0 * rng.uniform() - 1.0);
     let noise = opts.noise as f32;

@@ -84,6 +84,7 @@ fn options(epochs: usize) -> TrainOptions {
             channel_scale: 0.0,
             vibration: 0.0,
             stretch: 0.0,
+            reverse: 0.0,
             mixup: 0.0,
             extrapolate: 0.0,
             extrapolate_levels: false,

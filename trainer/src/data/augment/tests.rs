@@ -94,3 +94,29 @@ fn time_shift_moves_frames_and_repeats_the_edge() {
     }
     assert_eq!(seen.into_iter().collect::<Vec<_>>(), vec![-2, -1, 0, 1, 2]);
 }
+
+#[test]
+fn reversal_plays_each_channel_backwards_as_often_as_asked() {
+    let opts = Augmentation { reverse: 0.5, gain: 0.0, noise: 0.0, ..TrainOptions::default().augmentation };
+    let norm = Normalization { mean: vec![0.0; 2], std: vec![1.0; 2], frames: 5 };
+    let forward: Vec<f32> = (0..10).map(|t| t as f32).collect(); // two channels of 5 frames
+    let backward = [4.0, 3.0, 2.0, 1.0, 0.0, 9.0, 8.0, 7.0, 6.0, 5.0];
+    let mut rng = Rng::new(3);
+    let mut reversed = 0;
+    for _ in 0..200 {
+        let mut sample = forward.clone();
+        augment(&mut sample, &norm, &opts, &mut rng);
+        if sample == backward {
+            reversed += 1;
+        } else {
+            assert_eq!(sample, forward);
+        }
+    }
+    assert!((70..=130).contains(&reversed), "{reversed} of 200 reversed");
+    // Off, it draws nothing: the gain's draw is the only one, as before the option was.
+    let off = Augmentation { reverse: 0.0, ..opts };
+    let (mut a, mut b) = (Rng::new(9), Rng::new(9));
+    augment(&mut forward.clone(), &norm, &off, &mut a);
+    b.uniform();
+    assert_eq!(a.uniform(), b.uniform());
+}
