@@ -159,8 +159,9 @@ other_platforms() {
   # The trainer checked for Windows and macOS.
   CC_aarch64_apple_darwin=clang cargo check "${platforms[@]}" --target x86_64-pc-windows-gnu --target aarch64-apple-darwin -p pvt3-trainer --bins
   # The runtime's lints: clippy with warnings denied (every unsafe block has a SAFETY note), on
-  # the Windows build the check above has half done (the same code as Linux's but for the
-  # allocator's tuning, runtime/src/heap.rs, which the aarch64 build's denied warnings cover).
+  # the Windows build the check above has half done (the same code as Linux's but for glibc's
+  # allocator tuning in runtime/src/heap.rs, which only the host build compiles, and which is
+  # therefore neither linted nor built with warnings denied; the host's tests run it).
   cargo clippy "${platforms[@]}" --target x86_64-pc-windows-gnu -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings
   # The runtime and pvt3-run built to show that they link statically and compute what the host
   # build computes, never timed: as the small robot build (docs/deploy.md) without default

@@ -9,7 +9,6 @@ use std::sync::OnceLock;
 
 use super::workspace::workspace;
 
-
 /// The venv's python, created once (test binaries run one after another; the venv is kept
 /// across runs).
 fn python() -> &'static Path {
