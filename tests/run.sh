@@ -7,8 +7,8 @@
 #      musl-tools, with apt-get as root), or it says exactly what is missing;
 #   1. the whole workspace on this machine (cargo test --profile ci --workspace: the release
 #      build with tract-core unoptimised and the runtime at opt-level 1, Cargo.toml's `ci`);
-#   2. the C ABI under valgrind (x86-64): the C example's paths and every entry point's error
-#      paths, no invalid read or write, no leak;
+#   2. the C ABI under valgrind (x86-64): the C example's paths (in step 1's tests) and every
+#      entry point's error paths (beside step 3's tests under qemu), no invalid read or write, no leak;
 #   3. the robot runtime cross-built for aarch64 (64-bit ARM: Jetson Orin, Raspberry Pi 4/5) as
 #      static musl binaries, and its tests that show it computes what x86-64 does run under
 #      qemu: golden logits, bit-identical loads, the kernels, damaged files, streaming, every
@@ -31,12 +31,24 @@
 #      built as docs/deploy.md says whenever the runtime, the format, its dependency tree, the
 #      build profiles or the compiler changed since it was last measured (tests/robot-small.size),
 #      it must stay within 8 MiB.
-# Each step's heading gives its start in seconds; times under qemu mean nothing, outputs do.
+# Each step's heading gives its start in seconds and how busy the cores were since the last
+# heading; times under qemu mean nothing, outputs do.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-# Each step's heading says when it starts, in seconds since the script did: the steps' times.
-step() { printf '\n== [%d s] %s\n' "$SECONDS" "$*"; }
+# Each step's heading says when it starts, in seconds since the script did (the steps' times),
+# and how busy the machine's cores were since the previous heading (/proc/stat: on two cores,
+# 100 % is both busy; where it is low, a step waits on one thread and could share the machine).
+# The machine's busy and total CPU ticks so far (user, nice, system, irq, softirq; and idle, iowait).
+cpu_ticks() { awk '/^cpu / { print $2 + $3 + $4 + $7 + $8, $2 + $3 + $4 + $5 + $6 + $7 + $8; exit }' /proc/stat 2>/dev/null || echo 0 0; }
+busy_since=($(cpu_ticks))
+step() {
+  local now busy=""
+  now=($(cpu_ticks))
+  [ "${now[1]}" = "${busy_since[1]}" ] || busy=$(printf ', cores %d %% busy since the last heading' $(((now[0] - busy_since[0]) * 100 / (now[1] - busy_since[1]))))
+  busy_since=("${now[@]}")
+  printf '\n== [%d s%s] %s\n' "$SECONDS" "$busy" "$*"
+}
 missing() { echo "tests/run.sh: missing $1" >&2; exit 1; }
 # Installs the Debian packages named (apt-get, as root), or says exactly what is missing.
 install_debian() {
@@ -189,27 +201,6 @@ echo "(its output follows the aarch64 tests)"
 step "host: the tests"
 cargo_test --profile ci --workspace
 
-valgrind_pid=
-if [ -n "${PVT3_VALGRIND:-}" ]; then
-  step "C ABI under valgrind: every entry point's error paths, no invalid access, no leak (in the background, beside the aarch64 build)"
-  # The test binary the host step built (the same command, so nothing is built again: with
-  # `-p pvt3-runtime` alone its dependencies' features differ, and tract would be rebuilt).
-  c_abi=$(cargo test -q --profile ci --workspace --no-run --message-format=json 2>/dev/null |
-    python3 -c 'import json, sys
-for line in sys.stdin:
-    m = json.loads(line)
-    if m.get("reason") == "compiler-artifact" and m["target"]["name"] == "c_abi" and m.get("executable"):
-        print(m["executable"])')
-  # One thread for most of a minute: the builds below use the other core.
-  valgrind_log=target/valgrind.log
-  (valgrind -q --error-exitcode=99 --leak-check=full --errors-for-leak-kinds=definite,indirect --show-leak-kinds=definite,indirect \
-    "$c_abi" --test-threads 1 every_entry_point_reports_instead_of_crashing 2>&1 | tee -a "$log") >"$valgrind_log" &
-  valgrind_pid=$!
-  background+=("$valgrind_pid")
-  echo "(its output follows the aarch64 build)"
-  unset PVT3_VALGRIND
-fi
-
 step "aarch64: cargo test --profile ci --target $target -p pvt3-runtime -p pvt3-format --no-default-features --no-run"
 # The aarch64 build's compiler, linker and runner, for its build and its tests alone (subshells):
 # the other platforms' builds name their own. Static musl binaries, so the emulator needs no
@@ -237,9 +228,26 @@ aarch64_env() {
 aarch64_tests=(--profile ci --target "$target" -p pvt3-runtime -p pvt3-format --no-default-features)
 (aarch64_env && cargo test "${aarch64_tests[@]}" --no-run)
 
-if [ -n "$valgrind_pid" ]; then
-  step "C ABI under valgrind (run beside the steps above)"
-  joined "$valgrind_pid" "$valgrind_log" "the C ABI failed under valgrind"
+valgrind_pid=
+if [ -n "${PVT3_VALGRIND:-}" ]; then
+  step "C ABI under valgrind: every entry point's error paths, no invalid access, no leak (in the background, beside the tests under qemu)"
+  # The test binary the host step built (the same command, so nothing is built again: with
+  # `-p pvt3-runtime` alone its dependencies' features differ, and tract would be rebuilt).
+  c_abi=$(cargo test -q --profile ci --workspace --no-run --message-format=json 2>/dev/null |
+    python3 -c 'import json, sys
+for line in sys.stdin:
+    m = json.loads(line)
+    if m.get("reason") == "compiler-artifact" and m["target"]["name"] == "c_abi" and m.get("executable"):
+        print(m["executable"])')
+  # One thread for about a minute, beside the tests under qemu, which leave a core idle for much
+  # of theirs (a few long tests each run alone at the end of their harness).
+  valgrind_log=target/valgrind.log
+  (valgrind -q --error-exitcode=99 --leak-check=full --errors-for-leak-kinds=definite,indirect --show-leak-kinds=definite,indirect \
+    "$c_abi" --test-threads 1 every_entry_point_reports_instead_of_crashing 2>&1 | tee -a "$log") >"$valgrind_log" &
+  valgrind_pid=$!
+  background+=("$valgrind_pid")
+  echo "(its output follows the aarch64 tests)"
+  unset PVT3_VALGRIND
 fi
 
 step "aarch64: the tests under qemu"
@@ -252,14 +260,22 @@ step "aarch64: the tests under qemu"
 # nothing; its report's form is tested on the host), and tests of logic and robustness that no
 # arithmetic of the target changes: the continuous stream's answer at every frame and its reset,
 # the Rust example's 79 answers (built for aarch64 above; its arithmetic is the golden tests'),
-# pvt3-run's JSON lines (its answers stay), one classifier shared by four threads, and the
-# thousands of hostile files (damaged_files stays).
+# pvt3-run's JSON lines (its answers stay), one classifier shared by four threads, the thousands
+# of hostile files (damaged_files stays), and a provisional answer's logic: a peek after each of
+# 75 frames (150 runs of the temporal plan, 40 s under qemu; peeks run there in the C example
+# and the C ABI's test) and a file without the key bias streaming but refusing to peek.
 qemu_skips=(bench_reports_batch_and_streaming_latencies every_answer_is_the_batch_classification_of_the_latest_window
+  a_peek_reads_the_touch_so_far_and_leaves_it_going a_file_without_the_key_bias_gives_no_provisional_answer
   a_reset_stream_waits_for_a_whole_window_and_misuse_is_an_error streaming_frame_by_frame_equals_the_whole_window
   the_example_answers_as_the_runtime_does json_gives_every_probability_of_every_window
   a_classifier_shared_by_threads_answers_each_as_it_answers_one
   re_signed_damaged_models_are_refused_or_run_and_never_panic damaged_npy_inputs_are_refused_and_never_panic)
 (aarch64_env && cargo_test "${aarch64_tests[@]}" -- $(printf -- '--skip %s ' "${qemu_skips[@]}"))
+
+if [ -n "$valgrind_pid" ]; then
+  step "C ABI under valgrind (run beside the tests under qemu)"
+  joined "$valgrind_pid" "$valgrind_log" "the C ABI failed under valgrind"
+fi
 
 step "aarch64: pvt3-run, as the tests built it, is static and answers the golden windows as the host build does"
 same_as_host "target/$target/ci/pvt3-run" qemu-aarch64
