@@ -41,13 +41,19 @@ cd "$(dirname "$0")/.."
 # 100 % is both busy; where it is low, a step waits on one thread and could share the machine).
 # The machine's busy and total CPU ticks so far (user, nice, system, irq, softirq; and idle, iowait).
 cpu_ticks() { awk '/^cpu / { print $2 + $3 + $4 + $7 + $8, $2 + $3 + $4 + $5 + $6 + $7 + $8; exit }' /proc/stat 2>/dev/null || echo 0 0; }
-busy_since=($(cpu_ticks))
-step() {
-  local now busy=""
+# How busy the cores were between `since` (ticks as cpu_ticks gives them) and now, as `, cores N % busy`.
+busy() {
+  local now
   now=($(cpu_ticks))
-  [ "${now[1]}" = "${busy_since[1]}" ] || busy=$(printf ', cores %d %% busy since the last heading' $(((now[0] - busy_since[0]) * 100 / (now[1] - busy_since[1]))))
-  busy_since=("${now[@]}")
-  printf '\n== [%d s%s] %s\n' "$SECONDS" "$busy" "$*"
+  [ "${now[1]}" = "$2" ] || printf ', cores %d %% busy' $(((now[0] - $1) * 100 / (now[1] - $2)))
+}
+first_ticks=($(cpu_ticks))
+heading_ticks=("${first_ticks[@]}")
+step() {
+  local since
+  since=$(busy "${heading_ticks[@]}")
+  heading_ticks=($(cpu_ticks))
+  printf '\n== [%d s%s] %s\n' "$SECONDS" "${since:+$since since the last heading}" "$*"
 }
 missing() { echo "tests/run.sh: missing $1" >&2; exit 1; }
 # Installs the Debian packages named (apt-get, as root), or says exactly what is missing.
@@ -288,5 +294,5 @@ joined "$small_pid" "$small_log" "the small robot library's size check failed (b
 
 # One closing line for all harnesses, host and aarch64 (cargo's own runs end with doc-test
 # harnesses that hold no test).
-echo "(all steps: $SECONDS s)"
+echo "(all steps: $SECONDS s$(busy "${first_ticks[@]}"))"
 grep '^test result:' "$log" | awk '{ p += $4; f += $6 } END { printf "\ntests: %d passed, %d failed\n", p, f }'
