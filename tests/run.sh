@@ -7,8 +7,8 @@
 #      musl-tools, with apt-get as root), or it says exactly what is missing;
 #   1. the whole workspace on this machine (cargo test --profile ci --workspace: the release
 #      build with tract-core unoptimised and the runtime at opt-level 1, Cargo.toml's `ci`);
-#   2. the C ABI under valgrind (x86-64): the C example's paths (in step 1's tests) and every
-#      entry point's error paths (beside step 3's tests under qemu), no invalid read or write, no leak;
+#   2. the C ABI under valgrind (x86-64): every entry point's error paths and the C example's
+#      paths (beside step 3's tests under qemu), no invalid read or write, no leak;
 #   3. the robot runtime cross-built for aarch64 (64-bit ARM: Jetson Orin, Raspberry Pi 4/5) as
 #      static musl binaries, and its tests that show it computes what x86-64 does run under
 #      qemu: golden logits, bit-identical loads, the kernels, damaged files, streaming, every
@@ -112,7 +112,7 @@ background+=("$small_pid")
 what_the_tests_need() {
   local need=()
   # The picture tests render the SVG files they draw with librsvg and look at the pixels; on
-  # x86-64 the C example runs under valgrind too (runtime/tests/c_abi.rs, PVT3_VALGRIND).
+  # x86-64 the C ABI and the C example run under valgrind too (runtime/tests/c_abi.rs, PVT3_VALGRIND).
   command -v rsvg-convert >/dev/null || need+=(librsvg2-bin)
   # The C example is built with the flags pkg-config reads from the installed pvt3.pc.
   command -v pkg-config >/dev/null || need+=(pkgconf)
@@ -195,7 +195,9 @@ target/ci/pvt3-run --json "${golden[@]}" >target/golden-host.jsonl
 
 step "what the tests need (installed beside the host build)"
 joined "$need_pid" "$need_log" "what the tests need could not be installed"
-[ "$(uname -m)" != x86_64 ] || export PVT3_VALGRIND=1
+# On x86-64 the C example's test runs beside the tests under qemu, its example under valgrind.
+valgrind=()
+[ "$(uname -m)" != x86_64 ] || valgrind=(--skip the_c_example_gives_the_rust_result)
 
 step "other platforms, in the background: the trainer checked for Windows and macOS, the runtime's lints, the runtime and pvt3-run built static with musl for x86-64"
 platforms_log=target/other-platforms.log
@@ -205,7 +207,7 @@ background+=("$platforms_pid")
 echo "(its output follows the aarch64 tests)"
 
 step "host: the tests"
-cargo_test --profile ci --workspace
+cargo_test --profile ci --workspace -- ${valgrind[@]+"${valgrind[@]}"}
 
 step "aarch64: cargo test --profile ci --target $target -p pvt3-runtime -p pvt3-format --no-default-features --no-run"
 # The aarch64 build's compiler, linker and runner, for its build and its tests alone (subshells):
@@ -235,8 +237,8 @@ aarch64_tests=(--profile ci --target "$target" -p pvt3-runtime -p pvt3-format --
 (aarch64_env && cargo test "${aarch64_tests[@]}" --no-run)
 
 valgrind_pid=
-if [ -n "${PVT3_VALGRIND:-}" ]; then
-  step "C ABI under valgrind: every entry point's error paths, no invalid access, no leak (in the background, beside the tests under qemu)"
+if [ ${#valgrind[@]} -gt 0 ]; then
+  step "C ABI under valgrind: every entry point's error paths and the C example's, no invalid access, no leak (in the background, beside the tests under qemu)"
   # The test binary the host step built (the same command, so nothing is built again: with
   # `-p pvt3-runtime` alone its dependencies' features differ, and tract would be rebuilt).
   c_abi=$(cargo test -q --profile ci --workspace --no-run --message-format=json 2>/dev/null |
@@ -245,15 +247,17 @@ for line in sys.stdin:
     m = json.loads(line)
     if m.get("reason") == "compiler-artifact" and m["target"]["name"] == "c_abi" and m.get("executable"):
         print(m["executable"])')
-  # One thread for about a minute, beside the tests under qemu, which leave a core idle for much
-  # of theirs (a few long tests each run alone at the end of their harness).
+  # One thread for about two minutes, beside the tests under qemu, which leave a core idle for
+  # much of theirs (a few long tests each run alone at the end of their harness): the entry points
+  # under valgrind, then the C example's test, which builds the example, holds its answers to the
+  # runtime's and runs it under valgrind (PVT3_VALGRIND) on its way through and its error paths.
   valgrind_log=target/valgrind.log
   (valgrind -q --error-exitcode=99 --leak-check=full --errors-for-leak-kinds=definite,indirect --show-leak-kinds=definite,indirect \
-    "$c_abi" --test-threads 1 every_entry_point_reports_instead_of_crashing 2>&1 | tee -a "$log") >"$valgrind_log" &
+    "$c_abi" --test-threads 1 every_entry_point_reports_instead_of_crashing 2>&1 | tee -a "$log"
+    PVT3_VALGRIND=1 "$c_abi" the_c_example_gives_the_rust_result 2>&1 | tee -a "$log") >"$valgrind_log" &
   valgrind_pid=$!
   background+=("$valgrind_pid")
   echo "(its output follows the aarch64 tests)"
-  unset PVT3_VALGRIND
 fi
 
 step "aarch64: the tests under qemu"
