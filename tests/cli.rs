@@ -17,7 +17,7 @@ mod pvt3_command;
 #[path = "support/workspace.rs"]
 mod workspace;
 
-use pvt3_command::{fails, ok, pvt3, scratch};
+use pvt3_command::{fails, ok, pvt3, scratch, succeeds};
 
 /// The first `per_fold` samples of every fold of the shipped iCub set, as an .npz.
 fn icub_slice(dir: &Path, per_fold: usize) -> PathBuf {
@@ -514,6 +514,44 @@ fn fabric_like(tag: &str, touches: usize) -> (PathBuf, PathBuf) {
     csv_tree::write(&tree, 3, touches, 40, 64);
     csv_tree::flatten(&tree, &flat, 3, touches);
     (dir, flat)
+}
+
+/// A camera's touches as a user brings them, MPEG-4 videos named `<object>_<n>.mov` side by side
+/// (as PhysiCLeAR's, made here by FFmpeg's test sources): imported shrunk, grey and minus each
+/// touch's first frame, then trained on; options of the other kind of touch refused.
+#[test]
+fn a_camera_s_videos_import_and_train() {
+    let dir = scratch("camera");
+    let videos = dir.join("videos");
+    std::fs::create_dir_all(&videos).unwrap();
+    for (object, source) in [("striped_cloth", "testsrc"), ("smooth_tile", "testsrc2")] {
+        for n in 0..5 {
+            let input = format!("{source}=size=64x48:rate=25:duration=1.6,hue=h={}", 20 * n);
+            let file = videos.join(format!("{object}_{n}.mov"));
+            let made = Command::new("ffmpeg").args(["-v", "error", "-f", "lavfi", "-i", &input, "-c:v", "mpeg4"]).arg(&file).output();
+            let made = made.expect("ffmpeg runs (apt-get install ffmpeg)");
+            assert!(made.status.success(), "{}", String::from_utf8_lossy(&made.stderr));
+        }
+    }
+    let (data, run) = (dir.join("set.npz"), dir.join("run"));
+    let (v, d, r) = (videos.to_str().unwrap(), data.to_str().unwrap(), run.to_str().unwrap());
+    let args = ["import", v, "--name", "{class}_*", "--size", "12x16", "--grey", "--frames", "8", "--subtract-first", "--out", d];
+    let imported = ok(&args);
+    assert!(imported.contains("10 touches of 2 classes (5 to 5 touches a class): 8 frames of 12 × 16 grey each, stored as 8-bit"), "{imported}");
+    assert!(imported.contains("first frame kept as its background"), "{imported}");
+    let set = Dataset::load(&data, 0).unwrap();
+    assert_eq!((set.sample_shape.clone(), set.class_names.clone().unwrap()), (vec![12, 16, 8], vec!["smooth_tile".to_string(), "striped_cloth".to_string()]));
+    assert!(set.x.iter().any(|v| *v < 0.0), "frames minus the first: some pixels darker than before contact");
+    let mut args = vec!["train", "--data", d, "--out", r, "--epochs", "1"];
+    args.extend(SMALL);
+    succeeds(&args);
+    let err = fails(&["import", v, "--grid", "3x4", "--out", d]);
+    assert!(err.contains("--grid is for CSV touches") && err.contains("holds a camera's (videos or frame folders)"), "{err}");
+    let csvs = dir.join("csvs");
+    csv_tree::write(&csvs, 3, 6, 40, 64);
+    let err = fails(&["import", csvs.to_str().unwrap(), "--crop", "8x8+0+0", "--out", d]);
+    assert!(err.contains("--crop is for a camera's touches (videos or frame folders)"), "{err}");
+    std::fs::remove_dir_all(dir).unwrap();
 }
 
 /// Touches whose file names say their class, force and speed (as FabricSlide names them): imported

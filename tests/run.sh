@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # The tests, exactly as CI runs them (.ci/run):
 #   0. what they need, installed in the background beside step 1's build (rustup's musl, Windows
-#      and macOS targets and clippy; Debian's librsvg2-bin for the picture tests, valgrind for the
-#      C ABI, pkgconf for the installed library's flags, gcc-aarch64-linux-gnu,
-#      libc6-dev-arm64-cross, musl-dev:arm64 and qemu-user, gcc-mingw-w64-x86-64, clang and
-#      musl-tools, with apt-get as root), or it says exactly what is missing;
+#      and macOS targets and clippy; Debian's librsvg2-bin for the picture tests, ffmpeg for the
+#      camera import's videos, valgrind for the C ABI, pkgconf for the installed library's flags,
+#      gcc-aarch64-linux-gnu, libc6-dev-arm64-cross, musl-dev:arm64 and qemu-user,
+#      gcc-mingw-w64-x86-64, clang and musl-tools, with apt-get as root), or it says exactly what
+#      is missing;
 #   1. the whole workspace on this machine (cargo test --profile ci --workspace: the release
 #      build with tract-core unoptimised and the runtime at opt-level 1, Cargo.toml's `ci`);
 #   2. the C ABI under valgrind (x86-64): every entry point's error paths and the C example's
@@ -117,6 +118,8 @@ what_the_tests_need() {
   # The C example is built with the flags pkg-config reads from the installed pvt3.pc.
   command -v pkg-config >/dev/null || need+=(pkgconf)
   [ "$(uname -m)" != x86_64 ] || command -v valgrind >/dev/null || need+=(valgrind)
+  # The camera import's tests write videos with FFmpeg and decode them with it.
+  command -v ffmpeg >/dev/null && command -v ffprobe >/dev/null || need+=(ffmpeg)
   # aarch64: the cross compiler and the arm64 C library it expects beside it, musl's arm64
   # headers and static libraries (the tests and the C example are static musl binaries), qemu.
   command -v aarch64-linux-gnu-gcc >/dev/null || need+=(gcc-aarch64-linux-gnu)

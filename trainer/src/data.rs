@@ -3,6 +3,10 @@
 //! grid) or `[N, H, W, C, T]`, integer labels `[N]` and an optional fold per sample. Any integer
 //! or float dtype is accepted and converted to f32.
 //!
+//! A camera's touches (`pvt3 import` of videos or frame folders) hold 8-bit frames
+//! `[N, H, W, C, T]` (grey: `[N, H, W, T]`) and, where each touch's frame before contact is
+//! subtracted, that frame as `background` `[N, H, W, (C)]`.
+//!
 //! Touches of unequal length (what `pvt3 import` writes from CSV folders) hold `lengths` `[N]`:
 //! touch `i` is its first `lengths[i]` frames, the rest of `T` padding never read. Optional
 //! `class_names` and `sources` (UTF-8 bytes, one name per line) name the classes and each touch's
@@ -51,6 +55,9 @@ pub mod key {
     /// How the touches were read (resampled to one speed, scaled to one force), a JSON
     /// `pvt3_format::Reading`, UTF-8.
     pub const READING: &str = "reading";
+    /// Each camera touch's frame before contact, `x`'s shape without its frame axis, which a
+    /// reader subtracts from its frames (`pvt3 import --subtract-first`).
+    pub const BACKGROUND: &str = "background";
 
     /// The array of one condition's level for every touch, one a line.
     pub fn condition(name: &str) -> String {
@@ -186,6 +193,18 @@ fn read_numeric(src: &mut impl ArraySource, key: &str) -> std::result::Result<Ar
     Err(first_error.unwrap_or_default())
 }
 
+/// Each touch's frames minus its background (`key::BACKGROUND`, `[N, H, W, C]` for `x`
+/// `[N, H, W, C, T]`): a camera's frames as differences from the gel before contact.
+fn subtract_background(path: &Path, src: &mut impl ArraySource, x: &mut ArrayD<f64>) -> Result<()> {
+    let b = read_numeric(src, key::BACKGROUND).map_err(|e| data_error(path, format!("array `background`: {e}")))?;
+    let frame = &x.shape()[..x.ndim() - 1];
+    if b.shape() != frame {
+        return Err(data_error(path, format!("`background` has shape {:?}; expected {frame:?}, `x`'s without its frame axis", b.shape())));
+    }
+    *x -= &b.insert_axis(ndarray::Axis(frame.len()));
+    Ok(())
+}
+
 impl Dataset {
     /// Loads a data set; `seed` draws stratified folds when the file has none.
     pub fn load(path: &Path, seed: u64) -> Result<Self> {
@@ -210,7 +229,10 @@ impl Dataset {
                 return Err(missing(k));
             }
         }
-        let x = read_numeric(src, key::X).map_err(|e| data_error(path, format!("array `x`: {e}")))?;
+        let mut x = read_numeric(src, key::X).map_err(|e| data_error(path, format!("array `x`: {e}")))?;
+        if keys.iter().any(|k| k == key::BACKGROUND) {
+            subtract_background(path, src, &mut x)?;
+        }
         let y = read_numeric(src, key::Y).map_err(|e| data_error(path, format!("array `y`: {e}")))?;
         let fold = if keys.iter().any(|k| k == key::FOLD) {
             Some(read_numeric(src, key::FOLD).map_err(|e| data_error(path, format!("array `fold`: {e}")))?)

@@ -19,6 +19,10 @@ use pvt3_runtime::{read_touch, Reading, Touch};
 use crate::data::{key, Condition, FOLDS};
 use crate::{Error, Result};
 
+pub mod camera;
+mod decode;
+mod picture;
+
 /// What to import and how.
 #[derive(Clone, Debug, Default)]
 pub struct ImportOptions {
@@ -41,8 +45,8 @@ pub struct ImportOptions {
     pub per_force: Option<(String, f64)>,
 }
 
-/// A file name pattern (the name without `.csv`): `{field}` reads a non-empty run of characters
-/// as that field's value, `*` matches any run, every other character itself. The field `class`
+/// A file name pattern (the name without its extension, or a folder's name): `{field}` reads the
+/// longest non-empty run of characters that lets the rest match as that field's value, `*` matches any run, every other character itself. The field `class`
 /// names the touch's class; every other field is a condition of the touch (a speed, a force, a
 /// direction) that `pvt3 cv --hold-out` can hold out.
 #[derive(Clone, Debug, PartialEq)]
@@ -115,7 +119,9 @@ impl NamePattern {
                 None => name.is_empty(),
                 Some((Part::Char(c), rest)) => name.first() == Some(c) && go(rest, &name[1..], values),
                 Some((Part::Any, rest)) => (0..=name.len()).any(|k| go(rest, &name[k..], values)),
-                Some((Part::Field(_), rest)) => (1..=name.len()).any(|k| {
+                // The longest value that lets the rest match: `{class}_*` reads `aluminium_foil`
+                // from `aluminium_foil_3`.
+                Some((Part::Field(_), rest)) => (1..=name.len()).rev().any(|k| {
                     values.push(name[..k].iter().collect());
                     go(rest, &name[k..], values) || {
                         values.pop();
@@ -196,19 +202,9 @@ fn time_like(name: &str) -> bool {
 
 /// Reads `dir` as one folder per class of CSV touches.
 pub fn read_folder(dir: &Path, opts: &ImportOptions) -> Result<Imported> {
-    let (files, flat) = list_touches(dir, opts)?;
-    let classes: Vec<String> = files.iter().map(|f| f.class.clone()).collect::<std::collections::BTreeSet<_>>().into_iter().collect();
-    check_enough_touches(dir, &files, &classes, flat)?;
+    let (files, classes) = list_touches(dir, opts.name.as_ref(), Recording::Csv)?;
     let (names, touches, condition_values) = read_touches(files, &classes)?;
-    let conditions = match &opts.name {
-        Some(pattern) => pattern
-            .conditions()
-            .iter()
-            .enumerate()
-            .map(|(k, name)| Condition { name: name.to_string(), levels: condition_values.iter().map(|v| v[k].clone()).collect() })
-            .collect(),
-        None => Vec::new(),
-    };
+    let conditions = conditions(opts.name.as_ref(), &condition_values);
     let (chosen, left_out) = choose_columns(&names, &touches, opts)?;
     let channels: Vec<String> = chosen.iter().map(|&c| names[c].clone()).collect();
     if let Some((h, w)) = opts.grid {
@@ -247,6 +243,38 @@ pub fn read_folder(dir: &Path, opts: &ImportOptions) -> Result<Imported> {
     Ok(out)
 }
 
+/// The conditions `pattern` reads from the touches' names, each touch's values in `values`.
+fn conditions(pattern: Option<&NamePattern>, values: &[Vec<String>]) -> Vec<Condition> {
+    let names = pattern.map(NamePattern::conditions).unwrap_or_default();
+    names.iter().enumerate().map(|(k, name)| Condition { name: name.to_string(), levels: values.iter().map(|v| v[k].clone()).collect() }).collect()
+}
+
+/// What one touch is on disk.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Recording {
+    /// A CSV file: a header row, then a row a frame.
+    Csv,
+    /// A camera's: a video file, or a folder of frame images ([`camera`]).
+    Camera,
+}
+
+impl Recording {
+    fn is_touch(self, path: &Path) -> bool {
+        match self {
+            Self::Csv => path.is_file() && path.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv")),
+            Self::Camera => decode::is_camera_touch(path),
+        }
+    }
+
+    /// What a touch is, for errors.
+    fn what(self) -> &'static str {
+        match self {
+            Self::Csv => ".csv file",
+            Self::Camera => "video or folder of frame images",
+        }
+    }
+}
+
 /// A touch's file, found by [`list_touches`]: its class name and its condition values.
 struct Listed {
     path: PathBuf,
@@ -254,24 +282,26 @@ struct Listed {
     values: Vec<String>,
 }
 
-/// The CSV files of `dir`, sorted: one folder per class, or side by side when `--name` names
-/// the class (`flat`, the second value).
-fn list_touches(dir: &Path, opts: &ImportOptions) -> Result<(Vec<Listed>, bool)> {
+/// The touches of `dir`, sorted, and the classes, sorted: one folder per class, or side by side
+/// when the `--name` pattern names the class. Refuses a class of fewer touches than folds.
+fn list_touches(dir: &Path, name: Option<&NamePattern>, kind: Recording) -> Result<(Vec<Listed>, Vec<String>)> {
     let mut files = Vec::new();
     let read_name = |path: &Path, pattern: &NamePattern| -> Result<Vec<String>> {
-        let stem = path.file_stem().map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
+        // A file's name without its extension; a folder's whole name.
+        let stem = if path.is_dir() { path.file_name() } else { path.file_stem() };
+        let stem = stem.map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
         pattern.read(&stem).ok_or_else(|| import_error(path, None, format!("its name `{stem}` does not match --name {pattern}")))
     };
     // Whether the names give the class, the touches then side by side in `dir`.
-    let flat = opts.name.as_ref().is_some_and(|p| p.fields().contains(&CLASS_FIELD));
-    match &opts.name {
+    let flat = name.is_some_and(|p| p.fields().contains(&CLASS_FIELD));
+    match name {
         Some(pattern) if flat => {
-            let found = csv_files(dir)?;
+            let found = touches_in(dir, kind)?;
             if found.is_empty() {
                 return Err(import_error(
                     dir,
                     None,
-                    format!("holds no .csv file (--name {pattern} names the class, so the touches lie side by side in this folder)"),
+                    format!("holds no {} (--name {pattern} names the class, so the touches lie side by side in this folder)", kind.what()),
                 ));
             }
             for path in found {
@@ -286,17 +316,20 @@ fn list_touches(dir: &Path, opts: &ImportOptions) -> Result<(Vec<Listed>, bool)>
                 return Err(import_error(
                     dir,
                     None,
-                    "holds no class folder (expected one folder per class, each with one CSV file per touch, or --name with a {class} field)",
+                    format!(
+                        "holds no class folder (expected one folder per class, each with one {} per touch, or --name with a {{class}} field)",
+                        kind.what()
+                    ),
                 ));
             }
             for class_dir in class_dirs {
-                let found = csv_files(&class_dir)?;
+                let found = touches_in(&class_dir, kind)?;
                 if found.is_empty() {
-                    return Err(import_error(&class_dir, None, "an empty class: this folder holds no .csv file"));
+                    return Err(import_error(&class_dir, None, format!("an empty class: this folder holds no {}", kind.what())));
                 }
                 let class = class_dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
                 for path in found {
-                    let values = match &opts.name {
+                    let values = match name {
                         Some(pattern) => read_name(&path, pattern)?,
                         None => Vec::new(),
                     };
@@ -305,7 +338,9 @@ fn list_touches(dir: &Path, opts: &ImportOptions) -> Result<(Vec<Listed>, bool)>
             }
         }
     }
-    Ok((files, flat))
+    let classes: Vec<String> = files.iter().map(|f| f.class.clone()).collect::<std::collections::BTreeSet<_>>().into_iter().collect();
+    check_enough_touches(dir, &files, &classes, flat)?;
+    Ok((files, classes))
 }
 
 /// The entries of folder `d`, sorted.
@@ -316,9 +351,19 @@ fn sorted_entries(d: &Path) -> Result<Vec<PathBuf>> {
     Ok(v)
 }
 
-/// The `.csv` files of folder `d`, sorted.
-fn csv_files(d: &Path) -> Result<Vec<PathBuf>> {
-    Ok(sorted_entries(d)?.into_iter().filter(|p| p.is_file() && p.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"))).collect())
+/// Whether `dir` holds a camera's touches (videos or frame folders), side by side or one folder
+/// per class, and no CSV file: what `pvt3 import` reads it as.
+pub fn holds_camera_touches(dir: &Path) -> bool {
+    let entries = sorted_entries(dir).unwrap_or_default();
+    let holds = |kind: Recording| {
+        entries.iter().any(|p| kind.is_touch(p)) || entries.iter().filter(|p| p.is_dir()).any(|d| touches_in(d, kind).is_ok_and(|t| !t.is_empty()))
+    };
+    holds(Recording::Camera) && !holds(Recording::Csv)
+}
+
+/// The touches of kind `kind` in folder `d`, sorted.
+fn touches_in(d: &Path, kind: Recording) -> Result<Vec<PathBuf>> {
+    Ok(sorted_entries(d)?.into_iter().filter(|p| kind.is_touch(p)).collect())
 }
 
 /// Refuses a class with fewer touches than folds, naming its folder (or `dir`, when `flat`).
@@ -515,28 +560,42 @@ impl Imported {
         let bad = |e: &dyn std::fmt::Display| Error::Usage(format!("writing {}: {e}", path.display()));
         let file = std::fs::File::create(path).map_err(Error::io(path))?;
         let mut npz = NpzWriter::new(std::io::BufWriter::new(file));
-        let lines = |v: &[String]| Array1::from(v.join("\n").into_bytes());
         npz.add_array(key::X, &ArrayD::from_shape_vec(IxDyn(&shape), x).map_err(|e| bad(&e))?).map_err(|e| bad(&e))?;
-        npz.add_array(key::Y, &Array1::from(self.labels.iter().map(|l| *l as i64).collect::<Vec<_>>())).map_err(|e| bad(&e))?;
         npz.add_array(key::LENGTHS, &Array1::from(self.touches.iter().map(|t| t[0].len() as i64).collect::<Vec<_>>()))
             .map_err(|e| bad(&e))?;
-        npz.add_array(key::CLASS_NAMES, &lines(&self.classes)).map_err(|e| bad(&e))?;
-        npz.add_array(key::SOURCES, &lines(&self.sources)).map_err(|e| bad(&e))?;
         npz.add_array(key::CHANNELS, &lines(&self.channels)).map_err(|e| bad(&e))?;
         if let Some(reading) = &self.reading {
             let text = serde_json::to_string(reading).expect("plain data serialises");
             npz.add_array(key::READING, &Array1::from(text.into_bytes())).map_err(|e| bad(&e))?;
         }
-        if !self.conditions.is_empty() {
-            let names: Vec<String> = self.conditions.iter().map(|c| c.name.clone()).collect();
-            npz.add_array(key::CONDITIONS, &lines(&names)).map_err(|e| bad(&e))?;
-            for c in &self.conditions {
-                npz.add_array(key::condition(&c.name).as_str(), &lines(&c.levels)).map_err(|e| bad(&e))?;
-            }
-        }
+        add_records(&mut npz, &self.labels, &self.classes, &self.sources, &self.conditions).map_err(|e| bad(&e))?;
         npz.finish().map_err(|e| bad(&e))?;
         Ok(())
     }
+}
+
+/// A data set being written ([`Imported::write_npz`], [`camera::CameraSet::write_npz`]).
+type Npz = NpzWriter<std::io::BufWriter<std::fs::File>>;
+
+/// The lines of `v` as one UTF-8 array, as the data set holds names ([`key`]).
+fn lines(v: &[String]) -> Array1<u8> {
+    Array1::from(v.join("\n").into_bytes())
+}
+
+/// What every imported set records beside its frames: the labels `y`, the class names, each
+/// touch's file and its conditions ([`key`]).
+fn add_records(npz: &mut Npz, labels: &[u32], classes: &[String], sources: &[String], conditions: &[Condition]) -> std::result::Result<(), ndarray_npy::WriteNpzError> {
+    npz.add_array(key::Y, &Array1::from(labels.iter().map(|l| *l as i64).collect::<Vec<_>>()))?;
+    npz.add_array(key::CLASS_NAMES, &lines(classes))?;
+    npz.add_array(key::SOURCES, &lines(sources))?;
+    if !conditions.is_empty() {
+        let names: Vec<String> = conditions.iter().map(|c| c.name.clone()).collect();
+        npz.add_array(key::CONDITIONS, &lines(&names))?;
+        for c in conditions {
+            npz.add_array(key::condition(&c.name).as_str(), &lines(&c.levels))?;
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

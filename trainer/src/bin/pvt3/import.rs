@@ -1,21 +1,28 @@
-//! `pvt3 import`: a folder of CSV touches → an `.npz` data set for `train`, `cv` and `eval`.
+//! `pvt3 import`: a folder of CSV touches, or of a camera's videos or frame folders → an `.npz`
+//! data set for `train`, `cv` and `eval`.
 
 use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
-use pvt3_trainer::data::import::{read_folder, ImportOptions, NamePattern};
+use pvt3_trainer::data::import::camera::{read_camera_folder, CameraOptions, CameraSet, Crop, FrameSpan};
+use pvt3_trainer::data::import::{holds_camera_touches, read_folder, ImportOptions, NamePattern};
 
-/// Read a folder of CSV recordings (one folder per class, one CSV file per touch, a header row,
-/// touches of any length) into a data set.
+use crate::progress;
+
+/// Read a folder of touches into a data set: CSV recordings (one CSV file per touch, a header
+/// row, touches of any length), or a camera-based sensor's (GelSight, DIGIT: one video, or one
+/// folder of PNG or JPEG frames, per touch; videos decoded by FFmpeg).
 ///
 /// Example: `pvt3 import csvs/ --out data.npz`, then `pvt3 cv --data data.npz`. Where the file
 /// names say the class and how each touch was made: `pvt3 import fabric/ --name
 /// '{class}_F{force}_V{speed}mmps_*'`, then `pvt3 cv --hold-out force=210,250` tests on forces
-/// the training never saw.
+/// the training never saw. A camera's videos named `<object>_<n>.mov` (PhysiCLeAR): `pvt3
+/// import dataset/ --name '{class}_*' --size 60x80 --frames 25`.
 #[derive(clap::Args)]
 pub struct ImportArgs {
-    /// The folder: DIR/<class>/<touch>.csv, class names the folder names; or, with --name
-    /// naming the class, DIR/<touch>.csv.
+    /// The folder: DIR/<class>/<touch>, class names the folder names; or, with --name naming the
+    /// class, DIR/<touch>. A touch is a .csv file, or a camera's video (.mov, .mp4, .avi, .mkv,
+    /// .webm, .m4v, .mpg) or folder of frame images (.png, .jpg, in name order).
     pub dir: PathBuf,
     /// The data set to write (`x`, `y`, `lengths`, class names, channels, the files read).
     #[arg(short, long, default_value = "data.npz")]
@@ -29,10 +36,11 @@ pub struct ImportArgs {
     /// Default: one column of channels, as for the BioTac's electrodes.
     #[arg(long, value_parser = parse_grid)]
     pub grid: Option<(usize, usize)>,
-    /// What each file's name (without .csv) says: `{field}` reads a value, `*` matches anything,
-    /// other characters match themselves. `{class}` names the class (the files then lie side by
-    /// side in DIR); every other field is a condition of the touch (speed, force, …) recorded
-    /// for `--hold-out`. E.g. `{class}_F{force}_V{speed}mmps_*`.
+    /// What each touch's name (without its extension) says: `{field}` reads a value (the longest
+    /// that lets the rest match), `*` matches anything, other characters match themselves.
+    /// `{class}` names the class (the touches then lie side by side in DIR); every other field is
+    /// a condition of the touch (speed, force, …) recorded for `--hold-out`. E.g.
+    /// `{class}_F{force}_V{speed}mmps_*`, or `{class}_*` for `aluminium_foil_3.mov`.
     #[arg(long, value_name = "PATTERN")]
     pub name: Option<NamePattern>,
     /// Read every touch by distance travelled, not by time: CONDITION=SPEED names the condition
@@ -46,6 +54,62 @@ pub struct ImportArgs {
     /// (readings times FORCE/f for a touch pressed at f). E.g. `--per-force force=150`.
     #[arg(long, value_name = "CONDITION=FORCE", value_parser = parse_condition_value)]
     pub per_force: Option<(String, f64)>,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+}
+
+/// How a camera's frames are read (videos or frame folders only).
+#[derive(clap::Args)]
+#[command(next_help_heading = "Camera touches (videos or frame folders)")]
+pub struct CameraArgs {
+    /// The rectangle of each frame to keep, HEIGHTxWIDTH+TOP+LEFT in pixels (e.g. 200x280+20+20
+    /// to drop a 20-pixel border of 240 × 320 frames). Default: the whole frame.
+    #[arg(long, value_name = "GEOMETRY")]
+    pub crop: Option<Crop>,
+    /// The size every frame is shrunk to, HEIGHTxWIDTH, by area averaging (each new pixel the
+    /// mean of the pixels it covers). Default: as recorded.
+    #[arg(long, value_name = "HEIGHTxWIDTH", value_parser = parse_size)]
+    pub size: Option<(usize, usize)>,
+    /// One grey channel instead of RGB.
+    #[arg(long)]
+    pub grey: bool,
+    /// Frames a touch, spread evenly over the frames chosen by --frames-from.
+    #[arg(long, default_value_t = CameraOptions::default().frames)]
+    pub frames: usize,
+    /// Where the frames are taken: `moving`, the span in which the gel moves (as the PhysiCLeAR
+    /// authors cut their videos; the whole recording where nothing moves), or `whole`.
+    #[arg(long, value_enum, default_value_t = FrameSpan::default())]
+    pub frames_from: FrameSpan,
+    /// Keep each touch's first frame (the gel before contact) as its background: training and
+    /// evaluation read the frames minus it (the PVT³ report's GelSight preprocessing).
+    #[arg(long)]
+    pub subtract_first: bool,
+    /// Read a recording of fewer frames than --frames with its frames repeated (evenly), and
+    /// list it, instead of refusing it.
+    #[arg(long)]
+    pub allow_short: bool,
+}
+
+impl CameraArgs {
+    fn options(&self, name: Option<NamePattern>) -> CameraOptions {
+        let (crop, size, grey, frames, span) = (self.crop, self.size, self.grey, self.frames, self.frames_from);
+        CameraOptions { name, crop, size, grey, frames, span, subtract_first: self.subtract_first, allow_short: self.allow_short }
+    }
+
+    /// The camera options given on the command line (those left at their defaults not named).
+    fn given(&self) -> Vec<&'static str> {
+        let defaults = CameraOptions::default();
+        let given = [
+            (self.crop.is_some(), "--crop"),
+            (self.size.is_some(), "--size"),
+            (self.grey, "--grey"),
+            (self.frames != defaults.frames, "--frames"),
+            (self.frames_from != defaults.span, "--frames-from"),
+            (self.subtract_first, "--subtract-first"),
+            (self.allow_short, "--allow-short"),
+        ];
+        given.into_iter().filter_map(|(g, name)| g.then_some(name)).collect()
+    }
 }
 
 /// `CONDITION=VALUE`, the value a number above 0.
@@ -56,17 +120,30 @@ fn parse_condition_value(s: &str) -> std::result::Result<(String, f64), String> 
     Ok((name.trim().to_string(), value))
 }
 
-fn parse_grid(s: &str) -> std::result::Result<(usize, usize), String> {
+/// Two positive numbers `AxB`, or an error showing `example` (`what`, its form).
+fn parse_pair(s: &str, what: &str, example: &str) -> std::result::Result<(usize, usize), String> {
     let parse = |v: &str| v.trim().parse::<usize>().ok().filter(|v| *v > 0);
-    match s.split_once(['x', 'X', '×']) {
-        Some((h, w)) => parse(h).zip(parse(w)).ok_or_else(|| format!("`{s}`: expected ROWSxCOLS, e.g. 6x10")),
-        None => Err(format!("`{s}`: expected ROWSxCOLS, e.g. 6x10")),
-    }
+    let pair = s.split_once(['x', 'X', '×']).and_then(|(a, b)| parse(a).zip(parse(b)));
+    pair.ok_or_else(|| format!("`{s}`: expected {what}, e.g. {example}"))
+}
+
+fn parse_grid(s: &str) -> std::result::Result<(usize, usize), String> {
+    parse_pair(s, "ROWSxCOLS", "6x10")
+}
+
+fn parse_size(s: &str) -> std::result::Result<(usize, usize), String> {
+    parse_pair(s, "HEIGHTxWIDTH", "60x80")
 }
 
 pub fn run(a: ImportArgs) -> Result<()> {
     if !a.dir.is_dir() {
-        bail!("{} is not a folder (expected one folder per class of CSV files)", a.dir.display());
+        bail!("{} is not a folder (expected one folder per class of touches)", a.dir.display());
+    }
+    if holds_camera_touches(&a.dir) {
+        return run_camera(a);
+    }
+    if let Some(option) = a.camera.given().first() {
+        bail!("{option} is for a camera's touches (videos or frame folders), and {} holds none", a.dir.display());
     }
     let opts = ImportOptions { columns: a.columns, grid: a.grid, name: a.name, per_distance: a.per_distance, per_force: a.per_force };
     let set = read_folder(&a.dir, &opts)?;
@@ -99,6 +176,64 @@ pub fn run(a: ImportArgs) -> Result<()> {
     }
     println!("wrote {}; next: pvt3 cv --data {}", a.out.display(), a.out.display());
     Ok(())
+}
+
+/// `pvt3 import` of a camera's touches.
+fn run_camera(a: ImportArgs) -> Result<()> {
+    let given: Vec<&str> = [(!a.columns.is_empty(), "--columns"), (a.grid.is_some(), "--grid"), (a.per_distance.is_some(), "--per-distance"), (a.per_force.is_some(), "--per-force")]
+        .into_iter()
+        .filter_map(|(g, name)| g.then_some(name))
+        .collect();
+    if let Some(option) = given.first() {
+        bail!("{option} is for CSV touches, and {} holds a camera's (videos or frame folders)", a.dir.display());
+    }
+    let opts = a.camera.options(a.name);
+    let bar = progress::bar("decoding");
+    let set = read_camera_folder(&a.dir, &opts, |done, all| {
+        bar.set_length(all as u64);
+        bar.set_position(done as u64);
+    })?;
+    bar.finish_and_clear();
+    set.write_npz(&a.out).with_context(|| format!("writing {}", a.out.display()))?;
+    describe_camera(&set, &opts);
+    println!("wrote {}; next: pvt3 cv --data {}", a.out.display(), a.out.display());
+    Ok(())
+}
+
+fn describe_camera(set: &CameraSet, opts: &CameraOptions) {
+    let per_class = set.per_class();
+    let [h, w, c] = set.frame_shape;
+    println!(
+        "{} touches of {} classes ({} to {} touches a class): {} frames of {h} × {w} {} each, stored as 8-bit",
+        set.labels.len(),
+        set.classes.len(),
+        per_class.iter().min().unwrap_or(&0),
+        per_class.iter().max().unwrap_or(&0),
+        set.frames,
+        if c == 1 { "grey" } else { "RGB" }
+    );
+    let recorded = set.spans.iter().map(|s| s.0);
+    let taken = set.spans.iter().map(|s| s.2 + 1 - s.1);
+    println!(
+        "frames taken from {}: spans of {} to {} of {} to {} recorded",
+        match opts.span {
+            FrameSpan::Moving => "the span in which the gel moves",
+            FrameSpan::Whole => "the whole recording",
+        },
+        taken.clone().min().unwrap_or(0),
+        taken.max().unwrap_or(0),
+        recorded.clone().min().unwrap_or(0),
+        recorded.max().unwrap_or(0)
+    );
+    if opts.subtract_first {
+        println!("each touch's first frame kept as its background: its frames are read minus it");
+    }
+    for (source, recorded) in set.short() {
+        println!("short: {source} has {recorded} frames, repeated to {}", set.frames);
+    }
+    for cond in &set.conditions {
+        println!("condition {}: {}", cond.name, cond.distinct().join(", "));
+    }
 }
 
 #[cfg(test)]

@@ -120,9 +120,11 @@ fn name_patterns_read_fields_and_refuse_what_cannot_be_told_apart() {
     assert_eq!(p.read("Linen_F120_V10mmps_0").unwrap(), ["Linen", "120", "10"]);
     assert_eq!(p.read("Linen_F120_V10mm_0"), None);
     assert_eq!(p.read("_F120_V10mmps_0"), None, "a field reads at least one character");
-    // Fields take the shortest run that lets the rest match.
+    // Fields take the longest run that lets the rest match: an object's name holds underscores.
     let p: NamePattern = "{a}_{b}".parse().unwrap();
-    assert_eq!(p.read("x_y_z").unwrap(), ["x", "y_z"]);
+    assert_eq!(p.read("x_y_z").unwrap(), ["x_y", "z"]);
+    let p: NamePattern = "{class}_*".parse().unwrap();
+    assert_eq!(p.read("aluminium_foil_3").unwrap(), ["aluminium_foil"]);
     for (bad, why) in [
         ("{a}{b}", "side by side"),
         ("{a}*", "side by side"),

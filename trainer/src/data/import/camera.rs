@@ -1,0 +1,299 @@
+//! `pvt3 import` of camera-based tactile sensors (GelSight, DIGIT, GelSlim). A folder of
+//! videos (one file a touch) or of frame folders (one folder of PNG or JPEG images a touch), the
+//! classes from folders or from a file-name pattern as for CSV touches, becomes a data set of
+//! 8-bit frames `x` `[N, H, W, C, T]` (RGB; grey `[N, H, W, T]`), stored as recorded: a GelSight
+//! set is a few gigabytes as u8 and four times that as f32.
+//!
+//! Each touch gives `T` frames taken evenly over the recording or over the span in which the gel
+//! moves (as the PhysiCLeAR authors cut their videos), each cropped and shrunk by area averaging.
+//! With `subtract_first`, each touch's first frame (the gel before contact) is kept as its
+//! `background` `[N, H, W, C]`, and a reader takes the frames minus it, the PVT³ report's GelSight
+//! preprocessing ([`crate::data::Dataset::load`]).
+
+use std::path::Path;
+
+use ndarray::{ArrayViewD, IxDyn};
+use ndarray_npy::NpzWriter;
+use rayon::prelude::*;
+
+use super::decode;
+pub use super::picture::Crop;
+use super::picture::Picture;
+use super::{add_records, conditions, import_error, list_touches, NamePattern, Recording};
+use crate::data::{key, Condition};
+use crate::{Error, Result};
+
+/// Which frames of a recording a touch takes.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum FrameSpan {
+    /// Evenly over the whole recording.
+    Whole,
+    /// Evenly over the span in which the gel moves: from the first to the last frame that
+    /// differs from the one before it ([`moving_span`]), widened to the frames asked where it is
+    /// shorter.
+    #[default]
+    Moving,
+}
+
+/// What to import and how.
+#[derive(Clone, Debug)]
+pub struct CameraOptions {
+    /// What each file's (or frame folder's) name says: its class and the touch's conditions.
+    pub name: Option<NamePattern>,
+    /// The rectangle of each frame to keep (before shrinking); `None`: the whole frame.
+    pub crop: Option<Crop>,
+    /// The size every frame is shrunk to (height, width), by area averaging; `None`: as recorded.
+    pub size: Option<(usize, usize)>,
+    /// One grey channel instead of RGB.
+    pub grey: bool,
+    /// Frames a touch.
+    pub frames: usize,
+    /// Which frames.
+    pub span: FrameSpan,
+    /// Each touch's first frame kept as its background, which a reader subtracts.
+    pub subtract_first: bool,
+    /// A recording of fewer frames than `frames` read with its frames repeated, evenly, instead
+    /// of refused.
+    pub allow_short: bool,
+}
+
+impl Default for CameraOptions {
+    /// The PVT³ report's GelSight touch: 25 RGB frames as recorded, where the gel moves.
+    fn default() -> Self {
+        Self {
+            name: None,
+            crop: None,
+            size: None,
+            grey: false,
+            frames: 25,
+            span: FrameSpan::Moving,
+            subtract_first: false,
+            allow_short: false,
+        }
+    }
+}
+
+/// How far between a recording's stillest and busiest frame a frame must change to count as
+/// moving: GelSight's gel moves by a grey level or two a frame, its codec's key frames jump.
+pub const MOVING_FRACTION: f32 = 0.25;
+/// Frames over which each frame's change is smoothed (a median: a key frame's jump is one frame).
+pub const SMOOTHING: usize = 5;
+/// Still frames within a moving span that do not end it.
+pub const PAUSE: usize = 5;
+
+/// The imported set, before it is written.
+#[derive(Debug)]
+pub struct CameraSet {
+    /// `[N, H, W, C, T]`.
+    pub x: Vec<u8>,
+    /// `[N, H, W, C]`: each touch's first frame, where it is subtracted.
+    pub background: Option<Vec<u8>>,
+    /// One frame's `[H, W, C]`, and `T`.
+    pub frame_shape: [usize; 3],
+    pub frames: usize,
+    pub labels: Vec<u32>,
+    pub classes: Vec<String>,
+    pub sources: Vec<String>,
+    pub conditions: Vec<Condition>,
+    /// Each touch's frames recorded and the first and last it took.
+    pub spans: Vec<(usize, usize, usize)>,
+}
+
+impl CameraSet {
+    /// The touches recorded with fewer frames than they take (their frames repeated), by source.
+    pub fn short(&self) -> Vec<(&str, usize)> {
+        let short = self.spans.iter().zip(&self.sources).filter(|((recorded, _, _), _)| *recorded < self.frames);
+        short.map(|((recorded, _, _), source)| (source.as_str(), *recorded)).collect()
+    }
+}
+
+/// Reads `dir` as camera touches (videos or frame folders), one folder per class or side by side
+/// with `opts.name` naming the class.
+pub fn read_camera_folder(dir: &Path, opts: &CameraOptions, mut progress: impl FnMut(usize, usize)) -> Result<CameraSet> {
+    if opts.frames == 0 {
+        return Err(Error::Usage("--frames must be at least 1".into()));
+    }
+    let (files, classes) = list_touches(dir, opts.name.as_ref(), Recording::Camera)?;
+    let values: Vec<Vec<String>> = files.iter().map(|f| f.values.clone()).collect();
+    let mut set = CameraSet {
+        x: Vec::new(),
+        background: opts.subtract_first.then(Vec::new),
+        frame_shape: [0; 3],
+        frames: opts.frames,
+        labels: Vec::new(),
+        classes,
+        sources: Vec::new(),
+        conditions: conditions(opts.name.as_ref(), &values),
+        spans: Vec::new(),
+    };
+    let mut first: Option<(&Path, [usize; 3])> = None;
+    // Touches decoded a few at a time on every core, appended in order.
+    let mut done = 0;
+    let decoded = files.chunks(4 * rayon::current_num_threads()).flat_map(|chunk| {
+        let read: Vec<_> = chunk.par_iter().map(|f| (f, read_touch(&f.path, opts))).collect();
+        done += chunk.len();
+        progress(done, files.len());
+        read
+    });
+    for (file, touch) in decoded {
+        let path = file.path.as_path();
+        let ReadTouch { frames, background, span } = touch.map_err(|e| import_error(path, None, e))?;
+        let shape = [frames[0].height, frames[0].width, frames[0].channels];
+        match first {
+            None => first = Some((path, shape)),
+            Some((p, s)) if s != shape => {
+                let why = format!(
+                    "its frames are {} × {}, {}'s {} × {} (--size shrinks every touch to one size)",
+                    shape[0],
+                    shape[1],
+                    p.display(),
+                    s[0],
+                    s[1]
+                );
+                return Err(import_error(path, None, why));
+            }
+            Some(_) => {}
+        }
+        set.append(&frames, background);
+        set.labels.push(set.classes.binary_search(&file.class).expect("a listed class") as u32);
+        set.sources.push(path.strip_prefix(dir).unwrap_or(path).display().to_string());
+        set.spans.push(span);
+    }
+    set.frame_shape = first.map(|(_, s)| s).unwrap_or_default();
+    Ok(set)
+}
+
+/// One touch as read: its chosen frames, cropped, shrunk and greyed; its background, where
+/// asked; and (frames recorded, first taken, last taken).
+struct ReadTouch {
+    frames: Vec<Picture>,
+    background: Option<Picture>,
+    span: (usize, usize, usize),
+}
+
+fn read_touch(path: &Path, opts: &CameraOptions) -> std::result::Result<ReadTouch, String> {
+    let recorded = decode::frames(path)?;
+    if recorded.is_empty() || (recorded.len() < opts.frames && !opts.allow_short) {
+        let repeat = if recorded.is_empty() { "" } else { "; --allow-short repeats its frames" };
+        return Err(format!("{} frames, fewer than the {} a touch takes (--frames{repeat})", recorded.len(), opts.frames));
+    }
+    let (start, end) = match opts.span {
+        FrameSpan::Whole => (0, recorded.len() - 1),
+        FrameSpan::Moving => widened(moving_span(&recorded), opts.frames, recorded.len()),
+    };
+    let prepare = |p: &Picture| -> std::result::Result<Picture, String> {
+        let p = match opts.crop {
+            Some(c) => p.crop(c)?,
+            None => p.clone(),
+        };
+        let p = match opts.size {
+            Some((h, w)) if h > p.height || w > p.width => {
+                return Err(format!("--size {h}x{w} is larger than its frames ({} × {}): area averaging only shrinks", p.height, p.width))
+            }
+            Some((h, w)) => p.resize(h, w),
+            None => p,
+        };
+        Ok(if opts.grey { p.grey() } else { p })
+    };
+    let chosen = evenly(start, end, opts.frames).into_iter().map(|i| prepare(&recorded[i])).collect::<std::result::Result<Vec<_>, _>>()?;
+    let background = if opts.subtract_first { Some(prepare(&recorded[0])?) } else { None };
+    Ok(ReadTouch { frames: chosen, background, span: (recorded.len(), start, end) })
+}
+
+/// `count` frame indices spread evenly over `start..=end` (each the middle of its share).
+fn evenly(start: usize, end: usize, count: usize) -> Vec<usize> {
+    let len = end + 1 - start;
+    (0..count).map(|k| start + (2 * k + 1) * len / (2 * count)).collect()
+}
+
+/// The span in which the gel moves: each frame's change from the one before (the mean absolute
+/// difference of their grey levels), smoothed by a median over [`SMOOTHING`] frames; a frame
+/// moves where that exceeds [`MOVING_FRACTION`] of the way from the recording's stillest to its
+/// busiest frame; the span is the longest run of moving frames, pauses of up to [`PAUSE`]
+/// frames bridged. `None` for a recording that never changes.
+pub fn moving_span(frames: &[Picture]) -> Option<(usize, usize)> {
+    let greys: Vec<Picture> = frames.iter().map(Picture::grey).collect();
+    let change: Vec<f32> = greys
+        .windows(2)
+        .map(|w| w[0].data.iter().zip(&w[1].data).map(|(a, b)| f32::from(a.abs_diff(*b))).sum::<f32>() / w[0].data.len() as f32)
+        .collect();
+    let smooth: Vec<f32> = (0..change.len())
+        .map(|i| {
+            let mut near = change[i.saturating_sub(SMOOTHING / 2)..(i + SMOOTHING / 2 + 1).min(change.len())].to_vec();
+            near.sort_by(f32::total_cmp);
+            near[(near.len() - 1) / 2]
+        })
+        .collect();
+    let (still, busy) = smooth.iter().fold((f32::MAX, 0f32), |(lo, hi), v| (lo.min(*v), hi.max(*v)));
+    if smooth.is_empty() || busy <= still {
+        return None;
+    }
+    let threshold = still + MOVING_FRACTION * (busy - still);
+    // Runs of moving frames (frame i + 1 is change i's), pauses of up to PAUSE frames bridged.
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    for i in (0..smooth.len()).filter(|&i| smooth[i] > threshold).map(|i| i + 1) {
+        match runs.last_mut() {
+            Some((_, end)) if i - *end <= PAUSE + 1 => *end = i,
+            _ => runs.push((i, i)),
+        }
+    }
+    runs.into_iter().max_by_key(|(start, end)| (end - start, std::cmp::Reverse(*start)))
+}
+
+/// `span` widened about its middle to `frames` frames within `0..len` where it is shorter; the
+/// whole recording where nothing moves.
+fn widened(span: Option<(usize, usize)>, frames: usize, len: usize) -> (usize, usize) {
+    let Some((start, end)) = span else { return (0, len - 1) };
+    if end + 1 - start >= frames {
+        return (start, end);
+    }
+    let width = frames.min(len);
+    let start = (start + end).div_ceil(2).saturating_sub(width / 2).min(len - width);
+    (start, start + width - 1)
+}
+
+impl CameraSet {
+    /// A touch's frames appended to `x` in the layout `[H, W, C, T]`, and its background.
+    fn append(&mut self, frames: &[Picture], background: Option<Picture>) {
+        let (pixels, t) = (frames[0].data.len(), frames.len());
+        let at = self.x.len();
+        self.x.resize(at + pixels * t, 0);
+        for (f, frame) in frames.iter().enumerate() {
+            for (p, v) in frame.data.iter().enumerate() {
+                self.x[at + p * t + f] = *v;
+            }
+        }
+        if let (Some(all), Some(b)) = (self.background.as_mut(), background) {
+            all.extend_from_slice(&b.data);
+        }
+    }
+
+    /// Touches per class, in class order.
+    pub fn per_class(&self) -> Vec<usize> {
+        (0..self.classes.len() as u32).map(|c| self.labels.iter().filter(|l| **l == c).count()).collect()
+    }
+
+    /// Writes the set as `.npz`: `x` (uint8 `[N, H, W, C, T]`, grey `[N, H, W, T]`, the layouts
+    /// [`crate::data::Dataset`] reads), `background` (uint8 `[N, H, W, (C)]`) where asked, `y`,
+    /// and the names as UTF-8 lines ([`key`]).
+    pub fn write_npz(&self, path: &Path) -> Result<()> {
+        let [h, w, c] = self.frame_shape;
+        let n = self.labels.len();
+        let bad = |e: &dyn std::fmt::Display| Error::Usage(format!("writing {}: {e}", path.display()));
+        let file = std::fs::File::create(path).map_err(Error::io(path))?;
+        let mut npz = NpzWriter::new(std::io::BufWriter::new(file));
+        let frame: Vec<usize> = if c == 1 { vec![n, h, w] } else { vec![n, h, w, c] };
+        let x = ArrayViewD::from_shape(IxDyn(&[&frame[..], &[self.frames]].concat()), &self.x).map_err(|e| bad(&e))?;
+        npz.add_array(key::X, &x).map_err(|e| bad(&e))?;
+        if let Some(b) = &self.background {
+            let b = ArrayViewD::from_shape(IxDyn(&frame), b).map_err(|e| bad(&e))?;
+            npz.add_array(key::BACKGROUND, &b).map_err(|e| bad(&e))?;
+        }
+        add_records(&mut npz, &self.labels, &self.classes, &self.sources, &self.conditions).map_err(|e| bad(&e))?;
+        npz.finish().map_err(|e| bad(&e))?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests;

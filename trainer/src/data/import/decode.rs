@@ -1,0 +1,137 @@
+//! A camera touch's frames from its file: a video through `ffmpeg` (any format it reads: the
+//! MPEG-4 of PhysiCLeAR's GelSight videos, H.264, …), or a folder of PNG or JPEG frames read in
+//! name order (pure Rust). Every frame comes out as 8-bit RGB or grey, as recorded.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+
+use super::picture::Picture;
+
+/// The video files `pvt3 import` reads (by extension, any case).
+pub const VIDEO_EXTENSIONS: [&str; 7] = ["mov", "mp4", "avi", "mkv", "webm", "m4v", "mpg"];
+/// The frame images a folder of frames holds (by extension, any case).
+pub const IMAGE_EXTENSIONS: [&str; 3] = ["png", "jpg", "jpeg"];
+
+fn has_extension(path: &Path, extensions: &[&str]) -> bool {
+    path.extension().and_then(|e| e.to_str()).is_some_and(|e| extensions.iter().any(|x| x.eq_ignore_ascii_case(e)))
+}
+
+/// Whether `path` is a camera touch: a video file, or a folder holding frame images.
+pub fn is_camera_touch(path: &Path) -> bool {
+    (path.is_file() && has_extension(path, &VIDEO_EXTENSIONS)) || (path.is_dir() && !frame_files(path).unwrap_or_default().is_empty())
+}
+
+/// Every frame of a touch, in order: a video's, or a folder's images by name.
+pub fn frames(path: &Path) -> Result<Vec<Picture>, String> {
+    if path.is_dir() {
+        let files = frame_files(path).map_err(|e| e.to_string())?;
+        let pictures = files.iter().map(|f| image(f).map_err(|e| format!("{}: {e}", f.file_name().unwrap_or_default().to_string_lossy())));
+        let pictures = pictures.collect::<Result<Vec<_>, _>>()?;
+        if let Some(odd) = pictures.iter().position(|p| (p.height, p.width) != (pictures[0].height, pictures[0].width)) {
+            return Err(format!(
+                "its images differ in size: {} is {} × {}, {} is {} × {}",
+                files[0].display(),
+                pictures[0].height,
+                pictures[0].width,
+                files[odd].display(),
+                pictures[odd].height,
+                pictures[odd].width
+            ));
+        }
+        Ok(pictures)
+    } else {
+        video(path)
+    }
+}
+
+/// The frame images of folder `dir`, in name order.
+fn frame_files(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file() && has_extension(p, &IMAGE_EXTENSIONS))
+        .collect();
+    files.sort();
+    Ok(files)
+}
+
+/// One PNG or JPEG image as 8-bit RGB, or grey where the file is grey.
+fn image(path: &Path) -> Result<Picture, String> {
+    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+    if has_extension(path, &["png"]) {
+        png_image(&bytes)
+    } else {
+        jpeg_image(&bytes)
+    }
+}
+
+fn png_image(bytes: &[u8]) -> Result<Picture, String> {
+    let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
+    // Palettes expanded, 16-bit samples cut to 8, so that every image is 8-bit grey or RGB(A).
+    decoder.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
+    let mut reader = decoder.read_info().map_err(|e| format!("not a readable PNG ({e})"))?;
+    let mut data = vec![0; reader.output_buffer_size().ok_or("a PNG too large to read")?];
+    let info = reader.next_frame(&mut data).map_err(|e| format!("not a readable PNG ({e})"))?;
+    data.truncate(info.buffer_size());
+    let (height, width) = (info.height as usize, info.width as usize);
+    let picture = |channels, data| Ok(Picture { height, width, channels, data });
+    match info.color_type {
+        png::ColorType::Grayscale => picture(1, data),
+        png::ColorType::Rgb => picture(3, data),
+        png::ColorType::GrayscaleAlpha => picture(1, data.chunks_exact(2).map(|p| p[0]).collect()),
+        png::ColorType::Rgba => picture(3, data.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect()),
+        other => Err(format!("a PNG of colour type {other:?}, not grey or RGB")),
+    }
+}
+
+fn jpeg_image(bytes: &[u8]) -> Result<Picture, String> {
+    use zune_jpeg::zune_core::{bytestream::ZCursor, colorspace::ColorSpace, options::DecoderOptions};
+    let mut decoder = zune_jpeg::JpegDecoder::new(ZCursor::new(bytes));
+    decoder.decode_headers().map_err(|e| format!("not a readable JPEG ({e:?})"))?;
+    let grey = decoder.input_colorspace().is_some_and(|c| c == ColorSpace::Luma);
+    let out = if grey { ColorSpace::Luma } else { ColorSpace::RGB };
+    let mut decoder = zune_jpeg::JpegDecoder::new_with_options(ZCursor::new(bytes), DecoderOptions::default().jpeg_set_out_colorspace(out));
+    let data = decoder.decode().map_err(|e| format!("not a readable JPEG ({e:?})"))?;
+    let (width, height) = decoder.dimensions().ok_or("a JPEG without dimensions")?;
+    Ok(Picture { height, width, channels: out.num_components(), data })
+}
+
+/// Every frame of a video, as `ffmpeg` decodes it to 8-bit RGB.
+fn video(path: &Path) -> Result<Vec<Picture>, String> {
+    let probe = run(Command::new("ffprobe")
+        .args(["-v", "error", "-select_streams", "v:0", "-show_entries", "stream=width,height"])
+        .args(["-of", "csv=p=0:s=x"]))
+    .arg(path)
+    .output()
+    .map_err(missing("ffprobe"))?;
+    if !probe.status.success() {
+        return Err(format!("not a video ffprobe reads: {}", String::from_utf8_lossy(&probe.stderr).trim()));
+    }
+    let size = String::from_utf8_lossy(&probe.stdout).trim().to_string();
+    let (width, height) = size
+        .split_once('x')
+        .and_then(|(w, h)| Some((w.parse::<usize>().ok()?, h.parse::<usize>().ok()?)))
+        .filter(|(w, h)| *w > 0 && *h > 0)
+        .ok_or_else(|| format!("ffprobe found no video stream (it says `{size}`)"))?;
+    let decoded = run(Command::new("ffmpeg").args(["-v", "error", "-nostdin", "-i"]))
+        .arg(path)
+        .args(["-f", "rawvideo", "-pix_fmt", "rgb24", "pipe:1"])
+        .output()
+        .map_err(missing("ffmpeg"))?;
+    if !decoded.status.success() {
+        return Err(format!("ffmpeg could not decode it: {}", String::from_utf8_lossy(&decoded.stderr).trim()));
+    }
+    let frame = height * width * 3;
+    Ok(decoded.stdout.chunks_exact(frame).map(|data| Picture { height, width, channels: 3, data: data.to_vec() }).collect())
+}
+
+/// `command` with its output captured and nothing read from the terminal.
+fn run(command: &mut Command) -> &mut Command {
+    command.stdin(Stdio::null())
+}
+
+/// The error of a decoder that does not run, naming the package that installs it.
+fn missing(program: &'static str) -> impl Fn(std::io::Error) -> String {
+    move |e| {
+        format!("{program} does not run ({e}): videos are decoded by FFmpeg (Debian and Ubuntu: apt-get install ffmpeg; macOS: brew install ffmpeg)")
+    }
+}

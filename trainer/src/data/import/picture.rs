@@ -1,0 +1,170 @@
+//! A camera frame as the camera gives it (8-bit, rows × columns × RGB), and what `pvt3 import`
+//! does to one: crop, shrink by area averaging, grey. Kept in u8 from file to data set: a
+//! GelSight data set is a few gigabytes as u8 and four times that as f32.
+
+/// One frame: `height × width × channels` bytes, row-major, channels innermost (1: grey, 3: RGB).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Picture {
+    pub height: usize,
+    pub width: usize,
+    pub channels: usize,
+    pub data: Vec<u8>,
+}
+
+/// A rectangle of a frame: its top-left pixel and its size.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Crop {
+    pub top: usize,
+    pub left: usize,
+    pub height: usize,
+    pub width: usize,
+}
+
+impl std::str::FromStr for Crop {
+    type Err = String;
+
+    /// `HEIGHTxWIDTH+TOP+LEFT`, e.g. `200x280+20+20` (as ImageMagick writes a geometry).
+    fn from_str(s: &str) -> Result<Self, String> {
+        let bad = || format!("`{s}`: expected HEIGHTxWIDTH+TOP+LEFT, e.g. 200x280+20+20");
+        let number = |v: &str| v.trim().parse::<usize>().map_err(|_| bad());
+        let mut parts = s.split('+');
+        let (h, w) = parts.next().and_then(|size| size.split_once(['x', 'X', '×'])).ok_or_else(bad)?;
+        let (top, left) = (number(parts.next().ok_or_else(bad)?)?, number(parts.next().ok_or_else(bad)?)?);
+        let (height, width) = (number(h)?, number(w)?);
+        if parts.next().is_some() || height == 0 || width == 0 {
+            return Err(bad());
+        }
+        Ok(Self { top, left, height, width })
+    }
+}
+
+impl std::fmt::Display for Crop {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}x{}+{}+{}", self.height, self.width, self.top, self.left)
+    }
+}
+
+impl Picture {
+    /// The rectangle `c`, or why it does not fit in this frame.
+    pub fn crop(&self, c: Crop) -> Result<Self, String> {
+        if c.top + c.height > self.height || c.left + c.width > self.width {
+            return Err(format!("the crop {c} does not fit in a frame of {} × {}", self.height, self.width));
+        }
+        let row = self.width * self.channels;
+        let data = (c.top..c.top + c.height)
+            .flat_map(|y| &self.data[y * row + c.left * self.channels..y * row + (c.left + c.width) * self.channels])
+            .copied()
+            .collect();
+        Ok(Self { height: c.height, width: c.width, data, ..*self })
+    }
+
+    /// Shrunk (or kept) to `height × width` by area averaging: each new pixel is the mean of the
+    /// old pixels it covers, weighted by how much of each it covers, rounded.
+    pub fn resize(&self, height: usize, width: usize) -> Self {
+        if (height, width) == (self.height, self.width) {
+            return self.clone();
+        }
+        let (rows, cols) = (area_weights(self.height, height), area_weights(self.width, width));
+        let c = self.channels;
+        // Columns first, in f32: [self.height][width][c].
+        let mut narrow = vec![0f32; self.height * width * c];
+        for y in 0..self.height {
+            for (x, weights) in cols.iter().enumerate() {
+                for &(from, w) in weights {
+                    for k in 0..c {
+                        narrow[(y * width + x) * c + k] += w * f32::from(self.data[(y * self.width + from) * c + k]);
+                    }
+                }
+            }
+        }
+        let mut data = vec![0u8; height * width * c];
+        for (y, weights) in rows.iter().enumerate() {
+            for i in 0..width * c {
+                let v: f32 = weights.iter().map(|&(from, w)| w * narrow[from * width * c + i]).sum();
+                data[y * width * c + i] = v.round().clamp(0.0, 255.0) as u8;
+            }
+        }
+        Self { height, width, channels: c, data }
+    }
+
+    /// One grey channel (ITU-R BT.601 luma, as OpenCV's `COLOR_RGB2GRAY`), rounded; a grey frame
+    /// is kept.
+    pub fn grey(&self) -> Self {
+        if self.channels == 1 {
+            return self.clone();
+        }
+        let data = self
+            .data
+            .chunks_exact(self.channels)
+            .map(|p| (0.299 * f32::from(p[0]) + 0.587 * f32::from(p[1]) + 0.114 * f32::from(p[2])).round() as u8)
+            .collect();
+        Self { channels: 1, data, ..*self }
+    }
+}
+
+/// For each of `to` cells along an axis of `from` pixels, the pixels it covers and their weights
+/// (the share of the cell each covers; they sum to 1).
+fn area_weights(from: usize, to: usize) -> Vec<Vec<(usize, f32)>> {
+    let scale = from as f64 / to as f64;
+    (0..to)
+        .map(|i| {
+            let (start, end) = (i as f64 * scale, (i + 1) as f64 * scale);
+            (start.floor() as usize..(end.ceil() as usize).min(from))
+                .map(|j| (j, ((end.min(j as f64 + 1.0) - start.max(j as f64)) / scale) as f32))
+                .filter(|&(_, w)| w > 0.0)
+                .collect()
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn picture(height: usize, width: usize, channels: usize) -> Picture {
+        let data = (0..height * width * channels).map(|i| (i * 7 % 256) as u8).collect();
+        Picture { height, width, channels, data }
+    }
+
+    #[test]
+    fn crops_parse_as_geometries_and_cut_the_rectangle() {
+        let c: Crop = "2x3+1+2".parse().unwrap();
+        assert_eq!(c, Crop { top: 1, left: 2, height: 2, width: 3 });
+        assert_eq!(c.to_string(), "2x3+1+2");
+        for bad in ["2x3", "2x3+1", "0x3+1+1", "2x3+1+1+1", "axb+1+1"] {
+            assert!(bad.parse::<Crop>().unwrap_err().contains("HEIGHTxWIDTH+TOP+LEFT"), "{bad}");
+        }
+        let p = picture(4, 6, 3);
+        let cut = p.crop(c).unwrap();
+        assert_eq!((cut.height, cut.width, cut.data.len()), (2, 3, 18));
+        assert_eq!(cut.data[..3], p.data[(6 + 2) * 3..(6 + 2) * 3 + 3]);
+        assert_eq!(cut.data[9..12], p.data[(2 * 6 + 2) * 3..(2 * 6 + 2) * 3 + 3]);
+        assert!(p.crop("4x6+1+0".parse().unwrap()).unwrap_err().contains("does not fit in a frame of 4 × 6"));
+    }
+
+    #[test]
+    fn shrinking_averages_the_area_each_pixel_covers() {
+        // Halving averages 2 × 2 blocks.
+        let p = Picture { height: 2, width: 4, channels: 1, data: vec![0, 10, 20, 40, 100, 110, 220, 200] };
+        assert_eq!(p.resize(1, 2).data, [55, 120]);
+        // Three pixels into two: the middle one counted half in each.
+        let q = Picture { height: 1, width: 3, channels: 1, data: vec![0, 90, 30] };
+        assert_eq!(q.resize(1, 2).data, [30, 50]);
+        // Each channel on its own; an unchanged size is the frame itself.
+        let rgb = picture(6, 8, 3);
+        let small = rgb.resize(3, 4);
+        let r = |y: usize, x: usize| f32::from(rgb.data[(y * 8 + x) * 3]);
+        assert_eq!(small.data[0], ((r(0, 0) + r(0, 1) + r(1, 0) + r(1, 1)) / 4.0).round() as u8);
+        assert_eq!(rgb.resize(6, 8), rgb);
+        // A constant frame stays constant at any size.
+        let flat = Picture { height: 7, width: 9, channels: 1, data: vec![77; 63] };
+        assert!(flat.resize(3, 4).data.iter().all(|v| *v == 77));
+    }
+
+    #[test]
+    fn grey_is_the_luma_of_each_pixel() {
+        let p = Picture { height: 1, width: 3, channels: 3, data: vec![255, 0, 0, 0, 255, 0, 10, 20, 30] };
+        assert_eq!(p.grey().data, [76, 150, 18]);
+        assert_eq!(p.grey().grey(), p.grey());
+    }
+}
