@@ -1,4 +1,5 @@
-//! `pvt3 import`: a folder of CSV recordings → a data set (`.npz`) the trainer reads.
+//! `pvt3 import`: a folder of CSV recordings, or of a camera's videos or frame folders
+//! ([`camera`]), → a data set (`.npz`) the trainer reads.
 //!
 //! The folder holds one folder per class (its name is the class's), each with one CSV file per
 //! touch: a header row, then one row per frame. Or, with a file name pattern that names the
@@ -8,7 +9,6 @@
 //! records each touch's (`lengths`), its file (`sources`), the class names (`class_names`) and
 //! the conditions the pattern reads from the names (speed, force, …), see [`crate::data::key`].
 
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use ndarray::{Array1, ArrayD, IxDyn};
@@ -46,8 +46,8 @@ pub struct ImportOptions {
 }
 
 /// A file name pattern (the name without its extension, or a folder's name): `{field}` reads the
-/// longest non-empty run of characters that lets the rest match as that field's value, `*` matches any run, every other character itself. The field `class`
-/// names the touch's class; every other field is a condition of the touch (a speed, a force, a
+/// longest non-empty run of characters that lets the rest match as that field's value, `*`
+/// matches any run, every other character itself. The field `class` names the touch's class; every other field is a condition of the touch (a speed, a force, a
 /// direction) that `pvt3 cv --hold-out` can hold out.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NamePattern {
@@ -534,9 +534,7 @@ impl Imported {
 
     /// Touches per class, in class order.
     pub fn per_class(&self) -> Vec<usize> {
-        let mut counts: BTreeMap<u32, usize> = BTreeMap::new();
-        self.labels.iter().for_each(|l| *counts.entry(*l).or_default() += 1);
-        (0..self.classes.len() as u32).map(|c| counts.get(&c).copied().unwrap_or(0)).collect()
+        per_class(&self.labels, self.classes.len())
     }
 
     /// Writes the set as `.npz`: `x` (float32, `[N, channels, T]` or `[N, rows, cols, T]`, `T`
@@ -572,6 +570,13 @@ impl Imported {
         npz.finish().map_err(|e| bad(&e))?;
         Ok(())
     }
+}
+
+/// Touches per class of `classes`, in class order, of touches labelled `labels`.
+fn per_class(labels: &[u32], classes: usize) -> Vec<usize> {
+    let mut counts = vec![0; classes];
+    labels.iter().for_each(|l| counts[*l as usize] += 1);
+    counts
 }
 
 /// A data set being written ([`Imported::write_npz`], [`camera::CameraSet::write_npz`]).

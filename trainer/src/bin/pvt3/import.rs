@@ -6,6 +6,7 @@ use std::path::PathBuf;
 use anyhow::{bail, Context, Result};
 use pvt3_trainer::data::import::camera::{read_camera_folder, CameraOptions, CameraSet, Crop, FrameSpan};
 use pvt3_trainer::data::import::{holds_camera_touches, read_folder, ImportOptions, NamePattern};
+use pvt3_trainer::data::Condition;
 
 use crate::progress;
 
@@ -76,8 +77,9 @@ pub struct CameraArgs {
     /// Frames a touch, spread evenly over the frames chosen by --frames-from.
     #[arg(long, default_value_t = CameraOptions::default().frames)]
     pub frames: usize,
-    /// Where the frames are taken: `moving`, the span in which the gel moves (as the PhysiCLeAR
-    /// authors cut their videos; the whole recording where nothing moves), or `whole`.
+    /// Where the frames are taken: `moving`, the span in which the gel moves (the longest run of
+    /// frames that change more than the recording's stillest; the whole recording where nothing
+    /// moves), or `whole`.
     #[arg(long, value_enum, default_value_t = FrameSpan::default())]
     pub frames_from: FrameSpan,
     /// Keep each touch's first frame (the gel before contact) as its background: training and
@@ -149,14 +151,7 @@ pub fn run(a: ImportArgs) -> Result<()> {
     let set = read_folder(&a.dir, &opts)?;
     set.write_npz(&a.out).with_context(|| format!("writing {}", a.out.display()))?;
     let (shortest, longest) = set.length_range();
-    let per_class = set.per_class();
-    println!(
-        "{} touches of {} classes ({} to {} touches a class), {shortest} to {longest} frames a touch",
-        set.labels.len(),
-        set.classes.len(),
-        per_class.iter().min().unwrap_or(&0),
-        per_class.iter().max().unwrap_or(&0)
-    );
+    println!("{}, {shortest} to {longest} frames a touch", touches(&set.per_class()));
     let layout = match set.grid {
         Some((h, w)) => format!("a {h} × {w} grid"),
         None => "one column".into(),
@@ -168,9 +163,7 @@ pub fn run(a: ImportArgs) -> Result<()> {
     if let Some((name, force)) = &opts.per_force {
         println!("every touch's readings scaled to {name} {force}");
     }
-    for c in &set.conditions {
-        println!("condition {}: {}", c.name, c.distinct().join(", "));
-    }
+    print_conditions(&set.conditions);
     for (name, why) in &set.left_out {
         println!("left out: {name} ({why})");
     }
@@ -200,18 +193,22 @@ fn run_camera(a: ImportArgs) -> Result<()> {
     Ok(())
 }
 
+/// `N touches of K classes (A to B touches a class)`, from the touches per class.
+fn touches(per_class: &[usize]) -> String {
+    let (fewest, most) = (per_class.iter().min().unwrap_or(&0), per_class.iter().max().unwrap_or(&0));
+    format!("{} touches of {} classes ({fewest} to {most} touches a class)", per_class.iter().sum::<usize>(), per_class.len())
+}
+
+fn print_conditions(conditions: &[Condition]) {
+    for c in conditions {
+        println!("condition {}: {}", c.name, c.distinct().join(", "));
+    }
+}
+
 fn describe_camera(set: &CameraSet, opts: &CameraOptions) {
-    let per_class = set.per_class();
     let [h, w, c] = set.frame_shape;
-    println!(
-        "{} touches of {} classes ({} to {} touches a class): {} frames of {h} × {w} {} each, stored as 8-bit",
-        set.labels.len(),
-        set.classes.len(),
-        per_class.iter().min().unwrap_or(&0),
-        per_class.iter().max().unwrap_or(&0),
-        set.frames,
-        if c == 1 { "grey" } else { "RGB" }
-    );
+    let colour = if c == 1 { "grey" } else { "RGB" };
+    println!("{}: {} frames of {h} × {w} {colour} each, stored as 8-bit", touches(&set.per_class()), set.frames);
     let recorded = set.spans.iter().map(|s| s.0);
     let taken = set.spans.iter().map(|s| s.2 + 1 - s.1);
     println!(
@@ -231,9 +228,7 @@ fn describe_camera(set: &CameraSet, opts: &CameraOptions) {
     for (source, recorded) in set.short() {
         println!("short: {source} has {recorded} frames, repeated to {}", set.frames);
     }
-    for cond in &set.conditions {
-        println!("condition {}: {}", cond.name, cond.distinct().join(", "));
-    }
+    print_conditions(&set.conditions);
 }
 
 #[cfg(test)]

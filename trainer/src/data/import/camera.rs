@@ -5,7 +5,8 @@
 //! set is a few gigabytes as u8 and four times that as f32.
 //!
 //! Each touch gives `T` frames taken evenly over the recording or over the span in which the gel
-//! moves (as the PhysiCLeAR authors cut their videos), each cropped and shrunk by area averaging.
+//! moves (where the PhysiCLeAR authors cut their videos, found by a rule of its own: its gel moves
+//! by a grey level or two a frame), each cropped and shrunk by area averaging.
 //! With `subtract_first`, each touch's first frame (the gel before contact) is kept as its
 //! `background` `[N, H, W, C]`, and a reader takes the frames minus it, the PVT³ report's GelSight
 //! preprocessing ([`crate::data::Dataset::load`]).
@@ -28,9 +29,8 @@ use crate::{Error, Result};
 pub enum FrameSpan {
     /// Evenly over the whole recording.
     Whole,
-    /// Evenly over the span in which the gel moves: from the first to the last frame that
-    /// differs from the one before it ([`moving_span`]), widened to the frames asked where it is
-    /// shorter.
+    /// Evenly over the span in which the gel moves ([`moving_span`]), widened to the frames asked
+    /// where it is shorter; the whole recording where nothing moves.
     #[default]
     Moving,
 }
@@ -270,7 +270,7 @@ impl CameraSet {
 
     /// Touches per class, in class order.
     pub fn per_class(&self) -> Vec<usize> {
-        (0..self.classes.len() as u32).map(|c| self.labels.iter().filter(|l| **l == c).count()).collect()
+        super::per_class(&self.labels, self.classes.len())
     }
 
     /// Writes the set as `.npz`: `x` (uint8 `[N, H, W, C, T]`, grey `[N, H, W, T]`, the layouts
