@@ -197,6 +197,9 @@ fn read_numeric(src: &mut impl ArraySource, key: &str) -> std::result::Result<Ar
 /// `[N, H, W, C, T]`): a camera's frames as differences from the gel before contact.
 fn subtract_background(path: &Path, src: &mut impl ArraySource, x: &mut ArrayD<f64>) -> Result<()> {
     let b = read_numeric(src, key::BACKGROUND).map_err(|e| data_error(path, format!("array `background`: {e}")))?;
+    if x.ndim() < 2 {
+        return Err(data_error(path, format!("`x` has shape {:?}; a background needs touches of frames", x.shape())));
+    }
     let frame = &x.shape()[..x.ndim() - 1];
     if b.shape() != frame {
         return Err(data_error(path, format!("`background` has shape {:?}; expected {frame:?}, `x`'s without its frame axis", b.shape())));

@@ -126,7 +126,8 @@ pub fn read_camera_folder(dir: &Path, opts: &CameraOptions, mut progress: impl F
         conditions: conditions(opts.name.as_ref(), &values),
         spans: Vec::new(),
     };
-    let mut first: Option<(&Path, [usize; 3])> = None;
+    // The first touch and its first frame: every touch's frames must have its shape.
+    let mut first: Option<(&Path, Picture)> = None;
     // Touches decoded a few at a time on every core, appended in order.
     let mut done = 0;
     let decoded = files.chunks(4 * rayon::current_num_threads()).flat_map(|chunk| {
@@ -138,28 +139,27 @@ pub fn read_camera_folder(dir: &Path, opts: &CameraOptions, mut progress: impl F
     for (file, touch) in decoded {
         let path = file.path.as_path();
         let ReadTouch { frames, background, span } = touch.map_err(|e| import_error(path, None, e))?;
-        let shape = [frames[0].height, frames[0].width, frames[0].channels];
-        match first {
-            None => first = Some((path, shape)),
-            Some((p, s)) if s != shape => {
+        match &first {
+            Some((p, f)) if f.shape() != frames[0].shape() => {
                 let why = format!(
-                    "its frames are {} × {}, {}'s {} × {} (--size shrinks every touch to one size)",
-                    shape[0],
-                    shape[1],
+                    "its frames are {}, {}'s {} (--size shrinks every touch to one size, --grey greys them)",
+                    frames[0].describe(),
                     p.display(),
-                    s[0],
-                    s[1]
+                    f.describe()
                 );
                 return Err(import_error(path, None, why));
             }
             Some(_) => {}
+            None => {
+                set.frame_shape = frames[0].shape();
+                first = Some((path, frames[0].clone()));
+            }
         }
         set.append(&frames, background);
         set.labels.push(set.classes.binary_search(&file.class).expect("a listed class") as u32);
         set.sources.push(path.strip_prefix(dir).unwrap_or(path).display().to_string());
         set.spans.push(span);
     }
-    set.frame_shape = first.map(|(_, s)| s).unwrap_or_default();
     Ok(set)
 }
 

@@ -27,15 +27,13 @@ pub fn frames(path: &Path) -> Result<Vec<Picture>, String> {
         let files = frame_files(path).map_err(|e| e.to_string())?;
         let pictures = files.iter().map(|f| image(f).map_err(|e| format!("{}: {e}", f.file_name().unwrap_or_default().to_string_lossy())));
         let pictures = pictures.collect::<Result<Vec<_>, _>>()?;
-        if let Some(odd) = pictures.iter().position(|p| (p.height, p.width) != (pictures[0].height, pictures[0].width)) {
+        if let Some(odd) = pictures.iter().position(|p| p.shape() != pictures[0].shape()) {
             return Err(format!(
-                "its images differ in size: {} is {} × {}, {} is {} × {}",
+                "its images differ in size or colour: {} is {}, {} is {}",
                 files[0].display(),
-                pictures[0].height,
-                pictures[0].width,
+                pictures[0].describe(),
                 files[odd].display(),
-                pictures[odd].height,
-                pictures[odd].width
+                pictures[odd].describe()
             ));
         }
         Ok(pictures)

@@ -45,9 +45,19 @@ impl std::fmt::Display for Crop {
 }
 
 impl Picture {
+    /// `[height, width, channels]`.
+    pub fn shape(&self) -> [usize; 3] {
+        [self.height, self.width, self.channels]
+    }
+
+    /// Its size and colour, for errors: `240 × 320 RGB`.
+    pub fn describe(&self) -> String {
+        format!("{} × {} {}", self.height, self.width, if self.channels == 1 { "grey" } else { "RGB" })
+    }
+
     /// The rectangle `c`, or why it does not fit in this frame.
     pub fn crop(&self, c: Crop) -> Result<Self, String> {
-        if c.top + c.height > self.height || c.left + c.width > self.width {
+        if c.top.saturating_add(c.height) > self.height || c.left.saturating_add(c.width) > self.width {
             return Err(format!("the crop {c} does not fit in a frame of {} × {}", self.height, self.width));
         }
         let row = self.width * self.channels;
@@ -140,6 +150,8 @@ mod tests {
         assert_eq!(cut.data[..3], p.data[(6 + 2) * 3..(6 + 2) * 3 + 3]);
         assert_eq!(cut.data[9..12], p.data[(2 * 6 + 2) * 3..(2 * 6 + 2) * 3 + 3]);
         assert!(p.crop("4x6+1+0".parse().unwrap()).unwrap_err().contains("does not fit in a frame of 4 × 6"));
+        let huge = format!("{}x1+1+0", usize::MAX);
+        assert!(p.crop(huge.parse().unwrap()).unwrap_err().contains("does not fit"));
     }
 
     #[test]

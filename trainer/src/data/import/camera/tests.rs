@@ -130,6 +130,15 @@ fn videos_import_as_their_frames_do_from_where_the_gel_moves_minus_the_first() {
     assert_eq!((b.conditions[0].name.as_str(), b.conditions[0].levels[7].as_str()), ("take", "2"));
     let out = videos.join("set.npz");
     b.write_npz(&out).unwrap();
+    // A background that is not x's shape without its frame axis is refused, naming the file.
+    let bad = videos.join("bad.npz");
+    let mut w = ndarray_npy::NpzWriter::new(std::fs::File::create(&bad).unwrap());
+    w.add_array(key::X, &ndarray::Array3::<u8>::zeros((10, 4, 3))).unwrap();
+    w.add_array(key::Y, &ndarray::Array1::<i64>::zeros(10)).unwrap();
+    w.add_array(key::BACKGROUND, &ndarray::Array2::<u8>::zeros((10, 3))).unwrap();
+    w.finish().unwrap();
+    let msg = Dataset::load(&bad, 0).unwrap_err().to_string();
+    assert!(msg.contains("bad.npz") && msg.contains("`background` has shape [10, 3]; expected [10, 4]"), "{msg}");
     let data = Dataset::load(&out, 0).unwrap();
     let background = frame(1, 2, 0).resize(4, 5).grey();
     let x = data.sample(7);
@@ -158,7 +167,10 @@ fn a_touch_that_cannot_be_read_is_an_error_naming_its_file() {
     assert!(msg.contains("the crop 8x8+1+0 does not fit in a frame of 8 × 10"), "{msg}");
     write_png(&dir.join("felt/touch_2/frame_005.png"), &frame(0, 2, 5).resize(4, 5));
     let msg = err(&dir, &options(4, FrameSpan::Whole));
-    assert!(msg.contains("felt/touch_2: its images differ in size") && msg.contains("frame_005.png is 4 × 5"), "{msg}");
+    assert!(msg.contains("felt/touch_2: its images differ in size or colour") && msg.contains("frame_005.png is 4 × 5 RGB"), "{msg}");
+    write_png(&dir.join("felt/touch_2/frame_005.png"), &frame(0, 2, 5).grey());
+    let msg = err(&dir, &options(4, FrameSpan::Whole));
+    assert!(msg.contains("frame_000.png is 8 × 10 RGB") && msg.contains("frame_005.png is 8 × 10 grey"), "{msg}");
     std::fs::write(dir.join("felt/touch_2/frame_005.png"), b"not a picture").unwrap();
     let msg = err(&dir, &options(4, FrameSpan::Whole));
     assert!(msg.contains("felt/touch_2: frame_005.png: not a readable PNG"), "{msg}");
@@ -172,7 +184,18 @@ fn a_touch_that_cannot_be_read_is_an_error_naming_its_file() {
     std::fs::create_dir_all(&folder).unwrap();
     (0..RECORDED).for_each(|f| write_png(&folder.join(format!("{f}.png")), &frame(0, 2, f).resize(4, 5)));
     let msg = err(&dir, &CameraOptions { size: None, ..options(4, FrameSpan::Whole) });
-    assert!(msg.contains("felt/touch_2: its frames are 4 × 5") && msg.contains("--size shrinks every touch to one size"), "{msg}");
+    assert!(msg.contains("felt/touch_2: its frames are 4 × 5 RGB") && msg.contains("--size shrinks every touch to one size"), "{msg}");
+    // A touch of grey frames beside RGB ones needs --grey.
+    (0..RECORDED).for_each(|f| write_png(&folder.join(format!("{f}.png")), &frame(0, 2, f).grey()));
+    let msg = err(&dir, &CameraOptions { size: None, ..options(4, FrameSpan::Whole) });
+    assert!(
+        msg.contains("its frames are 8 × 10 grey") && msg.contains("touch_0's 8 × 10 RGB") && msg.contains("--grey greys them"),
+        "{msg}"
+    );
+    assert_eq!(
+        read_camera_folder(&dir, &CameraOptions { size: None, grey: true, ..options(4, FrameSpan::Whole) }, |_, _| {}).unwrap().frame_shape,
+        [8, 10, 1]
+    );
     std::fs::remove_dir_all(dir).unwrap();
 }
 
