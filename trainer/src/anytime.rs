@@ -285,6 +285,7 @@ impl Prefixes {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::data::Dataset;
 
     /// The answers after each token are the model's on the touch so far, a spectral head's over
     /// the frames received (`Pvt3::forward_prefix`), and the last is the whole window's.
@@ -300,8 +301,8 @@ mod tests {
         let mut rng = pvt3_models::Rng::new(8);
         let n = 3;
         let x: Vec<f32> = (0..n * 60 * 12).map(|_| rng.normal()).collect();
-        let samples =
-            Samples { x, labels: vec![0; n], sample_shape: cfg.sample_shape(), touches: (0..n).collect(), filled: vec![cfg.frames; n] };
+        let data = Dataset::in_memory(x, cfg.sample_shape(), vec![0; n]);
+        let samples = Samples::unnormalised(&data);
         let a = answers(&model, &samples).unwrap();
         assert_eq!(a.tokens, 4);
         let (x, _) = samples.batch(&[0, 1, 2], |_| {}).unwrap();

@@ -23,6 +23,7 @@
 //! [`import`]) to a split's windows normalised by the training split's fit ([`normalization`],
 //! [`windows`]) to an augmented batch ([`augment`]) to the learner ([`crate::train`]).
 
+use std::borrow::Cow;
 use std::fs::File;
 use std::io::{Read, Seek};
 use std::path::{Path, PathBuf};
@@ -33,8 +34,10 @@ use ndarray_npy::{NpzReader, ReadNpyExt, ReadableElement};
 use pvt3_models::Rng;
 
 use crate::{Error, Result};
+pub use frames::Frames;
 
 pub mod augment;
+mod frames;
 pub mod import;
 pub mod normalization;
 mod split;
@@ -107,8 +110,9 @@ pub const FOLDS: usize = 5;
 
 #[derive(Clone, Debug)]
 pub struct Dataset {
-    /// Samples back to back, each in the model layout `[H, W, (C,) T]`.
-    pub x: Vec<f32>,
+    /// Samples back to back, each in the model layout `[H, W, (C,) T]`: f32, or a camera's 8-bit
+    /// frames as recorded ([`Frames`]).
+    pub x: Frames,
     /// The layout of one sample: `[H, W, T]` or `[H, W, C, T]`; `T` is the longest touch's.
     pub sample_shape: Vec<usize>,
     /// Each touch's frames (`T` for all unless the file holds `lengths`).
@@ -193,19 +197,53 @@ fn read_numeric(src: &mut impl ArraySource, key: &str) -> std::result::Result<Ar
     Err(first_error.unwrap_or_default())
 }
 
-/// Each touch's frames minus its background (`key::BACKGROUND`, `[N, H, W, C]` for `x`
-/// `[N, H, W, C, T]`): a camera's frames as differences from the gel before contact.
-fn subtract_background(path: &Path, src: &mut impl ArraySource, x: &mut ArrayD<f64>) -> Result<()> {
-    let b = read_numeric(src, key::BACKGROUND).map_err(|e| data_error(path, format!("array `background`: {e}")))?;
-    if x.ndim() < 2 {
-        return Err(data_error(path, format!("`x` has shape {:?}; a background needs touches of frames", x.shape())));
+/// `x` and its shape: 8-bit frames as they are, beside their background where the file has one
+/// (`key::BACKGROUND`, one frame a touch), which a reader subtracts ([`Frames`]); any other dtype
+/// as f32, minus its background.
+fn read_frames(path: &Path, src: &mut impl ArraySource, has_background: bool) -> Result<(Frames, Vec<usize>)> {
+    let eight_bit = src.read::<u8>(key::X).ok();
+    let background = if has_background && eight_bit.is_some() { src.read::<u8>(key::BACKGROUND).ok() } else { None };
+    if let Some(x) = eight_bit.filter(|_| has_background == background.is_some()) {
+        let shape = x.shape().to_vec();
+        if let Some(b) = &background {
+            check_background(path, &shape, b.shape())?;
+        }
+        return Ok((Frames::U8 { x: flat(x), background: background.map(flat) }, shape));
     }
-    let frame = &x.shape()[..x.ndim() - 1];
-    if b.shape() != frame {
-        return Err(data_error(path, format!("`background` has shape {:?}; expected {frame:?}, `x`'s without its frame axis", b.shape())));
+    let mut x = read_numeric(src, key::X).map_err(|e| data_error(path, format!("array `x`: {e}")))?;
+    if has_background {
+        let b = read_numeric(src, key::BACKGROUND).map_err(|e| data_error(path, format!("array `background`: {e}")))?;
+        check_background(path, x.shape(), b.shape())?;
+        x -= &b.insert_axis(ndarray::Axis(x.ndim() - 1));
     }
-    *x -= &b.insert_axis(ndarray::Axis(frame.len()));
+    let shape = x.shape().to_vec();
+    let x: Vec<f32> = x.iter().map(|v| *v as f32).collect();
+    let sample_len = x.len() / shape.first().copied().unwrap_or(1).max(1);
+    if let Some(i) = x.iter().position(|v| !v.is_finite()) {
+        return Err(data_error(path, format!("`x` holds a NaN or infinite value in sample {}", i / sample_len)));
+    }
+    Ok((Frames::F32(x), shape))
+}
+
+/// A background is a frame of each touch: `x`'s shape (`[N, H, W, C, T]`) without its frame axis.
+fn check_background(path: &Path, x: &[usize], background: &[usize]) -> Result<()> {
+    if x.len() < 2 {
+        return Err(data_error(path, format!("`x` has shape {x:?}; a background needs touches of frames")));
+    }
+    let frame = &x[..x.len() - 1];
+    if background != frame {
+        return Err(data_error(path, format!("`background` has shape {background:?}; expected {frame:?}, `x`'s without its frame axis")));
+    }
     Ok(())
+}
+
+/// An array's values in row-major order, without a copy where they already are.
+fn flat<T: Clone>(a: ArrayD<T>) -> Vec<T> {
+    if a.is_standard_layout() {
+        a.into_raw_vec_and_offset().0
+    } else {
+        a.iter().cloned().collect()
+    }
 }
 
 impl Dataset {
@@ -232,29 +270,21 @@ impl Dataset {
                 return Err(missing(k));
             }
         }
-        let mut x = read_numeric(src, key::X).map_err(|e| data_error(path, format!("array `x`: {e}")))?;
-        if keys.iter().any(|k| k == key::BACKGROUND) {
-            subtract_background(path, src, &mut x)?;
-        }
+        let (x, shape) = read_frames(path, src, keys.iter().any(|k| k == key::BACKGROUND))?;
         let y = read_numeric(src, key::Y).map_err(|e| data_error(path, format!("array `y`: {e}")))?;
         let fold = if keys.iter().any(|k| k == key::FOLD) {
             Some(read_numeric(src, key::FOLD).map_err(|e| data_error(path, format!("array `fold`: {e}")))?)
         } else {
             None
         };
-        let n = x.shape()[0];
-        let sample_shape = match x.shape() {
-            [_, c, t] => vec![*c, 1, *t],
-            [_, h, w, t] => vec![*h, *w, *t],
-            [_, h, w, c, t] => vec![*h, *w, *c, *t],
-            s => return Err(data_error(path, format!("`x` has shape {s:?}; expected [N, H, W, T], [N, C, T] or [N, H, W, C, T]"))),
+        let n = shape[0];
+        let sample_shape = match shape[..] {
+            [_, c, t] => vec![c, 1, t],
+            [_, h, w, t] => vec![h, w, t],
+            [_, h, w, c, t] => vec![h, w, c, t],
+            _ => return Err(data_error(path, format!("`x` has shape {shape:?}; expected [N, H, W, T], [N, C, T] or [N, H, W, C, T]"))),
         };
         let labels = integers(path, key::Y, &y, n)?;
-        let x: Vec<f32> = x.iter().map(|v| *v as f32).collect();
-        let sample_len = x.len() / n.max(1);
-        if let Some(i) = x.iter().position(|v| !v.is_finite()) {
-            return Err(data_error(path, format!("`x` holds a NaN or infinite value in sample {}", i / sample_len)));
-        }
         let frames = *sample_shape.last().expect("a sample shape has a frame axis");
         let lengths = if keys.iter().any(|k| k == key::LENGTHS) {
             let l = read_numeric(src, key::LENGTHS).map_err(|e| data_error(path, format!("array `lengths`: {e}")))?;
@@ -322,6 +352,28 @@ impl Dataset {
         })
     }
 
+    /// Touches held in memory (`x` the layout `sample_shape` back to back), all in fold 0 and
+    /// of full length: what a test builds a data set from.
+    #[cfg(test)]
+    pub(crate) fn in_memory(x: impl Into<Frames>, sample_shape: Vec<usize>, labels: Vec<u32>) -> Self {
+        let frames = *sample_shape.last().expect("a frame axis");
+        Self {
+            x: x.into(),
+            sample_shape,
+            lengths: vec![frames; labels.len()],
+            class_names: None,
+            sources: None,
+            conditions: Vec::new(),
+            held_out: None,
+            reading: None,
+            folds: vec![0; labels.len()],
+            labels,
+            fold_seed: None,
+            path: PathBuf::from("mem"),
+            digest: OnceLock::new(),
+        }
+    }
+
     pub fn len(&self) -> usize {
         self.labels.len()
     }
@@ -334,9 +386,9 @@ impl Dataset {
         self.sample_shape.iter().product()
     }
 
-    pub fn sample(&self, i: usize) -> &[f32] {
-        let l = self.sample_len();
-        &self.x[i * l..(i + 1) * l]
+    /// Touch `i`'s values, as f32 whatever the file held.
+    pub fn sample(&self, i: usize) -> Cow<'_, [f32]> {
+        self.x.sample(i, self.sample_len(), self.max_frames())
     }
 
     /// Frames of the longest touch (the file's `T`).

@@ -40,7 +40,7 @@ pub fn fit(model: &Model, varmap: &VarMap, train: &Samples) -> Result<()> {
 mod tests {
     use pvt3_models::{Model, Config, Rng};
 
-    use crate::data::windows::Samples;
+    use crate::data::{windows::Samples, Dataset};
 
     /// After fitting, the standardised features of the training samples have mean 0 and
     /// standard deviation 1, feature by feature.
@@ -52,9 +52,9 @@ mod tests {
         let n = 40;
         let l: usize = cfg.sample_shape().iter().product();
         // Channels of different levels and scales, as raw sensors have.
-        let x = (0..n * l).map(|i| 5.0 * ((i / 75) % 60) as f32 + (1.0 + (i / 75 % 7) as f32) * rng.normal()).collect();
-        let train =
-            Samples { x, labels: vec![0; n], sample_shape: cfg.sample_shape(), touches: (0..n).collect(), filled: vec![cfg.frames; n] };
+        let x: Vec<f32> = (0..n * l).map(|i| 5.0 * ((i / 75) % 60) as f32 + (1.0 + (i / 75 % 7) as f32) * rng.normal()).collect();
+        let data = Dataset::in_memory(x, cfg.sample_shape(), vec![0; n]);
+        let train = Samples::unnormalised(&data);
         super::fit(&model, &varmap, &train).unwrap();
         let spectrum = model.pvt3("test").unwrap().spectrum().unwrap();
         let (x, _) = train.batch(&(0..n).collect::<Vec<_>>(), |_| {}).unwrap();

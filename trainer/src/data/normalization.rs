@@ -45,32 +45,18 @@ pub fn fit(data: &Dataset, indices: &[usize], window: usize) -> Normalization {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::path::PathBuf;
 
     #[test]
     fn fit_uses_only_the_given_samples_and_standardises_them() {
         // Two channels, three frames, three samples; sample 2 is an outlier left out of the fit.
-        let data = Dataset {
-            x: vec![1., 2., 3., 0., 0., 0., 3., 4., 5., 0., 0., 0., 100., 100., 100., 9., 9., 9.],
-            sample_shape: vec![2, 1, 3],
-            lengths: vec![3; 3],
-            class_names: None,
-            sources: None,
-            labels: vec![0, 1, 0],
-            folds: vec![0, 1, 4],
-            fold_seed: None,
-            digest: Default::default(),
-            conditions: Vec::new(),
-            held_out: None,
-            reading: None,
-            path: PathBuf::from("mem"),
-        };
+        let x = vec![1., 2., 3., 0., 0., 0., 3., 4., 5., 0., 0., 0., 100., 100., 100., 9., 9., 9.];
+        let data = Dataset::in_memory(x, vec![2, 1, 3], vec![0, 1, 0]);
         let norm = fit(&data, &[0, 1], 3);
         assert_eq!(norm.mean, vec![3.0, 0.0]);
         assert!((norm.std[0] - (10.0f32 / 6.0).sqrt()).abs() < 1e-6);
         assert_eq!(norm.std[1], 1.0, "a constant channel keeps unit scale");
         let mut out = Vec::new();
-        norm.apply_into(data.sample(1), &mut out);
+        norm.apply_into(&data.sample(1), &mut out);
         assert!((out[0]).abs() < 1e-6 && out[3..] == [0.0, 0.0, 0.0]);
     }
 }

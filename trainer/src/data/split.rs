@@ -75,8 +75,10 @@ impl Dataset {
             sha.update(words(&self.sample_shape));
             sha.update(words(&self.lengths));
             sha.update(self.labels.iter().flat_map(|l| l.to_le_bytes()).collect::<Vec<u8>>());
-            for chunk in self.x.chunks(1 << 16) {
-                sha.update(chunk.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>());
+            for i in 0..self.len() {
+                for chunk in self.sample(i).chunks(1 << 16) {
+                    sha.update(chunk.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>());
+                }
             }
             let hex: String = sha.finalize().iter().map(|b| format!("{b:02x}")).collect();
             format!("sha256:{hex}")

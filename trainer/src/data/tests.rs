@@ -42,7 +42,7 @@ fn shipped_icub20_loads_with_its_folds() {
 fn shipped_biotac20_int16_reads_as_an_electrode_column() {
     let d = Dataset::load(&shipped("biotac20.npz"), 0).unwrap();
     assert_eq!(d.sample_shape, vec![19, 1, 400]);
-    assert!(d.x.iter().all(|v| (0.0..=3396.0).contains(v)));
+    assert!((0..d.len()).all(|i| d.sample(i).iter().all(|v| (0.0..=3396.0).contains(v))));
     d.check_fits(&pvt3_models::Config::biotac20()).unwrap();
     let msg = d.check_fits(&pvt3_models::Config::icub20()).unwrap_err().to_string();
     assert!(msg.contains("samples are [19, 1, 400] but the model expects [6, 10, 75]"), "{msg}");
@@ -143,5 +143,6 @@ fn a_directory_of_npy_files_loads_like_an_npz() {
     let d = Dataset::load(&dir, 0).unwrap();
     assert_eq!((d.sample_shape.clone(), d.classes(), d.folds.clone()), (vec![2, 2, 3], 3, vec![0, 1, 2, 3, 4]));
     assert_eq!(d.sample(1)[0], 12.0);
+    assert!(matches!(d.x, crate::data::Frames::U8 { background: None, .. }), "8-bit frames stay 8-bit");
     std::fs::remove_dir_all(dir).unwrap();
 }

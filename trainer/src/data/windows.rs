@@ -12,10 +12,13 @@ use super::normalization::Normalization;
 use super::Dataset;
 use crate::Result;
 
-/// Normalised windows of one split, ready to batch.
+/// The windows of one split: which touch each reads and where, read and normalised only as a
+/// batch takes them, so that a camera's 8-bit touches are never held again as f32.
 #[derive(Clone, Debug)]
-pub struct Samples {
-    pub x: Vec<f32>,
+pub struct Samples<'a> {
+    data: &'a Dataset,
+    norm: Normalization,
+    windows: Vec<(usize, Window)>,
     /// Each window's label.
     pub labels: Vec<u32>,
     pub sample_shape: Vec<usize>,
@@ -25,6 +28,15 @@ pub struct Samples {
     /// Each window's frames that are its touch's: all of the window's, but for a test touch
     /// shorter than it, which is answered from the temporal tokens it fills ([`evaluate`]).
     pub filled: Vec<usize>,
+}
+
+/// Where in its touch a window reads.
+#[derive(Clone, Copy, Debug)]
+enum Window {
+    /// The model's frames from this one.
+    At(usize),
+    /// From this (fractional) frame, this many of the touch's frames a model frame, resampled.
+    Stretched(f64, f64),
 }
 
 /// Where the windows of `frames` frames that evaluate a touch of `len` frames start: every half
@@ -43,12 +55,12 @@ pub fn window_starts(len: usize, frames: usize) -> Vec<usize> {
     starts
 }
 
-impl Samples {
+impl<'a> Samples<'a> {
     /// The `indices` touches of `data`, each read as its evaluation windows ([`window_starts`])
     /// of the `norm.frames` frames the model reads, normalised.
-    pub fn new(data: &Dataset, indices: &[usize], norm: &Normalization) -> Self {
-        let picks = indices.iter().flat_map(|&i| window_starts(data.lengths[i], norm.frames).into_iter().map(move |s| (i, s)));
-        Self::from_windows(data, picks, norm, |i, start, raw| data.window_into(i, start, norm.frames, raw))
+    pub fn new(data: &'a Dataset, indices: &[usize], norm: &Normalization) -> Self {
+        let picks = indices.iter().flat_map(|&i| window_starts(data.lengths[i], norm.frames).into_iter().map(move |s| (i, Window::At(s))));
+        Self::from_windows(data, picks, norm)
     }
 
     /// One window of each of the `indices` touches, where `rng` draws it (the whole touch, and
@@ -56,62 +68,60 @@ impl Samples {
     /// at a random speed, as if the touch had been made faster or slower: it spans `r` times the
     /// model's frames of the touch, `r` log-uniform in [1 / (1 + stretch), 1 + stretch] (at most
     /// the whole touch), resampled to the model's frames ([`pvt3_runtime::resample`]).
-    pub fn cropped(data: &Dataset, indices: &[usize], norm: &Normalization, stretch: f64, rng: &mut Rng) -> Self {
-        if stretch > 0.0 {
-            // Each touch's window as (first frame, source frames per model frame), drawn in order.
-            let picks: Vec<(usize, (f64, f64))> = indices
-                .iter()
-                .map(|&i| {
-                    let len = data.lengths[i];
-                    let r = log_uniform_factor(stretch, rng).min(len as f64 / norm.frames as f64);
-                    (i, (rng.uniform() as f64 * (len as f64 - r * norm.frames as f64), r))
-                })
-                .collect();
-            return Self::from_windows(data, picks, norm, |i, (start, r), raw| {
-                let len = data.lengths[i];
-                raw.resize(data.sample_len() / data.max_frames() * norm.frames, 0.0);
-                for (row, out) in data.sample(i).chunks(data.max_frames()).zip(raw.chunks_mut(norm.frames)) {
-                    pvt3_runtime::resample::resample_into(&row[..len], start, r, out);
-                }
-            });
-        }
-        let picks: Vec<(usize, usize)> = indices
-            .iter()
-            .map(|&i| {
-                let spare = data.lengths[i] - norm.frames;
-                (i, if spare == 0 { 0 } else { rng.below(spare + 1) })
-            })
-            .collect();
-        Self::from_windows(data, picks, norm, |i, start, raw| data.window_into(i, start, norm.frames, raw))
+    pub fn cropped(data: &'a Dataset, indices: &[usize], norm: &Normalization, stretch: f64, rng: &mut Rng) -> Self {
+        let draw = |i: usize, rng: &mut Rng| {
+            let len = data.lengths[i];
+            if stretch > 0.0 {
+                let r = log_uniform_factor(stretch, rng).min(len as f64 / norm.frames as f64);
+                return Window::Stretched(rng.uniform() as f64 * (len as f64 - r * norm.frames as f64), r);
+            }
+            let spare = len - norm.frames;
+            Window::At(if spare == 0 { 0 } else { rng.below(spare + 1) })
+        };
+        let picks: Vec<(usize, Window)> = indices.iter().map(|&i| (i, draw(i, rng))).collect();
+        Self::from_windows(data, picks, norm)
     }
 
-    /// The windows `picks` names, each a touch and where in it, read into an empty buffer by `read`
-    /// and normalised; a touch's windows come together.
-    fn from_windows<W>(
-        data: &Dataset,
-        picks: impl IntoIterator<Item = (usize, W)>,
-        norm: &Normalization,
-        mut read: impl FnMut(usize, W, &mut Vec<f32>),
-    ) -> Self {
+    /// The windows `picks` names, each a touch and where in it; a touch's windows come together.
+    fn from_windows(data: &'a Dataset, picks: impl IntoIterator<Item = (usize, Window)>, norm: &Normalization) -> Self {
         let mut sample_shape = data.sample_shape.clone();
         *sample_shape.last_mut().expect("a frame axis") = norm.frames;
-        let (mut x, mut raw, mut labels, mut touches, mut filled) = (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
-        let mut previous = None;
+        let (mut windows, mut labels, mut touches, mut filled) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
         for (i, at) in picks {
-            raw.clear();
-            read(i, at, &mut raw);
-            norm.apply_into(&raw, &mut x);
+            let touch = match (windows.last(), touches.last()) {
+                (Some((p, _)), Some(t)) if *p == i => *t,
+                (Some(_), Some(t)) => t + 1,
+                _ => 0,
+            };
+            windows.push((i, at));
             labels.push(data.labels[i]);
             filled.push(data.lengths[i].min(norm.frames));
-            let touch = match previous {
-                Some((p, t)) if p == i => t,
-                Some((_, t)) => t + 1,
-                None => 0,
-            };
-            previous = Some((i, touch));
             touches.push(touch);
         }
-        Self { x, labels, sample_shape, touches, filled }
+        Self { data, norm: norm.clone(), windows, labels, sample_shape, touches, filled }
+    }
+
+    /// Appends window `w` as read from its touch, before normalising, to the empty `raw`.
+    fn read_into(&self, w: usize, raw: &mut Vec<f32>) {
+        let (data, frames) = (self.data, self.norm.frames);
+        match self.windows[w] {
+            (i, Window::At(start)) => data.window_into(i, start, frames, raw),
+            (i, Window::Stretched(start, r)) => {
+                let len = data.lengths[i];
+                raw.resize(data.sample_len() / data.max_frames() * frames, 0.0);
+                for (row, out) in data.sample(i).chunks(data.max_frames()).zip(raw.chunks_mut(frames)) {
+                    pvt3_runtime::resample::resample_into(&row[..len], start, r, out);
+                }
+            }
+        }
+    }
+
+    /// Every touch of `data` as one window, as it is: what a test feeds a model.
+    #[cfg(test)]
+    pub(crate) fn unnormalised(data: &'a Dataset) -> Self {
+        let channels = data.sample_len() / data.max_frames();
+        let norm = Normalization { mean: vec![0.0; channels], std: vec![1.0; channels], frames: data.max_frames() };
+        Self::new(data, &(0..data.len()).collect::<Vec<_>>(), &norm)
     }
 
     pub fn len(&self) -> usize {
@@ -131,12 +141,14 @@ impl Samples {
         self.filled.iter().map(move |f| f / tubelet)
     }
 
-    /// The samples at `rows` as a tensor `[rows, …sample_shape]` and a label tensor.
+    /// The windows at `rows`, normalised, as a tensor `[rows, …sample_shape]` and a label tensor.
     pub fn batch(&self, rows: &[usize], transform: impl FnMut(&mut [f32])) -> Result<(Tensor, Tensor)> {
         let l = self.sample_len();
-        let mut x = Vec::with_capacity(rows.len() * l);
+        let (mut x, mut raw) = (Vec::with_capacity(rows.len() * l), Vec::with_capacity(l));
         for &r in rows {
-            x.extend_from_slice(&self.x[r * l..(r + 1) * l]);
+            raw.clear();
+            self.read_into(r, &mut raw);
+            self.norm.apply_into(&raw, &mut x);
         }
         x.chunks_mut(l).for_each(transform);
         let mut shape = vec![rows.len()];
@@ -163,32 +175,20 @@ mod tests {
         // One touch of two channels, a ramp of 100 frames (the second the ramp's negative); the
         // model reads 20. A stretched window is a ramp still, its slope the speed it was read at.
         let ramp: Vec<f32> = (0..100).map(|t| t as f32).chain((0..100).map(|t| -(t as f32))).collect();
-        let data = Dataset {
-            x: ramp,
-            sample_shape: vec![2, 1, 100],
-            lengths: vec![100],
-            class_names: None,
-            sources: None,
-            conditions: Vec::new(),
-            held_out: None,
-            reading: None,
-            labels: vec![0],
-            folds: vec![0],
-            fold_seed: None,
-            digest: Default::default(),
-            path: "mem".into(),
-        };
+        let data = Dataset::in_memory(ramp, vec![2, 1, 100], vec![0]);
         let norm = Normalization { mean: vec![0.0; 2], std: vec![1.0; 2], frames: 20 };
         let mut rng = Rng::new(3);
         let mut slopes = Vec::new();
         for _ in 0..30 {
             let s = Samples::cropped(&data, &[0], &norm, 1.0, &mut rng);
-            assert_eq!((s.x.len(), s.sample_shape.as_slice()), (40, &[2, 1, 20][..]));
-            let slope = (s.x[19] - s.x[0]) / 19.0;
+            let (x, _) = s.batch(&[0], |_| {}).unwrap();
+            assert_eq!((x.dims(), s.sample_shape.as_slice()), (&[1, 2, 1, 20][..], &[2, 1, 20][..]));
+            let s = x.flatten_all().unwrap().to_vec1::<f32>().unwrap();
+            let slope = (s[19] - s[0]) / 19.0;
             assert!((0.5 - 1e-4..=2.0 + 1e-4).contains(&slope), "{slope}");
-            assert!(s.x[..20].windows(2).all(|w| (w[1] - w[0] - slope).abs() < 1e-3), "a straight ramp: {:?}", &s.x[..20]);
-            assert!(s.x[..20].iter().all(|v| (0.0..=99.0).contains(v)), "read from within the touch");
-            assert!(s.x[20..].iter().zip(&s.x[..20]).all(|(b, a)| (a + b).abs() < 1e-4), "every channel alike");
+            assert!(s[..20].windows(2).all(|w| (w[1] - w[0] - slope).abs() < 1e-3), "a straight ramp: {:?}", &s[..20]);
+            assert!(s[..20].iter().all(|v| (0.0..=99.0).contains(v)), "read from within the touch");
+            assert!(s[20..].iter().zip(&s[..20]).all(|(b, a)| (a + b).abs() < 1e-4), "every channel alike");
             slopes.push(slope);
         }
         assert!(slopes.iter().any(|s| *s < 0.8) && slopes.iter().any(|s| *s > 1.25), "{slopes:?}");

@@ -37,7 +37,7 @@ fn pruned_entries_stay_zero_and_the_baked_model_matches() {
     let rows: Vec<usize> = (0..normalised.len()).collect();
     let (x, _) = normalised.batch(&rows, |_| {}).unwrap();
     let expected = model.forward(&x, None).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap();
-    let got = reference::forward(&baked, &normalised.x, rows.len()).unwrap();
+    let got = reference::forward(&baked, &x.flatten_all().unwrap().to_vec1::<f32>().unwrap(), rows.len()).unwrap();
     let worst = got.iter().flatten().zip(&expected).map(|(a, b)| (a - *b as f64).abs()).fold(0.0, f64::max);
     assert!(worst < 1e-5, "worst {worst:e}");
     std::fs::remove_dir_all(dense).unwrap();

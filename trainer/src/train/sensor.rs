@@ -34,11 +34,11 @@ pub(super) struct Sensor<'a> {
     pub(super) split: Split,
     /// Every training touch read as its evaluation windows: what fits the spectral head's
     /// standardisation, and each epoch's batches when every touch is one window long.
-    pub(super) train_set: Samples,
+    pub(super) train_set: Samples<'a>,
     /// A touch longer than a window (or stretched) gives each epoch one window drawn at random.
     pub(super) crops: bool,
-    pub(super) val_set: Samples,
-    pub(super) test_set: Samples,
+    pub(super) val_set: Samples<'a>,
+    pub(super) test_set: Samples<'a>,
     pub(super) net: Net,
 }
 
@@ -99,7 +99,7 @@ impl<'a> Sensor<'a> {
     }
 
     /// This epoch's training windows, when they are drawn anew each epoch (see `crops`).
-    pub(super) fn epoch_windows(&self, rng: &mut Rng) -> Option<Samples> {
+    pub(super) fn epoch_windows(&self, rng: &mut Rng) -> Option<Samples<'a>> {
         let stretch = self.options.augmentation.stretch;
         self.crops.then(|| Samples::cropped(self.data, &self.split.train, &self.normalization, stretch, rng))
     }

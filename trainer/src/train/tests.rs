@@ -8,7 +8,7 @@ use indicatif::ProgressBar;
 use pvt3_models::{Config, Rng};
 
 use super::*;
-use crate::data::Dataset;
+use crate::data::{Dataset, Frames};
 use crate::options::{Augmentation, Distillation, HeldZeros, Optimization, Pruning};
 use crate::run_dir::CrossValidation;
 
@@ -47,21 +47,8 @@ pub(crate) fn tiny_data() -> Dataset {
             }
         }
     }
-    Dataset {
-        x,
-        sample_shape: vec![2, 2, 8],
-        lengths: vec![8; n],
-        class_names: None,
-        sources: None,
-        labels,
-        folds: (0..n).map(|i| (i / 2) % 5).collect(),
-        fold_seed: None,
-        digest: Default::default(),
-        conditions: Vec::new(),
-        held_out: None,
-        reading: None,
-        path: PathBuf::from("tiny"),
-    }
+    let folds = (0..n).map(|i| (i / 2) % 5).collect();
+    Dataset { folds, path: PathBuf::from("tiny"), ..Dataset::in_memory(x, vec![2, 2, 8], labels) }
 }
 
 fn options(epochs: usize) -> TrainOptions {
@@ -273,7 +260,8 @@ fn distillation_learns_from_runs_of_the_same_split_and_resumes_exactly() {
     let none = refused(1, &data, "distill-fold1");
     assert!(none.contains("no trained run of validation fold 1") && none.contains(&teachers.display().to_string()), "{none}");
     let mut other = tiny_data();
-    other.x.iter_mut().for_each(|v| *v += 1.0);
+    let Frames::F32(x) = &mut other.x else { unreachable!("tiny data are f32") };
+    x.iter_mut().for_each(|v| *v += 1.0);
     let elsewhere = refused(0, &other, "distill-other");
     assert!(elsewhere.contains("trained on another split") && elsewhere.contains("seed0/fold0"), "{elsewhere}");
     let own = RunSpec { options: taught.clone(), ..spec(&data, 4, None) };
@@ -351,7 +339,7 @@ fn tiny_other_sensor() -> (Dataset, Config) {
             }
         }
     }
-    let data = Dataset { x, sample_shape: vec![3, 1, 8], lengths: vec![8; n], labels, path: PathBuf::from("tiny-other"), ..tiny_data() };
+    let data = Dataset { path: PathBuf::from("tiny-other"), folds: tiny_data().folds, ..Dataset::in_memory(x, vec![3, 1, 8], labels) };
     (data, Config { height: 3, width: 1, patch_height: 3, patch_width: 1, ..tiny_config() })
 }
 

@@ -133,7 +133,7 @@ impl Loaded {
         Ok(Self { meta, model, data, indices })
     }
 
-    pub fn samples(&self) -> Samples {
+    pub fn samples(&self) -> Samples<'_> {
         Samples::new(&self.data, &self.indices, &self.meta.normalization)
     }
 }

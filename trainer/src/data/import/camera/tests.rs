@@ -109,8 +109,8 @@ fn frame_folders_import_as_shrunk_8_bit_frames_evenly_over_the_touch() {
     set.write_npz(&out).unwrap();
     let data = Dataset::load(&out, 0).unwrap();
     assert_eq!((data.sample_shape.clone(), data.labels[6]), (vec![4, 5, 3, 4], 1));
-    assert_eq!(data.class_names.unwrap(), ["felt", "rough_cloth"]);
-    let at = |n: usize, i: usize| data.x[n * data.sample_shape.iter().product::<usize>() + i];
+    assert_eq!(data.class_names.as_deref().unwrap(), ["felt", "rough_cloth"]);
+    let at = |n: usize, i: usize| data.sample(n)[i];
     assert_eq!(at(6, 4 * 3 + 1), f32::from(set.x[(6 * 60 + 3) * 4 + 1]));
     std::fs::remove_dir_all(dir).unwrap();
 }
