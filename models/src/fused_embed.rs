@@ -5,7 +5,7 @@
 
 use std::sync::OnceLock;
 
-use candle_core::{CpuStorage, CustomOp2, Layout, Result, Shape, Tensor};
+use candle_core::{CpuStorage, CustomOp2, Layout, Result, Shape, Storage, Tensor};
 
 use crate::dense::{add_column_sums, add_to_rows, matmul, product, View};
 use crate::fused_block::values;
@@ -96,12 +96,18 @@ impl CustomOp2 for EmbedOp {
         let (d, s) = (self.dims.dim, self.dims.starts());
         let p = packed.flatten_all()?.to_vec1::<f32>()?;
         let g = grad.flatten_all()?.to_vec1::<f32>()?;
-        let x = patches.flatten_all()?.to_vec1::<f32>()?;
+        // The patches as they are held, not copied: a camera's batch of them is most of a gigabyte.
+        let patches = patches.contiguous()?;
+        let (storage, layout) = patches.storage_and_layout();
+        let x = match &*storage {
+            Storage::Cpu(s) => values(s, layout)?,
+            _ => candle_core::bail!("fused embedding: CPU tensors only"),
+        };
         let recomputed;
         let e = match self.embedded.get() {
             Some(e) => e,
             None => {
-                recomputed = self.embed(&x, &p);
+                recomputed = self.embed(x, &p);
                 &recomputed
             }
         };
@@ -119,7 +125,7 @@ impl CustomOp2 for EmbedOp {
         }
         let rows = de.len() / d;
         add_column_sums(&mut dp[s[1]..][..d], &de);
-        matmul(&mut dp[s[0]..][..d * pd], View::rows(&de, rows, d).t(), View::rows(&x, rows, pd), true);
+        matmul(&mut dp[s[0]..][..d * pd], View::rows(&de, rows, d).t(), View::rows(x, rows, pd), true);
         let dx = if patches.track_op() {
             Some(Tensor::from_vec(
                 product(View::rows(&de, rows, d), View::rows(&p[s[0]..][..d * pd], d, pd)),

@@ -14,7 +14,7 @@ use pvt3_format::{answers_agree, StopRule};
 use pvt3_models::Pvt3;
 use serde::{Deserialize, Serialize};
 
-use crate::{data::windows::Samples, evaluate::EVAL_BATCH};
+use crate::{data::windows::Samples, evaluate::eval_batch};
 use crate::Result;
 
 /// Answers in a row that must agree on the class before a touch stops: a single confident
@@ -87,7 +87,7 @@ pub fn answers(model: &Pvt3, samples: &Samples) -> Result<Answers> {
     let tokens = model.config().time_tokens();
     let mut probabilities = vec![Vec::with_capacity(tokens); samples.len()];
     let rows: Vec<usize> = (0..samples.len()).collect();
-    for chunk in rows.chunks(EVAL_BATCH) {
+    for chunk in rows.chunks(eval_batch(samples)) {
         let (x, _) = samples.batch(chunk, |_| {})?;
         let sequence = model.sequence(&x, None)?;
         for k in 1..=tokens {

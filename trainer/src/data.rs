@@ -27,7 +27,7 @@ use std::borrow::Cow;
 use std::fs::File;
 use std::io::{Read, Seek};
 use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
 
 use ndarray::{ArrayD, IxDyn};
 use ndarray_npy::{NpzReader, ReadNpyExt, ReadableElement};
@@ -111,8 +111,9 @@ pub const FOLDS: usize = 5;
 #[derive(Clone, Debug)]
 pub struct Dataset {
     /// Samples back to back, each in the model layout `[H, W, (C,) T]`: f32, or a camera's 8-bit
-    /// frames as recorded ([`Frames`]).
-    pub x: Frames,
+    /// frames as recorded ([`Frames`]); shared by the copies of a set (each seed's split of a
+    /// cross-validation), never copied.
+    pub x: Arc<Frames>,
     /// The layout of one sample: `[H, W, T]` or `[H, W, C, T]`; `T` is the longest touch's.
     pub sample_shape: Vec<usize>,
     /// Each touch's frames (`T` for all unless the file holds `lengths`).
@@ -336,7 +337,7 @@ impl Dataset {
             None => (stratified_folds(&labels, FOLDS, seed), Some(seed)),
         };
         Ok(Self {
-            x,
+            x: Arc::new(x),
             sample_shape,
             lengths,
             class_names,
@@ -358,7 +359,7 @@ impl Dataset {
     pub(crate) fn in_memory(x: impl Into<Frames>, sample_shape: Vec<usize>, labels: Vec<u32>) -> Self {
         let frames = *sample_shape.last().expect("a frame axis");
         Self {
-            x: x.into(),
+            x: Arc::new(x.into()),
             sample_shape,
             lengths: vec![frames; labels.len()],
             class_names: None,

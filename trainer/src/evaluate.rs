@@ -21,13 +21,23 @@ pub struct Evaluation {
     pub labels: Vec<u32>,
 }
 
-pub const EVAL_BATCH: usize = 100;
+/// Windows an evaluation batch holds at most.
+const EVAL_BATCH: usize = 100;
+/// Values an evaluation batch holds at most (256 MB as f32): a hundred windows of a tactile
+/// array, eleven of a camera's 25 frames of 240 × 320 RGB, whose hundred would take 2.3 GB and
+/// as much again cut into patches.
+const EVAL_VALUES: usize = 1 << 26;
+
+/// How many of `samples`' windows an evaluation batch takes.
+pub fn eval_batch(samples: &Samples) -> usize {
+    (EVAL_VALUES / samples.sample_len().max(1)).clamp(1, EVAL_BATCH)
+}
 
 pub fn evaluate(model: &Model, samples: &Samples) -> Result<Evaluation> {
     let mut loss_sum = 0.0;
     let mut logits = vec![Vec::new(); samples.len()];
     for (tokens, rows) in by_answer(samples, model)? {
-        for chunk in rows.chunks(EVAL_BATCH) {
+        for chunk in rows.chunks(eval_batch(samples)) {
             let (x, y) = samples.batch(chunk, |_| {})?;
             let l = match tokens {
                 None => model.forward(&x, None)?,

@@ -143,6 +143,6 @@ fn a_directory_of_npy_files_loads_like_an_npz() {
     let d = Dataset::load(&dir, 0).unwrap();
     assert_eq!((d.sample_shape.clone(), d.classes(), d.folds.clone()), (vec![2, 2, 3], 3, vec![0, 1, 2, 3, 4]));
     assert_eq!(d.sample(1)[0], 12.0);
-    assert!(matches!(d.x, crate::data::Frames::U8 { background: None, .. }), "8-bit frames stay 8-bit");
+    assert!(matches!(*d.x, crate::data::Frames::U8 { background: None, .. }), "8-bit frames stay 8-bit");
     std::fs::remove_dir_all(dir).unwrap();
 }

@@ -132,7 +132,8 @@ impl<'a> Samples<'a> {
         self.labels.is_empty()
     }
 
-    fn sample_len(&self) -> usize {
+    /// Values of one window.
+    pub fn sample_len(&self) -> usize {
         self.sample_shape.iter().product()
     }
 

@@ -260,7 +260,7 @@ fn distillation_learns_from_runs_of_the_same_split_and_resumes_exactly() {
     let none = refused(1, &data, "distill-fold1");
     assert!(none.contains("no trained run of validation fold 1") && none.contains(&teachers.display().to_string()), "{none}");
     let mut other = tiny_data();
-    let Frames::F32(x) = &mut other.x else { unreachable!("tiny data are f32") };
+    let Frames::F32(x) = std::sync::Arc::make_mut(&mut other.x) else { unreachable!("tiny data are f32") };
     x.iter_mut().for_each(|v| *v += 1.0);
     let elsewhere = refused(0, &other, "distill-other");
     assert!(elsewhere.contains("trained on another split") && elsewhere.contains("seed0/fold0"), "{elsewhere}");
