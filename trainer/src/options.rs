@@ -137,6 +137,12 @@ pub struct Augmentation {
     #[arg(long = "aug-reverse", id = "aug_reverse", value_name = "AUG_REVERSE", default_value_t = 0.0, help_heading = AUGMENTATION)]
     #[serde(default, rename = "aug_reverse")]
     pub reverse: f64,
+    /// Move each training window's image by up to N pixels (or taxels) each way, both axes drawn
+    /// alone, edge pixels repeated: a camera's touch pressed a little elsewhere on the gel.
+    /// 0 turns it off.
+    #[arg(long = "aug-translate", id = "aug_translate", value_name = "AUG_TRANSLATE", default_value_t = 0, help_heading = AUGMENTATION)]
+    #[serde(default, rename = "aug_translate")]
+    pub translate: usize,
     /// Mixup: blend each training batch with a shuffled copy of itself, λ ~ Beta(α, α) per batch,
     /// and the two labels' losses alike; this is α (e.g. 0.2). 0 turns it off.
     #[arg(long, default_value_t = 0.0, help_heading = AUGMENTATION)]
@@ -259,7 +265,7 @@ mod tests {
         options.distillation.teachers = Some("runs/cv".into());
         let json = serde_json::to_string(&options).unwrap();
         let order = "epochs batch_size lr lr_floor warmup_epochs weight_decay label_smoothing clip_grad aug_gain aug_noise \
-            aug_shift aug_scale aug_channel_scale aug_vibration aug_stretch aug_reverse mixup extrapolate extrapolate_levels ema seed l1 \
+            aug_shift aug_scale aug_channel_scale aug_vibration aug_stretch aug_reverse aug_translate mixup extrapolate extrapolate_levels ema seed l1 \
             mask_lr random_prune prefix_training distill distill_weight hold_pruned hold_zero_weights";
         let positions: Vec<usize> = order.split_whitespace().map(|k| json.find(&format!("\"{k}\":")).expect(k)).collect();
         assert!(positions.windows(2).all(|w| w[0] < w[1]), "{json}");

@@ -12,12 +12,12 @@ use pvt3_models::Rng;
 use super::normalization::Normalization;
 use crate::options::Augmentation;
 
-/// One normalised training window (`norm.frames` frames a channel, channels in rows) changed in
-/// place as `opts` asks: its raw readings scaled per window and per channel, its variation about
-/// each channel's mean scaled, shifted in time (edge frames repeated), reversed in time, then a
-/// gain and Gaussian noise; each draw from `rng`, in that order (an option that is off draws
-/// nothing).
-pub fn augment(sample: &mut [f32], norm: &Normalization, opts: &Augmentation, rng: &mut Rng) {
+/// One normalised training window (`norm.frames` frames a channel, channels in rows, `grid`'s
+/// height × width × colours of them) changed in place as `opts` asks: its raw readings scaled per
+/// window and per channel, its variation about each channel's mean scaled, shifted in time (edge
+/// frames repeated), reversed in time, its image moved, then a gain and Gaussian noise; each draw
+/// from `rng`, in that order (an option that is off draws nothing).
+pub fn augment(sample: &mut [f32], norm: &Normalization, grid: [usize; 3], opts: &Augmentation, rng: &mut Rng) {
     let frames = norm.frames;
     if opts.scale > 0.0 || opts.channel_scale > 0.0 {
         // The raw readings times k, in normalised units: k z + (k - 1) mean / std, per channel;
@@ -52,10 +52,32 @@ pub fn augment(sample: &mut [f32], norm: &Normalization, opts: &Augmentation, rn
     if opts.reverse > 0.0 && f64::from(rng.uniform()) < opts.reverse {
         sample.chunks_mut(frames).for_each(|row| row.reverse());
     }
+    if opts.translate > 0 {
+        let mut offset = || rng.below(2 * opts.translate + 1) as isize - opts.translate as isize;
+        let by = [offset(), offset()];
+        translate(sample, norm, grid, by);
+    }
     let gain = 1.0 + opts.gain as f32 * (2.0 * rng.uniform() - 1.0);
     let noise = opts.noise as f32;
     for v in sample.iter_mut() {
         *v = *v * gain + if noise > 0.0 { noise * rng.normal() } else { 0.0 };
+    }
+}
+
+/// Moves the image of a normalised window (`grid` height × width × colours rows of `norm.frames`)
+/// by `by` rows and columns, edge pixels repeated: each pixel takes the raw reading of the one it
+/// comes from, normalised as its own.
+fn translate(sample: &mut [f32], norm: &Normalization, [h, w, c]: [usize; 3], by: [isize; 2]) {
+    let frames = norm.frames;
+    let original = sample.to_vec();
+    let from = |at: usize, len: usize, by: isize| (at as isize - by).clamp(0, len as isize - 1) as usize;
+    for (row, out) in sample.chunks_mut(frames).enumerate() {
+        let (y, x, colour) = (row / (w * c), row / c % w, row % c);
+        let source = (from(y, h, by[0]) * w + from(x, w, by[1])) * c + colour;
+        let (ms, ss, md, sd) = (norm.mean[source], norm.std[source], norm.mean[row], norm.std[row]);
+        for (v, z) in out.iter_mut().zip(&original[source * frames..(source + 1) * frames]) {
+            *v = (z * ss + ms - md) / sd;
+        }
     }
 }
 

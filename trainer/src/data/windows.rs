@@ -132,6 +132,15 @@ impl<'a> Samples<'a> {
         self.labels.is_empty()
     }
 
+    /// A window's image: height, width and colours (1 for a grid of taxels).
+    pub fn grid(&self) -> [usize; 3] {
+        match self.sample_shape[..] {
+            [h, w, c, _] => [h, w, c],
+            [h, w, ..] => [h, w, 1],
+            _ => unreachable!("a sample shape has 3 or 4 axes"),
+        }
+    }
+
     /// Values of one window.
     pub fn sample_len(&self) -> usize {
         self.sample_shape.iter().product()

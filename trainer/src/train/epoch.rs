@@ -77,7 +77,7 @@ pub(super) fn train(
                 _ => crate::joint::draw_partners(rows.iter().map(|&r| own.labels[r]), &same_class[i - 1], &mut run.rng)?,
             };
             let rng = &mut run.rng;
-            batches.push(set.batch(&rows, |s| augment(s, normalization, &opts.augmentation, rng))?);
+            batches.push(set.batch(&rows, |s| augment(s, normalization, set.grid(), &opts.augmentation, rng))?);
         }
         let mut learners: Vec<_> = nets.iter_mut().map(|n| &mut n.learner).collect();
         let (stepped, apart) = step_together(&mut learners, &batches, pull, opts, lr, &mut run.rng)?;

@@ -72,6 +72,7 @@ fn options(epochs: usize) -> TrainOptions {
             vibration: 0.0,
             stretch: 0.0,
             reverse: 0.0,
+            translate: 0,
             mixup: 0.0,
             extrapolate: 0.0,
             extrapolate_levels: false,

@@ -16,7 +16,7 @@ fn scaling_multiplies_the_raw_readings_of_every_channel_alike() {
     let mut factors = Vec::new();
     for _ in 0..40 {
         let mut s = sample.clone();
-        augment(&mut s, &norm, &opts, &mut rng);
+        augment(&mut s, &norm, [norm.mean.len(), 1, 1], &opts, &mut rng);
         // Back to raw readings: each is the original times one factor k in [1/2, 2].
         let back: Vec<f32> = s.iter().enumerate().map(|(i, z)| z * norm.std[i / 3] + norm.mean[i / 3]).collect();
         let k = back[0] / raw[0];
@@ -40,7 +40,7 @@ fn channel_scaling_multiplies_each_channels_raw_readings_by_a_factor_of_its_own(
     let mut apart = 0;
     for _ in 0..40 {
         let mut s = sample.clone();
-        augment(&mut s, &norm, &opts, &mut rng);
+        augment(&mut s, &norm, [norm.mean.len(), 1, 1], &opts, &mut rng);
         let back: Vec<f32> = s.iter().enumerate().map(|(i, z)| z * norm.std[i / 3] + norm.mean[i / 3]).collect();
         let factors: Vec<f32> = (0..3).map(|c| back[3 * c] / raw[3 * c]).collect();
         for (c, k) in factors.iter().enumerate() {
@@ -64,7 +64,7 @@ fn vibration_scales_each_channel_about_its_window_mean_and_keeps_the_level() {
     let mut factors = Vec::new();
     for _ in 0..40 {
         let mut s = sample;
-        augment(&mut s, &norm, &opts, &mut rng);
+        augment(&mut s, &norm, [norm.mean.len(), 1, 1], &opts, &mut rng);
         let k = (s[1] - s[0]) / (sample[1] - sample[0]);
         assert!((0.5..=2.0).contains(&k), "{k}");
         for (row, original) in s.chunks(4).zip(sample.chunks(4)) {
@@ -86,7 +86,7 @@ fn time_shift_moves_frames_and_repeats_the_edge() {
     let mut seen = std::collections::BTreeSet::new();
     for _ in 0..50 {
         let mut sample: Vec<f32> = (0..10).map(|t| t as f32).collect(); // two channels of 5 frames
-        augment(&mut sample, &Normalization { mean: vec![0.0; 2], std: vec![1.0; 2], frames: 5 }, &opts, &mut rng);
+        augment(&mut sample, &Normalization { mean: vec![0.0; 2], std: vec![1.0; 2], frames: 5 }, [2, 1, 1], &opts, &mut rng);
         let shift = 2 - sample[2] as isize;
         let expected: Vec<f32> = (0..10).map(|i| ((i % 5) as isize - shift).clamp(0, 4) as f32 + (i / 5 * 5) as f32).collect();
         assert_eq!(sample, expected);
@@ -105,7 +105,7 @@ fn reversal_plays_each_channel_backwards_as_often_as_asked() {
     let mut reversed = 0;
     for _ in 0..200 {
         let mut sample = forward.clone();
-        augment(&mut sample, &norm, &opts, &mut rng);
+        augment(&mut sample, &norm, [norm.mean.len(), 1, 1], &opts, &mut rng);
         if sample == backward {
             reversed += 1;
         } else {
@@ -116,7 +116,42 @@ fn reversal_plays_each_channel_backwards_as_often_as_asked() {
     // Off, it draws nothing: the gain's draw is the only one, as before the option was.
     let off = Augmentation { reverse: 0.0, ..opts };
     let (mut a, mut b) = (Rng::new(9), Rng::new(9));
-    augment(&mut forward.clone(), &norm, &off, &mut a);
+    augment(&mut forward.clone(), &norm, [norm.mean.len(), 1, 1], &off, &mut a);
     b.uniform();
     assert_eq!(a.uniform(), b.uniform());
+}
+
+#[test]
+fn translation_moves_the_raw_image_and_normalises_each_pixel_as_its_own() {
+    // A 3 × 4 image of one colour and 2 frames; each pixel's raw value is 10 · row + column (+ the
+    // frame), and each pixel normalised with its own mean and deviation.
+    let (h, w, frames) = (3, 4, 2);
+    let mean: Vec<f32> = (0..h * w).map(|p| p as f32).collect();
+    let std: Vec<f32> = (0..h * w).map(|p| 1.0 + p as f32 / 4.0).collect();
+    let norm = Normalization { mean, std, frames };
+    let raw = |y: usize, x: usize, t: usize| (10 * y + x + t) as f32;
+    let image: Vec<f32> = (0..h * w).flat_map(|p| (0..frames).map(move |t| raw(p / w, p % w, t))).collect();
+    let mut sample = Vec::new();
+    norm.apply_into(&image, &mut sample);
+    let opts = Augmentation { translate: 2, gain: 0.0, noise: 0.0, ..TrainOptions::default().augmentation };
+    let mut rng = Rng::new(5);
+    let mut moves = std::collections::BTreeSet::new();
+    for _ in 0..200 {
+        let mut s = sample.clone();
+        augment(&mut s, &norm, [h, w, 1], &opts, &mut rng);
+        let back: Vec<f32> = s.iter().enumerate().map(|(i, z)| z * norm.std[i / frames] + norm.mean[i / frames]).collect();
+        // Read back, the image is the original moved by (dy, dx), edge pixels repeated.
+        let found = (-2..=2).flat_map(|dy| (-2..=2).map(move |dx| (dy, dx))).find(|&(dy, dx): &(isize, isize)| {
+            let at = |y: usize, x: usize| {
+                ((y as isize - dy).clamp(0, h as isize - 1) as usize, (x as isize - dx).clamp(0, w as isize - 1) as usize)
+            };
+            (0..h * w * frames).all(|i| {
+                let (p, t) = (i / frames, i % frames);
+                let (y, x) = at(p / w, p % w);
+                (back[i] - raw(y, x, t)).abs() < 1e-4
+            })
+        });
+        moves.insert(found.expect("the image moved by at most 2 pixels each way"));
+    }
+    assert_eq!(moves.len(), 25, "every move of up to 2 pixels each way drawn: {moves:?}");
 }
