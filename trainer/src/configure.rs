@@ -115,10 +115,15 @@ fn base_config(data: &Dataset, choice: &ModelChoice, notes: &mut Vec<String>) ->
     let shape = window.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(" × ");
     let derived = Config::for_sensor(&window)
         .ok_or_else(|| Error::Usage(format!("samples of shape {shape}: expected [height, width, (channels,) frames]")))?;
+    let layout = if pvt3_spec::config::is_image(derived.height, derived.width) {
+        let (ph, pw) = (derived.patch_height, derived.patch_width);
+        let grid = format!("{} × {}", derived.height / ph, derived.width / pw);
+        format!("derived a camera's layout, patches of {ph} × {pw} pixels ({grid} a frame), one token per {} frames", derived.tubelet)
+    } else {
+        format!("derived the BioTac layout, one token per {} frames of all {} values of a frame", derived.tubelet, derived.sensor_channels())
+    };
     notes.push(format!(
-        "no preset takes samples of {shape}: derived the BioTac layout, one token per {} frames of all {} values of a frame ({} temporal tokens); `pvt3 info --json` and --config FILE to choose otherwise",
-        derived.tubelet,
-        derived.sensor_channels(),
+        "no preset takes samples of {shape}: {layout} ({} temporal tokens); `pvt3 info --json` and --config FILE to choose otherwise",
         derived.time_tokens()
     ));
     Ok(derived.for_model(architecture))

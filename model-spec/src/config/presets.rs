@@ -8,6 +8,24 @@ use crate::{Error, Result};
 /// The sensor presets (PVT³); each also comes as `vit-NAME` and `raec-NAME`.
 pub const PRESETS: [&str; 3] = ["icub20", "biotac20", "gelsight"];
 
+/// The least height and width, in values, of a frame that is an image (a camera's): smaller grids
+/// are a tactile array's taxels or electrodes.
+pub const IMAGE_SIDE: usize = 16;
+
+/// About how many patches a derived layout cuts an image into: 3 × 4 of a 3:4 frame.
+const IMAGE_PATCHES: f64 = 12.0;
+
+/// Whether frames of `height` × `width` values are a camera's images ([`IMAGE_SIDE`]).
+pub fn is_image(height: usize, width: usize) -> bool {
+    height >= IMAGE_SIDE && width >= IMAGE_SIDE
+}
+
+/// The divisor of `n` nearest `ideal` in ratio (the smaller of two as near).
+fn nearest_divisor(n: usize, ideal: f64) -> usize {
+    let distance = |d: usize| (d as f64 / ideal).ln().abs();
+    (1..=n).filter(|d| n.is_multiple_of(*d)).min_by(|a, b| distance(*a).total_cmp(&distance(*b))).expect("1 divides every n")
+}
+
 impl Config {
     /// The iCub forearm skin preset of DESIGN.md: 6 × 10 taxels, 75 frames, 20 classes,
     /// exactly 64,272 trainable parameters besides the frame mask.
@@ -42,11 +60,14 @@ impl Config {
         Self { height: 19, width: 1, frames: 400, patch_height: 19, patch_width: 1, tubelet: 10, ..Self::icub20() }
     }
 
-    /// A sensor no preset fits, samples `[height, width, (channels,) frames]`: the BioTac layout,
-    /// which assumes no grid. All channels of a tubelet form one token (one patch covering the
-    /// frame), and the tubelet is the divisor of `frames` nearest (in ratio) to `frames / 40`, so
-    /// that about 40 temporal tokens remain, as in the BioTac preset. The rest is the BioTac
-    /// preset's. `None` for a shape that is not 3 or 4 axes of positive lengths.
+    /// A sensor no preset fits, samples `[height, width, (channels,) frames]`. The tubelet is the
+    /// divisor of `frames` nearest (in ratio) to `frames / 40`, so that about 40 temporal tokens
+    /// remain, as in the BioTac preset. A camera's images ([`is_image`]) are cut into about 12
+    /// square patches (sides the divisors of height and width nearest `√(height · width / 12)`:
+    /// 10 × 10 pixels of 30 × 40), the rest the GelSight preset's. Any other sensor gets the BioTac
+    /// layout, which assumes no grid: all channels of a tubelet form one token (one patch covering
+    /// the frame), the rest the BioTac preset's. `None` for a shape that is not 3 or 4 axes of
+    /// positive lengths.
     pub fn for_sensor(sample_shape: &[usize]) -> Option<Self> {
         let (height, width, channels, frames) = match *sample_shape {
             [h, w, f] => (h, w, 1, f),
@@ -56,9 +77,12 @@ impl Config {
         if [height, width, channels, frames].contains(&0) {
             return None;
         }
-        let ideal = frames as f64 / 40.0;
-        let distance = |d: usize| (d as f64 / ideal).ln().abs();
-        let tubelet = (1..=frames).filter(|d| frames.is_multiple_of(*d)).min_by(|a, b| distance(*a).total_cmp(&distance(*b)))?;
+        let tubelet = nearest_divisor(frames, frames as f64 / 40.0);
+        if is_image(height, width) {
+            let side = ((height * width) as f64 / IMAGE_PATCHES).sqrt();
+            let (patch_height, patch_width) = (nearest_divisor(height, side), nearest_divisor(width, side));
+            return Some(Self { height, width, channels, frames, patch_height, patch_width, tubelet, ..Self::gelsight() });
+        }
         Some(Self { height, width, channels, frames, patch_height: height, patch_width: width, tubelet, ..Self::biotac20() })
     }
 
@@ -156,5 +180,26 @@ mod tests {
         }
         assert_eq!(Config::for_sensor(&[19, 1, 400]).unwrap(), Config::biotac20());
         assert!(Config::for_sensor(&[10, 75]).is_none() && Config::for_sensor(&[0, 1, 4]).is_none());
+    }
+
+    /// A camera's images are cut into about 12 patches, with the GelSight preset's widths.
+    #[test]
+    fn a_camera_gets_about_twelve_patches_a_frame() {
+        for (shape, patch, tubelet) in [
+            (vec![30, 40, 3, 25], [10, 10], 1),
+            (vec![240, 320, 3, 25], [80, 80], 1),
+            (vec![48, 64, 100], [16, 16], 2),
+            (vec![16, 17, 3, 8], [4, 17], 1),
+        ] {
+            let cfg = Config::for_sensor(&shape).unwrap();
+            cfg.validate().unwrap();
+            assert_eq!(
+                (cfg.sample_shape(), [cfg.patch_height, cfg.patch_width], cfg.tubelet),
+                (shape.clone(), patch, tubelet),
+                "{shape:?}"
+            );
+            assert_eq!((cfg.dim, cfg.mlp_dim), (Config::gelsight().dim, Config::gelsight().mlp_dim));
+        }
+        assert_eq!(Config::for_sensor(&[15, 40, 3, 25]).unwrap().num_patches(), 1, "a grid narrower than an image");
     }
 }
