@@ -13,6 +13,8 @@ use pvt3_spec::normalization::Normalization;
 use pvt3_spec::reference;
 use pvt3_spec::weights::read_tensors;
 
+#[path = "support/onnx_check.rs"]
+mod onnx_check;
 #[path = "support/spectral_case.rs"]
 mod spectral_case;
 #[path = "support/workspace.rs"]
@@ -273,6 +275,72 @@ fn a_spectral_head_runs_in_tract_as_the_reference_and_streams() {
             let peek = session.peek().unwrap();
             let worst = peek.prediction.probabilities.iter().zip(softmax(logits)).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
             assert!(worst <= 1e-5, "{tokens} tokens: {worst:e}");
+        }
+        let streamed = session.finish().unwrap();
+        let worst = streamed.probabilities.iter().zip(&expected.probabilities).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+        assert!(worst <= 1e-5 && streamed.class == expected.class, "streamed against whole window: {worst:e}");
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// A camera's model in every form: the layout `pvt3 cv` derives for 30 × 40 RGB frames (patches
+/// of 10 × 10 pixels, 12 a frame, the GelSight preset's widths), a quarter of its frames pruned
+/// and the others scaled, 8-bit pixel values normalised pixel by pixel. Candle's forward, the
+/// runtime on whole windows and frame by frame (its provisional answers too), tract-onnx and
+/// onnxruntime all equal the f64 reference within 1e-5.
+#[test]
+fn a_camera_model_equals_the_reference_in_every_form() {
+    let cfg = Config { classes: 5, ..Config::for_sensor(&[30, 40, 3, 25]).unwrap() };
+    assert_eq!((cfg.patch_height, cfg.patch_width, cfg.num_patches(), cfg.dim), (10, 10, 12, 64));
+    let (model, varmap) = Pvt3::init(&cfg, 7).unwrap();
+    let scales: Vec<f32> = (0..25).map(|t| if t % 4 == 3 { 0.0 } else { 1.0 - t as f32 / 50.0 }).collect();
+    varmap.data().lock().unwrap()["frame_mask"].set(&candle_core::Tensor::new(scales, &candle_core::Device::Cpu).unwrap()).unwrap();
+    let baked = bake(&cfg, &varmap_tensors(&varmap).unwrap()).unwrap();
+    assert_eq!(baked.kept_tokens.len(), 19);
+    let (pixels, mut rng) = (30 * 40 * 3, pvt3_models::Rng::new(8));
+    let norm = Normalization {
+        mean: (0..pixels).map(|_| 100.0 + 30.0 * rng.normal()).collect(),
+        std: (0..pixels).map(|_| 20.0 + 10.0 * rng.normal().abs()).collect(),
+        frames: 25,
+    };
+    let raw: Vec<f32> = (0..2 * pixels * 25).map(|_| (128.0 + 60.0 * rng.normal()).clamp(0.0, 255.0).round()).collect();
+    let mut normalised = Vec::new();
+    raw.chunks(pixels * 25).for_each(|sample| norm.apply_into(sample, &mut normalised));
+    let reference = reference::forward(&baked, &normalised, 2).unwrap();
+    let within = |got: &[f32], form: &str| {
+        let worst = got.iter().zip(reference.iter().flatten()).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
+        assert!(worst <= 1e-5, "{form} against the f64 reference: {worst:e}");
+    };
+    let x = candle_core::Tensor::from_vec(normalised.clone(), (2, 30, 40, 3, 25), &candle_core::Device::Cpu).unwrap();
+    within(&model.forward(&x, None).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap(), "candle");
+    let meta = pvt3_export::Metadata {
+        classes: (0..5).map(|k| format!("c{k}")).collect(),
+        provenance: serde_json::json!({"data": "synthetic camera"}),
+        stop_rule: None,
+        reading: None,
+    };
+    let dir = scratch("camera");
+    let path = dir.join("camera.onnx");
+    pvt3_export::write(&pvt3_export::export(&baked, &norm, &meta).unwrap(), &path).unwrap();
+    let c = Classifier::load(&path).unwrap();
+    let (logits, _) = c.run(&raw, 2).unwrap();
+    within(&logits, "the runtime");
+    tract_onnx_agrees(&path, &c, &raw, 2);
+    let expected: Vec<f32> = reference.iter().flatten().map(|v| *v as f32).collect();
+    let msg = onnx_check::assert_onnxruntime_matches(&path, (&[2, 30, 40, 3, 25], &raw), &expected, 1e-5, None);
+    assert!(msg.starts_with("ok"), "{msg}");
+    let whole = c.classify_batch(&raw, 2).unwrap();
+    let mut session = c.session().unwrap();
+    for ((sample, normalised), expected) in raw.chunks(pixels * 25).zip(normalised.chunks(pixels * 25)).zip(&whole) {
+        for t in 0..25 {
+            // The camera's frame: every pixel's colours, row by row.
+            session.push_frame(&(0..pixels).map(|i| sample[i * 25 + t]).collect::<Vec<_>>()).unwrap();
+            if t % 6 == 5 {
+                let logits = &reference::forward_prefix(&baked, normalised, 1, t + 1).unwrap()[0];
+                let peek = session.peek().unwrap();
+                let worst = peek.prediction.probabilities.iter().zip(softmax(logits)).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
+                assert!(worst <= 1e-5, "{} frames: {worst:e}", t + 1);
+            }
         }
         let streamed = session.finish().unwrap();
         let worst = streamed.probabilities.iter().zip(&expected.probabilities).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
