@@ -23,26 +23,6 @@ impl From<Vec<f32>> for Frames {
 }
 
 impl Frames {
-    /// The values held, of every touch.
-    pub fn len(&self) -> usize {
-        match self {
-            Self::F32(x) => x.len(),
-            Self::U8 { x, .. } => x.len(),
-        }
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
-    /// Bytes of memory the frames take.
-    pub fn bytes(&self) -> usize {
-        match self {
-            Self::F32(x) => 4 * x.len(),
-            Self::U8 { x, background } => x.len() + background.as_ref().map_or(0, Vec::len),
-        }
-    }
-
     /// Touch `i` of `len` values, `frames` a row, as f32: borrowed where stored so, else read
     /// from the 8-bit frames minus the background.
     pub fn sample(&self, i: usize, len: usize, frames: usize) -> Cow<'_, [f32]> {
@@ -70,7 +50,6 @@ mod tests {
         let frames = Frames::U8 { x: (0..12).map(|v| 10 * v).collect(), background: Some(vec![5, 0, 100, 255]) };
         assert_eq!(frames.sample(0, 6, 3).as_ref(), &[-5.0, 5.0, 15.0, 30.0, 40.0, 50.0]);
         assert_eq!(frames.sample(1, 6, 3).as_ref(), &[-40.0, -30.0, -20.0, -165.0, -155.0, -145.0]);
-        assert_eq!(frames.bytes(), 16);
         let plain = Frames::U8 { x: vec![0, 255], background: None };
         assert_eq!(plain.sample(0, 2, 2).as_ref(), &[0.0, 255.0]);
         let floats = Frames::from(vec![0.5, -1.0, 2.0, 3.0]);
