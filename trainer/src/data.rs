@@ -278,13 +278,13 @@ impl Dataset {
         } else {
             None
         };
-        let n = shape[0];
         let sample_shape = match shape[..] {
             [_, c, t] => vec![c, 1, t],
             [_, h, w, t] => vec![h, w, t],
             [_, h, w, c, t] => vec![h, w, c, t],
             _ => return Err(data_error(path, format!("`x` has shape {shape:?}; expected [N, H, W, T], [N, C, T] or [N, H, W, C, T]"))),
         };
+        let n = shape[0];
         let labels = integers(path, key::Y, &y, n)?;
         let frames = *sample_shape.last().expect("a sample shape has a frame axis");
         let lengths = if keys.iter().any(|k| k == key::LENGTHS) {

@@ -144,5 +144,14 @@ fn a_directory_of_npy_files_loads_like_an_npz() {
     assert_eq!((d.sample_shape.clone(), d.classes(), d.folds.clone()), (vec![2, 2, 3], 3, vec![0, 1, 2, 3, 4]));
     assert_eq!(d.sample(1)[0], 12.0);
     assert!(matches!(*d.x, crate::data::Frames::U8 { background: None, .. }), "8-bit frames stay 8-bit");
+    // A single number for `x`, 8-bit or not, is an error naming the file, not a panic.
+    for dtype in ["u8", "f32"] {
+        match dtype {
+            "u8" => write_npy(dir.join("x.npy"), &ndarray::arr0(7u8)).unwrap(),
+            _ => write_npy(dir.join("x.npy"), &ndarray::arr0(7f32)).unwrap(),
+        }
+        let msg = Dataset::load(&dir, 0).unwrap_err().to_string();
+        assert!(msg.contains("`x` has shape []") && msg.contains(&dir.display().to_string()), "{dtype}: {msg}");
+    }
     std::fs::remove_dir_all(dir).unwrap();
 }
