@@ -518,7 +518,8 @@ fn fabric_like(tag: &str, touches: usize) -> (PathBuf, PathBuf) {
 
 /// A camera's touches as a user brings them, MPEG-4 videos named `<object>_<n>.mov` side by side
 /// (as PhysiCLeAR's, made here by FFmpeg's test sources): imported shrunk, grey and minus each
-/// touch's first frame, then trained on; options of the other kind of touch refused.
+/// touch's first frame, then trained on and exported, the file saying how a camera's frames are
+/// read; options of the other kind of touch refused.
 #[test]
 fn a_camera_s_videos_import_and_train() {
     let dir = scratch("camera");
@@ -542,9 +543,19 @@ fn a_camera_s_videos_import_and_train() {
     let set = Dataset::load(&data, 0).unwrap();
     assert_eq!((set.sample_shape.clone(), set.class_names.clone().unwrap()), (vec![12, 16, 8], vec!["smooth_tile".to_string(), "striped_cloth".to_string()]));
     assert!((0..set.len()).any(|i| set.sample(i).iter().any(|v| *v < 0.0)), "frames minus the first: some pixels darker than before contact");
-    let mut args = vec!["train", "--data", d, "--out", r, "--epochs", "1"];
+    let onnx = dir.join("model.onnx");
+    let mut args = vec!["train", "--data", d, "--out", r, "--epochs", "1", "--export", onnx.to_str().unwrap()];
     args.extend(SMALL);
     succeeds(&args);
+    // The exported file says how the camera's frames were read; a session takes them as FFmpeg
+    // gives them, 48 × 64 RGB, the first of a touch its background.
+    let c = pvt3_runtime::Classifier::load(&onnx).unwrap();
+    let camera = pvt3_runtime::picture::Camera { recorded: [48, 64, 3], crop: None, size: Some([12, 16]), grey: true, subtract_first: true };
+    assert_eq!(c.camera(), Some(camera));
+    let raw = Command::new("ffmpeg").args(["-v", "error", "-i"]).arg(videos.join("smooth_tile_0.mov")).args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"]).output().unwrap();
+    let mut session = c.session().unwrap();
+    raw.stdout.chunks(48 * 64 * 3).take(9).for_each(|frame| session.push_camera_frame(frame).unwrap());
+    assert_eq!(session.finish().unwrap().probabilities.len(), 2);
     let err = fails(&["import", v, "--grid", "3x4", "--out", d]);
     assert!(err.contains("--grid is for CSV touches") && err.contains("holds a camera's (videos or frame folders)"), "{err}");
     let csvs = dir.join("csvs");

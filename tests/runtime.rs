@@ -121,6 +121,7 @@ fn streaming_equals_the_whole_window_with_heads_tubelets_and_pruned_tokens() {
         provenance: serde_json::json!({}),
         stop_rule: Some(StopRule { top_probability: 0.095, agreeing: 3 }),
         reading: None,
+        camera: None,
     };
     for (bad, says) in
         [((0.0, 3), "is not in (0, 1]"), ((1.5, 3), "is not in (0, 1]"), ((f32::NAN, 3), "is not in (0, 1]"), ((0.5, 0), "agreeing = 0")]
@@ -246,6 +247,7 @@ fn a_spectral_head_runs_in_tract_as_the_reference_and_streams() {
         provenance: serde_json::json!({"data": "synthetic"}),
         stop_rule: Some(StopRule { top_probability: 0.5, agreeing: 2 }),
         reading: None,
+        camera: None,
     };
     let dir = scratch("spectral");
     let path = dir.join("spectral.onnx");
@@ -283,26 +285,48 @@ fn a_spectral_head_runs_in_tract_as_the_reference_and_streams() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
-/// A camera's model in every form: the layout `pvt3 cv` derives for 30 × 40 RGB frames (patches
-/// of 10 × 10 pixels, 12 a frame, the GelSight preset's widths), a quarter of its frames pruned
-/// and the others scaled, 8-bit pixel values normalised pixel by pixel. Candle's forward, the
-/// runtime on whole windows and frame by frame (its provisional answers too), tract-onnx and
-/// onnxruntime all equal the f64 reference within 1e-5.
-#[test]
-fn a_camera_model_equals_the_reference_in_every_form() {
-    let cfg = Config { classes: 5, ..Config::for_sensor(&[30, 40, 3, 25]).unwrap() };
+/// A camera's model: the layout `pvt3 cv` derives for 30 × 40 RGB frames (patches of 10 × 10
+/// pixels, 12 a frame, the GelSight preset's widths) with a patch mask, a quarter of its frames
+/// and half of its patches pruned and the others scaled, normalised pixel by pixel; with its
+/// candle form and the metadata it is exported with.
+fn camera_model() -> (Pvt3, pvt3_spec::baked::BakedPvt3, Normalization, pvt3_export::Metadata) {
+    let layout = Config { classes: 5, ..Config::for_sensor(&[30, 40, 3, 25]).unwrap() };
+    let cfg = Config { network: pvt3_models::Pvt3Config { patch_selection: true, ..Default::default() }.into(), ..layout };
     assert_eq!((cfg.patch_height, cfg.patch_width, cfg.num_patches(), cfg.dim), (10, 10, 12, 64));
     let (model, varmap) = Pvt3::init(&cfg, 7).unwrap();
+    let unpruned = bake(&cfg, &varmap_tensors(&varmap).unwrap()).unwrap();
     let scales: Vec<f32> = (0..25).map(|t| if t % 4 == 3 { 0.0 } else { 1.0 - t as f32 / 50.0 }).collect();
     varmap.data().lock().unwrap()["frame_mask"].set(&candle_core::Tensor::new(scales, &candle_core::Device::Cpu).unwrap()).unwrap();
+    let patches: Vec<f32> = (0..12).map(|p| if p % 2 == 1 { 0.0 } else { 0.5 + p as f32 / 10.0 }).collect();
+    varmap.data().lock().unwrap()["patch_mask"].set(&candle_core::Tensor::new(patches, &candle_core::Device::Cpu).unwrap()).unwrap();
     let baked = bake(&cfg, &varmap_tensors(&varmap).unwrap()).unwrap();
-    assert_eq!(baked.kept_tokens.len(), 19);
+    assert_eq!((baked.kept_tokens.len(), baked.kept_patches.len()), (19, 6));
+    // Half the patches: about half the spatial transformer's and the embedding's work.
+    let frames_only = unpruned.mult_adds() as f64 * 19.0 / 25.0;
+    assert!((baked.mult_adds() as f64) < 0.6 * frames_only, "{} of {frames_only}", baked.mult_adds());
     let (pixels, mut rng) = (30 * 40 * 3, pvt3_models::Rng::new(8));
     let norm = Normalization {
         mean: (0..pixels).map(|_| 100.0 + 30.0 * rng.normal()).collect(),
         std: (0..pixels).map(|_| 20.0 + 10.0 * rng.normal().abs()).collect(),
         frames: 25,
     };
+    let meta = pvt3_export::Metadata {
+        classes: (0..5).map(|k| format!("c{k}")).collect(),
+        provenance: serde_json::json!({"data": "synthetic camera"}),
+        stop_rule: None,
+        reading: None,
+        camera: None,
+    };
+    (model, baked, norm, meta)
+}
+
+/// The camera model of [`camera_model`] in every form, 8-bit pixel values: candle's forward, the
+/// runtime on whole windows and frame by frame (its provisional answers too), tract-onnx and
+/// onnxruntime all equal the f64 reference within 1e-5.
+#[test]
+fn a_camera_model_equals_the_reference_in_every_form() {
+    let (model, baked, norm, meta) = camera_model();
+    let (pixels, mut rng) = (30 * 40 * 3, pvt3_models::Rng::new(9));
     let raw: Vec<f32> = (0..2 * pixels * 25).map(|_| (128.0 + 60.0 * rng.normal()).clamp(0.0, 255.0).round()).collect();
     let mut normalised = Vec::new();
     raw.chunks(pixels * 25).for_each(|sample| norm.apply_into(sample, &mut normalised));
@@ -313,12 +337,6 @@ fn a_camera_model_equals_the_reference_in_every_form() {
     };
     let x = candle_core::Tensor::from_vec(normalised.clone(), (2, 30, 40, 3, 25), &candle_core::Device::Cpu).unwrap();
     within(&model.forward(&x, None).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap(), "candle");
-    let meta = pvt3_export::Metadata {
-        classes: (0..5).map(|k| format!("c{k}")).collect(),
-        provenance: serde_json::json!({"data": "synthetic camera"}),
-        stop_rule: None,
-        reading: None,
-    };
     let dir = scratch("camera");
     let path = dir.join("camera.onnx");
     pvt3_export::write(&pvt3_export::export(&baked, &norm, &meta).unwrap(), &path).unwrap();
@@ -338,7 +356,8 @@ fn a_camera_model_equals_the_reference_in_every_form() {
             if t % 6 == 5 {
                 let logits = &reference::forward_prefix(&baked, normalised, 1, t + 1).unwrap()[0];
                 let peek = session.peek().unwrap();
-                let worst = peek.prediction.probabilities.iter().zip(softmax(logits)).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
+                let worst =
+                    peek.prediction.probabilities.iter().zip(softmax(logits)).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
                 assert!(worst <= 1e-5, "{} frames: {worst:e}", t + 1);
             }
         }
@@ -346,5 +365,46 @@ fn a_camera_model_equals_the_reference_in_every_form() {
         let worst = streamed.probabilities.iter().zip(&expected.probabilities).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
         assert!(worst <= 1e-5 && streamed.class == expected.class, "streamed against whole window: {worst:e}");
     }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// 8-bit frames as a camera gives them (60 × 80 RGB), to a model whose file says how they were
+/// read (shrunk to 30 × 40, less the touch's first frame): a session's answer equals the f64
+/// reference on the frames so read.
+#[test]
+fn a_camera_s_frames_are_read_as_the_import_read_them() {
+    let (_, baked, norm, meta) = camera_model();
+    let camera =
+        pvt3_runtime::picture::Camera { recorded: [60, 80, 3], crop: None, size: Some([30, 40]), grey: false, subtract_first: true };
+    let dir = scratch("camera-frames");
+    let path = dir.join("camera.onnx");
+    pvt3_export::write(&pvt3_export::export(&baked, &norm, &pvt3_export::Metadata { camera: Some(camera), ..meta }).unwrap(), &path)
+        .unwrap();
+    let c = Classifier::load(&path).unwrap();
+    assert_eq!((c.camera(), c.camera_frame_len()), (Some(camera), 60 * 80 * 3));
+    let mut rng = pvt3_models::Rng::new(10);
+    // The gel before contact, then the touch's 25 frames.
+    let touch: Vec<Vec<u8>> =
+        (0..26).map(|_| (0..60 * 80 * 3).map(|_| (128.0 + 60.0 * rng.normal()).clamp(0.0, 255.0) as u8).collect()).collect();
+    let read =
+        |f: &[u8]| pvt3_runtime::picture::Picture { height: 60, width: 80, channels: 3, data: f.to_vec() }.read_as(&camera).unwrap().data;
+    let background = read(&touch[0]);
+    let pixels = 30 * 40 * 3;
+    let mut sample = vec![0f32; pixels * 25];
+    for (t, frame) in touch[1..].iter().enumerate() {
+        read(frame).iter().zip(&background).enumerate().for_each(|(i, (v, b))| sample[i * 25 + t] = f32::from(*v) - f32::from(*b));
+    }
+    let mut normalised = Vec::new();
+    norm.apply_into(&sample, &mut normalised);
+    let expected = softmax(&reference::forward(&baked, &normalised, 1).unwrap()[0]);
+    let mut session = c.session().unwrap();
+    for _ in 0..2 {
+        touch.iter().for_each(|frame| session.push_camera_frame(frame).unwrap());
+        let got = session.finish().unwrap();
+        let worst = got.probabilities.iter().zip(&expected).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
+        assert!(worst <= 1e-5, "camera frames against the reference: {worst:e}");
+    }
+    let err = session.push_camera_frame(&touch[0][1..]).unwrap_err();
+    assert!(matches!(err, Error::FrameLength { got: 14399, expected: 14400 }), "{err}");
     std::fs::remove_dir_all(dir).unwrap();
 }

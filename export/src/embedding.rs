@@ -4,7 +4,9 @@
 //! padded to whole vectors (on the raw iCub rows of 60 values it cost a sixth of the model). The
 //! embedding of small frames is one product with a block-diagonal matrix that maps a token's
 //! whole frame to all of its patch embeddings, which spares the rearrangement into patches; large
-//! frames (where that matrix would be large) are cut into patches first.
+//! frames (where that matrix would be large) are cut into patches first. A model whose patch mask
+//! pruned patches gathers the kept patches' values first, so that nothing after reads the
+//! pruned ones.
 
 use pvt3_spec::baked::{BakedPvt3, Dense};
 use pvt3_spec::normalization::Normalization;
@@ -24,10 +26,14 @@ const DENSE_LIMIT: usize = 1 << 20;
 /// `[tokens, patches, dim]`.
 pub(crate) fn embed(g: &mut Graph, frames: &str, m: &BakedPvt3, norm: &Normalization) -> String {
     let c = &m.config;
-    let (tt, h, w, ch, d, n) = (c.tubelet, c.height, c.width, c.channels, c.dim, c.num_patches());
+    let (tt, h, w, ch, d) = (c.tubelet, c.height, c.width, c.channels, c.dim);
     let features = tt * h * w * ch;
     let flat = g.i64s("frame_rows", &[2], vec![-1, features as i64]);
     let rows = g.op(Op::Reshape, &[frames, &flat]);
+    if m.kept_patches.len() < c.num_patches() {
+        return embed_kept_patches(g, &rows, m, norm);
+    }
+    let n = c.num_patches();
     // Padded to whole vectors: tract runs a row broadcast fast only if the row is a multiple of
     // 64 values, and element by element otherwise.
     let padded = features.div_ceil(ALIGN) * ALIGN;
@@ -42,10 +48,7 @@ pub(crate) fn embed(g: &mut Graph, frames: &str, m: &BakedPvt3, norm: &Normaliza
         row.resize(padded, pad);
         row
     };
-    let mean = g.f32s("norm_mean", &[padded], per_feature(&norm.mean, 0.0));
-    let std = g.f32s("norm_std", &[padded], per_feature(&norm.std, 1.0));
-    let shifted = g.op(Op::Sub, &[&rows, &mean]);
-    let rows = g.op(Op::Div, &[&shifted, &std]);
+    let rows = normalise(g, &rows, per_feature(&norm.mean, 0.0), per_feature(&norm.std, 1.0));
     let embedding = centred(&m.patch_embed);
     let x = if padded * n * d <= DENSE_LIMIT {
         linear(g, &rows, &block_diagonal(m, &embedding, padded), "patch_embed")
@@ -63,6 +66,48 @@ pub(crate) fn embed(g: &mut Graph, frames: &str, m: &BakedPvt3, norm: &Normaliza
         linear(g, &x, &embedding, "patch_embed")
     };
     let tokens = g.i64s("tokens", &[3], vec![-1, n as i64, d as i64]);
+    g.op(Op::Reshape, &[&x, &tokens])
+}
+
+/// `(rows − mean) / std`, per column.
+fn normalise(g: &mut Graph, rows: &str, mean: Vec<f32>, std: Vec<f32>) -> String {
+    let mean = g.f32s("norm_mean", &[mean.len()], mean);
+    let std = g.f32s("norm_std", &[std.len()], std);
+    let shifted = g.op(Op::Sub, &[rows, &mean]);
+    g.op(Op::Div, &[&shifted, &std])
+}
+
+/// The embedding of the kept patches alone from a token's frame `rows` `[N, tt·h·w·c]`: one
+/// gather takes their values in patch order (padded to whole vectors, as above), then the
+/// normalisation and the embedding read those only.
+fn embed_kept_patches(g: &mut Graph, rows: &str, m: &BakedPvt3, norm: &Normalization) -> String {
+    let c = &m.config;
+    let (tt, h, w, ch, d, pd) = (c.tubelet, c.height, c.width, c.channels, c.dim, c.patch_dim());
+    let (ph, pw, gw, nk) = (c.patch_height, c.patch_width, c.width / c.patch_width, m.kept_patches.len());
+    // Each kept patch's values in the patch embedding's order, `((f · ph + dy) · pw + dx) · c + k`.
+    let mut columns: Vec<usize> = Vec::with_capacity(nk * pd);
+    for &p in &m.kept_patches {
+        for f in 0..tt {
+            for dy in 0..ph {
+                for dx in 0..pw {
+                    let (y, x) = ((p / gw) * ph + dy, (p % gw) * pw + dx);
+                    columns.extend((0..ch).map(|k| ((f * h + y) * w + x) * ch + k));
+                }
+            }
+        }
+    }
+    let values = nk * pd;
+    columns.resize(values.div_ceil(ALIGN) * ALIGN, 0);
+    let index = g.i64s("kept_patch_values", &[columns.len()], columns.iter().map(|v| *v as i64).collect());
+    let rows = g.node(Op::Gather, &[rows, &index], vec![int("axis", 1)], None);
+    let per_value = |v: &[f32]| columns.iter().map(|i| v[i % (h * w * ch)]).collect();
+    let rows = normalise(g, &rows, per_value(&norm.mean), per_value(&norm.std));
+    let (start, end, axis) = (g.i64s("start", &[1], vec![0]), g.i64s("end", &[1], vec![values as i64]), g.i64s("axis", &[1], vec![1]));
+    let rows = g.op(Op::Slice, &[&rows, &start, &end, &axis]);
+    let patch_rows = g.i64s("patch_rows", &[2], vec![-1, pd as i64]);
+    let x = g.op(Op::Reshape, &[&rows, &patch_rows]);
+    let x = linear(g, &x, &centred(&m.patch_embed), "patch_embed");
+    let tokens = g.i64s("tokens", &[3], vec![-1, nk as i64, d as i64]);
     g.op(Op::Reshape, &[&x, &tokens])
 }
 

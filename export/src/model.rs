@@ -30,6 +30,9 @@ pub struct Metadata {
     /// How the model reads a touch (`pvt3.reading`), if its training touches were brought to one
     /// speed and force.
     pub reading: Option<pvt3_format::Reading>,
+    /// How a camera's frames become the model's (`pvt3.camera`), for a model of camera frames
+    /// imported from videos or images.
+    pub camera: Option<pvt3_format::Camera>,
 }
 
 /// One pre-norm block on the (centred) stream `x`: `[rows, dim]` out, or with `cls_only` the
@@ -82,11 +85,14 @@ fn check(m: &BakedPvt3, norm: &Normalization, meta: &Metadata) -> Result<()> {
     if meta.classes.len() != c.classes {
         return Err(Error::Inconsistent(format!("{} class names for {} classes", meta.classes.len(), c.classes)));
     }
+    if let Some(problem) = meta.camera.and_then(|cam| cam.problem(&dims(c))) {
+        return Err(Error::Inconsistent(format!("camera: {problem}")));
+    }
     if let Some(problem) = meta.stop_rule.and_then(|r| r.problem()) {
         return Err(Error::Inconsistent(format!("stopping rule: {problem}")));
     }
-    if m.kept_tokens.is_empty() {
-        return Err(Error::Unsupported("every frame is pruned; the model would ignore its input".into()));
+    if m.kept_tokens.is_empty() || m.kept_patches.is_empty() {
+        return Err(Error::Unsupported("every frame or every patch is pruned; the model would ignore its input".into()));
     }
     for (name, t) in [("space", &m.space), ("temporal", &m.temporal)] {
         for (i, b) in t.layers.iter().enumerate() {
@@ -168,14 +174,20 @@ fn token_seams(g: &mut Graph, m: &BakedPvt3) {
 /// name of the shape `[-1, dim]` of its rows, which the temporal stage reads too.
 fn spatial_stage(g: &mut Graph, m: &BakedPvt3, norm: &Normalization) -> String {
     let c = &m.config;
-    let (n, d, eps, tk) = (c.num_patches(), c.dim, c.layer_norm_eps, m.kept_tokens.len());
+    let (n, d, eps, tk) = (m.kept_patches.len(), c.dim, c.layer_norm_eps, m.kept_tokens.len());
     // Spatial stage. Everything written to the residual stream is centred (see `layers`), so
     // every pre-norm is a root-mean-square norm: the patch embedding, the CLS tokens, the
     // position embedding, each block's outputs, and the encodings handed to the temporal stage.
     let x = embed(g, TOKEN_FRAMES, m, norm);
-    let scales = g.f32s("frame_scale", &[tk], m.token_scale.clone());
+    // Each kept token's frame-mask value, times each kept patch's patch-mask value if any is not one.
+    let (scales, column) = if m.patch_scale.iter().all(|s| *s == 1.0) {
+        (g.f32s("frame_scale", &[tk], m.token_scale.clone()), vec![-1, 1, 1])
+    } else {
+        let table = m.token_scale.iter().flat_map(|t| m.patch_scale.iter().map(move |p| t * p)).collect();
+        (g.f32s("frame_scale", &[tk, n], table), vec![-1, n as i64, 1])
+    };
     let scale = g.node(Op::Gather, &[&scales, TOKEN_INDEX], vec![int("axis", 0)], None);
-    let column = g.i64s("column", &[3], vec![-1, 1, 1]);
+    let column = g.i64s("column", &[3], column);
     let scale = g.op(Op::Reshape, &[&scale, &column]);
     let embedded = g.op(Op::Mul, &[&x, &scale]);
     let token_shape = g.op(Op::Shape, &[TOKEN_FRAMES]);
@@ -241,10 +253,15 @@ fn temporal_stage(g: &mut Graph, m: &BakedPvt3, norm: &Normalization, flat: &str
     g.node(Op::Softmax, &[&logits], vec![int("axis", -1)], Some(PROBABILITIES));
 }
 
+/// The input and token sizes a runtime reads, of configuration `c`.
+fn dims(c: &pvt3_spec::Config) -> Dims {
+    Dims { height: c.height, width: c.width, channels: c.channels, frames: c.frames, tubelet: c.tubelet, dim: c.dim }
+}
+
 /// The graph `g` as a model with its inputs, outputs and metadata, signed.
 fn signed_model(g: Graph, m: &BakedPvt3, meta: &Metadata) -> ModelProto {
     let c = &m.config;
-    let (h, w, ch, tt, d) = (c.height, c.width, c.channels, c.tubelet, c.dim);
+    let tt = c.tubelet;
     let sample = c.sample_shape();
     let kept_frames: Vec<usize> = m.kept_tokens.iter().flat_map(|k| k * tt..(k + 1) * tt).collect();
 
@@ -257,8 +274,9 @@ fn signed_model(g: Graph, m: &BakedPvt3, meta: &Metadata) -> ModelProto {
         input: vec![value_info(INPUT, &input_dims)],
         output: vec![value_info(LOGITS, &[None, Some(c.classes)]), value_info(PROBABILITIES, &[None, Some(c.classes)])],
     };
-    let dims = Dims { height: h, width: w, channels: ch, frames: c.frames, tubelet: tt, dim: d };
-    let header = Header { classes: meta.classes.clone(), kept_frames, dims, stop_rule: meta.stop_rule, reading: meta.reading };
+    let dims = dims(c);
+    let header =
+        Header { classes: meta.classes.clone(), kept_frames, dims, stop_rule: meta.stop_rule, reading: meta.reading, camera: meta.camera };
     let config = serde_json::to_value(c).expect("the configuration serialises");
     let mut props = header.entries(&config);
     props.push((keys::PROVENANCE, meta.provenance.to_string()));

@@ -6,7 +6,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::keys;
+use crate::{keys, Camera};
 
 /// The file format this crate reads and writes, `major.minor`. A runtime reads every file of
 /// its major version; a new minor version only adds what older runtimes may ignore.
@@ -48,6 +48,8 @@ pub struct Header {
     pub stop_rule: Option<StopRule>,
     /// How the model reads a touch ([`keys::READING`]); `None`: as the sensor records it.
     pub reading: Option<Reading>,
+    /// How a camera's frames become the model's ([`keys::CAMERA`]); `None`: given as it reads them.
+    pub camera: Option<Camera>,
 }
 
 /// How a model reads a touch when its training touches were brought to one sliding speed and one
@@ -104,7 +106,13 @@ impl StopRule {
     /// calibration and replay: a touch stops after its `k`-th temporal token when the answer then,
     /// `class` with `probability`, is at least [`StopRule::top_probability`] sure and
     /// [`answers_agree`] over the last [`StopRule::agreeing`] tokens.
-    pub fn stops<E>(&self, k: usize, class: usize, probability: f32, class_after: impl FnMut(usize) -> Result<usize, E>) -> Result<bool, E> {
+    pub fn stops<E>(
+        &self,
+        k: usize,
+        class: usize,
+        probability: f32,
+        class_after: impl FnMut(usize) -> Result<usize, E>,
+    ) -> Result<bool, E> {
         let sure = probability >= self.top_probability;
         if !sure {
             return Ok(false);
@@ -124,7 +132,12 @@ impl std::fmt::Display for StopRule {
 /// the `k`-th's: `class_after(j)` gives the class answered after `j` tokens, asked for `j` from
 /// `k + 1 − agreeing` to `k − 1` in order, until one differs. False while fewer than `agreeing`
 /// tokens are in.
-pub fn answers_agree<E>(agreeing: usize, k: usize, class: usize, mut class_after: impl FnMut(usize) -> Result<usize, E>) -> Result<bool, E> {
+pub fn answers_agree<E>(
+    agreeing: usize,
+    k: usize,
+    class: usize,
+    mut class_after: impl FnMut(usize) -> Result<usize, E>,
+) -> Result<bool, E> {
     if k < agreeing {
         return Ok(false);
     }
@@ -168,6 +181,9 @@ impl Header {
         if let Some(reading) = self.reading {
             entries.push((keys::READING, serde_json::to_string(&reading).expect("plain data serialises")));
         }
+        if let Some(camera) = self.camera {
+            entries.push((keys::CAMERA, serde_json::to_string(&camera).expect("plain data serialises")));
+        }
         entries
     }
 
@@ -198,6 +214,7 @@ impl Header {
             dims: json(keys::CONFIG, get(keys::CONFIG)?)?,
             stop_rule: get(keys::STOP_RULE).ok().map(|t| json(keys::STOP_RULE, t)).transpose()?,
             reading: get(keys::READING).ok().map(|t| json(keys::READING, t)).transpose()?,
+            camera: get(keys::CAMERA).ok().map(|t| json(keys::CAMERA, t)).transpose()?,
         };
         header.check()?;
         Ok(header)
@@ -225,6 +242,9 @@ impl Header {
         if let Some(problem) = self.reading.and_then(|r| r.problem()) {
             return bad(keys::READING, &problem);
         }
+        if let Some(problem) = self.camera.and_then(|c| c.problem(&self.dims)) {
+            return bad(keys::CAMERA, &problem);
+        }
         Ok(())
     }
 }
@@ -241,6 +261,7 @@ mod tests {
             dims,
             stop_rule: Some(StopRule { top_probability: 0.875, agreeing: 3 }),
             reading: None,
+            camera: None,
         }
     }
 
@@ -297,7 +318,11 @@ mod tests {
             let h = Header { reading: Some(reading), ..h.clone() };
             assert_eq!(parse(&h.entries(&config(&h))).unwrap(), h);
         }
-        assert!(entries.iter().all(|(k, _)| *k != keys::READING));
+        assert!(entries.iter().all(|(k, _)| *k != keys::READING && *k != keys::CAMERA));
+        // So is how a camera's frames are read.
+        let camera = Camera { recorded: [12, 20, 3], crop: None, size: Some([6, 10]), grey: true, subtract_first: true };
+        let h = Header { camera: Some(camera), ..h };
+        assert_eq!(parse(&h.entries(&config(&h))).unwrap(), h);
     }
 
     #[test]
@@ -317,7 +342,8 @@ mod tests {
     #[test]
     fn inconsistent_metadata_is_refused() {
         let h = header();
-        let broken: [fn(&mut Header); 15] = [
+        let broken: [fn(&mut Header); 16] = [
+            |h| h.camera = Some(Camera { recorded: [12, 20, 3], crop: None, size: Some([6, 10]), grey: false, subtract_first: false }),
             |h| h.reading = Some(Reading { speed: Some(0.0), force: None }),
             |h| h.reading = Some(Reading { speed: Some(150.0), force: Some(-3.0) }),
             |h| h.reading = Some(Reading { speed: None, force: Some(0.0) }),

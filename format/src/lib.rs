@@ -4,10 +4,12 @@
 //! Both sides read these from here and nowhere else; the runtime depends on this crate and tract
 //! alone.
 
+mod camera;
 mod digest;
 mod header;
 pub mod onnx;
 
+pub use camera::{Camera, Crop};
 pub use digest::{digest, verify, Integrity};
 pub use header::{answers_agree, top_class, Dims, Header, HeaderError, Reading, StopRule, FORMAT_VERSION};
 
@@ -62,6 +64,10 @@ pub mod keys {
     /// force of 150. Absent: the model reads frames as the sensor records them. A runtime that
     /// does not know it classifies frames already read so alike.
     pub const READING: &str = "pvt3.reading";
+    /// How a camera's frames become the model's (optional), a JSON [`crate::Camera`]:
+    /// `{"recorded": [240, 320, 3], "size": [30, 40], "grey": false, "subtract_first": true}`.
+    /// Absent: the model's frames are given as it reads them.
+    pub const CAMERA: &str = "pvt3.camera";
     /// The integrity digest: `sha256:` and the hex SHA-256 of everything else in the file
     /// ([`crate::digest`]).
     pub const DIGEST: &str = "pvt3.digest";

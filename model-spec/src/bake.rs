@@ -11,6 +11,10 @@
 //!   embeddings are zero, so its spatial encoding is a constant of the weights. Baking computes
 //!   that constant once; the baked model gathers only the kept frames from the input, encodes
 //!   them, and puts the constants in the pruned places of the temporal sequence.
+//! - Patches: a patch whose patch-mask value is zero has no token in the masked model
+//!   (`Pvt3Config::patch_selection`), so the baked one neither reads nor embeds it: its
+//!   position-embedding rows go, and the surviving mask values scale the kept patches'
+//!   embeddings.
 //!
 //! The result, [`BakedPvt3`] (`crate::baked`), is plain data (no candle types), so the exporter
 //! can depend on it alone.
@@ -18,7 +22,7 @@
 use crate::baked::{BakedAttention, BakedBlock, BakedFeedForward, BakedPvt3, BakedSpectrum, BakedTransformer, Dense, Norm};
 use crate::names::{
     join, layer, spectral, ATTN, ATTN_NORM, BIAS, CHANNEL_MASK, FC1, FC2, FFN, FFN_NORM, FRAME_MASK, HEAD, HEAD_NORM, LINEAR, NORM, OUT,
-    PATCH_EMBED, POS_EMBED, QKV, SCALE, SHIFT, SPACE, SPACE_CLS, TEMPORAL, TEMPORAL_CLS, WEIGHT,
+    PATCH_EMBED, PATCH_MASK, POS_EMBED, QKV, SCALE, SHIFT, SPACE, SPACE_CLS, TEMPORAL, TEMPORAL_CLS, WEIGHT,
 };
 use crate::reference;
 use crate::weights::Tensors;
@@ -142,24 +146,30 @@ pub fn bake(cfg: &Config, tensors: &Tensors) -> Result<BakedPvt3> {
     let (t, n, d) = (cfg.time_tokens(), cfg.num_patches(), cfg.dim);
     let frame_mask = src.get(FRAME_MASK, &[t])?;
     let kept_tokens: Vec<usize> = (0..t).filter(|&k| frame_mask[k] != 0.0).collect();
+    let patch_mask = if cfg.patch_selection() { src.get(PATCH_MASK, &[n])?.to_vec() } else { vec![1.0; n] };
+    let kept_patches: Vec<usize> = (0..n).filter(|&p| patch_mask[p] != 0.0).collect();
+    // Each token's position embedding: the CLS token's row, then the kept patches'.
     let pos = src.get(POS_EMBED, &[1, t, n + 1, d])?;
-    let row = (n + 1) * d;
+    let rows: Vec<usize> = std::iter::once(0).chain(kept_patches.iter().map(|p| p + 1)).collect();
+    let positions = |k: usize| rows.iter().flat_map(move |r| pos[(k * (n + 1) + r) * d..][..d].iter().copied());
     let space_cls = src.get(SPACE_CLS, &[1, 1, d])?.to_vec();
     let space = bake_transformer(&src, SPACE, cfg.space_depth, cfg)?;
     // A pruned token's spatial input is the CLS token and the position embedding alone.
     let mut pruned_encodings = vec![0f32; t * d];
     for k in (0..t).filter(|k| frame_mask[*k] == 0.0) {
-        let mut tokens: Vec<f64> = pos[k * row..(k + 1) * row].iter().map(|v| *v as f64).collect();
+        let mut tokens: Vec<f64> = positions(k).map(|v| v as f64).collect();
         tokens.iter_mut().zip(&space_cls).for_each(|(v, c)| *v += *c as f64);
-        let encoded = reference::transformer_cls(&space, &tokens, n + 1, d, cfg.layer_norm_eps);
+        let encoded = reference::transformer_cls(&space, &tokens, rows.len(), d, cfg.layer_norm_eps);
         pruned_encodings[k * d..(k + 1) * d].iter_mut().zip(encoded).for_each(|(o, v)| *o = v as f32);
     }
     Ok(BakedPvt3 {
         config: cfg.clone(),
         patch_embed: src.dense(PATCH_EMBED, d, cfg.patch_dim(), true)?,
         token_scale: kept_tokens.iter().map(|&k| frame_mask[k]).collect(),
-        pos_embed: kept_tokens.iter().flat_map(|&k| pos[k * row..(k + 1) * row].iter().copied()).collect(),
+        pos_embed: kept_tokens.iter().flat_map(|&k| positions(k)).collect(),
         kept_tokens,
+        patch_scale: kept_patches.iter().map(|&p| patch_mask[p]).collect(),
+        kept_patches,
         space_cls,
         temporal_cls: src.get(TEMPORAL_CLS, &[1, 1, d])?.to_vec(),
         pruned_encodings,

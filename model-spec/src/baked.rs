@@ -78,7 +78,13 @@ pub struct BakedPvt3 {
     pub kept_tokens: Vec<usize>,
     /// The frame-mask value of each kept token, applied to its patch embeddings.
     pub token_scale: Vec<f32>,
-    /// `[kept tokens, patches + 1, dim]`.
+    /// Patches of the grid (row-major) that are read from the input and embedded, ascending:
+    /// all of them unless the patch mask pruned some.
+    pub kept_patches: Vec<usize>,
+    /// The patch-mask value of each kept patch (ones without a patch mask), applied to its
+    /// embeddings.
+    pub patch_scale: Vec<f32>,
+    /// `[kept tokens, kept patches + 1, dim]`.
     pub pos_embed: Vec<f32>,
     pub space_cls: Vec<f32>,
     pub temporal_cls: Vec<f32>,
@@ -94,7 +100,7 @@ pub struct BakedPvt3 {
 }
 
 impl BakedPvt3 {
-    /// Trainable values left after baking (the frame scale included).
+    /// Trainable values left after baking (the frame and patch scales included).
     pub fn parameter_count(&self) -> usize {
         let dense = |l: &Dense| l.weight.len() + l.bias.as_ref().map_or(0, Vec::len);
         let norm = |n: &Norm| n.weight.len() + n.bias.len();
@@ -117,6 +123,7 @@ impl BakedPvt3 {
         };
         dense(&self.patch_embed)
             + self.token_scale.len()
+            + if self.config.patch_selection() { self.patch_scale.len() } else { 0 }
             + self.pos_embed.len()
             + self.space_cls.len()
             + self.temporal_cls.len()
@@ -127,10 +134,16 @@ impl BakedPvt3 {
             + self.spectrum.as_ref().map_or(0, |s| s.scale.len() + s.shift.len() + dense(&s.linear))
     }
 
-    /// "N parameters, M multiply-adds per sample, k of T temporal tokens kept".
+    /// "N parameters, M multiply-adds per sample, k of T temporal tokens kept" (and ", j of P
+    /// patches kept" for a model with a patch mask).
     pub fn size_summary(&self) -> String {
+        let patches = if self.config.patch_selection() {
+            format!(", {} of {} patches kept", self.kept_patches.len(), self.config.num_patches())
+        } else {
+            String::new()
+        };
         format!(
-            "{} parameters, {} multiply-adds per sample, {} of {} temporal tokens kept",
+            "{} parameters, {} multiply-adds per sample, {} of {} temporal tokens kept{patches}",
             self.parameter_count(),
             self.mult_adds(),
             self.kept_tokens.len(),
@@ -141,7 +154,7 @@ impl BakedPvt3 {
     /// Multiply-adds per sample (matrix products only), as [`Config::mult_adds`] counts them.
     pub fn mult_adds(&self) -> u64 {
         let c = &self.config;
-        let (n, t) = (c.num_patches(), c.time_tokens());
+        let (n, t) = (self.kept_patches.len(), c.time_tokens());
         let layer = |b: &BakedBlock, seqs: usize, len: usize| {
             let a = &b.attn;
             let inner = a.heads * a.head_dim;

@@ -98,6 +98,11 @@ impl Config {
         }
     }
 
+    /// Whether the model has a patch-selection mask (`Pvt3Config::patch_selection`).
+    pub fn patch_selection(&self) -> bool {
+        matches!(&self.network, Network::Pvt3(p) if p.patch_selection)
+    }
+
     /// Checks that the sizes fit together.
     pub fn validate(&self) -> Result<()> {
         let mut positive = vec![

@@ -17,6 +17,8 @@ pub const BIAS: &str = "bias";
 pub const PATCH_EMBED: &str = "patch_embed";
 /// PVT³'s frame-selection mask, one entry per temporal token.
 pub const FRAME_MASK: &str = "frame_mask";
+/// PVT³'s patch-selection mask, one entry per patch of the grid (`Pvt3Config::patch_selection`).
+pub const PATCH_MASK: &str = "patch_mask";
 pub const POS_EMBED: &str = "pos_embed";
 pub const SPACE_CLS: &str = "space_cls";
 pub const TEMPORAL_CLS: &str = "temporal_cls";
@@ -65,7 +67,7 @@ pub const LINEAR: &str = "linear";
 /// it. Read from its name by [`Role::of`], for every architecture.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Role {
-    /// A selection mask (channels or frames): starts at one, trained at its own rate, pruned by
+    /// A selection mask (channels, frames or patches): starts at one, trained at its own rate, pruned by
     /// magnitude.
     Mask,
     /// A layer norm's scale: starts at one.
@@ -91,7 +93,7 @@ impl Role {
         let (parent, leaf) = name.rsplit_once('.').unwrap_or(("", name));
         let is_norm = parent.ends_with(NORM);
         match leaf {
-            _ if leaf == FRAME_MASK || leaf == CHANNEL_MASK => Role::Mask,
+            _ if leaf == FRAME_MASK || leaf == PATCH_MASK || leaf == CHANNEL_MASK => Role::Mask,
             WEIGHT if is_norm => Role::NormScale,
             BIAS if is_norm => Role::NormShift,
             SCALE if parent == SPECTRAL => Role::StandardScale,
@@ -191,6 +193,9 @@ pub fn pvt3_variables(cfg: &Config) -> Vec<Variable> {
     let mut vars = Vec::new();
     vars.extend(linear(PATCH_EMBED, d, cfg.patch_dim()));
     vars.push(Variable::new(FRAME_MASK.into(), vec![t]));
+    if cfg.patch_selection() {
+        vars.push(Variable::new(PATCH_MASK.into(), vec![n]));
+    }
     vars.push(Variable::new(POS_EMBED.into(), vec![1, t, n + 1, d]));
     vars.push(Variable::new(SPACE_CLS.into(), vec![1, 1, d]));
     vars.push(Variable::new(TEMPORAL_CLS.into(), vec![1, 1, d]));

@@ -3,7 +3,9 @@
 //! Channel pruning removes the `p` % of channel-mask entries with the smallest |score|: per mask
 //! (local; for attention, per head, so heads stay equal in width) or below one threshold over all
 //! channel masks (global). Frame pruning removes the `q` % of temporal tokens with the smallest
-//! |frame-mask| value. Entries already zero count as the smallest.
+//! |frame-mask| value, patch pruning the `r` % of the grid's patches with the smallest
+//! |patch-mask| value (a model with `patch_selection`). Entries already zero count as the
+//! smallest.
 
 use std::collections::BTreeMap;
 
@@ -30,12 +32,20 @@ pub struct PruneSpec {
     pub channels: f64,
     /// Percentage of temporal tokens to remove.
     pub frames: f64,
+    /// Percentage of the grid's patches to remove (a model with a patch mask); written only when
+    /// not zero, so that earlier runs' records read and write as before.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub patches: f64,
     pub scope: Scope,
     /// Percentage of the entries of every weight matrix set to zero at random and kept there
     /// (persistent random unstructured pruning, [`random_weights`]). It regularises; it makes the
     /// model no smaller, since the matrices stay dense.
     #[serde(default)]
     pub weights: f64,
+}
+
+fn is_zero(v: &f64) -> bool {
+    *v == 0.0
 }
 
 /// Zeroes `percent` % of the entries of every weight matrix in `tensors` ([`Role::Matrix`]),
@@ -97,8 +107,14 @@ fn share(n: usize, percent: f64) -> usize {
 /// The plan for `spec` over the masks in `tensors`.
 pub fn plan(cfg: &Config, tensors: &Tensors, spec: &PruneSpec) -> Result<Plan> {
     cfg.require_pvt3("pruning")?;
-    for (what, p) in [("channels", spec.channels), ("frames", spec.frames)] {
+    for (what, p) in [("channels", spec.channels), ("frames", spec.frames), ("patches", spec.patches)] {
         check_percent(what, p)?;
+    }
+    if spec.patches > 0.0 && !cfg.patch_selection() {
+        return Err(Error::Config(format!(
+            "cannot prune {} % of the patches of a model without a patch mask: train it with --set patch_selection=true",
+            spec.patches
+        )));
     }
     let get = |name: &str| -> Result<&Vec<f32>> {
         tensors.get(name).map(|(_, v)| v).ok_or_else(|| Error::MissingTensor { task: "prune", name: name.into() })
@@ -132,6 +148,10 @@ pub fn plan(cfg: &Config, tensors: &Tensors, spec: &PruneSpec) -> Result<Plan> {
     }
     let frames = get(names::FRAME_MASK)?;
     plan.insert(names::FRAME_MASK.into(), keep_largest(frames, share(frames.len(), spec.frames)));
+    if cfg.patch_selection() {
+        let patches = get(names::PATCH_MASK)?;
+        plan.insert(names::PATCH_MASK.into(), keep_largest(patches, share(patches.len(), spec.patches)));
+    }
     Ok(plan)
 }
 
@@ -164,7 +184,7 @@ mod tests {
         let cfg = Config { heads: 2, dim_head: 4, mlp_dim: 8, ..Config::icub20() };
         // Scores alternate in sign; magnitudes rise with the index inside each head.
         let t = tensors(&cfg, |_, i| if i % 2 == 0 { (i % 4) as f32 } else { -((i % 4) as f32) });
-        let p = plan(&cfg, &t, &PruneSpec { channels: 50.0, frames: 40.0, scope: Scope::Local, weights: 0.0 }).unwrap();
+        let p = plan(&cfg, &t, &PruneSpec { channels: 50.0, frames: 40.0, patches: 0.0, scope: Scope::Local, weights: 0.0 }).unwrap();
         assert_eq!(p["space.layers.0.attn.channel_mask"], vec![false, false, true, true, false, false, true, true]);
         assert_eq!(p["space.layers.0.ffn.channel_mask"].iter().filter(|k| !**k).count(), 4);
         assert_eq!(p["frame_mask"].iter().filter(|k| !**k).count(), 30);
@@ -175,14 +195,25 @@ mod tests {
         let cfg = Config::icub20();
         // Temporal masks score high, spatial ones low: global pruning takes the spatial ones first.
         let t = tensors(&cfg, |name, i| if name.starts_with("space") { 0.1 + i as f32 * 1e-3 } else { 1.0 });
-        let p = plan(&cfg, &t, &PruneSpec { channels: 50.0, frames: 0.0, scope: Scope::Global, weights: 0.0 }).unwrap();
+        let p = plan(&cfg, &t, &PruneSpec { channels: 50.0, frames: 0.0, patches: 0.0, scope: Scope::Global, weights: 0.0 }).unwrap();
         assert!(p["space.layers.2.attn.channel_mask"].iter().all(|k| !k));
         assert!(p["temporal.layers.2.ffn.channel_mask"].iter().all(|k| *k));
         assert!(p["frame_mask"].iter().all(|k| *k));
         let mut pruned = t.clone();
         apply(&p, &mut pruned);
         assert!(pruned["space.layers.0.ffn.channel_mask"].1.iter().all(|v| *v == 0.0));
-        let err = plan(&cfg, &t, &PruneSpec { channels: 120.0, frames: 0.0, scope: Scope::Local, weights: 0.0 }).unwrap_err();
+        let err = plan(&cfg, &t, &PruneSpec { channels: 120.0, frames: 0.0, patches: 0.0, scope: Scope::Local, weights: 0.0 }).unwrap_err();
         assert!(err.to_string().contains("give a percentage from 0 to 100"));
+    }
+
+    #[test]
+    fn patch_pruning_takes_the_smallest_patch_mask_values_of_a_model_with_one() {
+        let cfg = Config { network: crate::Pvt3Config { patch_selection: true, ..Default::default() }.into(), ..Config::icub20() };
+        let mut t = tensors(&cfg, |_, _| 1.0);
+        t.insert(names::PATCH_MASK.into(), (vec![4], vec![0.9, -0.2, 0.5, 1.1]));
+        let spec = PruneSpec { channels: 0.0, frames: 0.0, patches: 50.0, scope: Scope::Local, weights: 0.0 };
+        assert_eq!(plan(&cfg, &t, &spec).unwrap()[names::PATCH_MASK], vec![true, false, false, true]);
+        let err = plan(&Config::icub20(), &t, &spec).unwrap_err().to_string();
+        assert!(err.contains("without a patch mask: train it with --set patch_selection=true"), "{err}");
     }
 }

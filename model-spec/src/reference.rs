@@ -73,12 +73,13 @@ pub fn transformer_cls(t: &BakedTransformer, tokens: &[f64], len: usize, dim: us
     layer_norm(&t.norm, &x[0], eps)
 }
 
-/// Patch vectors of temporal token `k` of one raw sample (`[h, w, (c,) t]`).
+/// Patch vectors of temporal token `k` of one raw sample (`[h, w, (c,) t]`), of the kept patches.
 fn patches(m: &BakedPvt3, sample: &[f32], k: usize) -> Vec<Vec<f64>> {
     let c = &m.config;
     let (gw, frames) = (c.width / c.patch_width, c.frames);
-    (0..c.num_patches())
-        .map(|p| {
+    m.kept_patches
+        .iter()
+        .map(|&p| {
             let (pr, pc) = (p / gw, p % gw);
             let mut v = Vec::with_capacity(c.patch_dim());
             for dt in 0..c.tubelet {
@@ -149,7 +150,7 @@ fn transformer_logits(m: &BakedPvt3, x: &[f32], batch: usize, tokens: usize) -> 
         return Err(Error::InputShape { got: vec![x.len()], expected: format!("{batch} × {sample_len} values") });
     }
     c.check_prefix(tokens)?;
-    let (n, d, eps) = (c.num_patches(), c.dim, c.layer_norm_eps);
+    let (n, d, eps) = (m.kept_patches.len(), c.dim, c.layer_norm_eps);
     x.chunks(sample_len)
         .map(|sample| {
             let mut sequence = m.temporal_cls.iter().map(|v| *v as f64).collect::<Vec<_>>();
@@ -157,8 +158,9 @@ fn transformer_logits(m: &BakedPvt3, x: &[f32], batch: usize, tokens: usize) -> 
             for (kk, &k) in m.kept_tokens.iter().enumerate().filter(|(_, k)| **k < tokens) {
                 let pos = &m.pos_embed[kk * (n + 1) * d..(kk + 1) * (n + 1) * d];
                 let mut tokens: Vec<f64> = m.space_cls.iter().map(|v| *v as f64).collect();
-                for p in patches(m, sample, k) {
-                    tokens.extend(dense(&m.patch_embed, &p).into_iter().map(|e| e * m.token_scale[kk] as f64));
+                for (p, scale) in patches(m, sample, k).iter().zip(&m.patch_scale) {
+                    let scale = m.token_scale[kk] as f64 * *scale as f64;
+                    tokens.extend(dense(&m.patch_embed, p).into_iter().map(|e| e * scale));
                 }
                 tokens.iter_mut().zip(pos).for_each(|(t, p)| *t += *p as f64);
                 let enc = transformer_cls(&m.space, &tokens, n + 1, d, eps);

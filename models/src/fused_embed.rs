@@ -1,5 +1,5 @@
 //! PVT³'s token embedding as one candle op with a hand-written backward: patches → linear patch
-//! embedding → × frame mask → spatial CLS token in front → + position embedding. Composed of
+//! embedding → × frame mask × patch mask → spatial CLS token in front → + position embedding. Composed of
 //! candle ops, the backward of the masks and embeddings broadcast over the batch are strided
 //! reductions on the training thread; fused, they are short loops.
 
@@ -22,14 +22,15 @@ pub struct EmbedDims {
 
 impl EmbedDims {
     /// The packed parameters, in order: `patch_embed.weight` `[dim, patch_dim]`,
-    /// `patch_embed.bias` `[dim]`, `frame_mask` `[tokens]`, `space_cls` `[dim]` and `pos_embed`
-    /// `[tokens, patches + 1, dim]`; their lengths.
-    fn lengths(&self) -> [usize; 5] {
+    /// `patch_embed.bias` `[dim]`, `frame_mask` `[tokens]`, `space_cls` `[dim]`, `pos_embed`
+    /// `[tokens, patches + 1, dim]` and the patch scale `[patches]` (the patch mask's values,
+    /// ones without one); their lengths.
+    fn lengths(&self) -> [usize; 6] {
         let d = self.dim;
-        [d * self.patch_dim, d, self.tokens, d, self.tokens * (self.patches + 1) * d]
+        [d * self.patch_dim, d, self.tokens, d, self.tokens * (self.patches + 1) * d, self.patches]
     }
 
-    fn starts(&self) -> [usize; 5] {
+    fn starts(&self) -> [usize; 6] {
         let mut start = 0;
         self.lengths().map(|len| {
             start += len;
@@ -42,7 +43,7 @@ impl EmbedDims {
 /// `[batch, tokens, patches + 1, dim]`.
 pub struct EmbedOp {
     dims: EmbedDims,
-    /// The patch embeddings before the frame mask, `[batch · tokens · patches, dim]`, for the
+    /// The patch embeddings before the masks, `[batch · tokens · patches, dim]`, for the
     /// mask's gradient.
     embedded: OnceLock<Vec<f32>>,
 }
@@ -78,14 +79,16 @@ impl CustomOp2 for EmbedOp {
         }
         let (x, p) = (values(sx, lx)?, values(sp, lp)?);
         let (d, s) = (dm.dim, dm.starts());
-        let (mask, cls, pos) = (&p[s[2]..][..t], &p[s[3]..][..d], &p[s[4]..]);
+        let (mask, cls, pos, scale) = (&p[s[2]..][..t], &p[s[3]..][..d], &p[s[4]..][..t * (n + 1) * d], &p[s[5]..][..n]);
         let e = self.embed(x, p);
         let mut out = Vec::with_capacity(b * t * (n + 1) * d);
         for (bt, rows) in e.chunks_exact(n * d).enumerate() {
             let k = bt % t;
             let pos = &pos[k * (n + 1) * d..][..(n + 1) * d];
             out.extend(cls.iter().zip(pos).map(|(c, q)| c + q));
-            out.extend(rows.iter().zip(&pos[d..]).map(|(v, q)| v * mask[k] + q));
+            for ((row, pos), scale) in rows.chunks_exact(d).zip(pos[d..].chunks_exact(d)).zip(scale) {
+                out.extend(row.iter().zip(pos).map(|(v, q)| v * mask[k] * scale + q));
+            }
         }
         let _ = self.embedded.set(e);
         Ok((CpuStorage::F32(out), Shape::from((b, t, n + 1, d))))
@@ -111,17 +114,22 @@ impl CustomOp2 for EmbedOp {
                 &recomputed
             }
         };
-        let mask = &p[s[2]..][..t];
+        let (mask, scale) = (&p[s[2]..][..t], &p[s[5]..][..n]);
         let mut dp = vec![0f32; p.len()];
-        // The gradient of the patch embeddings before the mask, `[rows, dim]`.
+        // The gradient of the patch embeddings before the masks, `[rows, dim]`.
         let mut de = Vec::with_capacity(e.len());
         for (bt, (gs, es)) in g.chunks_exact((n + 1) * d).zip(e.chunks_exact(n * d)).enumerate() {
             let k = bt % t;
             add_column_sums(&mut dp[s[3]..][..d], &gs[..d]);
             dp[s[4] + k * (n + 1) * d..][..(n + 1) * d].iter_mut().zip(gs).for_each(|(a, v)| *a += v);
             let patch_grads = &gs[d..];
-            dp[s[2] + k] += patch_grads.iter().zip(es).map(|(a, b)| a * b).sum::<f32>();
-            de.extend(patch_grads.iter().map(|v| v * mask[k]));
+            // One sum over the token's patches, as without a patch mask (whose scale is one).
+            let scaled = es.chunks_exact(d).zip(scale).flat_map(|(row, s)| row.iter().map(move |v| v * s));
+            dp[s[2] + k] += patch_grads.iter().zip(scaled).map(|(a, b)| a * b).sum::<f32>();
+            for (i, (gp, ep)) in patch_grads.chunks_exact(d).zip(es.chunks_exact(d)).enumerate() {
+                dp[s[5] + i] += gp.iter().zip(ep).map(|(a, b)| a * b).sum::<f32>() * mask[k];
+                de.extend(gp.iter().map(|v| v * mask[k] * scale[i]));
+            }
         }
         let rows = de.len() / d;
         add_column_sums(&mut dp[s[1]..][..d], &de);

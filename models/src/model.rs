@@ -69,7 +69,7 @@ mod tests {
         let configs = [
             Config::icub20(),
             Config { heads: 2, dim_head: 8, tubelet: 3, dropout: 0.1, ..Config::icub20() },
-            Config { network: Pvt3Config { spectral_bands: 4 }.into(), ..Config::icub20() },
+            Config { network: Pvt3Config { spectral_bands: 4, ..Default::default() }.into(), ..Config::icub20() },
             Config { dropout: 0.1, ..Config::preset("vit-icub20").unwrap() },
             Config { dropout: 0.1, ..Config::preset("raec-icub20").unwrap() },
             Config { frames: 40, ..Config::preset("raec-biotac20").unwrap() },

@@ -4,7 +4,8 @@
 //! Patch flattening follows the golden files: within a temporal token the patch index is
 //! row-major over the patch grid and the feature index is `((dt · ph + dy) · pw + dx) · c + ci`.
 //! The frame mask scales each temporal token's patch embeddings before the CLS token and the
-//! position embedding are added.
+//! position embedding are added; a patch mask (`patch_selection`) scales each patch's, and a
+//! patch whose entry is zero has no token at all.
 
 use candle_core::{Tensor, D};
 use candle_nn::{linear, Init, Linear, Module, VarBuilder, VarMap};
@@ -27,6 +28,8 @@ mod tests;
 pub struct Pvt3 {
     patch_embed: Linear,
     frame_mask: Tensor,
+    /// `[num_patches]`, for a model with `patch_selection`.
+    patch_mask: Option<Tensor>,
     pos_embed: Tensor,
     space_cls: Tensor,
     temporal_cls: Tensor,
@@ -48,6 +51,10 @@ impl Pvt3 {
         Ok(Self {
             patch_embed: linear(cfg.patch_dim(), d, vb.pp(names::PATCH_EMBED))?,
             frame_mask: vb.get_with_hints(t, names::FRAME_MASK, Init::Const(1.0))?,
+            patch_mask: match cfg.patch_selection() {
+                true => Some(vb.get_with_hints(n, names::PATCH_MASK, Init::Const(1.0))?),
+                false => None,
+            },
             pos_embed: vb.get_with_hints((1, t, n + 1, d), names::POS_EMBED, small)?,
             space_cls: vb.get_with_hints((1, 1, d), names::SPACE_CLS, small)?,
             temporal_cls: vb.get_with_hints((1, 1, d), names::TEMPORAL_CLS, small)?,
@@ -130,37 +137,85 @@ impl Pvt3 {
     /// temporal token's spatial encoding.
     pub fn sequence(&self, x: &Tensor, mut rng: Option<&mut Rng>) -> Result<Tensor> {
         let patches = self.patchify(x)?;
-        let (b, t, n, _) = patches.dims4()?;
-        let d = self.cfg.dim;
         let tokens = if composed_ops() { self.embed_composed(&patches)? } else { self.embed(&patches)? };
+        let (b, t, len, d) = tokens.dims4()?;
         let tokens = self.dropout.forward(&tokens, rng.as_deref_mut())?;
-        let frames = self.space.forward_cls(&tokens.reshape((b * t, n + 1, d))?, rng)?;
+        let frames = self.space.forward_cls(&tokens.reshape((b * t, len, d))?, rng)?;
         let cls = self.temporal_cls.broadcast_as((b, 1, d))?;
         Ok(Tensor::cat(&[&cls, &frames.reshape((b, t, d))?], 1)?)
     }
 
-    /// The tokens of the spatial transformer, `[b, t, n + 1, dim]`, from patches `[b, t, n, patch_dim]`:
-    /// patch embedding, × frame mask, the CLS token in front, + position embedding, as one fused op.
+    /// The patches of the spatial sequence: those the patch mask keeps (all, without one), each
+    /// one's mask value, and the position embedding of the CLS token and those.
+    fn selection(&self) -> Result<Selection> {
+        let n = self.cfg.num_patches();
+        let Some(mask) = &self.patch_mask else {
+            let ones = Tensor::ones(n, candle_core::DType::F32, self.pos_embed.device())?;
+            return Ok(Selection { kept: None, scale: ones, pos: self.pos_embed.clone() });
+        };
+        let values = mask.to_vec1::<f32>()?;
+        if values.iter().all(|v| *v != 0.0) {
+            return Ok(Selection { kept: None, scale: mask.clone(), pos: self.pos_embed.clone() });
+        }
+        let kept: Vec<u32> = (0..n as u32).filter(|p| values[*p as usize] != 0.0).collect();
+        let rows: Vec<u32> = std::iter::once(0).chain(kept.iter().map(|p| p + 1)).collect();
+        let device = mask.device();
+        let kept = Tensor::new(kept, device)?;
+        Ok(Selection {
+            scale: mask.index_select(&kept, 0)?,
+            pos: self.pos_embed.index_select(&Tensor::new(rows, device)?, 2)?,
+            kept: Some(kept),
+        })
+    }
+
+    /// The tokens of the spatial transformer, `[b, t, kept + 1, dim]`, from patches
+    /// `[b, t, n, patch_dim]`: the patches the patch mask keeps, their embedding, × frame mask
+    /// × patch mask, the CLS token in front, + position embedding, as one fused op.
     pub fn embed(&self, patches: &Tensor) -> Result<Tensor> {
+        let s = self.selection()?;
+        let patches = s.take(patches)?;
         let (_, t, n, patch_dim) = patches.dims4()?;
         let bias = self.patch_embed.bias().expect("linear has a bias");
-        let packed = pack([self.patch_embed.weight(), bias, &self.frame_mask, &self.space_cls, &self.pos_embed])?;
+        let packed = pack([self.patch_embed.weight(), bias, &self.frame_mask, &self.space_cls, &s.pos, &s.scale])?;
         let dims = EmbedDims { tokens: t, patches: n, patch_dim, dim: self.cfg.dim };
-        Ok(EmbedOp::new(dims).apply(patches, &packed)?)
+        Ok(EmbedOp::new(dims).apply(&patches, &packed)?)
     }
 
     /// [`Self::embed`] composed of candle ops: the oracle of its tests.
     pub fn embed_composed(&self, patches: &Tensor) -> Result<Tensor> {
+        let s = self.selection()?;
+        let patches = s.take(patches)?;
         let (b, t, n, p) = patches.dims4()?;
         let d = self.cfg.dim;
         let embedded = self.patch_embed.forward(&patches.reshape((b * t * n, p))?)?.reshape((b, t, n, d))?;
         let embedded = embedded.broadcast_mul(&self.frame_mask.reshape((1, t, 1, 1))?)?;
+        let embedded = embedded.broadcast_mul(&s.scale.reshape((1, 1, n, 1))?)?;
         let cls = self.space_cls.reshape((1, 1, 1, d))?.broadcast_as((b, t, 1, d))?;
-        Ok(Tensor::cat(&[&cls, &embedded], 2)?.broadcast_add(&self.pos_embed)?)
+        Ok(Tensor::cat(&[&cls, &embedded], 2)?.broadcast_add(&s.pos)?)
     }
 
     /// Class probabilities `[b, classes]` (evaluation mode).
     pub fn probabilities(&self, x: &Tensor) -> Result<Tensor> {
         Ok(candle_nn::ops::softmax(&self.forward(x, None)?, D::Minus1)?)
+    }
+}
+
+/// The spatial sequence's patches as the patch mask selects them ([`Pvt3::selection`]).
+struct Selection {
+    /// The kept patches' indices; `None`: all of them.
+    kept: Option<Tensor>,
+    /// `[kept]`: each kept patch's mask value (ones without a mask).
+    scale: Tensor,
+    /// `[1, t, kept + 1, dim]`.
+    pos: Tensor,
+}
+
+impl Selection {
+    /// The kept patches of `[b, t, n, patch_dim]`.
+    fn take(&self, patches: &Tensor) -> Result<Tensor> {
+        Ok(match &self.kept {
+            Some(kept) => patches.index_select(kept, 2)?,
+            None => patches.clone(),
+        })
     }
 }

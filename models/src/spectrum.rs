@@ -89,7 +89,7 @@ mod tests {
             width: 1,
             patch_height: 1,
             patch_width: 1,
-            network: Pvt3Config { spectral_bands: 4 }.into(),
+            network: Pvt3Config { spectral_bands: 4, ..Default::default() }.into(),
             ..Config::icub20()
         };
         let vb = VarBuilder::zeros(DType::F32, &Device::Cpu);
@@ -113,7 +113,7 @@ mod tests {
     #[test]
     fn frames_outside_the_weights_are_not_read() {
         let cfg = Config { frames: 40, height: 2, width: 1, patch_height: 1, patch_width: 1, ..Config::icub20() };
-        let cfg = Config { network: Pvt3Config { spectral_bands: 4 }.into(), ..cfg };
+        let cfg = Config { network: Pvt3Config { spectral_bands: 4, ..Default::default() }.into(), ..cfg };
         let head = Spectrum::new(&cfg, VarBuilder::zeros(DType::F32, &Device::Cpu)).unwrap();
         let weights: Vec<f64> = (0..40).map(|n| if n < 20 { 1.0 } else { 0.0 }).collect();
         let window = |tail: f32| -> Tensor {

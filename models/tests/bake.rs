@@ -73,6 +73,10 @@ fn check_against_parent(cfg: Config, prune_channels: bool, prune_frames: bool) {
         }
     }
     set_mask(&varmap, "frame_mask", &mut rng, |t| prune_frames && t % 4 != 0);
+    if cfg.patch_selection() {
+        // Two of the grid's four patches gone, the others scaled.
+        set_mask(&varmap, "patch_mask", &mut rng, |p| p == 1 || p == 2);
+    }
     if cfg.spectral_bands() > 0 {
         // A standardisation of the spectral features other than the identity.
         set_mask(&varmap, "spectral.scale", &mut rng, |_| false);
@@ -85,6 +89,9 @@ fn check_against_parent(cfg: Config, prune_channels: bool, prune_frames: bool) {
     }
     if prune_frames {
         assert_eq!(baked.kept_tokens.len(), cfg.time_tokens().div_ceil(4));
+    }
+    if cfg.patch_selection() {
+        assert_eq!(baked.kept_patches, [0, 3]);
     }
     let (x, b) = real_samples();
     let input = Tensor::from_vec(x.clone(), (b, 6, 10, 75), &Device::Cpu).unwrap();
@@ -122,7 +129,7 @@ fn baked_equals_masked_parent_with_several_heads_and_tubelets() {
 
 #[test]
 fn baked_equals_masked_parent_with_a_spectral_head() {
-    let cfg = Config { network: Pvt3Config { spectral_bands: 8 }.into(), ..Config::icub20() };
+    let cfg = Config { network: Pvt3Config { spectral_bands: 8, ..Default::default() }.into(), ..Config::icub20() };
     check_against_parent(cfg.clone(), true, true);
     let (parent, varmap) = Pvt3::init(&cfg, 9).unwrap();
     let baked = bake(&cfg, &varmap_tensors(&varmap).unwrap()).unwrap();
@@ -133,6 +140,26 @@ fn baked_equals_masked_parent_with_a_spectral_head() {
     assert_eq!(baked.mult_adds() - plain.mult_adds(), cfg.mult_adds() - Config::icub20().mult_adds());
     assert!(cfg.spectral_mult_adds() > 20 * 540);
     assert!(parent.spectrum().is_some());
+}
+
+#[test]
+fn baked_equals_masked_parent_with_pruned_patches() {
+    let cfg = Config { network: Pvt3Config { patch_selection: true, ..Default::default() }.into(), ..Config::icub20() };
+    for (c, f) in [(false, false), (true, true)] {
+        check_against_parent(cfg.clone(), c, f);
+    }
+    // The pruned patches' tokens are gone: fewer multiply-adds than the unpruned model's.
+    let (_, varmap) = Pvt3::init(&cfg, 9).unwrap();
+    let whole = bake(&cfg, &varmap_tensors(&varmap).unwrap()).unwrap();
+    assert_eq!(whole.kept_patches, [0, 1, 2, 3]);
+    assert_eq!(whole.mult_adds(), Config::icub20().mult_adds());
+    let plain = bake(&Config::icub20(), &varmap_tensors(&Pvt3::init(&Config::icub20(), 9).unwrap().1).unwrap()).unwrap();
+    assert_eq!(whole.parameter_count(), plain.parameter_count() + 4, "the patch scale");
+    let mut tensors = varmap_tensors(&varmap).unwrap();
+    tensors.get_mut("patch_mask").unwrap().1[1] = 0.0;
+    let pruned = bake(&cfg, &tensors).unwrap();
+    assert_eq!(pruned.kept_patches, [0, 2, 3]);
+    assert!(pruned.mult_adds() < whole.mult_adds() * 9 / 10, "{} of {}", pruned.mult_adds(), whole.mult_adds());
 }
 
 #[test]

@@ -80,6 +80,10 @@ int pvt3_classifier_sample_len(const pvt3_classifier *c, size_t *out);
 int pvt3_classifier_frames(const pvt3_classifier *c, size_t *out);
 /* Number of classes. */
 int pvt3_classifier_num_classes(const pvt3_classifier *c, size_t *out);
+/* Bytes in one of the camera's frames as pvt3_session_push_camera_frame takes it: for a model of
+ * camera frames (GelSight, DIGIT), the frame as the camera gives it (height x width x channels);
+ * otherwise one model frame. */
+int pvt3_classifier_camera_frame_len(const pvt3_classifier *c, size_t *out);
 /* Frames per temporal token: sessions answer, and continuous streams count `every`, in tokens. */
 int pvt3_classifier_tubelet(const pvt3_classifier *c, size_t *out);
 /* Name of class `index`, NUL-terminated, valid as long as the handle; unless len is NULL, its
@@ -113,6 +117,11 @@ int pvt3_session_new_touch(const pvt3_classifier *c, double speed, double force,
 /* Frees a session (NULL is ignored); it may outlive its classifier. */
 void pvt3_session_free(pvt3_session *s);
 int pvt3_session_push_frame(pvt3_session *s, const float *frame, size_t frame_len);
+/* Takes the camera's next frame, 8-bit as the camera gives it, row-major, channels innermost
+ * (frame_len = pvt3_classifier_camera_frame_len): cropped, shrunk, greyed as the training's
+ * `pvt3 import` read its videos; for a model trained on frames less the touch's first, the first
+ * frame of each touch is that background, not one of the model's frames. */
+int pvt3_session_push_camera_frame(pvt3_session *s, const unsigned char *frame, size_t frame_len);
 /* Writes the class probabilities, and the most probable class unless class_out is NULL. */
 int pvt3_session_finish(pvt3_session *s, float *probabilities, size_t probabilities_len, size_t *class_out);
 /* A provisional answer from the touch so far, which goes on: the temporal stage over the whole

@@ -143,6 +143,22 @@ impl Classifier {
         self.header.reading
     }
 
+    /// How a camera's 8-bit frames become the model's (`pvt3.camera`: crop, size, grey, less
+    /// the touch's first frame), for a model trained on camera frames `pvt3 import` read from
+    /// videos or images; `None`: frames are given as the model reads them.
+    pub fn camera(&self) -> Option<crate::picture::Camera> {
+        self.header.camera
+    }
+
+    /// Bytes in one of the camera's frames as [`crate::Session::push_camera_frame`] takes it: the
+    /// recorded frame's for a model with a [`Self::camera`], one model frame's otherwise.
+    pub fn camera_frame_len(&self) -> usize {
+        match self.header.camera {
+            Some(camera) => camera.recorded.iter().product(),
+            None => self.sample_len() / self.sample_shape.last().expect("a frame axis"),
+        }
+    }
+
     /// A touch as the robot recorded it, in the sample layout (`[height, width, (channels,) n]`,
     /// any number `n` of frames), at the speed and force it commanded: the frames this model
     /// reads ([`crate::read_touch`], as the training's import read its touches). Windows of them
@@ -280,6 +296,7 @@ impl Classifier {
             prefixes,
             window,
             stop_rule: self.stop_rule(),
+            camera: self.camera(),
             kept_index,
             token_shape,
             dim: self.dim(),

@@ -268,6 +268,17 @@ pub unsafe extern "C" fn pvt3_classifier_frames(c: *const Pvt3Classifier, out: *
     write_size(c, out, |c| *c.classifier.sample_shape().last().expect("a window has a frame axis"))
 }
 
+/// Bytes in one of the camera's frames as `pvt3_session_push_camera_frame` takes it: the
+/// recorded frame's (height × width × channels) for a model of camera frames, one model frame's
+/// otherwise.
+///
+/// # Safety
+/// `c` is a live handle or null; `out` is writable or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_classifier_camera_frame_len(c: *const Pvt3Classifier, out: *mut usize) -> c_int {
+    write_size(c, out, |c| c.classifier.camera_frame_len())
+}
+
 /// Frames per temporal token: a session answers, and a continuous stream counts its `every`, in
 /// whole tokens.
 ///
@@ -453,6 +464,23 @@ pub unsafe extern "C" fn pvt3_session_push_frame(s: *mut Pvt3Session, frame: *co
             return Err(null("frame"));
         }
         s.session.push_frame(std::slice::from_raw_parts(frame, frame_len)).map_err(fail)
+    })
+}
+
+/// Takes the camera's next frame, 8-bit as the camera gives it (`frame_len` =
+/// `pvt3_classifier_camera_frame_len` bytes, row-major, channels innermost), read as the
+/// training's import read its videos (`Session::push_camera_frame`).
+///
+/// # Safety
+/// `s` is a live session or null; `frame` is null or valid for `frame_len` bytes.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_session_push_camera_frame(s: *mut Pvt3Session, frame: *const u8, frame_len: usize) -> c_int {
+    guard(|| {
+        let s = s.as_mut().ok_or_else(|| null("session"))?;
+        if frame.is_null() {
+            return Err(null("frame"));
+        }
+        s.session.push_camera_frame(std::slice::from_raw_parts(frame, frame_len)).map_err(fail)
     })
 }
 

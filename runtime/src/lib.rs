@@ -25,6 +25,7 @@ mod heap;
 mod kernels;
 mod npy;
 mod onnx;
+pub mod picture;
 mod plan;
 mod reading;
 #[cfg(feature = "spectral")]

@@ -20,6 +20,8 @@ pub(crate) struct Stages {
     /// temporal stage reads, `[1, height, width, (channels,) frames]`: a session writes the kept
     /// frames it receives into one, zeros elsewhere.
     pub(crate) window: Option<Vec<usize>>,
+    /// How a camera's frames become the model's (`Header::camera`).
+    pub(crate) camera: Option<crate::picture::Camera>,
     /// The file's stopping rule (`Header::stop_rule`).
     pub(crate) stop_rule: Option<StopRule>,
     /// For each temporal token, its index among the kept tokens.

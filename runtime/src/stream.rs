@@ -58,6 +58,9 @@ pub struct Session {
     /// For a session made for a touch ([`Classifier::session_for`]): its recorded frames, read as
     /// the model reads touches, and the frames read not yet taken.
     reader: Option<(TouchReader, Vec<f32>)>,
+    /// For a model of camera frames read less the touch's first (`pvt3.camera`), that frame as
+    /// read, once the touch's first camera frame has arrived ([`Session::push_camera_frame`]).
+    background: Option<Vec<f32>>,
 }
 
 impl Classifier {
@@ -65,7 +68,16 @@ impl Classifier {
     pub fn session(&self) -> Result<Session> {
         let stages = self.stages()?;
         let window = stages.window.as_ref().map(|shape| vec![0.0; shape.iter().product()]);
-        Ok(Session { stages, received: 0, token: Vec::new(), encodings: Vec::new(), window, answered: Vec::new(), reader: None })
+        Ok(Session {
+            stages,
+            received: 0,
+            token: Vec::new(),
+            encodings: Vec::new(),
+            window,
+            answered: Vec::new(),
+            reader: None,
+            background: None,
+        })
     }
 
     /// A streaming session for touches the robot records at `touch` (the speed and force it
@@ -257,8 +269,10 @@ impl Session {
             window.fill(0.0);
         }
         self.answered.clear();
+        self.background = None;
     }
 }
 
+mod camera;
 #[cfg(test)]
 mod tests;

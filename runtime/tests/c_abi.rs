@@ -91,7 +91,7 @@ fn the_header_declares_exactly_what_the_code_exports() {
         .collect();
     let code_fns: BTreeMap<_, _> = code.split("extern \"C\" fn ").skip(1).filter_map(rust_signature).collect();
     assert_eq!(header_fns, code_fns, "functions, their return and parameter types");
-    assert_eq!(code_fns.len(), 27);
+    assert_eq!(code_fns.len(), 29);
     assert_eq!(code_fns["pvt3_classify"].1[6], "size_t *", "the types are read");
     let mut header_consts: Vec<(String, String)> = header
         .split("#define ")
@@ -132,6 +132,29 @@ fn the_version_macros_are_the_crate_s_and_the_format_s() {
     assert_eq!(said, format!("{PVT3_VERSION_MAJOR}.{PVT3_VERSION_MINOR}.{PVT3_VERSION_PATCH} (format {major}.{minor})"));
 }
 
+/// The camera example (`examples/camera.c`, built as `exe`) on a touch of bytes: the golden
+/// model's answer to a session given the same bytes.
+fn camera_example_answers_as_a_session(exe: &std::path::Path, dir: &std::path::Path) {
+    let touch: Vec<u8> = (0..75 * 60).map(|i| (i * 13 % 251) as u8).collect();
+    let path = dir.join("touch.u8");
+    std::fs::write(&path, &touch).unwrap();
+    let out = target_command(exe).arg(golden("model.onnx")).arg(&path).output().unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let c = Classifier::load(golden("model.onnx")).unwrap();
+    let mut session = c.session().unwrap();
+    touch.chunks(60).for_each(|frame| session.push_camera_frame(frame).unwrap());
+    let expected = session.finish().unwrap();
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    let fields: Vec<&str> = stdout.trim_end().split('\t').collect();
+    assert_eq!(
+        (fields[0], fields[1].parse::<usize>().unwrap(), fields[2]),
+        ("camera", expected.class, expected.label.as_str()),
+        "{stdout}"
+    );
+    let probs: Vec<f32> = fields[4..].iter().map(|v| v.parse().unwrap()).collect();
+    assert!(probs.iter().zip(&expected.probabilities).all(|(a, b)| (a - b).abs() < 1e-6), "{stdout}");
+}
+
 #[test]
 fn the_c_example_gives_the_rust_result() {
     let dir = scratch("example");
@@ -160,8 +183,11 @@ fn the_c_example_gives_the_rust_result() {
     assert!(flags.status.success(), "{}", String::from_utf8_lossy(&flags.stderr));
     let flags = String::from_utf8(flags.stdout).unwrap();
     assert!(flags.contains(&format!("-I{}", prefix.join("include").display())) && flags.contains("-lpvt3_runtime"), "{flags}");
-    let cc = target_cc().arg(root().join("examples/classify.c")).args(flags.split_whitespace()).arg("-o").arg(&exe).output().unwrap();
-    assert!(cc.status.success(), "cc failed:\n{}", String::from_utf8_lossy(&cc.stderr));
+    for (source, exe) in [("classify.c", &exe), ("camera.c", &dir.join("camera"))] {
+        let cc = target_cc().arg(root().join("examples").join(source)).args(flags.split_whitespace()).arg("-o").arg(exe).output().unwrap();
+        assert!(cc.status.success(), "cc {source} failed:\n{}", String::from_utf8_lossy(&cc.stderr));
+    }
+    camera_example_answers_as_a_session(&dir.join("camera"), &dir);
 
     // The example classifies, streams, peeks at and slides over the first `windows` windows.
     let windows = streamed_windows();
@@ -450,5 +476,39 @@ fn every_entry_point_reports_instead_of_crashing() {
         let absent = CString::new(dir.join("absent.onnx").to_str().unwrap()).unwrap();
         assert_eq!(pvt3_classifier_load(absent.as_ptr(), &mut c), PVT3_ERR_IO);
         std::fs::remove_dir_all(dir).unwrap();
+    }
+}
+
+/// A camera's 8-bit frames through the C ABI: to a model without a camera reading (the golden
+/// iCub file) the bytes are its frames, so a touch pushed as bytes answers as the same touch
+/// pushed as floats; null pointers and wrong lengths are refused.
+#[test]
+fn camera_frames_go_in_as_bytes() {
+    let model = CString::new(golden("model.onnx").to_str().unwrap()).unwrap();
+    let bytes: Vec<Vec<u8>> = (0..75).map(|t| (0..60).map(|i| ((i * 7 + t * 3) % 256) as u8).collect()).collect();
+    unsafe {
+        let (mut c, mut s, mut n) = (null_mut(), null_mut(), 0usize);
+        assert_eq!(pvt3_classifier_load(model.as_ptr(), &mut c), PVT3_OK);
+        assert_eq!(pvt3_classifier_camera_frame_len(c, null_mut()), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classifier_camera_frame_len(c, &mut n), PVT3_OK);
+        assert_eq!(n, 60);
+        assert_eq!(pvt3_session_new(c, &mut s), PVT3_OK);
+        let (mut as_bytes, mut as_floats) = (vec![0f32; 20], vec![0f32; 20]);
+        for frame in &bytes {
+            assert_eq!(pvt3_session_push_camera_frame(s, frame.as_ptr(), 60), PVT3_OK);
+        }
+        assert_eq!(pvt3_session_finish(s, as_bytes.as_mut_ptr(), 20, null_mut()), PVT3_OK);
+        for frame in &bytes {
+            let floats: Vec<f32> = frame.iter().map(|v| f32::from(*v)).collect();
+            assert_eq!(pvt3_session_push_frame(s, floats.as_ptr(), 60), PVT3_OK);
+        }
+        assert_eq!(pvt3_session_finish(s, as_floats.as_mut_ptr(), 20, null_mut()), PVT3_OK);
+        assert_eq!(as_bytes, as_floats);
+        assert_eq!(pvt3_session_push_camera_frame(null_mut(), bytes[0].as_ptr(), 60), PVT3_ERR_NULL);
+        assert_eq!(pvt3_session_push_camera_frame(s, null(), 60), PVT3_ERR_NULL);
+        assert_eq!(pvt3_session_push_camera_frame(s, bytes[0].as_ptr(), 59), PVT3_ERR_INPUT);
+        assert!(last_error().contains("a frame has 59 values; expected 60"), "{}", last_error());
+        pvt3_session_free(s);
+        pvt3_classifier_free(c);
     }
 }

@@ -19,7 +19,7 @@ pub struct SpectralCase {
 }
 
 pub fn spectral_case(windows: usize) -> SpectralCase {
-    let cfg = Config { network: pvt3_spec::Pvt3Config { spectral_bands: 16 }.into(), ..Config::biotac20() };
+    let cfg = Config { network: pvt3_spec::Pvt3Config { spectral_bands: 16, ..Default::default() }.into(), ..Config::biotac20() };
     let (_, varmap) = Pvt3::init(&cfg, 6).unwrap();
     let mut tensors = varmap_tensors(&varmap).unwrap();
     let mut rng = Rng::new(7);

@@ -14,8 +14,8 @@ use pvt3_format::{answers_agree, StopRule};
 use pvt3_models::Pvt3;
 use serde::{Deserialize, Serialize};
 
-use crate::{data::windows::Samples, evaluate::eval_batch};
 use crate::Result;
+use crate::{data::windows::Samples, evaluate::eval_batch};
 
 /// Answers in a row that must agree on the class before a touch stops: a single confident
 /// answer early in a touch was often wrong (docs/anytime.md).
@@ -294,7 +294,7 @@ mod tests {
         let cfg = pvt3_models::Config {
             frames: 12,
             tubelet: 3,
-            network: pvt3_models::Pvt3Config { spectral_bands: 4 }.into(),
+            network: pvt3_models::Pvt3Config { spectral_bands: 4, ..Default::default() }.into(),
             ..pvt3_models::Config::icub20()
         };
         let (model, _) = Pvt3::init(&cfg, 5).unwrap();
@@ -346,12 +346,7 @@ mod tests {
 
     #[test]
     fn each_tenth_reads_the_tokens_that_cover_it_and_at_least_one() {
-        let p = Prefixes {
-            top: vec![vec![0.9; 4]; 2],
-            class: vec![vec![1, 0, 0, 0], vec![1, 1, 0, 1]],
-            labels: vec![0, 1],
-            tokens: 4,
-        };
+        let p = Prefixes { top: vec![vec![0.9; 4]; 2], class: vec![vec![1, 0, 0, 0], vec![1, 1, 0, 1]], labels: vec![0, 1], tokens: 4 };
         let t = p.tenths();
         assert_eq!(t.len(), 10);
         assert_eq!(t[0], (0.1, 1, 0.5), "a tenth of four tokens reads one");

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 
 use candle_nn::VarMap;
 use pvt3_models::weights::{load_weights, save_weights};
-use pvt3_models::{Model, Config};
+use pvt3_models::{Config, Model};
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
@@ -47,6 +47,10 @@ pub struct Provenance {
     /// exported file asks a robot for the same.
     #[serde(default)]
     pub reading: Option<pvt3_format::Reading>,
+    /// How the data set's camera frames were read from the camera's (`pvt3 import` of videos or
+    /// images): the exported file asks a robot's camera frames to be read alike.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera: Option<pvt3_format::Camera>,
     /// The stopping rule of provisional answers, calibrated on the validation fold when the
     /// run finished (PVT³ only). A rule of another form (an earlier pvt3's) reads as none: such a
     /// run exports without one, and `pvt3 eval --anytime` calibrates it afresh.
@@ -139,6 +143,7 @@ impl BakedFile {
             provenance: serde_json::to_value(&self.provenance).expect("plain data serialises"),
             stop_rule: self.provenance.stopping.as_ref().map(|s| s.rule),
             reading: self.provenance.reading,
+            camera: self.provenance.camera,
         }
     }
 }
@@ -292,6 +297,7 @@ mod tests {
             held_out: None,
             trained_on: None,
             reading: None,
+            camera: None,
             stopping: None,
             expected: None,
         };

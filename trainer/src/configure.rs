@@ -120,7 +120,11 @@ fn base_config(data: &Dataset, choice: &ModelChoice, notes: &mut Vec<String>) ->
         let grid = format!("{} × {}", derived.height / ph, derived.width / pw);
         format!("derived a camera's layout, patches of {ph} × {pw} pixels ({grid} a frame), one token per {} frames", derived.tubelet)
     } else {
-        format!("derived the BioTac layout, one token per {} frames of all {} values of a frame", derived.tubelet, derived.sensor_channels())
+        format!(
+            "derived the BioTac layout, one token per {} frames of all {} values of a frame",
+            derived.tubelet,
+            derived.sensor_channels()
+        )
     };
     notes.push(format!(
         "no preset takes samples of {shape}: {layout} ({} temporal tokens); `pvt3 info --json` and --config FILE to choose otherwise",
@@ -167,6 +171,10 @@ fn class_names(data: &Dataset, file: Option<&Path>, classes: usize) -> Result<Ve
 pub fn apply_overrides(cfg: Config, overrides: &[String]) -> Result<Config> {
     let usage = |s: String| Error::Usage(s);
     let mut value = serde_json::to_value(&cfg).map_err(|e| usage(format!("the configuration does not serialise: {e}")))?;
+    if cfg.architecture() == Architecture::Pvt3 {
+        // A file leaves the field out while it is off.
+        value.as_object_mut().expect("a config is a JSON object").insert("patch_selection".into(), cfg.patch_selection().into());
+    }
     for o in overrides {
         let (key, raw) = o.split_once('=').ok_or_else(|| usage(format!("--set {o}: expected FIELD=VALUE")))?;
         let fields = value.as_object_mut().expect("a config is a JSON object");
@@ -196,8 +204,8 @@ mod tests {
         assert!(err.contains("unknown field `decoder`") && err.contains("decoder_from_state"), "{err}");
         // PVT³'s own field, and not RAEC's.
         let biotac = Config::preset("biotac20").unwrap();
-        let set = super::apply_overrides(biotac.clone(), &["spectral_bands=16".into()]).unwrap();
-        assert_eq!(set.spectral_bands(), 16);
+        let set = super::apply_overrides(biotac.clone(), &["spectral_bands=16".into(), "patch_selection=true".into()]).unwrap();
+        assert_eq!((set.spectral_bands(), set.patch_selection()), (16, true));
         let err = super::apply_overrides(biotac, &["latent=20".into()]).unwrap_err().to_string();
         assert!(err.contains("unknown field `latent`; a pvt3 model's fields"), "{err}");
     }

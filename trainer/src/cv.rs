@@ -430,7 +430,7 @@ mod tests {
         let dir = out.join("seed5/fold0");
         let spec = spec(&data, 2, Some(1));
         let stage = PruneStage {
-            spec: pvt3_spec::prune::PruneSpec { channels: 0.0, frames: 0.0, scope: Default::default(), weights: 20.0 },
+            spec: pvt3_spec::prune::PruneSpec { channels: 0.0, frames: 0.0, patches: 0.0, scope: Default::default(), weights: 20.0 },
             epochs: 1,
             lr: 1e-3,
         };

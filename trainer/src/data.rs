@@ -58,6 +58,7 @@ pub mod key {
     /// How the touches were read (resampled to one speed, scaled to one force), a JSON
     /// `pvt3_format::Reading`, UTF-8.
     pub const READING: &str = "reading";
+    pub const CAMERA: &str = "camera";
     /// Each camera touch's frame before contact, `x`'s shape without its frame axis, which a
     /// reader subtracts from its frames (`pvt3 import --subtract-first`).
     pub const BACKGROUND: &str = "background";
@@ -128,6 +129,9 @@ pub struct Dataset {
     pub held_out: Option<HoldOut>,
     /// How the touches were read, if they were brought to one speed or force (`pvt3 import`).
     pub reading: Option<pvt3_format::Reading>,
+    /// How camera frames were read from the camera's (`pvt3 import` of videos or images): the
+    /// file's `camera`, a JSON [`pvt3_format::Camera`] on one line.
+    pub camera: Option<pvt3_format::Camera>,
     pub labels: Vec<u32>,
     pub folds: Vec<usize>,
     /// The seed that drew the folds (the file had none, or levels are held out); `None`: the
@@ -326,6 +330,13 @@ impl Dataset {
             ),
             None => None,
         };
+        let camera = match lines(key::CAMERA, Some(1))? {
+            Some(text) => Some(
+                serde_json::from_str::<pvt3_format::Camera>(&text[0])
+                    .map_err(|e| data_error(path, format!("array `camera` is not how camera frames are read ({e})")))?,
+            ),
+            None => None,
+        };
         let (folds, fold_seed) = match fold {
             Some(f) => {
                 let folds = integers(path, key::FOLD, &f, n)?;
@@ -345,6 +356,7 @@ impl Dataset {
             conditions,
             held_out: None,
             reading,
+            camera,
             labels: labels.to_vec(),
             folds,
             fold_seed,
@@ -367,6 +379,7 @@ impl Dataset {
             conditions: Vec::new(),
             held_out: None,
             reading: None,
+            camera: None,
             folds: vec![0; labels.len()],
             labels,
             fold_seed: None,

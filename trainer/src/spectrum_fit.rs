@@ -38,7 +38,7 @@ pub fn fit(model: &Model, varmap: &VarMap, train: &Samples) -> Result<()> {
 
 #[cfg(test)]
 mod tests {
-    use pvt3_models::{Model, Config, Rng};
+    use pvt3_models::{Config, Model, Rng};
 
     use crate::data::{windows::Samples, Dataset};
 
@@ -46,7 +46,7 @@ mod tests {
     /// standard deviation 1, feature by feature.
     #[test]
     fn standardises_the_training_features() {
-        let cfg = Config { network: pvt3_models::Pvt3Config { spectral_bands: 6 }.into(), ..Config::icub20() };
+        let cfg = Config { network: pvt3_models::Pvt3Config { spectral_bands: 6, ..Default::default() }.into(), ..Config::icub20() };
         let (model, varmap) = Model::init(&cfg, 3).unwrap();
         let mut rng = Rng::new(4);
         let n = 40;

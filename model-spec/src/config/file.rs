@@ -49,6 +49,9 @@ pub(super) struct ConfigFile {
     decoder_from_state: Option<bool>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     spectral_bands: Option<usize>,
+    /// Written only when on, so that the files of models without the mask read as before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    patch_selection: Option<bool>,
 }
 
 /// Fails if a field of another network than `model` holds other than that network's default.
@@ -66,6 +69,7 @@ impl TryFrom<ConfigFile> for Config {
         let (m, pvt3, vit, raec) = (f.model, Pvt3Config::default(), VitConfig::default(), RaecConfig::default());
         if m != Architecture::Pvt3 {
             foreign(m, "spectral_bands", f.spectral_bands, pvt3.spectral_bands)?;
+            foreign(m, "patch_selection", f.patch_selection, pvt3.patch_selection)?;
         }
         if m != Architecture::Vit {
             foreign(m, "tile_rows", f.tile_rows, vit.tile_rows)?;
@@ -78,7 +82,11 @@ impl TryFrom<ConfigFile> for Config {
             foreign(m, "decoder_from_state", f.decoder_from_state, raec.decoder_from_state)?;
         }
         let network = match m {
-            Architecture::Pvt3 => Pvt3Config { spectral_bands: f.spectral_bands.unwrap_or(pvt3.spectral_bands) }.into(),
+            Architecture::Pvt3 => Pvt3Config {
+                spectral_bands: f.spectral_bands.unwrap_or(pvt3.spectral_bands),
+                patch_selection: f.patch_selection.unwrap_or(pvt3.patch_selection),
+            }
+            .into(),
             Architecture::Vit => VitConfig { tile_rows: f.tile_rows.unwrap_or(vit.tile_rows) }.into(),
             Architecture::Raec => RaecConfig {
                 rnn_hidden: f.rnn_hidden.unwrap_or(raec.rnn_hidden),
@@ -138,9 +146,13 @@ impl From<Config> for ConfigFile {
             reconstruction_weight: None,
             decoder_from_state: None,
             spectral_bands: None,
+            patch_selection: None,
         };
         match c.network {
-            Network::Pvt3(p) => f.spectral_bands = Some(p.spectral_bands),
+            Network::Pvt3(p) => {
+                f.spectral_bands = Some(p.spectral_bands);
+                f.patch_selection = p.patch_selection.then_some(true);
+            }
             Network::Vit(v) => f.tile_rows = Some(v.tile_rows),
             Network::Raec(r) => {
                 f.rnn_hidden = Some(r.rnn_hidden);
@@ -182,5 +194,18 @@ mod tests {
         let vit = BEFORE_THE_SPLIT.replace(r#""model":"pvt3""#, r#""model":"vit""#).replace('}', r#","spectral_bands":4}"#);
         let msg = serde_json::from_str::<Config>(&vit).unwrap_err().to_string();
         assert!(msg.contains("spectral_bands = 4: not a field of a vit model"), "{msg}");
+    }
+
+    #[test]
+    fn patch_selection_is_written_only_when_on() {
+        let off = serde_json::to_value(Config::icub20()).unwrap();
+        assert!(off.get("patch_selection").is_none(), "{off}");
+        let on = Config { network: Pvt3Config { patch_selection: true, ..Default::default() }.into(), ..Config::icub20() };
+        let written = serde_json::to_value(&on).unwrap();
+        assert_eq!(written["patch_selection"], true);
+        assert_eq!(serde_json::from_value::<Config>(written).unwrap(), on);
+        let raec = BEFORE_THE_SPLIT.replace(r#""model":"pvt3""#, r#""model":"raec""#).replace('}', r#","patch_selection":true}"#);
+        let msg = serde_json::from_str::<Config>(&raec).unwrap_err().to_string();
+        assert!(msg.contains("patch_selection = true: not a field of a raec model"), "{msg}");
     }
 }

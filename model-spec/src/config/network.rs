@@ -82,6 +82,11 @@ pub struct Pvt3Config {
     /// logits a linear map of each channel's mean level and log band powers over the kept frames
     /// received so far (the whole window at the end of a touch); 0 has no such head.
     pub spectral_bands: usize,
+    /// A patch-selection mask (`patch_mask`, one entry per patch of the grid, starting at one)
+    /// scales each patch's embeddings, as the frame mask scales a temporal token's; a patch whose
+    /// entry is zero is dropped from the spatial sequence, so pruning it removes its token and
+    /// the runtime never embeds its pixels. Off, the model has no such mask.
+    pub patch_selection: bool,
 }
 
 /// ViT's own fields.

@@ -89,7 +89,7 @@ fn a_fresh_model_has_exactly_the_variables_of_the_table() {
     let configs = [
         Config::icub20(),
         Config { heads: 2, dim_head: 8, tubelet: 3, ..Config::icub20() },
-        Config { network: Pvt3Config { spectral_bands: 16 }.into(), ..Config::biotac20() },
+        Config { network: Pvt3Config { spectral_bands: 16, ..Default::default() }.into(), ..Config::biotac20() },
     ];
     for cfg in configs {
         let (_, varmap) = Pvt3::init(&cfg, 1).unwrap();

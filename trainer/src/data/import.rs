@@ -21,7 +21,6 @@ use crate::{Error, Result};
 
 pub mod camera;
 mod decode;
-mod picture;
 
 /// What to import and how.
 #[derive(Clone, Debug, Default)]
@@ -246,7 +245,11 @@ pub fn read_folder(dir: &Path, opts: &ImportOptions) -> Result<Imported> {
 /// The conditions `pattern` reads from the touches' names, each touch's values in `values`.
 fn conditions(pattern: Option<&NamePattern>, values: &[Vec<String>]) -> Vec<Condition> {
     let names = pattern.map(NamePattern::conditions).unwrap_or_default();
-    names.iter().enumerate().map(|(k, name)| Condition { name: name.to_string(), levels: values.iter().map(|v| v[k].clone()).collect() }).collect()
+    names
+        .iter()
+        .enumerate()
+        .map(|(k, name)| Condition { name: name.to_string(), levels: values.iter().map(|v| v[k].clone()).collect() })
+        .collect()
 }
 
 /// What one touch is on disk.
@@ -356,7 +359,8 @@ fn sorted_entries(d: &Path) -> Result<Vec<PathBuf>> {
 pub fn holds_camera_touches(dir: &Path) -> bool {
     let entries = sorted_entries(dir).unwrap_or_default();
     let holds = |kind: Recording| {
-        entries.iter().any(|p| kind.is_touch(p)) || entries.iter().filter(|p| p.is_dir()).any(|d| touches_in(d, kind).is_ok_and(|t| !t.is_empty()))
+        entries.iter().any(|p| kind.is_touch(p))
+            || entries.iter().filter(|p| p.is_dir()).any(|d| touches_in(d, kind).is_ok_and(|t| !t.is_empty()))
     };
     holds(Recording::Camera) && !holds(Recording::Csv)
 }
@@ -563,8 +567,7 @@ impl Imported {
             .map_err(|e| bad(&e))?;
         npz.add_array(key::CHANNELS, &lines(&self.channels)).map_err(|e| bad(&e))?;
         if let Some(reading) = &self.reading {
-            let text = serde_json::to_string(reading).expect("plain data serialises");
-            npz.add_array(key::READING, &Array1::from(text.into_bytes())).map_err(|e| bad(&e))?;
+            add_json(&mut npz, key::READING, reading).map_err(|e| bad(&e))?;
         }
         add_records(&mut npz, &self.labels, &self.classes, &self.sources, &self.conditions).map_err(|e| bad(&e))?;
         npz.finish().map_err(|e| bad(&e))?;
@@ -589,7 +592,20 @@ fn lines(v: &[String]) -> Array1<u8> {
 
 /// What every imported set records beside its frames: the labels `y`, the class names, each
 /// touch's file and its conditions ([`key`]).
-fn add_records(npz: &mut Npz, labels: &[u32], classes: &[String], sources: &[String], conditions: &[Condition]) -> std::result::Result<(), ndarray_npy::WriteNpzError> {
+/// `value` as one line of JSON, UTF-8 bytes under `name` (what [`crate::data::Dataset::load`]
+/// reads as a line).
+fn add_json(npz: &mut Npz, name: &str, value: &impl serde::Serialize) -> std::result::Result<(), ndarray_npy::WriteNpzError> {
+    let text = serde_json::to_string(value).expect("plain data serialises");
+    npz.add_array(name, &Array1::from(text.into_bytes()))
+}
+
+fn add_records(
+    npz: &mut Npz,
+    labels: &[u32],
+    classes: &[String],
+    sources: &[String],
+    conditions: &[Condition],
+) -> std::result::Result<(), ndarray_npy::WriteNpzError> {
     npz.add_array(key::Y, &Array1::from(labels.iter().map(|l| *l as i64).collect::<Vec<_>>()))?;
     npz.add_array(key::CLASS_NAMES, &lines(classes))?;
     npz.add_array(key::SOURCES, &lines(sources))?;

@@ -1,4 +1,4 @@
-//! Pruning a trained tiny model: the pruned entries stay zero through fine-tuning, and the baked
+//! Pruning a trained tiny model (channels, frames and patches): the pruned entries stay zero through fine-tuning, and the baked
 //! fine-tuned model equals its masked parent.
 
 use indicatif::ProgressBar;
@@ -17,8 +17,13 @@ fn pruned_entries_stay_zero_and_the_baked_model_matches() {
     let (dense, pruned) = (out_dir("prune-dense"), out_dir("prune-ft"));
     let mut s = spec(&data, 8, None);
     s.options.pruning.l1 = 0.05;
+    s.config.network = pvt3_models::Pvt3Config { patch_selection: true, ..Default::default() }.into();
     train(&s, &dense, false, &ProgressBar::hidden()).unwrap().unwrap();
-    let stage = PruneStage { spec: PruneSpec { channels: 50.0, frames: 50.0, scope: Scope::Local, weights: 0.0 }, epochs: 4, lr: 1e-3 };
+    let stage = PruneStage {
+        spec: PruneSpec { channels: 50.0, frames: 50.0, patches: 50.0, scope: Scope::Local, weights: 0.0 },
+        epochs: 4,
+        lr: 1e-3,
+    };
     let r = prune_and_fine_tune(&dense, &data, &stage, &pruned, false, &ProgressBar::hidden()).unwrap().unwrap();
     assert!(r.test_accuracy > 0.0);
 
@@ -27,11 +32,12 @@ fn pruned_entries_stay_zero_and_the_baked_model_matches() {
     let tensors = varmap_tensors(&varmap).unwrap();
     let zeros = |name: &str| tensors[name].1.iter().filter(|v| **v == 0.0).count();
     assert_eq!(zeros("frame_mask"), 2, "half of the 4 temporal tokens");
+    assert_eq!(zeros("patch_mask"), 1, "one of the 2 patches");
     assert_eq!(zeros("space.layers.0.attn.channel_mask"), 4, "half of each head's 4 channels");
     assert_eq!(zeros("temporal.layers.0.ffn.channel_mask"), 4);
 
     let baked = bake(&meta.config, &tensors).unwrap();
-    assert_eq!(baked.kept_tokens.len(), 2);
+    assert_eq!((baked.kept_tokens.len(), baked.kept_patches.len()), (2, 1));
     let split = data.split(0).unwrap();
     let normalised = Samples::new(&data, &split.test, &meta.normalization);
     let rows: Vec<usize> = (0..normalised.len()).collect();
@@ -51,7 +57,11 @@ fn randomly_pruned_weights_stay_zero_through_fine_tuning() {
     let data = tiny_data();
     let (dense, pruned) = (out_dir("rp-dense"), out_dir("rp-ft"));
     train(&spec(&data, 3, None), &dense, false, &ProgressBar::hidden()).unwrap().unwrap();
-    let stage = PruneStage { spec: PruneSpec { channels: 0.0, frames: 0.0, scope: Scope::Local, weights: 25.0 }, epochs: 3, lr: 1e-3 };
+    let stage = PruneStage {
+        spec: PruneSpec { channels: 0.0, frames: 0.0, patches: 0.0, scope: Scope::Local, weights: 25.0 },
+        epochs: 3,
+        lr: 1e-3,
+    };
     prune_and_fine_tune(&dense, &data, &stage, &pruned, false, &ProgressBar::hidden()).unwrap().unwrap();
     let (_, _, parent) = checkpoint::load(&dense).unwrap();
     let (meta, _, varmap) = checkpoint::load(&pruned).unwrap();

@@ -31,6 +31,7 @@ fn the_runtime_stays_finite_and_close_to_the_f64_reference_on_extreme_inputs() {
             held_out: None,
             trained_on: None,
             reading: None,
+            camera: None,
             stopping: None,
             expected: None,
         },

@@ -143,6 +143,7 @@ impl<'a> Sensor<'a> {
                 held_out: self.data.held_out.clone(),
                 trained_on: Some(self.data.trained_on()),
                 reading: self.data.reading,
+                camera: self.data.camera,
                 stopping: None,
                 expected: None,
             },

@@ -18,6 +18,11 @@ pub struct PruneArgs {
     /// Prune this percentage of frames (temporal tokens) by mask score.
     #[arg(long)]
     prune_frames: Option<f64>,
+    /// Prune this percentage of the patch grid by mask score: a pruned patch's pixels are never
+    /// embedded, and the exported model never normalises or embeds them. Needs a model with a
+    /// patch mask (`--set patch_selection=true`).
+    #[arg(long)]
+    prune_patches: Option<f64>,
     /// Persistent random pruning (the PVT³ report's "random pruning"): this percentage of every
     /// weight matrix's entries set to zero at random after training, then fine-tuned with them
     /// held at zero. A regulariser: the matrices stay dense, the model no smaller.
@@ -36,13 +41,14 @@ pub struct PruneArgs {
 
 impl PruneArgs {
     pub fn stage(&self) -> Option<PruneStage> {
-        if self.prune_channels.is_none() && self.prune_frames.is_none() && self.prune_weights.is_none() {
+        if [self.prune_channels, self.prune_frames, self.prune_patches, self.prune_weights].iter().all(Option::is_none) {
             return None;
         }
         Some(PruneStage {
             spec: PruneSpec {
                 channels: self.prune_channels.unwrap_or(0.0),
                 frames: self.prune_frames.unwrap_or(0.0),
+                patches: self.prune_patches.unwrap_or(0.0),
                 scope: self.prune_scope,
                 weights: self.prune_weights.unwrap_or(0.0),
             },

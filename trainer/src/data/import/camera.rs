@@ -18,11 +18,11 @@ use ndarray_npy::NpzWriter;
 use rayon::prelude::*;
 
 use super::decode;
-pub use super::picture::Crop;
-use super::picture::Picture;
-use super::{add_records, conditions, import_error, list_touches, NamePattern, Recording};
+use super::{add_json, add_records, conditions, import_error, list_touches, NamePattern, Recording};
 use crate::data::{key, Condition};
 use crate::{Error, Result};
+use pvt3_runtime::picture::Picture;
+pub use pvt3_runtime::picture::{Camera, Crop};
 
 /// Which frames of a recording a touch takes.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
@@ -97,6 +97,9 @@ pub struct CameraSet {
     pub conditions: Vec<Condition>,
     /// Each touch's frames recorded and the first and last it took.
     pub spans: Vec<(usize, usize, usize)>,
+    /// How the frames were read from the camera's, where every recording's frames have one
+    /// shape (what a robot's camera gives the exported model).
+    pub camera: Option<Camera>,
 }
 
 impl CameraSet {
@@ -125,9 +128,11 @@ pub fn read_camera_folder(dir: &Path, opts: &CameraOptions, mut progress: impl F
         sources: Vec::new(),
         conditions: conditions(opts.name.as_ref(), &values),
         spans: Vec::new(),
+        camera: None,
     };
     // The first touch and its first frame: every touch's frames must have its shape.
     let mut first: Option<(&Path, Picture)> = None;
+    let mut recorded = Vec::new();
     // Touches decoded a few at a time on every core, appended in order.
     let mut done = 0;
     let decoded = files.chunks(4 * rayon::current_num_threads()).flat_map(|chunk| {
@@ -138,7 +143,8 @@ pub fn read_camera_folder(dir: &Path, opts: &CameraOptions, mut progress: impl F
     });
     for (file, touch) in decoded {
         let path = file.path.as_path();
-        let ReadTouch { frames, background, span } = touch.map_err(|e| import_error(path, None, e))?;
+        let ReadTouch { frames, background, span, camera } = touch.map_err(|e| import_error(path, None, e))?;
+        recorded.push(camera);
         match &first {
             Some((p, f)) if f.shape() != frames[0].shape() => {
                 let why = format!(
@@ -160,15 +166,17 @@ pub fn read_camera_folder(dir: &Path, opts: &CameraOptions, mut progress: impl F
         set.sources.push(path.strip_prefix(dir).unwrap_or(path).display().to_string());
         set.spans.push(span);
     }
+    set.camera = recorded.first().copied().filter(|c| recorded.iter().all(|r| r == c));
     Ok(set)
 }
 
 /// One touch as read: its chosen frames, cropped, shrunk and greyed; its background, where
-/// asked; and (frames recorded, first taken, last taken).
+/// asked; (frames recorded, first taken, last taken); and how its frames were read.
 struct ReadTouch {
     frames: Vec<Picture>,
     background: Option<Picture>,
     span: (usize, usize, usize),
+    camera: Camera,
 }
 
 fn read_touch(path: &Path, opts: &CameraOptions) -> std::result::Result<ReadTouch, String> {
@@ -181,23 +189,17 @@ fn read_touch(path: &Path, opts: &CameraOptions) -> std::result::Result<ReadTouc
         FrameSpan::Whole => (0, recorded.len() - 1),
         FrameSpan::Moving => widened(moving_span(&recorded), opts.frames, recorded.len()),
     };
-    let prepare = |p: &Picture| -> std::result::Result<Picture, String> {
-        let p = match opts.crop {
-            Some(c) => p.crop(c)?,
-            None => p.clone(),
-        };
-        let p = match opts.size {
-            Some((h, w)) if h > p.height || w > p.width => {
-                return Err(format!("--size {h}x{w} is larger than its frames ({} × {}): area averaging only shrinks", p.height, p.width))
-            }
-            Some((h, w)) => p.resize(h, w),
-            None => p,
-        };
-        Ok(if opts.grey { p.grey() } else { p })
+    let camera = Camera {
+        recorded: recorded[0].shape(),
+        crop: opts.crop,
+        size: opts.size.map(|(h, w)| [h, w]),
+        grey: opts.grey,
+        subtract_first: opts.subtract_first,
     };
+    let prepare = |p: &Picture| p.read_as(&camera);
     let chosen = evenly(start, end, opts.frames).into_iter().map(|i| prepare(&recorded[i])).collect::<std::result::Result<Vec<_>, _>>()?;
     let background = if opts.subtract_first { Some(prepare(&recorded[0])?) } else { None };
-    Ok(ReadTouch { frames: chosen, background, span: (recorded.len(), start, end) })
+    Ok(ReadTouch { frames: chosen, background, span: (recorded.len(), start, end), camera })
 }
 
 /// `count` frame indices spread evenly over `start..=end` (each the middle of its share).
@@ -275,7 +277,8 @@ impl CameraSet {
 
     /// Writes the set as `.npz`: `x` (uint8 `[N, H, W, C, T]`, grey `[N, H, W, T]`, the layouts
     /// [`crate::data::Dataset`] reads), `background` (uint8 `[N, H, W, (C)]`) where asked, `y`,
-    /// and the names as UTF-8 lines ([`key`]).
+    /// the names as UTF-8 lines ([`key`]), and `camera`, how the frames were read, where every
+    /// recording has one shape.
     pub fn write_npz(&self, path: &Path) -> Result<()> {
         let [h, w, c] = self.frame_shape;
         let n = self.labels.len();
@@ -288,6 +291,9 @@ impl CameraSet {
         if let Some(b) = &self.background {
             let b = ArrayViewD::from_shape(IxDyn(&frame), b).map_err(|e| bad(&e))?;
             npz.add_array(key::BACKGROUND, &b).map_err(|e| bad(&e))?;
+        }
+        if let Some(camera) = &self.camera {
+            add_json(&mut npz, key::CAMERA, camera).map_err(|e| bad(&e))?;
         }
         add_records(&mut npz, &self.labels, &self.classes, &self.sources, &self.conditions).map_err(|e| bad(&e))?;
         npz.finish().map_err(|e| bad(&e))?;

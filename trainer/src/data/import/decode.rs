@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-use super::picture::Picture;
+use pvt3_runtime::picture::Picture;
 
 /// The video files `pvt3 import` reads (by extension, any case).
 pub const VIDEO_EXTENSIONS: [&str; 7] = ["mov", "mp4", "avi", "mkv", "webm", "m4v", "mpg"];

@@ -162,7 +162,7 @@ fn a_touch_that_cannot_be_read_is_an_error_naming_its_file() {
     assert_eq!((short.short().len(), short.short()[0]), (10, ("felt/touch_0", 12)));
     assert_eq!((taken(&short, 0, 0), taken(&short, 0, 1)), (taken(&short, 0, 1), frame(0, 0, 0).resize(4, 5)), "frame 0 twice");
     let msg = err(&dir, &CameraOptions { size: Some((9, 5)), ..options(4, FrameSpan::Whole) });
-    assert!(msg.contains("--size 9x5 is larger than its frames (8 × 10)"), "{msg}");
+    assert!(msg.contains("the size 9x5 is larger than its frames (8 × 10)"), "{msg}");
     let msg = err(&dir, &CameraOptions { crop: Some("8x8+1+0".parse().unwrap()), ..options(4, FrameSpan::Whole) });
     assert!(msg.contains("the crop 8x8+1+0 does not fit in a frame of 8 × 10"), "{msg}");
     write_png(&dir.join("felt/touch_2/frame_005.png"), &frame(0, 2, 5).resize(4, 5));

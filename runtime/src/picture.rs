@@ -1,6 +1,10 @@
 //! A camera frame as the camera gives it (8-bit, rows × columns × RGB), and what `pvt3 import`
-//! does to one: crop, shrink by area averaging, grey. Kept in u8 from file to data set: a
-//! GelSight data set is a few gigabytes as u8 and four times that as f32.
+//! does to one: crop, shrink by area averaging, grey ([`Picture::read_as`] a [`Camera`] says).
+//! Kept in u8 from file to data set: a GelSight data set is a few gigabytes as u8 and four times
+//! that as f32. The import and a robot's session ([`crate::Session::push_camera_frame`]) read
+//! frames with this one code.
+
+pub use pvt3_format::{Camera, Crop};
 
 /// One frame: `height × width × channels` bytes, row-major, channels innermost (1: grey, 3: RGB).
 #[derive(Clone, Debug, PartialEq)]
@@ -9,39 +13,6 @@ pub struct Picture {
     pub width: usize,
     pub channels: usize,
     pub data: Vec<u8>,
-}
-
-/// A rectangle of a frame: its top-left pixel and its size.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Crop {
-    pub top: usize,
-    pub left: usize,
-    pub height: usize,
-    pub width: usize,
-}
-
-impl std::str::FromStr for Crop {
-    type Err = String;
-
-    /// `HEIGHTxWIDTH+TOP+LEFT`, e.g. `200x280+20+20` (as ImageMagick writes a geometry).
-    fn from_str(s: &str) -> Result<Self, String> {
-        let bad = || format!("`{s}`: expected HEIGHTxWIDTH+TOP+LEFT, e.g. 200x280+20+20");
-        let number = |v: &str| v.trim().parse::<usize>().map_err(|_| bad());
-        let mut parts = s.split('+');
-        let (h, w) = parts.next().and_then(|size| size.split_once(['x', 'X', '×'])).ok_or_else(bad)?;
-        let (top, left) = (number(parts.next().ok_or_else(bad)?)?, number(parts.next().ok_or_else(bad)?)?);
-        let (height, width) = (number(h)?, number(w)?);
-        if parts.next().is_some() || height == 0 || width == 0 {
-            return Err(bad());
-        }
-        Ok(Self { top, left, height, width })
-    }
-}
-
-impl std::fmt::Display for Crop {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}x{}+{}+{}", self.height, self.width, self.top, self.left)
-    }
 }
 
 impl Picture {
@@ -53,6 +24,23 @@ impl Picture {
     /// Its size and colour, for errors: `240 × 320 RGB`.
     pub fn describe(&self) -> String {
         format!("{} × {} {}", self.height, self.width, if self.channels == 1 { "grey" } else { "RGB" })
+    }
+
+    /// The frame read as `camera` reads the camera's frames: cropped, shrunk, greyed; or why it
+    /// cannot be (a crop that does not fit, a size larger than the crop).
+    pub fn read_as(&self, camera: &Camera) -> Result<Self, String> {
+        let p = match camera.crop {
+            Some(c) => self.crop(c)?,
+            None => self.clone(),
+        };
+        let p = match camera.size {
+            Some([h, w]) if h > p.height || w > p.width => {
+                return Err(format!("the size {h}x{w} is larger than its frames ({} × {}): area averaging only shrinks", p.height, p.width))
+            }
+            Some([h, w]) => p.resize(h, w),
+            None => p,
+        };
+        Ok(if camera.grey { p.grey() } else { p })
     }
 
     /// The rectangle `c`, or why it does not fit in this frame.
@@ -137,13 +125,8 @@ mod tests {
     }
 
     #[test]
-    fn crops_parse_as_geometries_and_cut_the_rectangle() {
+    fn a_crop_cuts_the_rectangle() {
         let c: Crop = "2x3+1+2".parse().unwrap();
-        assert_eq!(c, Crop { top: 1, left: 2, height: 2, width: 3 });
-        assert_eq!(c.to_string(), "2x3+1+2");
-        for bad in ["2x3", "2x3+1", "0x3+1+1", "2x3+1+1+1", "axb+1+1"] {
-            assert!(bad.parse::<Crop>().unwrap_err().contains("HEIGHTxWIDTH+TOP+LEFT"), "{bad}");
-        }
         let p = picture(4, 6, 3);
         let cut = p.crop(c).unwrap();
         assert_eq!((cut.height, cut.width, cut.data.len()), (2, 3, 18));
@@ -178,5 +161,15 @@ mod tests {
         let p = Picture { height: 1, width: 3, channels: 3, data: vec![255, 0, 0, 0, 255, 0, 10, 20, 30] };
         assert_eq!(p.grey().data, [76, 150, 18]);
         assert_eq!(p.grey().grey(), p.grey());
+    }
+
+    #[test]
+    fn a_camera_crops_then_shrinks_then_greys() {
+        let p = picture(8, 12, 3);
+        let crop = Crop { top: 2, left: 4, height: 6, width: 8 };
+        let camera = Camera { recorded: [8, 12, 3], crop: Some(crop), size: Some([3, 4]), grey: true, subtract_first: false };
+        assert_eq!(p.read_as(&camera).unwrap(), p.crop(crop).unwrap().resize(3, 4).grey());
+        let larger = Camera { size: Some([7, 4]), ..camera };
+        assert!(p.read_as(&larger).unwrap_err().contains("larger than its frames (6 × 8)"));
     }
 }
