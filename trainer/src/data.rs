@@ -323,20 +323,14 @@ impl Dataset {
             let levels = lines(&key::condition(&name), Some(n))?.ok_or_else(|| missing(&key::condition(&name)))?;
             conditions.push(Condition { name, levels });
         }
-        let reading = match lines(key::READING, Some(1))? {
-            Some(text) => Some(
-                serde_json::from_str::<pvt3_format::Reading>(&text[0])
-                    .map_err(|e| data_error(path, format!("array `reading` is not how touches are read ({e})")))?,
-            ),
-            None => None,
-        };
-        let camera = match lines(key::CAMERA, Some(1))? {
-            Some(text) => Some(
-                serde_json::from_str::<pvt3_format::Camera>(&text[0])
-                    .map_err(|e| data_error(path, format!("array `camera` is not how camera frames are read ({e})")))?,
-            ),
-            None => None,
-        };
+        // A record of one JSON line: how the touches, or a camera's frames, were read.
+        fn record<T: serde::de::DeserializeOwned>(path: &Path, key: &str, what: &str, text: Option<Vec<String>>) -> Result<Option<T>> {
+            let parse =
+                |line: &String| serde_json::from_str(line).map_err(|e| data_error(path, format!("array `{key}` is not {what} ({e})")));
+            text.as_ref().map(|t| parse(&t[0])).transpose()
+        }
+        let reading = record(path, key::READING, "how touches are read", lines(key::READING, Some(1))?)?;
+        let camera = record(path, key::CAMERA, "how camera frames are read", lines(key::CAMERA, Some(1))?)?;
         let (folds, fold_seed) = match fold {
             Some(f) => {
                 let folds = integers(path, key::FOLD, &f, n)?;
