@@ -10,6 +10,7 @@
 
 use pvt3_spec::baked::{BakedPvt3, Dense};
 use pvt3_spec::normalization::Normalization;
+use pvt3_spec::Config;
 
 use pvt3_format::onnx::{int, ints, Op};
 
@@ -82,20 +83,8 @@ fn normalise(g: &mut Graph, rows: &str, mean: Vec<f32>, std: Vec<f32>) -> String
 /// normalisation and the embedding read those only.
 fn embed_kept_patches(g: &mut Graph, rows: &str, m: &BakedPvt3, norm: &Normalization) -> String {
     let c = &m.config;
-    let (tt, h, w, ch, d, pd) = (c.tubelet, c.height, c.width, c.channels, c.dim, c.patch_dim());
-    let (ph, pw, gw, nk) = (c.patch_height, c.patch_width, c.width / c.patch_width, m.kept_patches.len());
-    // Each kept patch's values in the patch embedding's order, `((f · ph + dy) · pw + dx) · c + k`.
-    let mut columns: Vec<usize> = Vec::with_capacity(nk * pd);
-    for &p in &m.kept_patches {
-        for f in 0..tt {
-            for dy in 0..ph {
-                for dx in 0..pw {
-                    let (y, x) = ((p / gw) * ph + dy, (p % gw) * pw + dx);
-                    columns.extend((0..ch).map(|k| ((f * h + y) * w + x) * ch + k));
-                }
-            }
-        }
-    }
+    let (h, w, ch, d, pd, nk) = (c.height, c.width, c.channels, c.dim, c.patch_dim(), m.kept_patches.len());
+    let mut columns = patch_columns(c, &m.kept_patches);
     let values = nk * pd;
     columns.resize(values.div_ceil(ALIGN) * ALIGN, 0);
     let index = g.i64s("kept_patch_values", &[columns.len()], columns.iter().map(|v| *v as i64).collect());
@@ -111,27 +100,39 @@ fn embed_kept_patches(g: &mut Graph, rows: &str, m: &BakedPvt3, norm: &Normaliza
     g.op(Op::Reshape, &[&x, &tokens])
 }
 
-/// The embedding `e` of each patch as one layer over a token's whole frame, `[tt·h·w·c]` →
-/// `[patches · dim]`: input `(f, y, x, ch)` feeds patch `(y / ph, x / pw)` at its place
-/// `(f, y mod ph, x mod pw, ch)` within the patch; every other weight is zero, as are the
-/// weights of the padding up to `inputs`.
-fn block_diagonal(m: &BakedPvt3, e: &Dense, inputs: usize) -> Dense {
-    let c = &m.config;
-    let (tt, h, w, ch, d, n) = (c.tubelet, c.height, c.width, c.channels, c.dim, c.num_patches());
+/// For each of `patches` (row-major over the grid) and each of its values in the patch
+/// embedding's order, `((f · ph + dy) · pw + dx) · c + k`, its column in a token's frame row
+/// `(f, y, x, k)`.
+fn patch_columns(c: &Config, patches: &[usize]) -> Vec<usize> {
+    let (tt, h, w, ch) = (c.tubelet, c.height, c.width, c.channels);
     let (ph, pw, gw) = (c.patch_height, c.patch_width, c.width / c.patch_width);
-    let mut weight = vec![0f32; n * d * inputs];
-    for f in 0..tt {
-        for y in 0..h {
-            for x in 0..w {
-                for k in 0..ch {
-                    let input = ((f * h + y) * w + x) * ch + k;
-                    let patch = (y / ph) * gw + x / pw;
-                    let within = ((f * ph + y % ph) * pw + x % pw) * ch + k;
-                    for j in 0..d {
-                        weight[(patch * d + j) * inputs + input] = e.weight[j * e.cols + within];
-                    }
+    let mut columns = Vec::with_capacity(patches.len() * c.patch_dim());
+    for &p in patches {
+        for f in 0..tt {
+            for dy in 0..ph {
+                for dx in 0..pw {
+                    let (y, x) = ((p / gw) * ph + dy, (p % gw) * pw + dx);
+                    columns.extend((0..ch).map(|k| ((f * h + y) * w + x) * ch + k));
                 }
             }
+        }
+    }
+    columns
+}
+
+/// The embedding `e` of each patch as one layer over a token's whole frame, `[tt·h·w·c]` →
+/// `[patches · dim]`: each patch's value at its place within the patch ([`patch_columns`])
+/// feeds that patch's embedding; every other weight is zero, as are the weights of the padding
+/// up to `inputs`.
+fn block_diagonal(m: &BakedPvt3, e: &Dense, inputs: usize) -> Dense {
+    let c = &m.config;
+    let (d, n, pd) = (c.dim, c.num_patches(), c.patch_dim());
+    let mut weight = vec![0f32; n * d * inputs];
+    let every: Vec<usize> = (0..n).collect();
+    for (i, input) in patch_columns(c, &every).into_iter().enumerate() {
+        let (patch, within) = (i / pd, i % pd);
+        for j in 0..d {
+            weight[(patch * d + j) * inputs + input] = e.weight[j * e.cols + within];
         }
     }
     let bias = e.bias.as_ref().map(|b| (0..n).flat_map(|_| b.iter().copied()).collect());

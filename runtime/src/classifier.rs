@@ -155,7 +155,7 @@ impl Classifier {
     pub fn camera_frame_len(&self) -> usize {
         match self.header.camera {
             Some(camera) => camera.recorded.iter().product(),
-            None => self.sample_len() / self.sample_shape.last().expect("a frame axis"),
+            None => self.frame_len(),
         }
     }
 
@@ -165,8 +165,7 @@ impl Classifier {
     /// are then classified, or streamed into a session, as any frames. A model without a
     /// reading returns the frames as they are.
     pub fn read_touch(&self, frames: &[f32], touch: crate::Touch) -> Result<Vec<f32>> {
-        let frames_per_window = *self.sample_shape.last().expect("a frame axis");
-        crate::read_touch(frames, self.sample_len() / frames_per_window, &self.header.reading.unwrap_or_default(), touch)
+        crate::read_touch(frames, self.frame_len(), &self.header.reading.unwrap_or_default(), touch)
     }
 
     /// The frames of a window the model reads; the others were pruned.
@@ -176,6 +175,11 @@ impl Classifier {
 
     fn sample_len(&self) -> usize {
         self.sample_shape.iter().product()
+    }
+
+    /// Values in one frame: the sample's axes but the last (frames).
+    pub(crate) fn frame_len(&self) -> usize {
+        self.sample_shape[..self.sample_shape.len() - 1].iter().product()
     }
 
     /// Whether the file's graph computes a tensor of this name (a seam).

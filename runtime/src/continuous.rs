@@ -45,7 +45,7 @@ impl Classifier {
             return Err(Error::NoStride);
         }
         let (sample, frames) = (self.sample_shape(), *self.sample_shape().last().expect("a frame axis"));
-        let frame_len = sample[..sample.len() - 1].iter().product();
+        let frame_len = self.frame_len();
         Ok(Continuous {
             plan: self.plan(1)?,
             classes: self.classes().to_vec(),

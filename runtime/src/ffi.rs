@@ -126,6 +126,17 @@ unsafe fn write_size(c: *const Pvt3Classifier, out: *mut usize, size: impl FnOnc
     })
 }
 
+/// The `len` values C passes in at `p`, or the error naming `what` if `p` is null.
+///
+/// # Safety
+/// `p` is null or valid for `len` values, which outlive the slice.
+unsafe fn values_in<'a, T>(p: *const T, len: usize, what: &str) -> Result<&'a [T], (c_int, String)> {
+    if p.is_null() {
+        return Err(null(what));
+    }
+    Ok(std::slice::from_raw_parts(p, len))
+}
+
 fn null(what: &str) -> (c_int, String) {
     (PVT3_ERR_NULL, format!("{what} is a null pointer"))
 }
@@ -174,12 +185,10 @@ pub unsafe extern "C" fn pvt3_classifier_load_bytes(
     out: *mut *mut Pvt3Classifier,
 ) -> c_int {
     guard(|| {
-        if bytes.is_null() {
-            return Err(null("bytes"));
-        }
+        let bytes = values_in(bytes, len, "bytes")?;
         let out = out.as_mut().ok_or_else(|| null("out"))?;
         let name = if name.is_null() { "(memory)".into() } else { CStr::from_ptr(name).to_string_lossy() };
-        *out = handle(Classifier::from_bytes(std::slice::from_raw_parts(bytes, len), &name).map_err(fail)?);
+        *out = handle(Classifier::from_bytes(bytes, &name).map_err(fail)?);
         Ok(())
     })
 }
@@ -340,9 +349,7 @@ pub unsafe extern "C" fn pvt3_classify(
 ) -> c_int {
     guard(|| {
         let c = c.as_ref().ok_or_else(|| null("classifier"))?;
-        if frames.is_null() {
-            return Err(null("frames"));
-        }
+        let input = values_in(frames, frames_len, "frames")?;
         if probabilities.is_null() {
             return Err(null("probabilities"));
         }
@@ -350,7 +357,6 @@ pub unsafe extern "C" fn pvt3_classify(
         if probabilities_len < needed {
             return Err((PVT3_ERR_INPUT, format!("probabilities has room for {probabilities_len} values; {needed} needed")));
         }
-        let input = std::slice::from_raw_parts(frames, frames_len);
         let predictions = c.classifier.classify_batch(input, batch).map_err(fail)?;
         let probs = std::slice::from_raw_parts_mut(probabilities, needed);
         for (i, p) in predictions.iter().enumerate() {
@@ -386,14 +392,12 @@ pub unsafe extern "C" fn pvt3_read_touch(
 ) -> c_int {
     guard(|| {
         let c = c.as_ref().ok_or_else(|| null("classifier"))?;
-        if frames.is_null() {
-            return Err(null("frames"));
-        }
+        let frames = values_in(frames, frames_len, "frames")?;
         if out.is_null() {
             return Err(null("out"));
         }
         let written = written.as_mut().ok_or_else(|| null("written"))?;
-        let read = c.classifier.read_touch(std::slice::from_raw_parts(frames, frames_len), touch(speed, force)).map_err(fail)?;
+        let read = c.classifier.read_touch(frames, touch(speed, force)).map_err(fail)?;
         *written = read.len();
         if out_len < read.len() {
             return Err((PVT3_ERR_INPUT, format!("out has room for {out_len} values; the touch reads as {}", read.len())));
@@ -460,10 +464,7 @@ pub unsafe extern "C" fn pvt3_session_free(s: *mut Pvt3Session) {
 pub unsafe extern "C" fn pvt3_session_push_frame(s: *mut Pvt3Session, frame: *const f32, frame_len: usize) -> c_int {
     guard(|| {
         let s = s.as_mut().ok_or_else(|| null("session"))?;
-        if frame.is_null() {
-            return Err(null("frame"));
-        }
-        s.session.push_frame(std::slice::from_raw_parts(frame, frame_len)).map_err(fail)
+        s.session.push_frame(values_in(frame, frame_len, "frame")?).map_err(fail)
     })
 }
 
@@ -477,10 +478,7 @@ pub unsafe extern "C" fn pvt3_session_push_frame(s: *mut Pvt3Session, frame: *co
 pub unsafe extern "C" fn pvt3_session_push_camera_frame(s: *mut Pvt3Session, frame: *const u8, frame_len: usize) -> c_int {
     guard(|| {
         let s = s.as_mut().ok_or_else(|| null("session"))?;
-        if frame.is_null() {
-            return Err(null("frame"));
-        }
-        s.session.push_camera_frame(std::slice::from_raw_parts(frame, frame_len)).map_err(fail)
+        s.session.push_camera_frame(values_in(frame, frame_len, "frame")?).map_err(fail)
     })
 }
 
@@ -604,11 +602,9 @@ pub unsafe extern "C" fn pvt3_continuous_push_frame(
 ) -> c_int {
     guard(|| {
         let s = s.as_mut().ok_or_else(|| null("stream"))?;
-        if frame.is_null() {
-            return Err(null("frame"));
-        }
+        let frame = values_in(frame, frame_len, "frame")?;
         room(probabilities, probabilities_len, s.names)?;
-        let answer = s.continuous.push_frame(std::slice::from_raw_parts(frame, frame_len)).map_err(fail)?;
+        let answer = s.continuous.push_frame(frame).map_err(fail)?;
         if let Some(p) = &answer {
             write_prediction(p, probabilities, class_out);
         }

@@ -28,10 +28,10 @@ impl Picture {
 
     /// The frame read as `camera` reads the camera's frames: cropped, shrunk, greyed; or why it
     /// cannot be (a crop that does not fit, a size larger than the crop).
-    pub fn read_as(&self, camera: &Camera) -> Result<Self, String> {
+    pub fn read_as(self, camera: &Camera) -> Result<Self, String> {
         let p = match camera.crop {
             Some(c) => self.crop(c)?,
-            None => self.clone(),
+            None => self,
         };
         let p = match camera.size {
             Some([h, w]) if h > p.height || w > p.width => {
@@ -168,7 +168,7 @@ mod tests {
         let p = picture(8, 12, 3);
         let crop = Crop { top: 2, left: 4, height: 6, width: 8 };
         let camera = Camera { recorded: [8, 12, 3], crop: Some(crop), size: Some([3, 4]), grey: true, subtract_first: false };
-        assert_eq!(p.read_as(&camera).unwrap(), p.crop(crop).unwrap().resize(3, 4).grey());
+        assert_eq!(p.clone().read_as(&camera).unwrap(), p.crop(crop).unwrap().resize(3, 4).grey());
         let larger = Camera { size: Some([7, 4]), ..camera };
         assert!(p.read_as(&larger).unwrap_err().contains("larger than its frames (6 × 8)"));
     }

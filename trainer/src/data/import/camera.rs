@@ -196,7 +196,7 @@ fn read_touch(path: &Path, opts: &CameraOptions) -> std::result::Result<ReadTouc
         grey: opts.grey,
         subtract_first: opts.subtract_first,
     };
-    let prepare = |p: &Picture| p.read_as(&camera);
+    let prepare = |p: &Picture| p.clone().read_as(&camera);
     let chosen = evenly(start, end, opts.frames).into_iter().map(|i| prepare(&recorded[i])).collect::<std::result::Result<Vec<_>, _>>()?;
     let background = if opts.subtract_first { Some(prepare(&recorded[0])?) } else { None };
     Ok(ReadTouch { frames: chosen, background, span: (recorded.len(), start, end), camera })
