@@ -18,7 +18,9 @@
 #
 # VARIANT=NAME (default `plain`) names the runs' folder, target/robustness/NAME/ROW; IMPORT holds
 # extra options of `pvt3 import` (e.g. `--per-distance speed=150`), TRAIN extra options of `pvt3 cv`
-# (e.g. `--aug-stretch 0.5`). SEEDS=0,1,2 JOBS=2 by default: every seed's four validation folds.
+# (e.g. `--aug-stretch 0.5`); a variant trains with `--robust off` unless TRAIN says `--robust`,
+# as every variant did before `--robust auto` was pvt3's default (TRAIN="--robust auto" is that
+# default). SEEDS=0,1,2 JOBS=2 by default: every seed's four validation folds.
 # FOLDS=0 (or any list) trains only those validation folds of each seed, one `pvt3 cv --only` run
 # each, side by side by JOBS: a quicker look, which the table marks. Rows resume where they stopped.
 # `python3 bench/robustness_report.py target/robustness` prints the tables of docs/robustness.md.
@@ -31,6 +33,8 @@ shift
 pvt3=${PVT3:-target/release/pvt3}
 [ -n "${PVT3:-}" ] || cargo build -q --release -p pvt3-trainer
 seeds=${SEEDS:-0,1,2} jobs=${JOBS:-2} variant=${VARIANT:-plain} folds=${FOLDS:-}
+train=${TRAIN:-}
+[[ $train == *--robust* ]] || train="--robust off $train"
 out=target/robustness/$variant
 mkdir -p "$out"
 # shellcheck disable=SC2086 # IMPORT and TRAIN are word lists of options
@@ -55,12 +59,12 @@ rows=("$@")
 failed=()
 for row in "${rows[@]}"; do
   args=$(hold "$row")
-  echo "== $variant $row: pvt3 cv $args ${TRAIN:-}"
+  echo "== $variant $row: pvt3 cv $args $train"
   resume=
   [ ! -d "$out/$row" ] || resume=--resume
   if [ -z "$folds" ]; then
     # shellcheck disable=SC2086
-    "$pvt3" cv --data "$out/fabric.npz" --seeds "$seeds" --jobs "$jobs" --out "$out/$row" $args ${TRAIN:-} $resume | tail -n 4 || failed+=("$row")
+    "$pvt3" cv --data "$out/fabric.npz" --seeds "$seeds" --jobs "$jobs" --out "$out/$row" $args $train $resume | tail -n 4 || failed+=("$row")
     continue
   fi
   # Some folds of each seed, JOBS at a time; then the report of all of them.
@@ -68,7 +72,7 @@ for row in "${rows[@]}"; do
     for fold in ${folds//,/ }; do
       while [ "$(jobs -rp | wc -l)" -ge "$jobs" ]; do wait -n || true; done
       # shellcheck disable=SC2086
-      "$pvt3" cv --data "$out/fabric.npz" --only "seed=$seed,fold=$fold" --out "$out/$row" $args ${TRAIN:-} --resume >/dev/null 2>>"$out/$row.log" &
+      "$pvt3" cv --data "$out/fabric.npz" --only "seed=$seed,fold=$fold" --out "$out/$row" $args $train --resume >/dev/null 2>>"$out/$row.log" &
     done
   done
   wait

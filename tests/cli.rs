@@ -567,7 +567,8 @@ fn a_camera_s_videos_import_and_train() {
 
 /// Touches whose file names say their class, force and speed (as FabricSlide names them): imported
 /// with their conditions, cross-validated with one force held out as the test set (augmented in
-/// speed and pressure), and evaluated on exactly the held-out touches again from the run alone.
+/// speed and pressure as asked), and evaluated on exactly the held-out touches again from the run
+/// alone; by default (`--robust auto`) the touches' two forces also scale each channel in training.
 #[test]
 fn conditions_from_file_names_hold_out_a_force() {
     let (dir, flat) = fabric_like("hold-out", 12);
@@ -578,7 +579,7 @@ fn conditions_from_file_names_hold_out_a_force() {
     let mut args = vec!["cv", "--data", d, "--out", o, "--epochs", "12", "--jobs", "2", "--set", "frames=32", "--set", "tubelet=4"];
     args.extend(["--hold-out", "force=210", "--aug-stretch", "0.2", "--aug-scale", "0.05"]);
     args.extend(SMALL);
-    let cv = pvt3(&args);
+    let cv = pvt3(&[&args[..], &["--robust", "off"]].concat());
     let (stdout, stderr) = (String::from_utf8_lossy(&cv.stdout), String::from_utf8_lossy(&cv.stderr));
     assert!(cv.status.success(), "{stderr}");
     assert!(stderr.contains("held out force=210: 12 touches test, the other 24 train and validate"), "{stderr}");
@@ -590,6 +591,17 @@ fn conditions_from_file_names_hold_out_a_force() {
     // The run remembers what it held out: its test fold is the 12 touches pressed at 210.
     let eval = ok(&["eval", out.join("seed0/fold1").to_str().unwrap()]);
     assert!(eval.contains("12 samples (fold 4"), "{eval}");
+    // By default the touches that train, pressed in two ways, say the robot will press in others.
+    let auto = dir.join("auto");
+    (args[4], args[6]) = (auto.to_str().unwrap(), "1");
+    args.extend(["--only", "seed=0,fold=1"]);
+    let cv = pvt3(&args);
+    let stderr = String::from_utf8_lossy(&cv.stderr);
+    assert!(cv.status.success() && stderr.contains("(condition force in 2 levels), so a robot will touch in others"), "{stderr}");
+    let provenance = std::fs::read_to_string(auto.join("seed0/fold1/model/provenance.json")).unwrap();
+    let options = &serde_json::from_str::<serde_json::Value>(&provenance).unwrap()["options"];
+    let robust = (&options["robust"], &options["aug_channel_scale"], &options["extrapolate"]);
+    assert_eq!(robust, (&"auto".into(), &0.15.into(), &0.0.into()), "the run records what it trained with");
     std::fs::remove_dir_all(dir).unwrap();
 }
 

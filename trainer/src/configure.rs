@@ -1,7 +1,8 @@
 //! Choosing the model for a data set: a preset (by name, or the one whose input fits the data), a
 //! JSON file, a checkpoint's, or a configuration derived for a new sensor's shape; `--set`
-//! overrides and dropout; the class names; and the options that only make sense for some models.
-//! What was chosen for the user is said in notes, which the command line prints.
+//! overrides and dropout; the class names; the options that only make sense for some models, and
+//! those the data decide (`--robust`). What was chosen for the user is said in notes, which the
+//! command line prints.
 
 use std::path::{Path, PathBuf};
 
@@ -9,7 +10,7 @@ use pvt3_models::{Architecture, Config};
 
 use crate::checkpoint;
 use crate::data::{Dataset, TEST_FOLD};
-use crate::options::TrainOptions;
+use crate::options::{Robust, TrainOptions};
 use crate::{Error, Result};
 
 /// What the user asked of the model: the network, and where its configuration comes from.
@@ -34,6 +35,8 @@ pub struct ModelChoice {
 pub struct Configured {
     pub config: Config,
     pub classes: Vec<String>,
+    /// The training options asked, with what the data decide ([`robust_options`]).
+    pub options: TrainOptions,
     /// What was chosen or found for the user, one sentence each.
     pub notes: Vec<String>,
 }
@@ -90,8 +93,44 @@ pub fn configure(data: &Dataset, choice: &ModelChoice, options: &TrainOptions) -
             cfg.frames
         ));
     }
-    Ok(Configured { config: cfg, classes, notes })
+    let options = robust_options(data, options, &mut notes);
+    Ok(Configured { config: cfg, classes, options, notes })
 }
+
+/// `options` with `--robust` applied to `data`: each channel's readings scaled by a factor of its
+/// own (`--aug-channel-scale` [`ROBUST_CHANNEL_SCALE`]) where asked (`on`), or (`auto`) where the
+/// touches that train and validate were made in more than one recorded way, a condition in two
+/// levels or more; unless the user asked for a robustness of their own (`--aug-channel-scale` or
+/// `--extrapolate`). Said in `notes`.
+pub fn robust_options(data: &Dataset, options: &TrainOptions, notes: &mut Vec<String>) -> TrainOptions {
+    let mut options = options.clone();
+    let augmentation = &mut options.augmentation;
+    if augmentation.channel_scale > 0.0 || augmentation.extrapolate > 0.0 {
+        return options;
+    }
+    let varied = data.conditions.iter().find_map(|c| {
+        let mut levels: Vec<&str> = c.levels.iter().zip(&data.folds).filter(|&(_, &f)| f != TEST_FOLD).map(|(l, _)| l.as_str()).collect();
+        levels.sort_unstable();
+        levels.dedup();
+        (levels.len() > 1).then(|| format!("condition {} in {} levels", c.name, levels.len()))
+    });
+    let why = match (augmentation.robust, varied) {
+        (Robust::Off, _) | (Robust::Auto, None) => return options,
+        (Robust::On, _) => "--robust on".to_string(),
+        (Robust::Auto, Some(varied)) => format!("the touches that train were made in more than one way ({varied})"),
+    };
+    augmentation.channel_scale = ROBUST_CHANNEL_SCALE;
+    notes.push(format!(
+        "{why}, so a robot will touch in others: training scales each channel's readings by a factor of its own \
+         (--aug-channel-scale {ROBUST_CHANNEL_SCALE}; --robust off trains as asked, --extrapolate 1 --extrapolate-levels \
+         for forces beyond the trained ones: docs/robustness.md)"
+    ));
+    options
+}
+
+/// The spread of `--robust`'s per-channel factors: on FabricSlide the best measured for the other
+/// sliding direction, and no worse than none for unseen forces (docs/robustness.md).
+pub const ROBUST_CHANNEL_SCALE: f64 = 0.15;
 
 /// The configuration before overrides: the preset named (in the chosen network's variant), the
 /// file given, else the preset whose window is the data's, else one derived for the data's shape.
@@ -192,6 +231,48 @@ pub fn apply_overrides(cfg: Config, overrides: &[String]) -> Result<Config> {
 #[cfg(test)]
 mod tests {
     use pvt3_models::Config;
+
+    use crate::data::{Condition, Dataset, TEST_FOLD};
+    use crate::options::{Robust, TrainOptions};
+
+    #[test]
+    fn robust_scales_channels_where_the_touches_that_train_vary_in_a_recorded_condition() {
+        // Four touches: two forces among those that train, a third only in the test fold.
+        let mut data = Dataset::in_memory(vec![0.0f32; 4 * 2], vec![1, 1, 2], vec![0, 1, 0, 1]);
+        let asked = TrainOptions::default();
+        assert_eq!(asked.augmentation.robust, Robust::Auto);
+        let robust = |data: &Dataset, asked: &TrainOptions| {
+            let mut notes = Vec::new();
+            let o = super::robust_options(data, asked, &mut notes).augmentation;
+            ((o.channel_scale, o.extrapolate), notes)
+        };
+        // No conditions recorded: as asked, and nothing said.
+        assert_eq!(robust(&data, &asked), ((0.0, 0.0), vec![]));
+        let forces = |l: [&str; 4]| vec![Condition { name: "force".into(), levels: l.map(String::from).to_vec() }];
+        data.folds = vec![0, 1, 2, TEST_FOLD];
+        // One level among the touches that train: the test touch's other level decides nothing.
+        data.conditions = forces(["120", "120", "120", "250"]);
+        assert_eq!(robust(&data, &asked).0, (0.0, 0.0));
+        data.conditions = forces(["120", "150", "120", "250"]);
+        let (on, notes) = robust(&data, &asked);
+        assert_eq!(on, (super::ROBUST_CHANNEL_SCALE, 0.0));
+        assert!(notes[0].contains("condition force in 2 levels") && notes[0].contains("--robust off"), "{notes:?}");
+        // Off, or a robustness of the user's own asked: as asked.
+        let mut off = asked.clone();
+        off.augmentation.robust = Robust::Off;
+        assert_eq!(robust(&data, &off), ((0.0, 0.0), vec![]));
+        let mut own = asked.clone();
+        own.augmentation.extrapolate = 0.5;
+        assert_eq!(robust(&data, &own), ((0.0, 0.5), vec![]));
+        let mut own = asked.clone();
+        own.augmentation.channel_scale = 0.05;
+        assert_eq!(robust(&data, &own), ((0.05, 0.0), vec![]));
+        // On: whatever the data record.
+        data.conditions.clear();
+        let mut on = asked;
+        on.augmentation.robust = Robust::On;
+        assert_eq!(robust(&data, &on).0, (super::ROBUST_CHANNEL_SCALE, 0.0));
+    }
 
     #[test]
     fn set_reaches_the_network_s_own_fields_and_names_the_unknown() {

@@ -143,6 +143,14 @@ pub struct Augmentation {
     #[arg(long = "aug-translate", id = "aug_translate", value_name = "AUG_TRANSLATE", default_value_t = 0, help_heading = AUGMENTATION)]
     #[serde(default, rename = "aug_translate")]
     pub translate: usize,
+    /// With probability P each, mirror a training window's image left to right, and top to
+    /// bottom (drawn alone): a texture's surface is as likely the one way round as the other, and
+    /// both mirrors together turn it half round. For an image's rows and columns, where the image
+    /// looks alike mirrored: not a GelSight's colour image, lit from fixed sides
+    /// (docs/camera.md), nor a grid of taxels that is not a picture. E.g. 0.5. 0 turns it off.
+    #[arg(long = "aug-flip", id = "aug_flip", value_name = "AUG_FLIP", default_value_t = 0.0, help_heading = AUGMENTATION)]
+    #[serde(default, rename = "aug_flip")]
+    pub flip: f64,
     /// Mixup: blend each training batch with a shuffled copy of itself, λ ~ Beta(α, α) per batch,
     /// and the two labels' losses alike; this is α (e.g. 0.2). 0 turns it off.
     #[arg(long, default_value_t = 0.0, help_heading = AUGMENTATION)]
@@ -164,6 +172,36 @@ pub struct Augmentation {
     #[arg(long, requires = "extrapolate", help_heading = AUGMENTATION)]
     #[serde(default)]
     pub extrapolate_levels: bool,
+    /// Training for ways of touching beyond the trained ones. `auto`: where the touches that
+    /// train were made in more than one recorded way (a condition of `pvt3 import --name`, such
+    /// as force or speed, in two levels or more) and neither --aug-channel-scale nor --extrapolate
+    /// is asked, train with `--aug-channel-scale 0.15`, and say so (what it changes, and
+    /// `--extrapolate 1 --extrapolate-levels` for forces beyond the trained ones:
+    /// docs/robustness.md); a set that records no conditions trains as asked. `on`: as if it
+    /// recorded them; `off`: as asked.
+    #[arg(long, value_enum, default_value_t = Robust::Auto, help_heading = AUGMENTATION)]
+    #[serde(default = "Robust::before_auto")]
+    pub robust: Robust,
+}
+
+/// Whether training prepares a model for ways of touching beyond the trained ones
+/// (`configure::robust_options`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Robust {
+    /// Where the data record that the touches were made in more than one way.
+    Auto,
+    /// Always.
+    On,
+    /// Never: the augmentations as asked.
+    Off,
+}
+
+impl Robust {
+    /// What a run recorded before `--robust` was: its options as asked.
+    fn before_auto() -> Self {
+        Robust::Off
+    }
 }
 
 /// The selection masks' training, and random weight pruning as a regulariser.
@@ -265,7 +303,7 @@ mod tests {
         options.distillation.teachers = Some("runs/cv".into());
         let json = serde_json::to_string(&options).unwrap();
         let order = "epochs batch_size lr lr_floor warmup_epochs weight_decay label_smoothing clip_grad aug_gain aug_noise \
-            aug_shift aug_scale aug_channel_scale aug_vibration aug_stretch aug_reverse aug_translate mixup extrapolate extrapolate_levels ema seed l1 \
+            aug_shift aug_scale aug_channel_scale aug_vibration aug_stretch aug_reverse aug_translate aug_flip mixup extrapolate extrapolate_levels robust ema seed l1 \
             mask_lr random_prune prefix_training distill distill_weight hold_pruned hold_zero_weights";
         let positions: Vec<usize> = order.split_whitespace().map(|k| json.find(&format!("\"{k}\":")).expect(k)).collect();
         assert!(positions.windows(2).all(|w| w[0] < w[1]), "{json}");

@@ -1,6 +1,6 @@
 //! Augmentation of training windows. Each window is changed alone as it is batched ([`augment`]:
 //! a firmer or lighter press, a stronger or weaker vibration, a shift in time, the other sliding
-//! direction, a gain and noise);
+//! direction, an image moved or mirrored, a gain and noise);
 //! a batch as a whole is blended with itself ([`mixup`]) or pushed beyond its touches
 //! ([`extrapolation`]) in the learner's forward pass.
 
@@ -15,8 +15,8 @@ use crate::options::Augmentation;
 /// One normalised training window (`norm.frames` frames a channel, channels in rows, `grid`'s
 /// height × width × colours of them) changed in place as `opts` asks: its raw readings scaled per
 /// window and per channel, its variation about each channel's mean scaled, shifted in time (edge
-/// frames repeated), reversed in time, its image moved, then a gain and Gaussian noise; each draw
-/// from `rng`, in that order (an option that is off draws nothing).
+/// frames repeated), reversed in time, its image moved and mirrored, then a gain and Gaussian
+/// noise; each draw from `rng`, in that order (an option that is off draws nothing).
 pub fn augment(sample: &mut [f32], norm: &Normalization, grid: [usize; 3], opts: &Augmentation, rng: &mut Rng) {
     let frames = norm.frames;
     if opts.scale > 0.0 || opts.channel_scale > 0.0 {
@@ -55,7 +55,18 @@ pub fn augment(sample: &mut [f32], norm: &Normalization, grid: [usize; 3], opts:
     if opts.translate > 0 {
         let mut offset = || rng.below(2 * opts.translate + 1) as isize - opts.translate as isize;
         let by = [offset(), offset()];
-        translate(sample, norm, grid, by);
+        let from = |at: usize, len: usize, by: isize| (at as isize - by).clamp(0, len as isize - 1) as usize;
+        let [h, w, _] = grid;
+        remap(sample, norm, grid, |y, x| (from(y, h, by[0]), from(x, w, by[1])));
+    }
+    if opts.flip > 0.0 {
+        let mut draw = || f64::from(rng.uniform()) < opts.flip;
+        let (rows, columns) = (draw(), draw());
+        let mirror = |at: usize, len: usize, on: bool| if on { len - 1 - at } else { at };
+        let [h, w, _] = grid;
+        if rows || columns {
+            remap(sample, norm, grid, |y, x| (mirror(y, h, rows), mirror(x, w, columns)));
+        }
     }
     let gain = 1.0 + opts.gain as f32 * (2.0 * rng.uniform() - 1.0);
     let noise = opts.noise as f32;
@@ -64,16 +75,15 @@ pub fn augment(sample: &mut [f32], norm: &Normalization, grid: [usize; 3], opts:
     }
 }
 
-/// Moves the image of a normalised window (`grid` height × width × colours rows of `norm.frames`)
-/// by `by` rows and columns, edge pixels repeated: each pixel takes the raw reading of the one it
-/// comes from, normalised as its own.
-fn translate(sample: &mut [f32], norm: &Normalization, [h, w, c]: [usize; 3], by: [isize; 2]) {
+/// Redraws the image of a normalised window (`grid` height × width × colours rows of
+/// `norm.frames`): the pixel at row y, column x takes the raw reading of the pixel `from(y, x)`
+/// in the same colour, normalised as its own.
+fn remap(sample: &mut [f32], norm: &Normalization, [_, w, c]: [usize; 3], from: impl Fn(usize, usize) -> (usize, usize)) {
     let frames = norm.frames;
     let original = sample.to_vec();
-    let from = |at: usize, len: usize, by: isize| (at as isize - by).clamp(0, len as isize - 1) as usize;
     for (row, out) in sample.chunks_mut(frames).enumerate() {
-        let (y, x, colour) = (row / (w * c), row / c % w, row % c);
-        let source = (from(y, h, by[0]) * w + from(x, w, by[1])) * c + colour;
+        let (y, x) = from(row / (w * c), row / c % w);
+        let source = (y * w + x) * c + row % c;
         let (ms, ss, md, sd) = (norm.mean[source], norm.std[source], norm.mean[row], norm.std[row]);
         for (v, z) in out.iter_mut().zip(&original[source * frames..(source + 1) * frames]) {
             *v = (z * ss + ms - md) / sd;

@@ -9,7 +9,7 @@ use pvt3_models::{Config, Rng};
 
 use super::*;
 use crate::data::{Dataset, Frames};
-use crate::options::{Augmentation, Distillation, HeldZeros, Optimization, Pruning};
+use crate::options::{Augmentation, Distillation, HeldZeros, Optimization, Pruning, Robust};
 use crate::run_dir::CrossValidation;
 
 fn tiny_config() -> Config {
@@ -73,9 +73,11 @@ fn options(epochs: usize) -> TrainOptions {
             stretch: 0.0,
             reverse: 0.0,
             translate: 0,
+            flip: 0.0,
             mixup: 0.0,
             extrapolate: 0.0,
             extrapolate_levels: false,
+            robust: Robust::Off,
         },
         ema: 0.0,
         seed: 5,

@@ -180,8 +180,7 @@ pub fn prepare_seeds(args: &ModelArgs, seeds: &[u64]) -> Result<Vec<Prepared>> {
 /// Builds the model configuration for `data` (and `partner`'s for a joint run), with what to
 /// tell the user about the choices made.
 fn prepare_with(args: &ModelArgs, data: Dataset, partner: Option<Dataset>) -> Result<(Prepared, Vec<String>)> {
-    let Configured { config, classes, mut notes } = configure(&data, &args.choice(), &args.options)?;
-    let mut options = args.options.clone();
+    let Configured { config, classes, mut options, mut notes } = configure(&data, &args.choice(), &args.options)?;
     let partner = match (&args.joint, partner) {
         (Some(path), Some(partner_data)) => {
             // The other sensor: its own data and the network that fits it, the same --set and --dropout.
@@ -201,4 +200,3 @@ fn prepare_with(args: &ModelArgs, data: Dataset, partner: Option<Dataset>) -> Re
     };
     Ok((Prepared { data, config, classes, options, partner }, notes))
 }
-

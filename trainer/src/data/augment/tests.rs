@@ -121,37 +121,66 @@ fn reversal_plays_each_channel_backwards_as_often_as_asked() {
     assert_eq!(a.uniform(), b.uniform());
 }
 
-#[test]
-fn translation_moves_the_raw_image_and_normalises_each_pixel_as_its_own() {
-    // A 3 × 4 image of one colour and 2 frames; each pixel's raw value is 10 · row + column (+ the
-    // frame), and each pixel normalised with its own mean and deviation.
+/// A 3 × 4 image of `colours` colours and 2 frames, each pixel's raw value 10 · row + column
+/// (+ 100 · colour + the frame) and normalised with its own mean and deviation, augmented 200
+/// times as `opts` asks; for each, the (row, column) moves of `moves` whose source pixels, read
+/// back raw, it shows.
+fn images_found<M: Copy + Ord + std::fmt::Debug>(
+    opts: &Augmentation,
+    colours: usize,
+    moves: &[M],
+    source: impl Fn(M, usize, usize) -> (usize, usize),
+) -> std::collections::BTreeSet<M> {
     let (h, w, frames) = (3, 4, 2);
-    let mean: Vec<f32> = (0..h * w).map(|p| p as f32).collect();
-    let std: Vec<f32> = (0..h * w).map(|p| 1.0 + p as f32 / 4.0).collect();
+    let channels = h * w * colours;
+    let mean: Vec<f32> = (0..channels).map(|p| p as f32).collect();
+    let std: Vec<f32> = (0..channels).map(|p| 1.0 + p as f32 / 4.0).collect();
     let norm = Normalization { mean, std, frames };
-    let raw = |y: usize, x: usize, t: usize| (10 * y + x + t) as f32;
-    let image: Vec<f32> = (0..h * w).flat_map(|p| (0..frames).map(move |t| raw(p / w, p % w, t))).collect();
+    let raw = |y: usize, x: usize, colour: usize, t: usize| (10 * y + x + 100 * colour + t) as f32;
+    let pixel = |p: usize| (p / (w * colours), p / colours % w, p % colours);
+    let image: Vec<f32> = (0..channels)
+        .flat_map(|p| (0..frames).map(move |t| (p, t)))
+        .map(|(p, t)| {
+            let (y, x, colour) = pixel(p);
+            raw(y, x, colour, t)
+        })
+        .collect();
     let mut sample = Vec::new();
     norm.apply_into(&image, &mut sample);
-    let opts = Augmentation { translate: 2, gain: 0.0, noise: 0.0, ..TrainOptions::default().augmentation };
     let mut rng = Rng::new(5);
-    let mut moves = std::collections::BTreeSet::new();
-    for _ in 0..200 {
-        let mut s = sample.clone();
-        augment(&mut s, &norm, [h, w, 1], &opts, &mut rng);
-        let back: Vec<f32> = s.iter().enumerate().map(|(i, z)| z * norm.std[i / frames] + norm.mean[i / frames]).collect();
-        // Read back, the image is the original moved by (dy, dx), edge pixels repeated.
-        let found = (-2..=2).flat_map(|dy| (-2..=2).map(move |dx| (dy, dx))).find(|&(dy, dx): &(isize, isize)| {
-            let at = |y: usize, x: usize| {
-                ((y as isize - dy).clamp(0, h as isize - 1) as usize, (x as isize - dx).clamp(0, w as isize - 1) as usize)
-            };
-            (0..h * w * frames).all(|i| {
-                let (p, t) = (i / frames, i % frames);
-                let (y, x) = at(p / w, p % w);
-                (back[i] - raw(y, x, t)).abs() < 1e-4
-            })
-        });
-        moves.insert(found.expect("the image moved by at most 2 pixels each way"));
-    }
-    assert_eq!(moves.len(), 25, "every move of up to 2 pixels each way drawn: {moves:?}");
+    (0..200)
+        .map(|_| {
+            let mut s = sample.clone();
+            augment(&mut s, &norm, [h, w, colours], opts, &mut rng);
+            let back: Vec<f32> = s.iter().enumerate().map(|(i, z)| z * norm.std[i / frames] + norm.mean[i / frames]).collect();
+            *moves
+                .iter()
+                .find(|&&m| {
+                    (0..channels * frames).all(|i| {
+                        let ((y, x, colour), t) = (pixel(i / frames), i % frames);
+                        let (sy, sx) = source(m, y, x);
+                        (back[i] - raw(sy, sx, colour, t)).abs() < 1e-4
+                    })
+                })
+                .expect("the image is one of the moves")
+        })
+        .collect()
+}
+
+#[test]
+fn translation_moves_the_raw_image_and_normalises_each_pixel_as_its_own() {
+    let opts = Augmentation { translate: 2, gain: 0.0, noise: 0.0, ..TrainOptions::default().augmentation };
+    let moves: Vec<(isize, isize)> = (-2..=2).flat_map(|dy| (-2..=2).map(move |dx| (dy, dx))).collect();
+    // Moved by (dy, dx), edge pixels repeated.
+    let from = |at: usize, len: isize, by: isize| (at as isize - by).clamp(0, len - 1) as usize;
+    let found = images_found(&opts, 1, &moves, |(dy, dx), y, x| (from(y, 3, dy), from(x, 4, dx)));
+    assert_eq!(found.len(), 25, "every move of up to 2 pixels each way drawn: {found:?}");
+}
+
+#[test]
+fn mirroring_flips_the_raw_image_by_rows_columns_or_both_and_keeps_its_colours() {
+    let opts = Augmentation { flip: 0.5, gain: 0.0, noise: 0.0, ..TrainOptions::default().augmentation };
+    let mirrors = [(false, false), (false, true), (true, false), (true, true)];
+    let found = images_found(&opts, 2, &mirrors, |(rows, columns), y, x| (if rows { 2 - y } else { y }, if columns { 3 - x } else { x }));
+    assert_eq!(found.len(), 4, "as it was, and mirrored left to right, top to bottom and both: {found:?}");
 }
