@@ -109,10 +109,8 @@ pub fn robust_options(data: &Dataset, options: &TrainOptions, notes: &mut Vec<St
         return options;
     }
     let varied = data.conditions.iter().find_map(|c| {
-        let mut levels: Vec<&str> = c.levels.iter().zip(&data.folds).filter(|&(_, &f)| f != TEST_FOLD).map(|(l, _)| l.as_str()).collect();
-        levels.sort_unstable();
-        levels.dedup();
-        (levels.len() > 1).then(|| format!("condition {} in {} levels", c.name, levels.len()))
+        let levels = c.distinct_among(|i| data.folds[i] != TEST_FOLD).len();
+        (levels > 1).then(|| format!("condition {} in {levels} levels", c.name))
     });
     let why = match (augmentation.robust, varied) {
         (Robust::Off, _) | (Robust::Auto, None) => return options,

@@ -79,7 +79,12 @@ pub struct Condition {
 impl Condition {
     /// Its distinct levels, in numeric order where every level is a number, else in text order.
     pub fn distinct(&self) -> Vec<&str> {
-        let mut all: Vec<&str> = self.levels.iter().map(String::as_str).collect();
+        self.distinct_among(|_| true)
+    }
+
+    /// The distinct levels of the touches `among` takes (by index), ordered as [`Self::distinct`].
+    pub fn distinct_among(&self, among: impl Fn(usize) -> bool) -> Vec<&str> {
+        let mut all: Vec<&str> = self.levels.iter().enumerate().filter(|&(i, _)| among(i)).map(|(_, l)| l.as_str()).collect();
         all.sort_unstable();
         all.dedup();
         if all.iter().all(|l| l.parse::<f64>().is_ok()) {
