@@ -14,6 +14,8 @@
 #   speed-V           one speed V in turn (10 20 50 100 120 150), both directions
 #   force-F           one force F in turn (120 150 180 210 250)
 #   direction-forward, direction-back   every touch of one sliding direction
+#   direction-forward-FABRIC, direction-back-FABRIC   one fabric's touches of that direction (the
+#                     others train both ways), e.g. direction-forward-Canvas
 # Default: random speeds-beyond speeds-between forces-unseen.
 #
 # VARIANT=NAME (default `plain`) names the runs' folder, target/robustness/NAME/ROW; IMPORT holds
@@ -50,6 +52,8 @@ hold() {
     force-*) echo "--hold-out force=${1#force-}" ;;
     direction-forward) echo "--hold-out speed=10,20,50,100,120,150" ;;
     direction-back) echo "--hold-out speed=-10,-20,-50,-100,-120,-150" ;;
+    direction-forward-* | direction-back-*)
+      echo "$(hold "${1%-*}") --hold-out-class ${1##*-}" ;;
     *) echo "unknown row $1" >&2; return 1 ;;
   esac
 }

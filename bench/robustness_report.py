@@ -46,7 +46,10 @@ def main():
     variants = sorted((d for d in root.iterdir() if d.is_dir()), key=lambda d: (d.name != "plain", d.name))
     if not variants:
         sys.exit(f"{root}: no runs (bash bench/robustness.sh FABRICSLIDE first)")
-    found = {v.name: {row: summary(v / row) for row in ROWS if (v / row).is_dir()} for v in variants}
+    # One fabric's other direction (direction-forward-Canvas, …) is a row of its own.
+    fabric_rows = sorted({d.name for v in variants for d in v.glob("direction-*-*") if d.is_dir()})
+    rows_run = ROWS + fabric_rows
+    found = {v.name: {row: summary(v / row) for row in rows_run if (v / row).is_dir()} for v in variants}
     plain_random = (found.get("plain", {}).get("random") or {}).get("mean_test_accuracy")
     for variant, rows in found.items():
         if len(rows) < 2:
@@ -59,8 +62,10 @@ def main():
         for row, s in rows.items():
             held = s.get("held_out") if s else None
             held_text = f"{held['condition']} = {', '.join(held['levels'])}" if held else "nothing (stratified)"
+            if held and held.get("class"):
+                held_text += f" of {held['class']}"
             print(f"| {row} | {held_text} | {cell(s, random_mean)} | {len(s['runs']) if s else 0} |")
-    for row in ROWS:
+    for row in rows_run:
         ran = [(variant, rows[row]) for variant, rows in found.items() if row in rows]
         if len(ran) < 2:
             continue

@@ -568,7 +568,9 @@ fn a_camera_s_videos_import_and_train() {
 /// Touches whose file names say their class, force and speed (as FabricSlide names them): imported
 /// with their conditions, cross-validated with one force held out as the test set (augmented in
 /// speed and pressure as asked), and evaluated on exactly the held-out touches again from the run
-/// alone; by default (`--robust auto`) the touches' two forces also scale each channel in training.
+/// alone; one class's touches at that force held out alone; by default (`--robust auto`) the
+/// touches' forces also scale each channel and stretch the windows in training, and the model
+/// reads the channels' spectra.
 #[test]
 fn conditions_from_file_names_hold_out_a_force() {
     let (dir, flat) = fabric_like("hold-out", 12);
@@ -591,17 +593,25 @@ fn conditions_from_file_names_hold_out_a_force() {
     // The run remembers what it held out: its test fold is the 12 touches pressed at 210.
     let eval = ok(&["eval", out.join("seed0/fold1").to_str().unwrap()]);
     assert!(eval.contains("12 samples (fold 4"), "{eval}");
-    // By default the touches that train, pressed in two ways, say the robot will press in others.
+    // One class's touches at 210 held out, the others trained at 210 too; by default the touches
+    // that train, pressed in three ways, say the robot will press in others.
     let auto = dir.join("auto");
     (args[4], args[6]) = (auto.to_str().unwrap(), "1");
-    args.extend(["--only", "seed=0,fold=1"]);
+    args.extend(["--only", "seed=0,fold=1", "--hold-out-class", "Fabric1"]);
     let cv = pvt3(&args);
     let stderr = String::from_utf8_lossy(&cv.stderr);
-    assert!(cv.status.success() && stderr.contains("(condition force in 2 levels), so a robot will touch in others"), "{stderr}");
+    assert!(cv.status.success() && stderr.contains("(condition force in 3 levels), so a robot will touch in others"), "{stderr}");
+    assert!(stderr.contains("held out force=210 of class Fabric1: 4 touches test, the other 32 train"), "{stderr}");
+    let eval = ok(&["eval", auto.join("seed0/fold1").to_str().unwrap()]);
+    assert!(eval.contains("4 samples (fold 4"), "{eval}");
     let provenance = std::fs::read_to_string(auto.join("seed0/fold1/model/provenance.json")).unwrap();
     let options = &serde_json::from_str::<serde_json::Value>(&provenance).unwrap()["options"];
-    let robust = (&options["robust"], &options["aug_channel_scale"], &options["extrapolate"]);
-    assert_eq!(robust, (&"auto".into(), &0.15.into(), &0.0.into()), "the run records what it trained with");
+    let robust = (&options["robust"], &options["aug_channel_scale"], &options["aug_stretch"], &options["extrapolate"]);
+    let trained = (&"auto".into(), &0.15.into(), &0.2.into(), &0.0.into());
+    assert_eq!(robust, trained, "the run records what it trained with, the stretch asked kept");
+    let config = std::fs::read_to_string(auto.join("seed0/fold1/model/config.json")).unwrap();
+    let bands = &serde_json::from_str::<serde_json::Value>(&config).unwrap()["spectral_bands"];
+    assert_eq!(bands, 16, "a window of 32 frames holds the spectral head's 16 bands");
     std::fs::remove_dir_all(dir).unwrap();
 }
 

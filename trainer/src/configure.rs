@@ -35,7 +35,7 @@ pub struct ModelChoice {
 pub struct Configured {
     pub config: Config,
     pub classes: Vec<String>,
-    /// The training options asked, with what the data decide ([`robust_options`]).
+    /// The training options asked, with what the data decide ([`robust`]).
     pub options: TrainOptions,
     /// What was chosen or found for the user, one sentence each.
     pub notes: Vec<String>,
@@ -78,8 +78,9 @@ pub fn configure(data: &Dataset, choice: &ModelChoice, options: &TrainOptions) -
     cfg.classes = data.classes();
     cfg = apply_overrides(cfg, &choice.overrides)?;
     cfg.dropout = choice.dropout.unwrap_or(cfg.dropout);
+    let (cfg, options) = robust(data, cfg, options, &choice.overrides, &mut notes)?;
     cfg.validate()?;
-    check_options(&cfg, options)?;
+    check_options(&cfg, &options)?;
     let classes = class_names(data, choice.class_names.as_deref(), cfg.classes)?;
     if data.held_out.is_none() {
         if let Some(seed) = data.fold_seed {
@@ -93,42 +94,72 @@ pub fn configure(data: &Dataset, choice: &ModelChoice, options: &TrainOptions) -
             cfg.frames
         ));
     }
-    let options = robust_options(data, options, &mut notes);
     Ok(Configured { config: cfg, classes, options, notes })
 }
 
-/// `options` with `--robust` applied to `data`: each channel's readings scaled by a factor of its
-/// own (`--aug-channel-scale` [`ROBUST_CHANNEL_SCALE`]) where asked (`on`), or (`auto`) where the
-/// touches that train and validate were made in more than one recorded way, a condition in two
-/// levels or more; unless the user asked for a robustness of their own (`--aug-channel-scale` or
-/// `--extrapolate`). Said in `notes`.
-pub fn robust_options(data: &Dataset, options: &TrainOptions, notes: &mut Vec<String>) -> TrainOptions {
+/// `--robust` applied to `data`: where asked (`on`), or (`auto`) where the touches that train
+/// record a condition (of `pvt3 import --name`) in two levels or more, the model is trained for
+/// ways of touching beyond the trained ones. Each channel's readings are scaled by a factor of
+/// their own ([`ROBUST_CHANNEL_SCALE`]) and windows are read at other speeds
+/// ([`ROBUST_STRETCH`]), and a PVT³ for a sensor of channels (not a camera) whose window holds
+/// the bands reads each channel's spectrum beside ([`ROBUST_SPECTRAL_BANDS`]); each only where the
+/// user left it unasked (`--aug-stretch`, `--set spectral_bands`). A user who asked for
+/// `--extrapolate` or `--aug-channel-scale` trains as asked.
+pub fn robust(
+    data: &Dataset,
+    cfg: Config,
+    options: &TrainOptions,
+    overrides: &[String],
+    notes: &mut Vec<String>,
+) -> Result<(Config, TrainOptions)> {
     let mut options = options.clone();
     let augmentation = &mut options.augmentation;
     if augmentation.channel_scale > 0.0 || augmentation.extrapolate > 0.0 {
-        return options;
+        return Ok((cfg, options));
     }
     let varied = data.conditions.iter().find_map(|c| {
         let levels = c.distinct_among(|i| data.folds[i] != TEST_FOLD).len();
         (levels > 1).then(|| format!("condition {} in {levels} levels", c.name))
     });
     let why = match (augmentation.robust, varied) {
-        (Robust::Off, _) | (Robust::Auto, None) => return options,
+        (Robust::Off, _) | (Robust::Auto, None) => return Ok((cfg, options)),
         (Robust::On, _) => "--robust on".to_string(),
         (Robust::Auto, Some(varied)) => format!("the touches that train were made in more than one way ({varied})"),
     };
     augmentation.channel_scale = ROBUST_CHANNEL_SCALE;
+    let mut chose = vec![format!("--aug-channel-scale {ROBUST_CHANNEL_SCALE}")];
+    if augmentation.stretch == 0.0 {
+        augmentation.stretch = ROBUST_STRETCH;
+        chose.push(format!("--aug-stretch {ROBUST_STRETCH}"));
+    }
+    let spectral = format!("spectral_bands={ROBUST_SPECTRAL_BANDS}");
+    let asked = overrides.iter().any(|o| o.split_once('=').is_some_and(|(k, _)| k == "spectral_bands"));
+    let camera = matches!(*data.x, crate::data::Frames::U8 { .. });
+    let fits = cfg.architecture() == Architecture::Pvt3 && cfg.frames / 2 >= ROBUST_SPECTRAL_BANDS;
+    let cfg = if fits && cfg.spectral_bands() == 0 && !asked && !camera {
+        chose.push(format!("--set {spectral}"));
+        apply_overrides(cfg, &[spectral])?
+    } else {
+        cfg
+    };
     notes.push(format!(
-        "{why}, so a robot will touch in others: training scales each channel's readings by a factor of its own \
-         (--aug-channel-scale {ROBUST_CHANNEL_SCALE}; --robust off trains as asked, --extrapolate 1 --extrapolate-levels \
-         for forces beyond the trained ones: docs/robustness.md)"
+        "{why}, so a robot will touch in others: training scales each channel's readings by a factor of its own, reads \
+         windows at other speeds and, where the model can, reads each channel's spectrum beside ({}; --robust off trains \
+         as asked, --extrapolate 1 --extrapolate-levels for forces beyond the trained ones: docs/robustness.md)",
+        chose.join(" ")
     ));
-    options
+    Ok((cfg, options))
 }
 
 /// The spread of `--robust`'s per-channel factors: on FabricSlide the best measured for the other
 /// sliding direction, and no worse than none for unseen forces (docs/robustness.md).
 pub const ROBUST_CHANNEL_SCALE: f64 = 0.15;
+/// `--robust`'s range of speeds (`--aug-stretch`): half to twice the touch's, which carries the
+/// spectrum to speeds beyond the trained ones (docs/robustness.md).
+pub const ROBUST_STRETCH: f64 = 1.0;
+/// `--robust`'s spectral head (`--set spectral_bands`): a texture's vibration does not depend on
+/// the direction it is slid in, where the channels' levels do (docs/robustness.md).
+pub const ROBUST_SPECTRAL_BANDS: usize = 16;
 
 /// The configuration before overrides: the preset named (in the chosen network's variant), the
 /// file given, else the preset whose window is the data's, else one derived for the data's shape.
@@ -234,42 +265,56 @@ mod tests {
     use crate::options::{Robust, TrainOptions};
 
     #[test]
-    fn robust_scales_channels_where_the_touches_that_train_vary_in_a_recorded_condition() {
+    fn robust_trains_for_other_touches_where_the_touches_that_train_vary_in_a_recorded_condition() {
         // Four touches: two forces among those that train, a third only in the test fold.
-        let mut data = Dataset::in_memory(vec![0.0f32; 4 * 2], vec![1, 1, 2], vec![0, 1, 0, 1]);
+        let mut data = Dataset::in_memory(vec![0.0f32; 4 * 64], vec![1, 1, 64], vec![0, 1, 0, 1]);
+        let cfg = Config { frames: 64, ..Config::biotac20() };
         let asked = TrainOptions::default();
         assert_eq!(asked.augmentation.robust, Robust::Auto);
-        let robust = |data: &Dataset, asked: &TrainOptions| {
+        let robust = |data: &Dataset, asked: &TrainOptions, overrides: &[String]| {
             let mut notes = Vec::new();
-            let o = super::robust_options(data, asked, &mut notes).augmentation;
-            ((o.channel_scale, o.extrapolate), notes)
+            let (cfg, o) = super::robust(data, cfg.clone(), asked, overrides, &mut notes).unwrap();
+            let o = o.augmentation;
+            ((o.channel_scale, o.extrapolate, o.stretch, cfg.spectral_bands()), notes)
         };
         // No conditions recorded: as asked, and nothing said.
-        assert_eq!(robust(&data, &asked), ((0.0, 0.0), vec![]));
+        assert_eq!(robust(&data, &asked, &[]), ((0.0, 0.0, 0.0, 0), vec![]));
         let forces = |l: [&str; 4]| vec![Condition { name: "force".into(), levels: l.map(String::from).to_vec() }];
         data.folds = vec![0, 1, 2, TEST_FOLD];
         // One level among the touches that train: the test touch's other level decides nothing.
         data.conditions = forces(["120", "120", "120", "250"]);
-        assert_eq!(robust(&data, &asked).0, (0.0, 0.0));
+        assert_eq!(robust(&data, &asked, &[]).0, (0.0, 0.0, 0.0, 0));
         data.conditions = forces(["120", "150", "120", "250"]);
-        let (on, notes) = robust(&data, &asked);
-        assert_eq!(on, (super::ROBUST_CHANNEL_SCALE, 0.0));
+        let (on, notes) = robust(&data, &asked, &[]);
+        let all = (super::ROBUST_CHANNEL_SCALE, 0.0, super::ROBUST_STRETCH, super::ROBUST_SPECTRAL_BANDS);
+        assert_eq!(on, all);
         assert!(notes[0].contains("condition force in 2 levels") && notes[0].contains("--robust off"), "{notes:?}");
+        assert!(notes[0].contains("(--aug-channel-scale 0.15 --aug-stretch 1 --set spectral_bands=16;"), "{notes:?}");
+        // What the user asked is kept: a stretch of their own, the spectral head off.
+        let mut stretch = asked.clone();
+        stretch.augmentation.stretch = 0.5;
+        assert_eq!(robust(&data, &stretch, &["spectral_bands=0".into()]).0, (super::ROBUST_CHANNEL_SCALE, 0.0, 0.5, 0));
+        // A window too short for the bands: no spectral head.
+        let short = Dataset::in_memory(vec![0.0f32; 4 * 16], vec![1, 1, 16], vec![0, 1, 0, 1]);
+        let short = Dataset { conditions: data.conditions.clone(), folds: data.folds.clone(), ..short };
+        let mut notes = Vec::new();
+        let (c, _) = super::robust(&short, Config { frames: 16, ..Config::biotac20() }, &asked, &[], &mut notes).unwrap();
+        assert_eq!(c.spectral_bands(), 0);
         // Off, or a robustness of the user's own asked: as asked.
         let mut off = asked.clone();
         off.augmentation.robust = Robust::Off;
-        assert_eq!(robust(&data, &off), ((0.0, 0.0), vec![]));
+        assert_eq!(robust(&data, &off, &[]), ((0.0, 0.0, 0.0, 0), vec![]));
         let mut own = asked.clone();
         own.augmentation.extrapolate = 0.5;
-        assert_eq!(robust(&data, &own), ((0.0, 0.5), vec![]));
+        assert_eq!(robust(&data, &own, &[]), ((0.0, 0.5, 0.0, 0), vec![]));
         let mut own = asked.clone();
         own.augmentation.channel_scale = 0.05;
-        assert_eq!(robust(&data, &own), ((0.05, 0.0), vec![]));
+        assert_eq!(robust(&data, &own, &[]), ((0.05, 0.0, 0.0, 0), vec![]));
         // On: whatever the data record.
         data.conditions.clear();
         let mut on = asked;
         on.augmentation.robust = Robust::On;
-        assert_eq!(robust(&data, &on).0, (super::ROBUST_CHANNEL_SCALE, 0.0));
+        assert_eq!(robust(&data, &on, &[]).0, all);
     }
 
     #[test]

@@ -319,9 +319,12 @@ struct Setup {
 
 impl PartialEq for Setup {
     fn eq(&self, other: &Self) -> bool {
-        let levels = |s: &Self| s.held_out.as_ref().map(|h| (h.condition.clone(), h.levels.clone()));
+        let same_held_out = match (&self.held_out, &other.held_out) {
+            (Some(a), Some(b)) => a.same_touches(b),
+            (a, b) => a.is_none() && b.is_none(),
+        };
         (&self.config, &self.data, &self.options, &self.pruning) == (&other.config, &other.data, &other.options, &other.pruning)
-            && levels(self) == levels(other)
+            && same_held_out
     }
 }
 

@@ -95,17 +95,32 @@ impl Condition {
 }
 
 /// Touches held out by a condition's levels, the test set of a run ([`Dataset::hold_out`]); the
-/// other touches are dealt into the training and validation folds with `seed`.
+/// other touches are dealt into the training and validation folds with `seed`. With `class`, only
+/// that class's touches of those levels are held out: the other classes train at every level
+/// (one fabric's other sliding direction, say, where the others were touched both ways).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct HoldOut {
     pub condition: String,
     pub levels: Vec<String>,
     pub seed: u64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub class: Option<String>,
+}
+
+impl HoldOut {
+    /// Whether `other` holds out the same touches of a set (whatever seed deals the rest).
+    pub fn same_touches(&self, other: &HoldOut) -> bool {
+        (&self.condition, &self.levels, &self.class) == (&other.condition, &other.levels, &other.class)
+    }
 }
 
 impl std::fmt::Display for HoldOut {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}={}", self.condition, self.levels.join(","))
+        write!(f, "{}={}", self.condition, self.levels.join(","))?;
+        match &self.class {
+            Some(class) => write!(f, " of class {class}"),
+            None => Ok(()),
+        }
     }
 }
 
@@ -448,6 +463,19 @@ impl Dataset {
         }
     }
 
+    /// The label of the class named `name` in the file's class names.
+    pub fn class_label(&self, name: &str) -> Result<u32> {
+        let names = self
+            .class_names
+            .as_ref()
+            .ok_or_else(|| data_error(&self.path, format!("class {name}: the set names no classes (pvt3 import writes their names)")))?;
+        names
+            .iter()
+            .position(|n| n == name)
+            .map(|c| c as u32)
+            .ok_or_else(|| data_error(&self.path, format!("no class is named {name}; the set's classes are {}", names.join(", "))))
+    }
+
     /// Number of classes: the largest label + 1.
     pub fn classes(&self) -> usize {
         self.labels.iter().max().map_or(0, |m| *m as usize + 1)
@@ -528,7 +556,9 @@ impl Dataset {
         if let Some(bad) = levels.iter().find(|l| !all.contains(&l.as_str())) {
             return Err(data_error(&self.path, format!("--hold-out {name}={bad}: no touch has that level; {name} has {}", all.join(", "))));
         }
-        let held: Vec<bool> = condition.levels.iter().map(|l| levels.contains(l)).collect();
+        let class = h.class.as_deref().map(|c| self.class_label(c)).transpose()?;
+        let held: Vec<bool> =
+            condition.levels.iter().zip(&self.labels).map(|(l, y)| levels.contains(l) && class.is_none_or(|c| c == *y)).collect();
         let kept: Vec<usize> = (0..self.len()).filter(|&i| !held[i]).collect();
         let kept_labels: Vec<u32> = kept.iter().map(|&i| self.labels[i]).collect();
         for c in 0..self.classes() as u32 {

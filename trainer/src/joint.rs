@@ -39,7 +39,7 @@ impl Partner<'_> {
             return refuse(format!("it holds the same touches as {}: a sensor cannot train beside itself", data.path.display()));
         }
         if let Some(h) = &data.held_out {
-            let holds = |p: &crate::data::HoldOut| p.condition == h.condition && p.levels == h.levels;
+            let holds = |p: &crate::data::HoldOut| p.same_touches(h);
             if self.data.conditions.iter().any(|c| c.name == h.condition) && !self.data.held_out.as_ref().is_some_and(holds) {
                 return refuse(format!(
                     "it records {} too and does not hold out {h}: those touches would train the network beside",

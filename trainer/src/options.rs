@@ -175,17 +175,18 @@ pub struct Augmentation {
     /// Training for ways of touching beyond the trained ones. `auto`: where the touches that
     /// train were made in more than one recorded way (a condition of `pvt3 import --name`, such
     /// as force or speed, in two levels or more) and neither --aug-channel-scale nor --extrapolate
-    /// is asked, train with `--aug-channel-scale 0.15`, and say so (what it changes, and
-    /// `--extrapolate 1 --extrapolate-levels` for forces beyond the trained ones:
-    /// docs/robustness.md); a set that records no conditions trains as asked. `on`: as if it
-    /// recorded them; `off`: as asked.
+    /// is asked, train with `--aug-channel-scale 0.15`, `--aug-stretch 1` unless a stretch is
+    /// asked, and a PVT³ of a sensor's channels with `--set spectral_bands=16` unless the bands are
+    /// set, and say so (what it changes, and `--extrapolate 1 --extrapolate-levels` for forces
+    /// beyond the trained ones: docs/robustness.md); a set that records no conditions trains as
+    /// asked. `on`: as if it recorded them; `off`: as asked.
     #[arg(long, value_enum, default_value_t = Robust::Auto, help_heading = AUGMENTATION)]
     #[serde(default = "Robust::before_auto")]
     pub robust: Robust,
 }
 
 /// Whether training prepares a model for ways of touching beyond the trained ones
-/// (`configure::robust_options`).
+/// (`configure::robust`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
 #[serde(rename_all = "lowercase")]
 pub enum Robust {

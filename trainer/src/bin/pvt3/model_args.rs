@@ -46,6 +46,12 @@ pub struct ModelArgs {
     /// others train and validate. E.g. `--hold-out force=210,250` or `--hold-out speed=10,-10`.
     #[arg(long, value_name = "NAME=LEVEL,…", value_parser = parse_hold_out)]
     pub hold_out: Option<(String, Vec<String>)>,
+    /// With --hold-out, hold out only this class's touches of those levels: the other classes
+    /// train and validate at every level. E.g. `--hold-out speed=10,20,50,100,120,150
+    /// --hold-out-class Canvas` tests Canvas slid the way it never trained, beside fabrics touched
+    /// both ways.
+    #[arg(long, value_name = "CLASS", requires = "hold_out")]
+    pub hold_out_class: Option<String>,
     /// Joint learning (Gao et al.): train a second PVT³ beside, on this data set of another
     /// sensor touching the same classes (same class order), e.g. `--data data/icub20.npz --joint
     /// data/biotac20.npz`. Each batch pairs every touch with a touch of its class
@@ -145,7 +151,12 @@ fn load(path: &Path, seed: u64, held_out: Option<&HoldOut>, partner: bool) -> Re
 
 /// `--hold-out`, its folds drawn with `--seed`.
 fn held_out(args: &ModelArgs) -> Option<HoldOut> {
-    args.hold_out.clone().map(|(condition, levels)| HoldOut { condition, levels, seed: args.options.seed })
+    args.hold_out.clone().map(|(condition, levels)| HoldOut {
+        condition,
+        levels,
+        seed: args.options.seed,
+        class: args.hold_out_class.clone(),
+    })
 }
 
 /// Loads the data set (and a joint partner's) and builds the model configuration for it: one

@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use super::*;
-use crate::data::Dataset;
+use crate::data::{Dataset, HoldOut};
 
 #[path = "../../../../tests/support/csv_tree.rs"]
 mod csv_tree;
@@ -166,7 +166,7 @@ fn a_flat_folder_imports_classes_and_conditions_from_names() {
     assert_eq!((data.labels[at], data.conditions[0].levels[at].as_str(), data.conditions[1].levels[at].as_str()), (1, "210", "50"));
 
     // Holding out a level: its touches and no other test; the rest fill the other folds.
-    let hold = |condition: &str, level: &str, seed| crate::data::HoldOut { condition: condition.into(), levels: vec![level.into()], seed };
+    let hold = |condition: &str, level: &str, seed| HoldOut { condition: condition.into(), levels: vec![level.into()], seed, class: None };
     data.hold_out(&hold("force", "210", 3)).unwrap();
     for i in 0..data.len() {
         assert_eq!(data.folds[i] == crate::data::TEST_FOLD, data.conditions[0].levels[i] == "210", "touch {i}");
@@ -186,6 +186,21 @@ fn a_flat_folder_imports_classes_and_conditions_from_names() {
     );
     assert!(msg("pressure", "1").contains("no such condition; the set records force, speed"));
     assert!(msg("speed", "-10").contains("keeps 3 touches, too few"), "{}", msg("speed", "-10"));
+
+    // One class's touches of a level: they test, and every other class trains at that level too.
+    let one = HoldOut { class: Some("Fabric1".into()), ..hold("force", "210", 3) };
+    data.hold_out(&one).unwrap();
+    for i in 0..data.len() {
+        let held = data.labels[i] == 1 && data.conditions[0].levels[i] == "210";
+        assert_eq!(data.folds[i] == crate::data::TEST_FOLD, held, "touch {i}");
+    }
+    assert!(data.folds.iter().zip(&data.conditions[0].levels).any(|(f, l)| *f != crate::data::TEST_FOLD && l == "210"));
+    assert_eq!(data.held_out.as_ref().unwrap().to_string(), "force=210 of class Fabric1");
+    assert!(one.same_touches(&HoldOut { seed: 0, ..one.clone() }) && !one.same_touches(&hold("force", "210", 3)));
+    let again = Dataset::load_as_trained(&out, 0, Some(&one), None).unwrap();
+    assert_eq!(again.folds, data.folds, "the class's hold-out is drawn again as it was trained");
+    let silk = data.clone().hold_out(&HoldOut { class: Some("Silk".into()), ..one.clone() }).unwrap_err().to_string();
+    assert!(silk.contains("no class is named Silk; the set's classes are Fabric0, Fabric1, Fabric2"), "{silk}");
 
     // Read by distance: a touch at -10 mm/s resampled to speed 50 keeps a fifth of its frames.
     let name = Some("{class}_F{force}_V{speed}mmps_*".parse().unwrap());
