@@ -5,9 +5,9 @@
 neighbour (both on standardised features), trained on forces 120–180 and tested on 210 and 250;
 trained on the negative speeds and tested on the positive ones (the other sliding direction,
 docs/robustness.md "Robust by default"); and, for comparison, on a random quarter of the touches
-held out. Then each fabric's channel
-levels against the force: a straight line through its levels at 120, 150 and 180, and how far it
-misses the levels at each force, beside the spread of the levels across its touches at one force.
+held out. Then each fabric's channel levels against the force: a straight line through its levels
+at 120, 150 and 180, and how far it misses the levels at each force, beside the spread of the
+levels across its touches at one force.
 
     target/onnx-venv/bin/python bench/fabric_linear.py FABRICSLIDE   # needs numpy
 
