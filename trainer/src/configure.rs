@@ -128,24 +128,27 @@ pub fn robust(
     };
     augmentation.channel_scale = ROBUST_CHANNEL_SCALE;
     let mut chose = vec![format!("--aug-channel-scale {ROBUST_CHANNEL_SCALE}")];
+    let mut does = vec!["scales each channel's readings by a factor of its own"];
     if augmentation.stretch == 0.0 {
         augmentation.stretch = ROBUST_STRETCH;
         chose.push(format!("--aug-stretch {ROBUST_STRETCH}"));
+        does.push("reads windows at other speeds");
     }
-    let spectral = format!("spectral_bands={ROBUST_SPECTRAL_BANDS}");
-    let asked = overrides.iter().any(|o| o.split_once('=').is_some_and(|(k, _)| k == "spectral_bands"));
-    let camera = matches!(*data.x, crate::data::Frames::U8 { .. });
+    let camera = pvt3_spec::config::is_image(cfg.height, cfg.width);
     let fits = cfg.architecture() == Architecture::Pvt3 && cfg.frames / 2 >= ROBUST_SPECTRAL_BANDS;
-    let cfg = if fits && cfg.spectral_bands() == 0 && !asked && !camera {
+    let cfg = if fits && cfg.spectral_bands() == 0 && !overridden(overrides, "spectral_bands") && !camera {
+        let spectral = format!("spectral_bands={ROBUST_SPECTRAL_BANDS}");
         chose.push(format!("--set {spectral}"));
+        does.push("reads each channel's spectrum beside");
         apply_overrides(cfg, &[spectral])?
     } else {
         cfg
     };
+    let last = does.pop().expect("the channel scale is always chosen");
+    let does = if does.is_empty() { last.to_string() } else { format!("{} and {last}", does.join(", ")) };
     notes.push(format!(
-        "{why}, so a robot will touch in others: training scales each channel's readings by a factor of its own, reads \
-         windows at other speeds and, where the model can, reads each channel's spectrum beside ({}; --robust off trains \
-         as asked, --extrapolate 1 --extrapolate-levels for forces beyond the trained ones: docs/robustness.md)",
+        "{why}, so a robot will touch in others: training {does} ({}; --robust off trains as asked, --extrapolate 1 \
+         --extrapolate-levels for forces beyond the trained ones: docs/robustness.md)",
         chose.join(" ")
     ));
     Ok((cfg, options))
@@ -244,7 +247,7 @@ pub fn apply_overrides(cfg: Config, overrides: &[String]) -> Result<Config> {
         value.as_object_mut().expect("a config is a JSON object").insert("patch_selection".into(), cfg.patch_selection().into());
     }
     for o in overrides {
-        let (key, raw) = o.split_once('=').ok_or_else(|| usage(format!("--set {o}: expected FIELD=VALUE")))?;
+        let (key, raw) = field_and_value(o)?;
         let fields = value.as_object_mut().expect("a config is a JSON object");
         if !fields.contains_key(key) {
             let mut known: Vec<&str> = fields.keys().map(String::as_str).collect();
@@ -255,6 +258,16 @@ pub fn apply_overrides(cfg: Config, overrides: &[String]) -> Result<Config> {
         fields.insert(key.to_string(), parsed);
     }
     serde_json::from_value(value).map_err(|e| usage(format!("the overridden configuration does not parse: {e}")))
+}
+
+/// Whether `overrides` (`--set FIELD=VALUE`, as [`apply_overrides`] reads them) set `field`.
+fn overridden(overrides: &[String], field: &str) -> bool {
+    overrides.iter().any(|o| field_and_value(o).is_ok_and(|(key, _)| key == field))
+}
+
+/// An override's field and its value, as written.
+fn field_and_value(o: &str) -> Result<(&str, &str)> {
+    o.split_once('=').ok_or_else(|| Error::Usage(format!("--set {o}: expected FIELD=VALUE")))
 }
 
 #[cfg(test)]
@@ -290,10 +303,21 @@ mod tests {
         assert_eq!(on, all);
         assert!(notes[0].contains("condition force in 2 levels") && notes[0].contains("--robust off"), "{notes:?}");
         assert!(notes[0].contains("(--aug-channel-scale 0.15 --aug-stretch 1 --set spectral_bands=16;"), "{notes:?}");
-        // What the user asked is kept: a stretch of their own, the spectral head off.
+        assert!(notes[0].contains("other speeds and reads each channel's spectrum beside ("), "{notes:?}");
+        // What the user asked is kept, and the note names only what training does: a stretch of
+        // their own, the spectral head off.
         let mut stretch = asked.clone();
         stretch.augmentation.stretch = 0.5;
-        assert_eq!(robust(&data, &stretch, &["spectral_bands=0".into()]).0, (super::ROBUST_CHANNEL_SCALE, 0.0, 0.5, 0));
+        let (kept, notes) = robust(&data, &stretch, &["spectral_bands=0".into()]);
+        assert_eq!(kept, (super::ROBUST_CHANNEL_SCALE, 0.0, 0.5, 0));
+        assert!(
+            notes[0].contains("training scales each channel's readings by a factor of its own (--aug-channel-scale 0.15;"),
+            "{notes:?}"
+        );
+        // A camera's frames: no spectral head, however long the window.
+        let mut notes = Vec::new();
+        let camera = Config { frames: 64, ..Config::gelsight() };
+        assert_eq!(super::robust(&data, camera, &asked, &[], &mut notes).unwrap().0.spectral_bands(), 0);
         // A window too short for the bands: no spectral head.
         let short = Dataset::in_memory(vec![0.0f32; 4 * 16], vec![1, 1, 16], vec![0, 1, 0, 1]);
         let short = Dataset { conditions: data.conditions.clone(), folds: data.folds.clone(), ..short };

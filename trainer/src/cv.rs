@@ -321,7 +321,8 @@ impl PartialEq for Setup {
     fn eq(&self, other: &Self) -> bool {
         let same_held_out = match (&self.held_out, &other.held_out) {
             (Some(a), Some(b)) => a.same_touches(b),
-            (a, b) => a.is_none() && b.is_none(),
+            (None, None) => true,
+            _ => false,
         };
         (&self.config, &self.data, &self.options, &self.pruning) == (&other.config, &other.data, &other.options, &other.pruning)
             && same_held_out
