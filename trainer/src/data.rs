@@ -24,19 +24,16 @@
 //! [`windows`]) to an augmented batch ([`augment`]) to the learner ([`crate::train`]).
 
 use std::borrow::Cow;
-use std::fs::File;
-use std::io::{Read, Seek};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, OnceLock};
 
-use ndarray::{ArrayD, IxDyn};
-use ndarray_npy::{NpzReader, ReadNpyExt, ReadableElement};
 use pvt3_models::Rng;
 
 use crate::{Error, Result};
 pub use frames::Frames;
 
 pub mod augment;
+mod file;
 mod frames;
 pub mod import;
 pub mod normalization;
@@ -166,217 +163,10 @@ fn data_error(path: &Path, reason: impl Into<String>) -> Error {
     Error::Data { path: path.to_path_buf(), reason: reason.into() }
 }
 
-/// Reads an array of any of the common numeric dtypes as f64.
-trait ArraySource {
-    fn read<T: ReadableElement>(&mut self, key: &str) -> std::result::Result<ArrayD<T>, String>;
-    fn keys(&mut self) -> Vec<String>;
-}
-
-struct Npz<R: Read + Seek>(NpzReader<R>);
-
-impl<R: Read + Seek> ArraySource for Npz<R> {
-    fn read<T: ReadableElement>(&mut self, key: &str) -> std::result::Result<ArrayD<T>, String> {
-        let name = if self.keys().iter().any(|k| k == key) { key.to_string() } else { format!("{key}.npy") };
-        self.0.by_name::<ndarray::OwnedRepr<T>, IxDyn>(&name).map_err(|e| e.to_string())
-    }
-    fn keys(&mut self) -> Vec<String> {
-        self.0.names().unwrap_or_default().into_iter().map(|n| n.trim_end_matches(".npy").to_string()).collect()
-    }
-}
-
-struct NpyDir(PathBuf);
-
-impl ArraySource for NpyDir {
-    fn read<T: ReadableElement>(&mut self, key: &str) -> std::result::Result<ArrayD<T>, String> {
-        let file = File::open(self.0.join(format!("{key}.npy"))).map_err(|e| e.to_string())?;
-        ArrayD::<T>::read_npy(std::io::BufReader::new(file)).map_err(|e| e.to_string())
-    }
-    fn keys(&mut self) -> Vec<String> {
-        let entries = std::fs::read_dir(&self.0).into_iter().flatten().flatten();
-        entries.filter_map(|e| e.file_name().to_str()?.strip_suffix(".npy").map(str::to_string)).collect()
-    }
-}
-
-/// Reads `key` whatever its numeric dtype, as f64.
-fn read_numeric(src: &mut impl ArraySource, key: &str) -> std::result::Result<ArrayD<f64>, String> {
-    fn conv<T: Copy + Into<f64>>(a: ArrayD<T>) -> ArrayD<f64> {
-        a.mapv(Into::into)
-    }
-    let mut first_error = None;
-    macro_rules! attempt {
-        ($($t:ty),*) => {$(
-            match src.read::<$t>(key) {
-                Ok(a) => return Ok(conv(a)),
-                Err(e) => { first_error.get_or_insert(e); }
-            }
-        )*};
-    }
-    attempt!(f32, f64, i16, u8, i8, u16, i32, u32);
-    // 64-bit integers do not convert losslessly to f64 in general; labels and folds are small.
-    if let Ok(a) = src.read::<i64>(key) {
-        return Ok(a.mapv(|v| v as f64));
-    }
-    if let Ok(a) = src.read::<u64>(key) {
-        return Ok(a.mapv(|v| v as f64));
-    }
-    Err(first_error.unwrap_or_default())
-}
-
-/// `x` and its shape: 8-bit frames as they are, beside their background where the file has one
-/// (`key::BACKGROUND`, one frame a touch), which a reader subtracts ([`Frames`]); any other dtype
-/// as f32, minus its background.
-fn read_frames(path: &Path, src: &mut impl ArraySource, has_background: bool) -> Result<(Frames, Vec<usize>)> {
-    let eight_bit = src.read::<u8>(key::X).ok();
-    let background = if has_background && eight_bit.is_some() { src.read::<u8>(key::BACKGROUND).ok() } else { None };
-    if let Some(x) = eight_bit.filter(|_| has_background == background.is_some()) {
-        let shape = x.shape().to_vec();
-        if let Some(b) = &background {
-            check_background(path, &shape, b.shape())?;
-        }
-        return Ok((Frames::U8 { x: flat(x), background: background.map(flat) }, shape));
-    }
-    let mut x = read_numeric(src, key::X).map_err(|e| data_error(path, format!("array `x`: {e}")))?;
-    if has_background {
-        let b = read_numeric(src, key::BACKGROUND).map_err(|e| data_error(path, format!("array `background`: {e}")))?;
-        check_background(path, x.shape(), b.shape())?;
-        x -= &b.insert_axis(ndarray::Axis(x.ndim() - 1));
-    }
-    let shape = x.shape().to_vec();
-    let x: Vec<f32> = x.iter().map(|v| *v as f32).collect();
-    let sample_len = x.len() / shape.first().copied().unwrap_or(1).max(1);
-    if let Some(i) = x.iter().position(|v| !v.is_finite()) {
-        return Err(data_error(path, format!("`x` holds a NaN or infinite value in sample {}", i / sample_len)));
-    }
-    Ok((Frames::F32(x), shape))
-}
-
-/// A background is a frame of each touch: `x`'s shape (`[N, H, W, C, T]`) without its frame axis.
-fn check_background(path: &Path, x: &[usize], background: &[usize]) -> Result<()> {
-    if x.len() < 2 {
-        return Err(data_error(path, format!("`x` has shape {x:?}; a background needs touches of frames")));
-    }
-    let frame = &x[..x.len() - 1];
-    if background != frame {
-        return Err(data_error(path, format!("`background` has shape {background:?}; expected {frame:?}, `x`'s without its frame axis")));
-    }
-    Ok(())
-}
-
-/// An array's values in row-major order, without a copy where they already are.
-fn flat<T: Clone>(a: ArrayD<T>) -> Vec<T> {
-    if a.is_standard_layout() {
-        a.into_raw_vec_and_offset().0
-    } else {
-        a.iter().cloned().collect()
-    }
-}
-
 impl Dataset {
     /// Loads a data set; `seed` draws stratified folds when the file has none.
     pub fn load(path: &Path, seed: u64) -> Result<Self> {
-        if !path.exists() {
-            return Err(data_error(path, "no such file or directory (expected an .npz file or a directory of .npy files)"));
-        }
-        if path.is_dir() {
-            Self::from_source(path, &mut NpyDir(path.to_path_buf()), seed)
-        } else {
-            let file = File::open(path).map_err(Error::io(path))?;
-            let npz = NpzReader::new(std::io::BufReader::new(file))
-                .map_err(|e| data_error(path, format!("not a readable .npz archive ({e})")))?;
-            Self::from_source(path, &mut Npz(npz), seed)
-        }
-    }
-
-    fn from_source(path: &Path, src: &mut impl ArraySource, seed: u64) -> Result<Self> {
-        let keys = src.keys();
-        let missing = |k: &str| data_error(path, format!("no array `{k}` (found: {})", keys.join(", ")));
-        for k in [key::X, key::Y] {
-            if !keys.iter().any(|have| have == k) {
-                return Err(missing(k));
-            }
-        }
-        let (x, shape) = read_frames(path, src, keys.iter().any(|k| k == key::BACKGROUND))?;
-        let y = read_numeric(src, key::Y).map_err(|e| data_error(path, format!("array `y`: {e}")))?;
-        let fold = if keys.iter().any(|k| k == key::FOLD) {
-            Some(read_numeric(src, key::FOLD).map_err(|e| data_error(path, format!("array `fold`: {e}")))?)
-        } else {
-            None
-        };
-        let sample_shape = match shape[..] {
-            [_, c, t] => vec![c, 1, t],
-            [_, h, w, t] => vec![h, w, t],
-            [_, h, w, c, t] => vec![h, w, c, t],
-            _ => return Err(data_error(path, format!("`x` has shape {shape:?}; expected [N, H, W, T], [N, C, T] or [N, H, W, C, T]"))),
-        };
-        let n = shape[0];
-        let labels = integers(path, key::Y, &y, n)?;
-        let frames = *sample_shape.last().expect("a sample shape has a frame axis");
-        let lengths = if keys.iter().any(|k| k == key::LENGTHS) {
-            let l = read_numeric(src, key::LENGTHS).map_err(|e| data_error(path, format!("array `lengths`: {e}")))?;
-            let lengths = integers(path, key::LENGTHS, &l, n)?;
-            if let Some(i) = lengths.iter().position(|l| *l == 0 || *l as usize > frames) {
-                return Err(data_error(path, format!("`lengths`[{i}] = {} is not in 1..={frames}", lengths[i])));
-            }
-            lengths.into_iter().map(|l| l as usize).collect()
-        } else {
-            vec![frames; n]
-        };
-        // The lines of a text array; `count`, how many it must have.
-        let mut lines = |key: &str, count: Option<usize>| -> Result<Option<Vec<String>>> {
-            if !keys.iter().any(|k| k == key) {
-                return Ok(None);
-            }
-            let bytes = src.read::<u8>(key).map_err(|e| data_error(path, format!("array `{key}` (UTF-8 bytes): {e}")))?;
-            let text = String::from_utf8(bytes.iter().copied().collect())
-                .map_err(|_| data_error(path, format!("array `{key}` is not UTF-8 text")))?;
-            let names: Vec<String> = text.lines().map(String::from).collect();
-            if let Some(count) = count.filter(|c| *c != names.len()) {
-                return Err(data_error(path, format!("array `{key}` names {} lines; expected {count}", names.len())));
-            }
-            Ok(Some(names))
-        };
-        let classes = labels.iter().max().map_or(0, |m| *m as usize + 1);
-        let class_names = lines(key::CLASS_NAMES, Some(classes))?;
-        let sources = lines(key::SOURCES, Some(n))?;
-        let mut conditions = Vec::new();
-        for name in lines(key::CONDITIONS, None)?.unwrap_or_default() {
-            let levels = lines(&key::condition(&name), Some(n))?.ok_or_else(|| missing(&key::condition(&name)))?;
-            conditions.push(Condition { name, levels });
-        }
-        // A record of one JSON line: how the touches, or a camera's frames, were read.
-        fn record<T: serde::de::DeserializeOwned>(path: &Path, key: &str, what: &str, text: Option<Vec<String>>) -> Result<Option<T>> {
-            let parse =
-                |line: &String| serde_json::from_str(line).map_err(|e| data_error(path, format!("array `{key}` is not {what} ({e})")));
-            text.as_ref().map(|t| parse(&t[0])).transpose()
-        }
-        let reading = record(path, key::READING, "how touches are read", lines(key::READING, Some(1))?)?;
-        let camera = record(path, key::CAMERA, "how camera frames are read", lines(key::CAMERA, Some(1))?)?;
-        let (folds, fold_seed) = match fold {
-            Some(f) => {
-                let folds = integers(path, key::FOLD, &f, n)?;
-                if let Some(bad) = folds.iter().find(|f| **f as usize >= FOLDS) {
-                    return Err(data_error(path, format!("fold {bad} is outside 0..={}", FOLDS - 1)));
-                }
-                (folds.into_iter().map(|f| f as usize).collect(), None)
-            }
-            None => (stratified_folds(&labels, FOLDS, seed), Some(seed)),
-        };
-        Ok(Self {
-            x: Arc::new(x),
-            sample_shape,
-            lengths,
-            class_names,
-            sources,
-            conditions,
-            held_out: None,
-            reading,
-            camera,
-            labels: labels.to_vec(),
-            folds,
-            fold_seed,
-            path: path.to_path_buf(),
-            digest: OnceLock::new(),
-        })
+        file::read(path, seed)
     }
 
     /// Touches held in memory (`x` the layout `sample_shape` back to back), all in fold 0 and
@@ -615,23 +405,6 @@ impl Dataset {
         }
         Ok(())
     }
-}
-
-/// Converts a numeric array of `n` whole, non-negative values to u32.
-fn integers(path: &Path, key: &str, a: &ArrayD<f64>, n: usize) -> Result<Vec<u32>> {
-    if a.shape() != [n] {
-        return Err(data_error(path, format!("`{key}` has shape {:?}; expected [{n}], one per sample", a.shape())));
-    }
-    a.iter()
-        .enumerate()
-        .map(|(i, v)| {
-            if v.fract() == 0.0 && *v >= 0.0 && *v <= u32::MAX as f64 {
-                Ok(*v as u32)
-            } else {
-                Err(data_error(path, format!("`{key}`[{i}] = {v} is not a whole number ≥ 0")))
-            }
-        })
-        .collect()
 }
 
 /// Deals each class's samples, shuffled by `seed`, round-robin into folds 0..folds_count.
