@@ -35,7 +35,7 @@ fn dataset(path: &Path, src: &mut impl ArraySource, seed: u64) -> Result<Dataset
             return Err(a.missing(k));
         }
     }
-    let (x, shape) = read_frames(path, a.src, a.has(key::BACKGROUND))?;
+    let (x, shape) = read_frames(&mut a)?;
     let y = a.numeric(key::Y)?;
     let fold = if a.has(key::FOLD) { Some(a.numeric(key::FOLD)?) } else { None };
     let sample_shape = sample_shape(path, &shape)?;
@@ -211,9 +211,10 @@ fn read_numeric(src: &mut impl ArraySource, key: &str) -> std::result::Result<Ar
 /// `x` and its shape: 8-bit frames as they are, beside their background where the file has one
 /// (`key::BACKGROUND`, one frame a touch), which a reader subtracts ([`Frames`]); any other dtype
 /// as f32, minus its background.
-fn read_frames(path: &Path, src: &mut impl ArraySource, has_background: bool) -> Result<(Frames, Vec<usize>)> {
-    let eight_bit = src.read::<u8>(key::X).ok();
-    let background = if has_background && eight_bit.is_some() { src.read::<u8>(key::BACKGROUND).ok() } else { None };
+fn read_frames(a: &mut Arrays<'_, impl ArraySource>) -> Result<(Frames, Vec<usize>)> {
+    let (path, has_background) = (a.path, a.has(key::BACKGROUND));
+    let eight_bit = a.src.read::<u8>(key::X).ok();
+    let background = if has_background && eight_bit.is_some() { a.src.read::<u8>(key::BACKGROUND).ok() } else { None };
     if let Some(x) = eight_bit.filter(|_| has_background == background.is_some()) {
         let shape = x.shape().to_vec();
         if let Some(b) = &background {
@@ -221,9 +222,9 @@ fn read_frames(path: &Path, src: &mut impl ArraySource, has_background: bool) ->
         }
         return Ok((Frames::U8 { x: flat(x), background: background.map(flat) }, shape));
     }
-    let mut x = read_numeric(src, key::X).map_err(|e| data_error(path, format!("array `x`: {e}")))?;
+    let mut x = a.numeric(key::X)?;
     if has_background {
-        let b = read_numeric(src, key::BACKGROUND).map_err(|e| data_error(path, format!("array `background`: {e}")))?;
+        let b = a.numeric(key::BACKGROUND)?;
         check_background(path, x.shape(), b.shape())?;
         x -= &b.insert_axis(ndarray::Axis(x.ndim() - 1));
     }
