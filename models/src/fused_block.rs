@@ -24,6 +24,11 @@ const CHUNK_ROWS: usize = 512;
 /// Chunks at least, where there are enough sequences: so that a few long sequences (the temporal
 /// transformer's) still spread evenly over the threads.
 const MIN_CHUNKS: usize = 8;
+/// Activations a block keeps for its backward at most, in values (64 MB). Above, its backward
+/// recomputes them, so that one block's are held at a time instead of every block's: a batch of
+/// camera frames at full size (240 × 320 in patches of 40 × 40) would keep 0.6 GB over the
+/// spatial transformer. A batch of tactile arrays, or of camera frames at 30 × 40, keeps fewer.
+const KEEP_VALUES: usize = 1 << 24;
 
 /// Defines the method `$name`, which runs `$body` compiled a second time for AVX2 (as `$avx2`)
 /// where the CPU has it: the short loops of attention, the norms and the elementwise work, all
@@ -65,7 +70,8 @@ use layout::*;
 pub struct BlockOp {
     dims: BlockDims,
     dropout: Option<BlockDropout>,
-    /// Keep the activations for the backward (training) instead of recomputing them there.
+    /// Keep the activations for the backward (training) instead of recomputing them there, where
+    /// they are at most [`KEEP_VALUES`].
     keep: bool,
     first_only: bool,
     saved: OnceLock<Saved>,
@@ -184,9 +190,10 @@ impl CustomOp2 for BlockOp {
         let (sequences, tokens) = self.check(lx, lp)?;
         let (x, p) = (values(sx, lx)?, values(sp, lp)?);
         let weights = self.effective(p);
+        let keep = self.keep && self.dims.activations(sequences, tokens, self.queries(tokens)) <= KEEP_VALUES;
         let (outputs, chunks): (Vec<Vec<f32>>, Vec<Activations>) =
-            self.run_forward(x, p, &weights, sequences, tokens, self.keep).into_iter().unzip();
-        if self.keep {
+            self.run_forward(x, p, &weights, sequences, tokens, keep).into_iter().unzip();
+        if keep {
             // Set once: each application of the block is a fresh op.
             let _ = self.saved.set(Saved { tokens, weights, chunks });
         }

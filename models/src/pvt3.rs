@@ -21,6 +21,7 @@ use crate::spectrum::Spectrum;
 use crate::transformer::{composed_ops, Transformer};
 use crate::{Config, Result, Rng};
 
+pub mod patches;
 #[cfg(test)]
 mod tests;
 
@@ -113,17 +114,38 @@ impl Pvt3 {
         self.classify_prefix(x, &sequence, tokens.unwrap_or(self.cfg.time_tokens()), rng)
     }
 
+    /// [`Self::forward_pooled`] of windows already cut into patches `[b, time_tokens,
+    /// num_patches, patch_dim]` ([`Self::patchify`], [`patches::cut_into`]), for a model
+    /// without a spectral head (which reads the frames themselves: [`Self::reads_patches`]).
+    pub fn forward_pooled_patches(&self, patches: &Tensor, tokens: Option<usize>, mut rng: Option<&mut Rng>) -> Result<(Tensor, Tensor)> {
+        if !self.reads_patches() {
+            return Err(pvt3_spec::Error::Config("a model with a spectral head reads whole windows, not patches".into()).into());
+        }
+        let sequence = self.sequence_of_patches(patches, rng.as_deref_mut())?;
+        self.classify_sequence(&sequence, tokens.unwrap_or(self.cfg.time_tokens()), rng)
+    }
+
+    /// Whether nothing but the patches is read of a window: no spectral head.
+    pub fn reads_patches(&self) -> bool {
+        self.spectrum.is_none()
+    }
+
     /// Logits `[b, classes]` and the encoding `[b, dim]` of windows `x` from the first `tokens`
     /// temporal tokens of their sequence ([`Self::sequence`]): the temporal transformer over the
     /// CLS token and those, and the spectral head over their kept frames.
     pub fn classify_prefix(&self, x: &Tensor, sequence: &Tensor, tokens: usize, rng: Option<&mut Rng>) -> Result<(Tensor, Tensor)> {
-        self.cfg.check_prefix(tokens)?;
-        let pooled = self.temporal.forward_cls(&sequence.narrow(1, 0, tokens + 1)?, rng)?;
-        let logits = self.head.forward(&pooled)?;
+        let (logits, pooled) = self.classify_sequence(sequence, tokens, rng)?;
         match &self.spectrum {
             Some(spectrum) => Ok(((logits + spectrum.forward(x, &self.frame_weights(tokens)?)?)?, pooled)),
             None => Ok((logits, pooled)),
         }
+    }
+
+    /// [`Self::classify_prefix`] without the spectral head's term.
+    fn classify_sequence(&self, sequence: &Tensor, tokens: usize, rng: Option<&mut Rng>) -> Result<(Tensor, Tensor)> {
+        self.cfg.check_prefix(tokens)?;
+        let pooled = self.temporal.forward_cls(&sequence.narrow(1, 0, tokens + 1)?, rng)?;
+        Ok((self.head.forward(&pooled)?, pooled))
     }
 
     /// The spectral head's weight of each frame (`pvt3_spec::spectrum::frame_weights`): the
@@ -135,9 +157,13 @@ impl Pvt3 {
 
     /// The temporal transformer's input `[b, 1 + time_tokens, dim]`: the CLS token, then each
     /// temporal token's spatial encoding.
-    pub fn sequence(&self, x: &Tensor, mut rng: Option<&mut Rng>) -> Result<Tensor> {
-        let patches = self.patchify(x)?;
-        let tokens = if composed_ops() { self.embed_composed(&patches)? } else { self.embed(&patches)? };
+    pub fn sequence(&self, x: &Tensor, rng: Option<&mut Rng>) -> Result<Tensor> {
+        self.sequence_of_patches(&self.patchify(x)?, rng)
+    }
+
+    /// [`Self::sequence`] of windows cut into patches.
+    fn sequence_of_patches(&self, patches: &Tensor, mut rng: Option<&mut Rng>) -> Result<Tensor> {
+        let tokens = if composed_ops() { self.embed_composed(patches)? } else { self.embed(patches)? };
         let (b, t, len, d) = tokens.dims4()?;
         let tokens = self.dropout.forward(&tokens, rng.as_deref_mut())?;
         let frames = self.space.forward_cls(&tokens.reshape((b * t, len, d))?, rng)?;

@@ -51,6 +51,14 @@ impl BlockDims {
         self.heads * self.dim_head
     }
 
+    /// The values of the activations a block's forward keeps for its backward
+    /// ([`super::Activations`]), over `sequences` of `tokens`, `queries` of which are computed.
+    pub(super) fn activations(&self, sequences: usize, tokens: usize, queries: usize) -> usize {
+        let (rows, out_rows) = (sequences * tokens, sequences * queries);
+        let (d, inner) = (self.dim, self.inner());
+        rows * (2 * d + 1 + 3 * inner) + out_rows * (self.heads * tokens + inner + 2 * d + 1 + 3 * self.mlp)
+    }
+
     /// Each packed parameter's name (under the block's prefix) and shape, in packing order.
     pub fn parameters(&self) -> [(String, Vec<usize>); 13] {
         names::BLOCK.map(|(path, shape)| (names::join(path), shape.iter().map(|s| s.of(self.dim, self.inner(), self.mlp)).collect()))

@@ -4,6 +4,7 @@
 use candle_core::{DType, Device, Var};
 use candle_nn::{VarBuilder, VarMap};
 
+use super::{pack, BlockDims, BlockOp};
 use crate::gradcheck::{directional, max_abs, random, randomise, relative, smooth_loss};
 use crate::transformer::Block;
 use crate::{Config, Rng};
@@ -112,4 +113,42 @@ fn threads_change_no_bit() {
         })
     };
     assert_eq!(run(1), run(3));
+}
+
+/// A block too large to keep its activations recomputes them in its backward: the same bits as
+/// when kept, and `BlockDims::activations` counts exactly what a kept forward holds.
+#[test]
+fn recomputed_activations_give_the_same_bits_and_are_counted_exactly() {
+    let (cfg, tokens) = (Config { dropout: 0.1, ..Config::icub20() }, 20);
+    let (block, vars) = block(&cfg, 11);
+    let dims = BlockDims::new(&cfg);
+    let by_name: std::collections::HashMap<_, _> = vars.iter().map(|(n, v)| (n.clone(), v.as_tensor().clone())).collect();
+    let packed = pack(dims.parameters().iter().map(|(name, _)| &by_name[name])).unwrap();
+    let x = Var::from_tensor(&random(&[30, tokens, cfg.dim], 12)).unwrap();
+    for first in [false, true] {
+        let run = |keep: bool| {
+            let dropout = block.draw_dropout(Some(&mut Rng::new(13)));
+            let y = BlockOp::new(dims, dropout, keep, first).apply(&x, &packed).unwrap();
+            let grads = y.sqr().unwrap().sum_all().unwrap().backward().unwrap();
+            let mut bits: Vec<u32> = y.flatten_all().unwrap().to_vec1::<f32>().unwrap().iter().map(|v| v.to_bits()).collect();
+            for t in std::iter::once(&x).chain(vars.iter().map(|(_, v)| v)) {
+                bits.extend(grads.get(t.as_tensor()).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap().iter().map(|v| v.to_bits()));
+            }
+            bits
+        };
+        assert_eq!(run(true), run(false), "first only: {first}");
+        let op = BlockOp::new(dims, block.draw_dropout(Some(&mut Rng::new(13))), true, first);
+        let (xs, p) = (x.flatten_all().unwrap().to_vec1::<f32>().unwrap(), packed.to_vec1::<f32>().unwrap());
+        let kept: usize = op
+            .run_forward(&xs, &p, &op.effective(&p), 30, tokens, true)
+            .iter()
+            .map(|(_, a)| {
+                [&a.xhat1, &a.rstd1, &a.a, &a.qkv, &a.probs, &a.heads, &a.xhat2, &a.rstd2, &a.c, &a.h, &a.cdf, &a.gd]
+                    .iter()
+                    .map(|v| v.len())
+                    .sum::<usize>()
+            })
+            .sum();
+        assert_eq!(dims.activations(30, tokens, op.queries(tokens)), kept, "first only: {first}");
+    }
 }

@@ -5,7 +5,8 @@
 //! ([`Samples::cropped`]), an augmentation of where the touch is read.
 
 use candle_core::{Device, Tensor};
-use pvt3_models::Rng;
+use pvt3_models::pvt3::patches::cut_into;
+use pvt3_models::{Config, Rng};
 
 use super::augment::log_uniform_factor;
 use super::normalization::Normalization;
@@ -151,18 +152,44 @@ impl<'a> Samples<'a> {
         self.filled.iter().map(move |f| f / tubelet)
     }
 
-    /// The windows at `rows`, normalised, as a tensor `[rows, …sample_shape]` and a label tensor.
+    /// The windows at `rows`, normalised and each passed to `transform`, as a tensor
+    /// `[rows, …sample_shape]`, and a label tensor.
     pub fn batch(&self, rows: &[usize], transform: impl FnMut(&mut [f32])) -> Result<(Tensor, Tensor)> {
+        self.gather(rows, None, transform)
+    }
+
+    /// [`Self::batch`] with each window cut into `cfg`'s patches as it is read,
+    /// `[rows, time_tokens, num_patches, patch_dim]`: what [`pvt3_models::Pvt3::patchify`] makes
+    /// of the other, without the batch ever being held both ways.
+    pub fn cut_batch(&self, rows: &[usize], cfg: &Config, transform: impl FnMut(&mut [f32])) -> Result<(Tensor, Tensor)> {
+        self.gather(rows, Some(cfg), transform)
+    }
+
+    fn gather(&self, rows: &[usize], cut: Option<&Config>, mut transform: impl FnMut(&mut [f32])) -> Result<(Tensor, Tensor)> {
         let l = self.sample_len();
-        let (mut x, mut raw) = (Vec::with_capacity(rows.len() * l), Vec::with_capacity(l));
+        let (mut x, mut raw, mut window) = (Vec::with_capacity(rows.len() * l), Vec::with_capacity(l), Vec::new());
         for &r in rows {
             raw.clear();
             self.read_into(r, &mut raw);
-            self.norm.apply_into(&raw, &mut x);
+            match cut {
+                None => {
+                    let start = x.len();
+                    self.norm.apply_into(&raw, &mut x);
+                    transform(&mut x[start..]);
+                }
+                Some(cfg) => {
+                    window.clear();
+                    self.norm.apply_into(&raw, &mut window);
+                    transform(&mut window);
+                    cut_into(cfg, &window, &mut x);
+                }
+            }
         }
-        x.chunks_mut(l).for_each(transform);
         let mut shape = vec![rows.len()];
-        shape.extend_from_slice(&self.sample_shape);
+        match cut {
+            None => shape.extend_from_slice(&self.sample_shape),
+            Some(cfg) => shape.extend([cfg.time_tokens(), cfg.num_patches(), cfg.patch_dim()]),
+        }
         let labels: Vec<u32> = rows.iter().map(|&r| self.labels[r]).collect();
         Ok((Tensor::from_vec(x, shape, &Device::Cpu)?, Tensor::new(labels, &Device::Cpu)?))
     }
@@ -171,6 +198,7 @@ impl<'a> Samples<'a> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::data::frames::Frames;
 
     #[test]
     fn windows_cover_the_touch_every_half_window_and_end_at_its_end() {
@@ -202,5 +230,26 @@ mod tests {
             slopes.push(slope);
         }
         assert!(slopes.iter().any(|s| *s < 0.8) && slopes.iter().any(|s| *s > 1.25), "{slopes:?}");
+    }
+
+    #[test]
+    fn a_cut_batch_is_the_patches_of_the_batch_each_window_transformed_alike() {
+        // Three 8-bit touches of 4 × 6 RGB and 9 frames; the model reads 6 frames in tubelets of 2,
+        // patches of 2 × 3. The transform draws from its generator, window by window.
+        let cfg = Config { height: 4, width: 6, channels: 3, frames: 6, patch_height: 2, patch_width: 3, tubelet: 2, ..Config::gelsight() };
+        let x = Frames::U8 { x: (0..3 * 4 * 6 * 3 * 9).map(|v| (v * 7 % 251) as u8).collect(), background: None };
+        let data = Dataset::in_memory(x, vec![4, 6, 3, 9], vec![0, 1, 0]);
+        let norm = Normalization { mean: vec![10.0; 72], std: vec![2.0; 72], frames: 6 };
+        let set = Samples::cropped(&data, &[0, 1, 2], &norm, 0.0, &mut Rng::new(1));
+        let (mut a, mut b) = (Rng::new(2), Rng::new(2));
+        let (whole, labels) = set.batch(&[2, 0, 1], |w| w.iter_mut().for_each(|v| *v += a.normal())).unwrap();
+        let (cut, cut_labels) = set.cut_batch(&[2, 0, 1], &cfg, |w| w.iter_mut().for_each(|v| *v += b.normal())).unwrap();
+        let (model, _) = pvt3_models::Pvt3::init(&cfg, 0).unwrap();
+        assert_eq!(cut.dims(), &[3, 3, 4, 36]);
+        assert_eq!(
+            cut.flatten_all().unwrap().to_vec1::<f32>().unwrap(),
+            model.patchify(&whole).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap()
+        );
+        assert_eq!(cut_labels.to_vec1::<u32>().unwrap(), labels.to_vec1::<u32>().unwrap());
     }
 }

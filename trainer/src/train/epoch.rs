@@ -77,7 +77,11 @@ pub(super) fn train(
                 _ => crate::joint::draw_partners(rows.iter().map(|&r| own.labels[r]), &same_class[i - 1], &mut run.rng)?,
             };
             let rng = &mut run.rng;
-            batches.push(set.batch(&rows, |s| augment(s, normalization, set.grid(), &opts.augmentation, rng))?);
+            let transform = |s: &mut [f32]| augment(s, normalization, set.grid(), &opts.augmentation, rng);
+            batches.push(match nets[i].learner.cuts(opts) {
+                Some(cfg) => set.cut_batch(&rows, cfg, transform)?,
+                None => set.batch(&rows, transform)?,
+            });
         }
         let mut learners: Vec<_> = nets.iter_mut().map(|n| &mut n.learner).collect();
         let (stepped, apart) = step_together(&mut learners, &batches, pull, opts, lr, &mut run.rng)?;

@@ -91,16 +91,32 @@ impl Learner {
         Ok(())
     }
 
-    /// One optimiser step on a batch: optional same-class extrapolation and mixup, forward with
-    /// dropout, smoothed cross-entropy (plus the teachers' term and the L1 penalty on the masks),
-    /// backward, gradient clipping, AdamW. Returns the loss and logits.
+    /// One optimiser step on a batch of whole windows `x` (cut into patches here where
+    /// [`Self::cuts`]): optional same-class extrapolation and mixup, forward with dropout,
+    /// smoothed cross-entropy (plus the teachers' term and the L1 penalty on the masks), backward,
+    /// gradient clipping, AdamW. Returns the loss and logits.
     pub fn step(&mut self, x: &Tensor, y: &Tensor, opts: &TrainOptions, lr: f64, rng: &mut Rng) -> Result<(f64, Tensor)> {
-        let batch = [(x.clone(), y.clone())];
+        let x = match self.cuts(opts) {
+            Some(_) => self.model.pvt3("cut batches")?.patchify(x)?,
+            None => x.clone(),
+        };
+        let batch = [(x, y.clone())];
         let (mut stepped, _) = step_together(&mut [self], &batch, 0.0, opts, lr, rng)?;
         Ok(stepped.remove(0))
     }
 
-    /// A training step up to its loss: with `pooled`, PVT³'s encoding too (joint learning).
+    /// The configuration whose patches this learner's training batches come cut into
+    /// ([`crate::data::windows::Samples::cut_batch`]), where nothing but PVT³'s embedding reads a
+    /// window: no spectral head, no teachers and no extrapolation to the levels (which read the
+    /// frames). `None`: whole windows.
+    pub fn cuts(&self, opts: &TrainOptions) -> Option<&Config> {
+        let pvt3 = self.model.pvt3("cut batches").ok()?;
+        let levels = opts.augmentation.extrapolate > 0.0 && opts.augmentation.extrapolate_levels;
+        (pvt3.reads_patches() && self.teachers.is_none() && !levels).then(|| pvt3.config())
+    }
+
+    /// A training step up to its loss, `x` the windows or, where [`Self::cuts`], their patches:
+    /// with `pooled`, PVT³'s encoding too (joint learning).
     fn forward(&mut self, x: &Tensor, y: &Tensor, opts: &TrainOptions, pooled: bool, rng: &mut Rng) -> Result<Pass> {
         let mut saved = Vec::new();
         if opts.pruning.random_prune > 0.0 {
@@ -121,10 +137,14 @@ impl Learner {
         let mixed = if opts.augmentation.mixup > 0.0 { Some(mixup::mix(x, y, opts.augmentation.mixup, rng)?) } else { None };
         let x = mixed.as_ref().map_or(x, |m| &m.x);
         let prefix = opts.prefix_training > 0.0 && rng.uniform() < opts.prefix_training as f32;
-        let (logits, extra, pooled) = if prefix || pooled {
+        let cut = self.cuts(opts).is_some();
+        let (logits, extra, pooled) = if prefix || pooled || cut {
             let pvt3 = self.model.pvt3(if prefix { "--prefix-training" } else { "--joint" })?;
             let tokens = prefix.then(|| 1 + rng.below(pvt3.config().time_tokens()));
-            let (logits, pooled) = pvt3.forward_pooled(x, tokens, Some(rng))?;
+            let (logits, pooled) = match cut {
+                true => pvt3.forward_pooled_patches(x, tokens, Some(rng))?,
+                false => pvt3.forward_pooled(x, tokens, Some(rng))?,
+            };
             (logits, None, Some(pooled))
         } else {
             let (logits, extra) = self.model.forward_with_loss(x, Some(rng))?;
