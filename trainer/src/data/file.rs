@@ -24,7 +24,7 @@ pub(super) fn read(path: &Path, seed: u64) -> Result<Dataset> {
         let file = File::open(path).map_err(Error::io(path))?;
         let npz =
             NpzReader::new(std::io::BufReader::new(file)).map_err(|e| data_error(path, format!("not a readable .npz archive ({e})")))?;
-        dataset(path, &mut Npz::new(npz), seed)
+        dataset(path, &mut Npz(npz), seed)
     }
 }
 
@@ -158,26 +158,15 @@ trait ArraySource {
     fn keys(&mut self) -> Vec<String>;
 }
 
-/// An `.npz` archive and the names of its members, listed once.
-struct Npz<R: Read + Seek> {
-    reader: NpzReader<R>,
-    names: Vec<String>,
-}
-
-impl<R: Read + Seek> Npz<R> {
-    fn new(mut reader: NpzReader<R>) -> Self {
-        let names = reader.names().unwrap_or_default();
-        Self { reader, names }
-    }
-}
+struct Npz<R: Read + Seek>(NpzReader<R>);
 
 impl<R: Read + Seek> ArraySource for Npz<R> {
+    /// The member `key`, or else `key.npy` (`NpzReader::by_name` tries both, in that order).
     fn read<T: ReadableElement>(&mut self, key: &str) -> std::result::Result<ArrayD<T>, String> {
-        let name = if self.names.iter().any(|n| n == key) { key.to_string() } else { format!("{key}.npy") };
-        self.reader.by_name::<ndarray::OwnedRepr<T>, IxDyn>(&name).map_err(|e| e.to_string())
+        self.0.by_name::<ndarray::OwnedRepr<T>, IxDyn>(key).map_err(|e| e.to_string())
     }
     fn keys(&mut self) -> Vec<String> {
-        self.names.iter().map(|n| n.trim_end_matches(".npy").to_string()).collect()
+        self.0.names().unwrap_or_default().into_iter().map(|n| n.trim_end_matches(".npy").to_string()).collect()
     }
 }
 
