@@ -8,6 +8,7 @@ pub mod extrapolation;
 pub mod mixup;
 
 use pvt3_models::Rng;
+use rayon::prelude::*;
 
 use super::normalization::Normalization;
 use crate::options::Augmentation;
@@ -69,10 +70,28 @@ pub fn augment(sample: &mut [f32], norm: &Normalization, grid: [usize; 3], opts:
         }
     }
     let gain = 1.0 + opts.gain as f32 * (2.0 * rng.uniform() - 1.0);
-    let noise = opts.noise as f32;
-    for v in sample.iter_mut() {
-        *v = *v * gain + if noise > 0.0 { noise * rng.normal() } else { 0.0 };
+    gain_and_noise(sample, gain, opts.noise as f32, rng);
+}
+
+/// Values a noise part draws at the least: below it a window is drawn in one part.
+const NOISE_PART: usize = 1 << 16;
+
+/// `v · gain + noise · z` for every value `v`, `z` a normal drawn from `rng` value by value in
+/// order (none where `noise` is 0). A camera's window holds millions of values, so its normals are
+/// drawn in parts on rayon's threads, each from where it falls in the stream ([`Rng::ahead`]):
+/// bit for bit what drawing them in order gives.
+fn gain_and_noise(sample: &mut [f32], gain: f32, noise: f32, rng: &mut Rng) {
+    if noise <= 0.0 {
+        sample.iter_mut().for_each(|v| *v *= gain);
+        return;
     }
+    let start = rng.clone();
+    let part = NOISE_PART.max(sample.len().div_ceil(rayon::current_num_threads()));
+    sample.par_chunks_mut(part).enumerate().for_each(|(k, values)| {
+        let mut rng = start.ahead(Rng::NORMAL_DRAWS * (k * part) as u64);
+        values.iter_mut().for_each(|v| *v = *v * gain + noise * rng.normal());
+    });
+    *rng = start.ahead(Rng::NORMAL_DRAWS * sample.len() as u64);
 }
 
 /// Redraws the image of a normalised window (`grid` height × width × colours rows of

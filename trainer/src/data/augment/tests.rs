@@ -184,3 +184,19 @@ fn mirroring_flips_the_raw_image_by_rows_columns_or_both_and_keeps_its_colours()
     let found = images_found(&opts, 2, &mirrors, |(rows, columns), y, x| (if rows { 2 - y } else { y }, if columns { 3 - x } else { x }));
     assert_eq!(found.len(), 4, "as it was, and mirrored left to right, top to bottom and both: {found:?}");
 }
+
+/// A camera-sized window's noise is drawn in parallel parts, each from where it falls in the
+/// stream: bit for bit the values, and the generator's state after, of drawing them in order.
+#[test]
+fn noise_drawn_in_parts_is_noise_drawn_in_order() {
+    let pool = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+    let (gain, noise) = (1.1_f32, 0.05_f32);
+    let window: Vec<f32> = (0..3 * NOISE_PART + 17).map(|i| (i % 101) as f32 / 7.0).collect();
+    let mut in_order = Rng::new(9);
+    let expected: Vec<f32> = window.iter().map(|v| v * gain + noise * in_order.normal()).collect();
+    let mut in_parts = Rng::new(9);
+    let mut drawn = window.clone();
+    pool.install(|| gain_and_noise(&mut drawn, gain, noise, &mut in_parts));
+    assert!(drawn.iter().zip(&expected).all(|(a, b)| a.to_bits() == b.to_bits()));
+    assert_eq!(in_parts.next_u64(), in_order.next_u64());
+}
