@@ -3,7 +3,7 @@
 image statistics, trained on exactly the folds of a `pvt3 cv` run, so that its figure stands
 beside the network's run for run.
 
-    target/onnx-venv/bin/python bench/camera_linear.py DATA.npz CV_DIR   # needs numpy
+    target/onnx-venv/bin/python bench/camera_linear.py DATA.npz CV_DIR [--grid HxW]   # needs numpy
 
 DATA.npz is a camera set of `pvt3 import` (uint8 `x` `[N, H, W, C, T]` or `[N, H, W, T]`, with
 `background` where imported with `--subtract-first`); CV_DIR the `pvt3 cv --data DATA.npz` run
@@ -12,7 +12,7 @@ each seed and validation fold k: folds other than k and 4 train, k chooses the r
 4 tests. No test touch reaches the features' standardisation or the choice.
 
 Features of a touch (its frames minus its background, if it has one), each from all its frames:
-- `mean`: the mean image, shrunk to 6 × 8 by area averaging, every colour;
+- `mean`: the mean image, shrunk to 6 × 8 (or `--grid HxW`) by area averaging, every colour;
 - `motion`: the mean absolute change from frame to frame, shrunk likewise;
 - `colour`: each colour's mean, standard deviation and 10th, 50th and 90th percentiles.
 """
@@ -36,19 +36,19 @@ def shrink(image, grid):
     return cut.reshape(h, rows, w, cols, -1).mean((1, 3))
 
 
-def features(touch, background):
+def features(touch, background, grid):
     """One touch `[H, W, C, T]` as float, minus its background `[H, W, C]`."""
     frames = touch.astype(np.float32)
     if background is not None:
         frames -= background.astype(np.float32)[..., None]
-    mean = shrink(frames.mean(-1), GRID).ravel()
-    motion = shrink(np.abs(np.diff(frames, axis=-1)).mean(-1), GRID).ravel()
+    mean = shrink(frames.mean(-1), grid).ravel()
+    motion = shrink(np.abs(np.diff(frames, axis=-1)).mean(-1), grid).ravel()
     per_colour = frames.reshape(-1, frames.shape[2], frames.shape[3]).transpose(1, 0, 2).reshape(frames.shape[2], -1)
     colour = np.concatenate([per_colour.mean(1), per_colour.std(1), *np.percentile(per_colour, [10, 50, 90], axis=1)])
     return np.concatenate([mean, motion, colour])
 
 
-def load(path):
+def load(path, grid):
     data = np.load(path)
     x, y = data["x"], data["y"].astype(int)
     if x.ndim == 4:
@@ -56,7 +56,7 @@ def load(path):
     background = data["background"] if "background" in data.files else None
     if background is not None and background.ndim == 3:
         background = background[..., None]
-    table = np.stack([features(x[i], None if background is None else background[i]) for i in range(len(x))])
+    table = np.stack([features(x[i], None if background is None else background[i], grid) for i in range(len(x))])
     return table, y
 
 
@@ -91,12 +91,17 @@ def runs(cv_dir):
 
 
 def main():
-    if len(sys.argv) != 3:
+    args = sys.argv[1:]
+    grid = GRID
+    if len(args) == 4 and args[2] == "--grid":
+        grid = tuple(int(v) for v in args[3].split("x"))
+        args = args[:2]
+    if len(args) != 2:
         sys.exit(__doc__)
-    table, labels = load(sys.argv[1])
+    table, labels = load(args[0], grid)
     classes = labels.max() + 1
     results = []
-    for seed, k, folds in runs(sys.argv[2]):
+    for seed, k, folds in runs(args[1]):
         train, val, test = (folds != k) & (folds != TEST_FOLD), folds == k, folds == TEST_FOLD
         scores = [(ridge(table[train], labels[train], table[val], classes, s) == labels[val]).mean() for s in STRENGTHS]
         best = STRENGTHS[int(np.argmax(scores))]

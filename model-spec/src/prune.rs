@@ -4,8 +4,9 @@
 //! (local; for attention, per head, so heads stay equal in width) or below one threshold over all
 //! channel masks (global). Frame pruning removes the `q` % of temporal tokens with the smallest
 //! |frame-mask| value, patch pruning the `r` % of the grid's patches with the smallest
-//! |patch-mask| value (a model with `patch_selection`). Entries already zero count as the
-//! smallest.
+//! |patch-mask| value (a model with `patch_selection`), or the patches the parent run's validation
+//! fold misses least ([`PatchChoice::Validation`], chosen by the trainer, which holds the data).
+//! Entries already zero count as the smallest.
 
 use std::collections::BTreeMap;
 
@@ -37,11 +38,34 @@ pub struct PruneSpec {
     #[serde(default, skip_serializing_if = "is_zero")]
     pub patches: f64,
     pub scope: Scope,
+    /// How the patches to prune are chosen; written only when not by magnitude, so that earlier
+    /// runs' records read and write as before.
+    #[serde(default, skip_serializing_if = "PatchChoice::is_magnitude")]
+    pub patch_choice: PatchChoice,
     /// Percentage of the entries of every weight matrix set to zero at random and kept there
     /// (persistent random unstructured pruning, [`random_weights`]). It regularises; it makes the
     /// model no smaller, since the matrices stay dense.
     #[serde(default)]
     pub weights: f64,
+}
+
+/// How patch pruning chooses the patches it removes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "lowercase")]
+pub enum PatchChoice {
+    /// The patches with the smallest |patch-mask| value.
+    #[default]
+    Magnitude,
+    /// One patch at a time, the one without which the parent run's validation fold has the lowest
+    /// loss (greedy backward elimination).
+    Validation,
+}
+
+impl PatchChoice {
+    fn is_magnitude(&self) -> bool {
+        *self == Self::Magnitude
+    }
 }
 
 fn is_zero(v: &f64) -> bool {
@@ -184,7 +208,19 @@ mod tests {
         let cfg = Config { heads: 2, dim_head: 4, mlp_dim: 8, ..Config::icub20() };
         // Scores alternate in sign; magnitudes rise with the index inside each head.
         let t = tensors(&cfg, |_, i| if i % 2 == 0 { (i % 4) as f32 } else { -((i % 4) as f32) });
-        let p = plan(&cfg, &t, &PruneSpec { channels: 50.0, frames: 40.0, patches: 0.0, scope: Scope::Local, weights: 0.0 }).unwrap();
+        let p = plan(
+            &cfg,
+            &t,
+            &PruneSpec {
+                channels: 50.0,
+                frames: 40.0,
+                patches: 0.0,
+                scope: Scope::Local,
+                weights: 0.0,
+                patch_choice: PatchChoice::Magnitude,
+            },
+        )
+        .unwrap();
         assert_eq!(p["space.layers.0.attn.channel_mask"], vec![false, false, true, true, false, false, true, true]);
         assert_eq!(p["space.layers.0.ffn.channel_mask"].iter().filter(|k| !**k).count(), 4);
         assert_eq!(p["frame_mask"].iter().filter(|k| !**k).count(), 30);
@@ -195,14 +231,38 @@ mod tests {
         let cfg = Config::icub20();
         // Temporal masks score high, spatial ones low: global pruning takes the spatial ones first.
         let t = tensors(&cfg, |name, i| if name.starts_with("space") { 0.1 + i as f32 * 1e-3 } else { 1.0 });
-        let p = plan(&cfg, &t, &PruneSpec { channels: 50.0, frames: 0.0, patches: 0.0, scope: Scope::Global, weights: 0.0 }).unwrap();
+        let p = plan(
+            &cfg,
+            &t,
+            &PruneSpec {
+                channels: 50.0,
+                frames: 0.0,
+                patches: 0.0,
+                scope: Scope::Global,
+                weights: 0.0,
+                patch_choice: PatchChoice::Magnitude,
+            },
+        )
+        .unwrap();
         assert!(p["space.layers.2.attn.channel_mask"].iter().all(|k| !k));
         assert!(p["temporal.layers.2.ffn.channel_mask"].iter().all(|k| *k));
         assert!(p["frame_mask"].iter().all(|k| *k));
         let mut pruned = t.clone();
         apply(&p, &mut pruned);
         assert!(pruned["space.layers.0.ffn.channel_mask"].1.iter().all(|v| *v == 0.0));
-        let err = plan(&cfg, &t, &PruneSpec { channels: 120.0, frames: 0.0, patches: 0.0, scope: Scope::Local, weights: 0.0 }).unwrap_err();
+        let err = plan(
+            &cfg,
+            &t,
+            &PruneSpec {
+                channels: 120.0,
+                frames: 0.0,
+                patches: 0.0,
+                scope: Scope::Local,
+                weights: 0.0,
+                patch_choice: PatchChoice::Magnitude,
+            },
+        )
+        .unwrap_err();
         assert!(err.to_string().contains("give a percentage from 0 to 100"));
     }
 
@@ -211,7 +271,14 @@ mod tests {
         let cfg = Config { network: crate::Pvt3Config { patch_selection: true, ..Default::default() }.into(), ..Config::icub20() };
         let mut t = tensors(&cfg, |_, _| 1.0);
         t.insert(names::PATCH_MASK.into(), (vec![4], vec![0.9, -0.2, 0.5, 1.1]));
-        let spec = PruneSpec { channels: 0.0, frames: 0.0, patches: 50.0, scope: Scope::Local, weights: 0.0 };
+        let spec = PruneSpec {
+            channels: 0.0,
+            frames: 0.0,
+            patches: 50.0,
+            scope: Scope::Local,
+            weights: 0.0,
+            patch_choice: PatchChoice::Magnitude,
+        };
         assert_eq!(plan(&cfg, &t, &spec).unwrap()[names::PATCH_MASK], vec![true, false, false, true]);
         let err = plan(&Config::icub20(), &t, &spec).unwrap_err().to_string();
         assert!(err.contains("without a patch mask: train it with --set patch_selection=true"), "{err}");

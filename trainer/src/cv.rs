@@ -407,7 +407,12 @@ fn finished_run(dir: &Path, unfinished: &mut Vec<String>) -> Result<Option<(Fold
         true => {
             let (_, pmeta) = crate::checkpoint::load_meta(&pruned).map_err(damaged)?;
             let o = &pmeta.provenance.options;
-            let stage = pmeta.provenance.pruning.map(|spec| PruneStage { spec, epochs: o.optimization.epochs, lr: o.optimization.lr });
+            let stage = pmeta.provenance.pruning.map(|spec| PruneStage {
+                spec,
+                epochs: o.optimization.epochs,
+                lr: o.optimization.lr,
+                kept_patches: None,
+            });
             (Some(read_json::<RunResult>(&Run(&pruned).result()).map_err(damaged)?), stage)
         }
         false if pruned.exists() => {
@@ -434,9 +439,17 @@ mod tests {
         let dir = out.join("seed5/fold0");
         let spec = spec(&data, 2, Some(1));
         let stage = PruneStage {
-            spec: pvt3_spec::prune::PruneSpec { channels: 0.0, frames: 0.0, patches: 0.0, scope: Default::default(), weights: 20.0 },
+            spec: pvt3_spec::prune::PruneSpec {
+                channels: 0.0,
+                frames: 0.0,
+                patches: 0.0,
+                scope: Default::default(),
+                weights: 20.0,
+                patch_choice: Default::default(),
+            },
             epochs: 1,
             lr: 1e-3,
+            kept_patches: None,
         };
         assert!(run_fold(&spec, Some(&stage), &dir, false, &ProgressBar::hidden()).unwrap().is_none(), "paused");
         assert!(Run(&dir).pruned().is_dir());

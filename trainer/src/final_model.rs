@@ -7,6 +7,9 @@
 use std::path::{Path, PathBuf};
 
 use indicatif::ProgressBar;
+use pvt3_models::weights::varmap_tensors;
+use pvt3_spec::names;
+use pvt3_spec::prune::PatchChoice;
 use serde::{Deserialize, Serialize};
 
 use crate::anytime::Stopping;
@@ -15,7 +18,7 @@ use crate::cv::CvSummary;
 use crate::data::Dataset;
 use crate::prune::{prune_and_fine_tune, PruneStage};
 use crate::run_dir::{Checkpoint, CrossValidation, Run, CV_SUMMARY};
-use crate::train::{train, RunSpec};
+use crate::train::{train, RunResult, RunSpec};
 use crate::{Error, Result};
 
 /// What a final model is expected to score: the cross-validation's test accuracy over its runs.
@@ -112,7 +115,10 @@ impl Plan {
             Some(stage) => {
                 let pruned = expected(true);
                 let (_, pruned_meta) = checkpoint::load_meta(&Run(&Run(&run).pruned()).model())?;
-                let stage = PruneStage { epochs: median(&pruned.selected_epochs), ..stage.clone() };
+                let mut stage = PruneStage { epochs: median(&pruned.selected_epochs), ..stage.clone() };
+                if stage.spec.patches > 0.0 && stage.spec.patch_choice == PatchChoice::Validation {
+                    stage.kept_patches = Some(most_kept_patches(cv, &summary.pruned_runs)?);
+                }
                 Some((stage, pruned, pruned_meta.provenance.stopping))
             }
             None => None,
@@ -180,6 +186,26 @@ impl Plan {
         stamp(&Run(&pruned).model(), stopping, expected)?;
         Ok(Run(&pruned).model())
     }
+}
+
+/// The patches a final model keeps where its cross-validation chose them by validation, which a
+/// final model has none of: those the cross-validation's pruned runs kept most often (ties to the
+/// lower patch), as many as each kept.
+fn most_kept_patches(cv: &Path, runs: &[RunResult]) -> Result<Vec<bool>> {
+    let (mut votes, mut kept) = (Vec::new(), 0);
+    for r in runs {
+        let fold = r.val_fold.ok_or_else(|| Error::Usage(format!("{}: a pruned run without a validation fold", cv.display())))?;
+        let (_, _, varmap) = checkpoint::load(&Run(&Run(&CrossValidation(cv).run(r.seed, fold)).pruned()).model())?;
+        let mask = varmap_tensors(&varmap)?.remove(names::PATCH_MASK).map(|(_, v)| v).unwrap_or_default();
+        votes.resize(mask.len(), 0usize);
+        mask.iter().zip(&mut votes).for_each(|(v, n)| *n += usize::from(*v != 0.0));
+        kept = mask.iter().filter(|v| **v != 0.0).count();
+    }
+    let mut order: Vec<usize> = (0..votes.len()).collect();
+    order.sort_by(|a, b| votes[*b].cmp(&votes[*a]).then(a.cmp(b)));
+    let mut keep = vec![false; votes.len()];
+    order.into_iter().take(kept).for_each(|p| keep[p] = true);
+    Ok(keep)
 }
 
 /// The median of `epochs`, the upper of the middle two of an even count.

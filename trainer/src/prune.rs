@@ -6,13 +6,15 @@ use std::path::Path;
 
 use indicatif::ProgressBar;
 use pvt3_models::weights::varmap_tensors;
-use pvt3_spec::prune::{self, PruneSpec};
+use pvt3_spec::names;
+use pvt3_spec::prune::{self, PatchChoice, PruneSpec};
 
 use crate::checkpoint;
+use crate::data::windows::Samples;
 use crate::data::Dataset;
 use crate::options::{HeldZeros, Optimization, TrainOptions};
 use crate::train::{train, RunResult, RunSpec};
-use crate::Result;
+use crate::{Error, Result};
 
 /// What to prune and how long to fine-tune.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -20,6 +22,10 @@ pub struct PruneStage {
     pub spec: PruneSpec,
     pub epochs: usize,
     pub lr: f64,
+    /// The patches to keep, where decided before (a final model's: those its cross-validation's
+    /// pruned runs kept most often, [`crate::final_model`]); `None`: chosen as `spec` says.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kept_patches: Option<Vec<bool>>,
 }
 
 /// Mixed into the run's seed to draw the weights that random pruning zeroes.
@@ -34,12 +40,26 @@ pub fn prune_and_fine_tune(
     resume: bool,
     bar: &ProgressBar,
 ) -> Result<Option<RunResult>> {
-    let (meta, _, varmap) = checkpoint::load(parent)?;
+    let (meta, model, varmap) = checkpoint::load(parent)?;
     if let Some(recorded) = &meta.provenance.trained_on {
         data.check_split(recorded, &format!("the pruned run {}", parent.display()))?;
     }
     let mut tensors = varmap_tensors(&varmap)?;
-    let plan = prune::plan(&meta.config, &tensors, &stage.spec)?;
+    let mut plan = prune::plan(&meta.config, &tensors, &stage.spec)?;
+    if let Some(kept) = &stage.kept_patches {
+        plan.insert(names::PATCH_MASK.into(), kept.clone());
+    } else if stage.spec.patches > 0.0 && stage.spec.patch_choice == PatchChoice::Validation {
+        let validation = data.split_for(meta.provenance.val_fold)?.val;
+        if validation.is_empty() {
+            return Err(Error::Usage(format!(
+                "{} has no validation fold to choose patches by; prune it with --patch-choice magnitude",
+                parent.display()
+            )));
+        }
+        let removed = plan[names::PATCH_MASK].iter().filter(|k| !**k).count();
+        let samples = Samples::new(data, &validation, &meta.normalization);
+        plan.insert(names::PATCH_MASK.into(), patch_choice::by_validation(&model, &varmap, &samples, removed, bar)?);
+    }
     prune::apply(&plan, &mut tensors);
     let parent_options = meta.provenance.options;
     if stage.spec.weights > 0.0 {
@@ -71,6 +91,8 @@ pub fn prune_and_fine_tune(
     };
     train(&spec, out, resume, bar)
 }
+
+mod patch_choice;
 
 #[cfg(test)]
 mod tests;

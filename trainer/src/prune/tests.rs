@@ -4,7 +4,7 @@
 use indicatif::ProgressBar;
 use pvt3_models::weights::varmap_tensors;
 use pvt3_spec::bake::bake;
-use pvt3_spec::prune::{PruneSpec, Scope};
+use pvt3_spec::prune::{PatchChoice, PruneSpec, Scope};
 use pvt3_spec::reference;
 
 use super::*;
@@ -20,9 +20,17 @@ fn pruned_entries_stay_zero_and_the_baked_model_matches() {
     s.config.network = pvt3_models::Pvt3Config { patch_selection: true, ..Default::default() }.into();
     train(&s, &dense, false, &ProgressBar::hidden()).unwrap().unwrap();
     let stage = PruneStage {
-        spec: PruneSpec { channels: 50.0, frames: 50.0, patches: 50.0, scope: Scope::Local, weights: 0.0 },
+        spec: PruneSpec {
+            channels: 50.0,
+            frames: 50.0,
+            patches: 50.0,
+            scope: Scope::Local,
+            weights: 0.0,
+            patch_choice: PatchChoice::Magnitude,
+        },
         epochs: 4,
         lr: 1e-3,
+        kept_patches: None,
     };
     let r = prune_and_fine_tune(&dense, &data, &stage, &pruned, false, &ProgressBar::hidden()).unwrap().unwrap();
     assert!(r.test_accuracy > 0.0);
@@ -58,9 +66,17 @@ fn randomly_pruned_weights_stay_zero_through_fine_tuning() {
     let (dense, pruned) = (out_dir("rp-dense"), out_dir("rp-ft"));
     train(&spec(&data, 3, None), &dense, false, &ProgressBar::hidden()).unwrap().unwrap();
     let stage = PruneStage {
-        spec: PruneSpec { channels: 0.0, frames: 0.0, patches: 0.0, scope: Scope::Local, weights: 25.0 },
+        spec: PruneSpec {
+            channels: 0.0,
+            frames: 0.0,
+            patches: 0.0,
+            scope: Scope::Local,
+            weights: 25.0,
+            patch_choice: PatchChoice::Magnitude,
+        },
         epochs: 3,
         lr: 1e-3,
+        kept_patches: None,
     };
     prune_and_fine_tune(&dense, &data, &stage, &pruned, false, &ProgressBar::hidden()).unwrap().unwrap();
     let (_, _, parent) = checkpoint::load(&dense).unwrap();
@@ -82,4 +98,38 @@ fn randomly_pruned_weights_stay_zero_through_fine_tuning() {
     assert!(matrices >= 10, "{matrices} weight matrices");
     std::fs::remove_dir_all(dense).unwrap();
     std::fs::remove_dir_all(pruned).unwrap();
+}
+
+/// Choosing by validation keeps the patch that tells the classes apart (the tiny data's ramps are
+/// on taxel 0, in patch 0) and leaves the parent's mask as it was; the fine-tuned run holds the
+/// other patch at zero, and a stage that names its patches (a final model's) keeps those.
+#[test]
+fn patches_chosen_by_validation_keep_the_one_that_tells_the_classes_apart() {
+    let data = tiny_data();
+    let (dense, pruned, named) = (out_dir("pv-dense"), out_dir("pv-ft"), out_dir("pv-named"));
+    let mut s = spec(&data, 8, None);
+    s.config.network = pvt3_models::Pvt3Config { patch_selection: true, ..Default::default() }.into();
+    train(&s, &dense, false, &ProgressBar::hidden()).unwrap().unwrap();
+    let (meta, model, varmap) = checkpoint::load(&dense).unwrap();
+    let mask = |varmap: &candle_nn::VarMap| varmap_tensors(varmap).unwrap()["patch_mask"].1.clone();
+    let trained = mask(&varmap);
+    let validation = Samples::new(&data, &data.split(0).unwrap().val, &meta.normalization);
+    let keep = patch_choice::by_validation(&model, &varmap, &validation, 1, &ProgressBar::hidden()).unwrap();
+    assert_eq!(keep, vec![true, false]);
+    assert_eq!(mask(&varmap), trained, "the parent's mask restored");
+
+    let spec =
+        PruneSpec { channels: 0.0, frames: 0.0, patches: 50.0, scope: Scope::Local, weights: 0.0, patch_choice: PatchChoice::Validation };
+    let stage = PruneStage { spec, epochs: 2, lr: 1e-3, kept_patches: None };
+    prune_and_fine_tune(&dense, &data, &stage, &pruned, false, &ProgressBar::hidden()).unwrap().unwrap();
+    let fine_tuned = mask(&checkpoint::load(&pruned).unwrap().2);
+    assert!(fine_tuned[0] != 0.0 && fine_tuned[1] == 0.0, "{fine_tuned:?}");
+
+    let stage = PruneStage { kept_patches: Some(vec![false, true]), ..stage };
+    prune_and_fine_tune(&dense, &data, &stage, &named, false, &ProgressBar::hidden()).unwrap().unwrap();
+    let fine_tuned = mask(&checkpoint::load(&named).unwrap().2);
+    assert!(fine_tuned[0] == 0.0 && fine_tuned[1] != 0.0, "{fine_tuned:?}");
+    for dir in [dense, pruned, named] {
+        std::fs::remove_dir_all(dir).unwrap();
+    }
 }

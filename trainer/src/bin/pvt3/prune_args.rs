@@ -3,7 +3,7 @@
 use std::path::Path;
 
 use anyhow::Result;
-use pvt3_spec::prune::{PruneSpec, Scope};
+use pvt3_spec::prune::{PatchChoice, PruneSpec, Scope};
 use pvt3_trainer::checkpoint::BakedFile;
 use pvt3_trainer::prune::PruneStage;
 use pvt3_trainer::run_dir::Run;
@@ -18,11 +18,16 @@ pub struct PruneArgs {
     /// Prune this percentage of frames (temporal tokens) by mask score.
     #[arg(long)]
     prune_frames: Option<f64>,
-    /// Prune this percentage of the patch grid by mask score: a pruned patch's pixels are never
+    /// Prune this percentage of the patch grid, chosen as --patch-choice says: a pruned patch's pixels are never
     /// embedded, and the exported model never normalises or embeds them. Needs a model with a
     /// patch mask (`--set patch_selection=true`).
     #[arg(long)]
     prune_patches: Option<f64>,
+    /// How --prune-patches chooses the patches: `validation` removes, one at a time, the patch
+    /// without which the run's validation fold has the lowest loss; `magnitude` the smallest
+    /// patch-mask values.
+    #[arg(long, value_enum, default_value_t = PatchChoice::Validation)]
+    patch_choice: PatchChoice,
     /// Persistent random pruning (the PVT³ report's "random pruning"): this percentage of every
     /// weight matrix's entries set to zero at random after training, then fine-tuned with them
     /// held at zero. A regulariser: the matrices stay dense, the model no smaller.
@@ -51,9 +56,11 @@ impl PruneArgs {
                 patches: self.prune_patches.unwrap_or(0.0),
                 scope: self.prune_scope,
                 weights: self.prune_weights.unwrap_or(0.0),
+                patch_choice: self.patch_choice,
             },
             epochs: self.fine_tune_epochs,
             lr: self.fine_tune_lr,
+            kept_patches: None,
         })
     }
 }

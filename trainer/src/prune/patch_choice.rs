@@ -1,0 +1,43 @@
+//! Choosing the patches to prune by the validation fold. A patch mask trained like the frame
+//! mask stays close to one (0.96 to 1.23 on PhysiCLeAR), so its magnitudes say little about which
+//! patches a class needs; the validation fold says it directly. One patch at a time, the patch
+//! without which the validation loss is lowest goes (greedy backward elimination): a patch count
+//! times the removed count evaluations of the validation fold, and no test touch read.
+
+use candle_core::{Device, Tensor};
+use candle_nn::VarMap;
+use indicatif::ProgressBar;
+use pvt3_models::Model;
+use pvt3_spec::names;
+
+use crate::data::windows::Samples;
+use crate::evaluate::evaluate;
+use crate::{Error, Result};
+
+/// Which patches to keep so that `remove` are gone, patches already zero among them: the
+/// model's patch mask (in `varmap`) set to zero patch by patch, scored on `validation`, and
+/// restored after.
+pub fn by_validation(model: &Model, varmap: &VarMap, validation: &Samples, remove: usize, bar: &ProgressBar) -> Result<Vec<bool>> {
+    let var = varmap.data().lock().expect("varmap lock poisoned").get(names::PATCH_MASK).cloned();
+    let var = var.ok_or_else(|| Error::Usage("choosing patches by validation needs a model with a patch mask".into()))?;
+    let trained = var.as_tensor().to_vec1::<f32>()?;
+    let mut keep: Vec<bool> = trained.iter().map(|v| *v != 0.0).collect();
+    let loss_without = |keep: &[bool], patch: usize| -> Result<f64> {
+        let values: Vec<f32> = trained.iter().enumerate().map(|(p, v)| if keep[p] && p != patch { *v } else { 0.0 }).collect();
+        var.set(&Tensor::from_vec(values, trained.len(), &Device::Cpu)?)?;
+        Ok(evaluate(model, validation)?.loss)
+    };
+    while keep.iter().filter(|k| !**k).count() < remove.min(keep.len()) {
+        let mut best: Option<(f64, usize)> = None;
+        for patch in (0..keep.len()).filter(|&p| keep[p]) {
+            let loss = loss_without(&keep, patch)?;
+            bar.set_message(format!("choosing patches by validation: {} of {remove} removed", keep.iter().filter(|k| !**k).count()));
+            if best.is_none_or(|(l, _)| loss < l) {
+                best = Some((loss, patch));
+            }
+        }
+        keep[best.expect("a kept patch is left while fewer than all are removed").1] = false;
+    }
+    var.set(&Tensor::from_vec(trained.clone(), trained.len(), &Device::Cpu)?)?;
+    Ok(keep)
+}
