@@ -103,6 +103,14 @@ impl Config {
         matches!(&self.network, Network::Pvt3(p) if p.patch_selection)
     }
 
+    /// The share of patches a training step drops (`Pvt3Config::patch_dropout`); 0 for other networks.
+    pub fn patch_dropout(&self) -> f64 {
+        match &self.network {
+            Network::Pvt3(p) => p.patch_dropout,
+            _ => 0.0,
+        }
+    }
+
     /// Checks that the sizes fit together.
     pub fn validate(&self) -> Result<()> {
         let mut positive = vec![
@@ -127,8 +135,10 @@ impl Config {
         if let Some((name, _)) = positive.iter().find(|(_, v)| *v == 0) {
             return Err(Error::Config(format!("{name} must be at least 1")));
         }
-        if !(0.0..1.0).contains(&self.dropout) {
-            return Err(Error::Config(format!("dropout = {} is not in [0, 1)", self.dropout)));
+        for (name, p) in [("dropout", self.dropout), ("patch_dropout", self.patch_dropout())] {
+            if !(0.0..1.0).contains(&p) {
+                return Err(Error::Config(format!("{name} = {p} is not in [0, 1)")));
+            }
         }
         let divides = match &self.network {
             Network::Pvt3(p) => {

@@ -163,7 +163,8 @@ impl Pvt3 {
 
     /// [`Self::sequence`] of windows cut into patches.
     fn sequence_of_patches(&self, patches: &Tensor, mut rng: Option<&mut Rng>) -> Result<Tensor> {
-        let tokens = if composed_ops() { self.embed_composed(patches)? } else { self.embed(patches)? };
+        let s = self.selection()?.dropped(self.cfg.patch_dropout(), rng.as_deref_mut())?;
+        let tokens = if composed_ops() { self.embed_composed_as(patches, s)? } else { self.embed_as(patches, s)? };
         let (b, t, len, d) = tokens.dims4()?;
         let tokens = self.dropout.forward(&tokens, rng.as_deref_mut())?;
         let frames = self.space.forward_cls(&tokens.reshape((b * t, len, d))?, rng)?;
@@ -198,7 +199,11 @@ impl Pvt3 {
     /// `[b, t, n, patch_dim]`: the patches the patch mask keeps, their embedding, × frame mask
     /// × patch mask, the CLS token in front, + position embedding, as one fused op.
     pub fn embed(&self, patches: &Tensor) -> Result<Tensor> {
-        let s = self.selection()?;
+        self.embed_as(patches, self.selection()?)
+    }
+
+    /// [`Self::embed`] of the patches `s` selects.
+    fn embed_as(&self, patches: &Tensor, s: Selection) -> Result<Tensor> {
         let patches = s.take(patches)?;
         let (_, t, n, patch_dim) = patches.dims4()?;
         let bias = self.patch_embed.bias().expect("linear has a bias");
@@ -209,7 +214,11 @@ impl Pvt3 {
 
     /// [`Self::embed`] composed of candle ops: the oracle of its tests.
     pub fn embed_composed(&self, patches: &Tensor) -> Result<Tensor> {
-        let s = self.selection()?;
+        self.embed_composed_as(patches, self.selection()?)
+    }
+
+    /// [`Self::embed_composed`] of the patches `s` selects.
+    fn embed_composed_as(&self, patches: &Tensor, s: Selection) -> Result<Tensor> {
         let patches = s.take(patches)?;
         let (b, t, n, p) = patches.dims4()?;
         let d = self.cfg.dim;
@@ -237,6 +246,30 @@ struct Selection {
 }
 
 impl Selection {
+    /// This selection less the patches a training step drops (`Config::patch_dropout`): each
+    /// dropped with probability `p`, one uniform draw a patch in order, and where that leaves
+    /// none, one kept at random. Unchanged without an `rng` (evaluation) or with `p` zero.
+    fn dropped(self, p: f64, rng: Option<&mut Rng>) -> Result<Self> {
+        let Some(rng) = rng.filter(|_| p > 0.0) else { return Ok(self) };
+        let device = self.scale.device().clone();
+        let all: Vec<u32> = match &self.kept {
+            Some(kept) => kept.to_vec1()?,
+            None => (0..self.scale.dim(0)? as u32).collect(),
+        };
+        let mut keep: Vec<u32> = (0..all.len() as u32).filter(|_| rng.uniform() as f64 >= p).collect();
+        if keep.is_empty() {
+            keep.push((rng.next_u64() % all.len() as u64) as u32);
+        }
+        let rows: Vec<u32> = std::iter::once(0).chain(keep.iter().map(|i| i + 1)).collect();
+        let kept: Vec<u32> = keep.iter().map(|&i| all[i as usize]).collect();
+        let keep = Tensor::new(keep, &device)?;
+        Ok(Self {
+            scale: self.scale.index_select(&keep, 0)?,
+            pos: self.pos.index_select(&Tensor::new(rows, &device)?, 2)?,
+            kept: Some(Tensor::new(kept, &device)?),
+        })
+    }
+
     /// The kept patches of `[b, t, n, patch_dim]`.
     fn take(&self, patches: &Tensor) -> Result<Tensor> {
         Ok(match &self.kept {

@@ -243,8 +243,10 @@ pub fn apply_overrides(cfg: Config, overrides: &[String]) -> Result<Config> {
     let usage = |s: String| Error::Usage(s);
     let mut value = serde_json::to_value(&cfg).map_err(|e| usage(format!("the configuration does not serialise: {e}")))?;
     if cfg.architecture() == Architecture::Pvt3 {
-        // A file leaves the field out while it is off.
-        value.as_object_mut().expect("a config is a JSON object").insert("patch_selection".into(), cfg.patch_selection().into());
+        // A file leaves these fields out while they are off.
+        let fields = value.as_object_mut().expect("a config is a JSON object");
+        fields.insert("patch_selection".into(), cfg.patch_selection().into());
+        fields.insert("patch_dropout".into(), cfg.patch_dropout().into());
     }
     for o in overrides {
         let (key, raw) = field_and_value(o)?;

@@ -52,6 +52,9 @@ pub(super) struct ConfigFile {
     /// Written only when on, so that the files of models without the mask read as before.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     patch_selection: Option<bool>,
+    /// Written only when not zero, likewise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    patch_dropout: Option<f64>,
 }
 
 /// Fails if a field of another network than `model` holds other than that network's default.
@@ -70,6 +73,7 @@ impl TryFrom<ConfigFile> for Config {
         if m != Architecture::Pvt3 {
             foreign(m, "spectral_bands", f.spectral_bands, pvt3.spectral_bands)?;
             foreign(m, "patch_selection", f.patch_selection, pvt3.patch_selection)?;
+            foreign(m, "patch_dropout", f.patch_dropout, pvt3.patch_dropout)?;
         }
         if m != Architecture::Vit {
             foreign(m, "tile_rows", f.tile_rows, vit.tile_rows)?;
@@ -85,6 +89,7 @@ impl TryFrom<ConfigFile> for Config {
             Architecture::Pvt3 => Pvt3Config {
                 spectral_bands: f.spectral_bands.unwrap_or(pvt3.spectral_bands),
                 patch_selection: f.patch_selection.unwrap_or(pvt3.patch_selection),
+                patch_dropout: f.patch_dropout.unwrap_or(pvt3.patch_dropout),
             }
             .into(),
             Architecture::Vit => VitConfig { tile_rows: f.tile_rows.unwrap_or(vit.tile_rows) }.into(),
@@ -147,11 +152,13 @@ impl From<Config> for ConfigFile {
             decoder_from_state: None,
             spectral_bands: None,
             patch_selection: None,
+            patch_dropout: None,
         };
         match c.network {
             Network::Pvt3(p) => {
                 f.spectral_bands = Some(p.spectral_bands);
                 f.patch_selection = p.patch_selection.then_some(true);
+                f.patch_dropout = (p.patch_dropout != 0.0).then_some(p.patch_dropout);
             }
             Network::Vit(v) => f.tile_rows = Some(v.tile_rows),
             Network::Raec(r) => {
@@ -207,5 +214,16 @@ mod tests {
         let raec = BEFORE_THE_SPLIT.replace(r#""model":"pvt3""#, r#""model":"raec""#).replace('}', r#","patch_selection":true}"#);
         let msg = serde_json::from_str::<Config>(&raec).unwrap_err().to_string();
         assert!(msg.contains("patch_selection = true: not a field of a raec model"), "{msg}");
+    }
+
+    #[test]
+    fn patch_dropout_is_written_only_when_on_and_must_be_a_probability() {
+        assert!(serde_json::to_value(Config::icub20()).unwrap().get("patch_dropout").is_none());
+        let on = Config { network: Pvt3Config { patch_dropout: 0.3, ..Default::default() }.into(), ..Config::icub20() };
+        let written = serde_json::to_value(&on).unwrap();
+        assert_eq!(written["patch_dropout"], 0.3);
+        assert_eq!(serde_json::from_value::<Config>(written).unwrap(), on);
+        let all = Config { network: Pvt3Config { patch_dropout: 1.0, ..Default::default() }.into(), ..Config::icub20() };
+        assert!(all.validate().unwrap_err().to_string().contains("patch_dropout = 1 is not in [0, 1)"));
     }
 }

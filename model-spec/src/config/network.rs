@@ -87,6 +87,12 @@ pub struct Pvt3Config {
     /// entry is zero is dropped from the spatial sequence, so pruning it removes its token and
     /// the runtime never embeds its pixels. Off, the model has no such mask.
     pub patch_selection: bool,
+    /// Patch dropout (PatchDropout, Liu et al. 2022): at each training step every patch of the
+    /// grid that the patch mask keeps is dropped from the spatial sequence with this probability
+    /// (one patch kept at least), the same patches for the whole batch. A model that learns to
+    /// answer from any part of the image loses less when patch selection prunes some. Evaluation
+    /// and every exported form read all patches. 0: off.
+    pub patch_dropout: f64,
 }
 
 /// ViT's own fields.

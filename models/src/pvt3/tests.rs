@@ -102,3 +102,30 @@ fn a_fresh_model_has_exactly_the_variables_of_the_table() {
         assert_eq!(got, table, "{cfg:?}");
     }
 }
+
+/// Patch dropout: a training step reads the window as the model whose patch mask is zero on the
+/// patches the step's draws drop (one uniform draw a patch, dropped below `patch_dropout`);
+/// evaluation reads every patch.
+#[test]
+fn patch_dropout_trains_on_the_patches_its_draws_keep_and_evaluates_on_all() {
+    let network = Pvt3Config { patch_selection: true, patch_dropout: 0.5, ..Default::default() }.into();
+    let cfg = Config { network, dropout: 0.0, ..Config::icub20() };
+    let (model, varmap) = Pvt3::init(&cfg, 0).unwrap();
+    crate::gradcheck::randomise(&varmap, 1);
+    let x = crate::gradcheck::random(&[2, 6, 10, 75], 2);
+    let seed = 3;
+    let mut replay = crate::Rng::new(seed);
+    let dropped: Vec<usize> = (0..cfg.num_patches()).filter(|_| (replay.uniform() as f64) < 0.5).collect();
+    assert!(!dropped.is_empty() && dropped.len() < cfg.num_patches(), "seed {seed} drops {dropped:?}: choose one that drops some");
+    let evaluated = model.forward(&x, None).unwrap();
+    let trained = model.forward(&x, Some(&mut crate::Rng::new(seed))).unwrap();
+
+    let mask = varmap.data().lock().unwrap()["patch_mask"].clone();
+    let mut values = mask.to_vec1::<f32>().unwrap();
+    dropped.iter().for_each(|&p| values[p] = 0.0);
+    mask.set(&Tensor::new(values, &Device::Cpu).unwrap()).unwrap();
+    let masked = model.forward(&x, None).unwrap();
+    let differ = |a: &Tensor, b: &Tensor| (a - b).unwrap().abs().unwrap().max_all().unwrap().to_scalar::<f32>().unwrap();
+    assert!(differ(&trained, &masked) <= 1e-6, "{}", differ(&trained, &masked));
+    assert!(differ(&evaluated, &masked) > 1e-3, "evaluation reads the dropped patches too");
+}
