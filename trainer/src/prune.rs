@@ -7,14 +7,13 @@ use std::path::Path;
 use indicatif::ProgressBar;
 use pvt3_models::weights::varmap_tensors;
 use pvt3_spec::names;
-use pvt3_spec::prune::{self, PatchChoice, PruneSpec};
+use pvt3_spec::prune::{self, PruneSpec};
 
 use crate::checkpoint;
-use crate::data::windows::Samples;
 use crate::data::Dataset;
 use crate::options::{HeldZeros, Optimization, TrainOptions};
 use crate::train::{train, RunResult, RunSpec};
-use crate::{Error, Result};
+use crate::Result;
 
 /// What to prune and how long to fine-tune.
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -46,19 +45,8 @@ pub fn prune_and_fine_tune(
     }
     let mut tensors = varmap_tensors(&varmap)?;
     let mut plan = prune::plan(&meta.config, &tensors, &stage.spec)?;
-    if let Some(kept) = &stage.kept_patches {
-        plan.insert(names::PATCH_MASK.into(), kept.clone());
-    } else if stage.spec.patches > 0.0 && stage.spec.patch_choice == PatchChoice::Validation {
-        let validation = data.split_for(meta.provenance.val_fold)?.val;
-        if validation.is_empty() {
-            return Err(Error::Usage(format!(
-                "{} has no validation fold to choose patches by; prune it with --patch-choice magnitude",
-                parent.display()
-            )));
-        }
-        let removed = plan[names::PATCH_MASK].iter().filter(|k| !**k).count();
-        let samples = Samples::new(data, &validation, &meta.normalization);
-        plan.insert(names::PATCH_MASK.into(), patch_choice::by_validation(&model, &varmap, &samples, removed, bar)?);
+    if let Some(kept) = patch_choice::kept(stage, parent, (&meta, &model, &varmap), data, &plan, bar)? {
+        plan.insert(names::PATCH_MASK.into(), kept);
     }
     prune::apply(&plan, &mut tensors);
     let parent_options = meta.provenance.options;

@@ -4,15 +4,48 @@
 //! without which the validation loss is lowest goes (greedy backward elimination): a patch count
 //! times the removed count evaluations of the validation fold, and no test touch read.
 
+use std::path::Path;
+
 use candle_core::{Device, Tensor};
 use candle_nn::VarMap;
 use indicatif::ProgressBar;
 use pvt3_models::Model;
 use pvt3_spec::names;
+use pvt3_spec::prune::{PatchChoice, Plan};
 
+use super::PruneStage;
+use crate::checkpoint::Meta;
 use crate::data::windows::Samples;
+use crate::data::Dataset;
 use crate::evaluate::evaluate;
 use crate::{Error, Result};
+
+/// The patches `stage` keeps where not by magnitude (`None`): those it names (a final model's), or
+/// those the validation fold of `parent`, loaded, chooses ([`by_validation`]), as many removed as
+/// `plan` removes.
+pub fn kept(
+    stage: &PruneStage,
+    parent: &Path,
+    (meta, model, varmap): (&Meta, &Model, &VarMap),
+    data: &Dataset,
+    plan: &Plan,
+    bar: &ProgressBar,
+) -> Result<Option<Vec<bool>>> {
+    if let Some(kept) = &stage.kept_patches {
+        return Ok(Some(kept.clone()));
+    }
+    if stage.spec.patches == 0.0 || stage.spec.patch_choice != PatchChoice::Validation {
+        return Ok(None);
+    }
+    let validation = data.split_for(meta.provenance.val_fold)?.val;
+    if validation.is_empty() {
+        let why = format!("{} has no validation fold to choose patches by; prune it with --patch-choice magnitude", parent.display());
+        return Err(Error::Usage(why));
+    }
+    let removed = plan[names::PATCH_MASK].iter().filter(|k| !**k).count();
+    let samples = Samples::new(data, &validation, &meta.normalization);
+    by_validation(model, varmap, &samples, removed, bar).map(Some)
+}
 
 /// Which patches to keep so that `remove` are gone, patches already zero among them: the
 /// model's patch mask (in `varmap`) set to zero patch by patch, scored on `validation`, and
