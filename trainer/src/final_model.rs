@@ -192,20 +192,26 @@ impl Plan {
 /// final model has none of: those the cross-validation's pruned runs kept most often (ties to the
 /// lower patch), as many as each kept.
 fn most_kept_patches(cv: &Path, runs: &[RunResult]) -> Result<Vec<bool>> {
-    let (mut votes, mut kept) = (Vec::new(), 0);
+    let mut masks = Vec::new();
     for r in runs {
         let fold = r.val_fold.ok_or_else(|| Error::Usage(format!("{}: a pruned run without a validation fold", cv.display())))?;
         let (_, _, varmap) = checkpoint::load(&Run(&Run(&CrossValidation(cv).run(r.seed, fold)).pruned()).model())?;
-        let mask = varmap_tensors(&varmap)?.remove(names::PATCH_MASK).map(|(_, v)| v).unwrap_or_default();
-        votes.resize(mask.len(), 0usize);
-        mask.iter().zip(&mut votes).for_each(|(v, n)| *n += usize::from(*v != 0.0));
-        kept = mask.iter().filter(|v| **v != 0.0).count();
+        masks.push(varmap_tensors(&varmap)?.remove(names::PATCH_MASK).map(|(_, v)| v).unwrap_or_default());
     }
-    let mut order: Vec<usize> = (0..votes.len()).collect();
+    Ok(most_kept(&masks))
+}
+
+/// Of patch masks that each keep (are not zero on) as many patches, the patches kept most often,
+/// as many; ties to the lower patch.
+fn most_kept(masks: &[Vec<f32>]) -> Vec<bool> {
+    let n = masks.first().map_or(0, Vec::len);
+    let votes: Vec<usize> = (0..n).map(|p| masks.iter().filter(|m| m[p] != 0.0).count()).collect();
+    let kept = masks.first().map_or(0, |m| m.iter().filter(|v| **v != 0.0).count());
+    let mut order: Vec<usize> = (0..n).collect();
     order.sort_by(|a, b| votes[*b].cmp(&votes[*a]).then(a.cmp(b)));
-    let mut keep = vec![false; votes.len()];
+    let mut keep = vec![false; n];
     order.into_iter().take(kept).for_each(|p| keep[p] = true);
-    Ok(keep)
+    keep
 }
 
 /// The median of `epochs`, the upper of the middle two of an even count.
@@ -225,6 +231,14 @@ fn stamp(dir: &Path, stopping: &Option<Stopping>, expected: &Expected) -> Result
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn a_final_model_keeps_the_patches_its_runs_kept_most_often() {
+        let masks = [vec![1.1, 0.0, 0.9, 0.0], vec![1.0, 0.0, 0.0, 1.2], vec![0.0, 1.0, 1.0, 0.0]];
+        assert_eq!(super::most_kept(&masks), vec![true, false, true, false], "votes 2, 1, 2, 1");
+        let tied = [vec![1.0, 0.0, 0.0], vec![0.0, 0.0, 1.0]];
+        assert_eq!(super::most_kept(&tied), vec![true, false, false], "a tie to the lower patch");
+    }
+
     #[test]
     fn the_median_takes_the_upper_middle() {
         assert_eq!(super::median(&[30, 10, 20]), 20);
