@@ -1,6 +1,6 @@
 //! Choosing the patches to prune by the validation fold. A patch mask trained like the frame
-//! mask stays close to one (0.96 to 1.23 on PhysiCLeAR), so its magnitudes say little about which
-//! patches a class needs; the validation fold says it directly. One patch at a time, the patch
+//! mask stays close to one (docs/camera.md, "Patch selection"), so its magnitudes say little about
+//! which patches a class needs; the validation fold says it directly. One patch at a time, the patch
 //! without which the validation loss is lowest goes (greedy backward elimination): a patch count
 //! times the removed count evaluations of the validation fold, and no test touch read.
 
