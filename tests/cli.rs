@@ -593,6 +593,13 @@ fn conditions_from_file_names_hold_out_a_force() {
     // The run remembers what it held out: its test fold is the 12 touches pressed at 210.
     let eval = ok(&["eval", out.join("seed0/fold1").to_str().unwrap()]);
     assert!(eval.contains("12 samples (fold 4"), "{eval}");
+    // Its accuracy at each level of the touches' conditions: all 12 at force 210, the runs'
+    // answers pooled over the cross-validation.
+    let level = |eval: &str, level: &str| {
+        eval.lines().find(|l| l.starts_with(&format!("{level} "))).map(|l| l.split_whitespace().nth(1).unwrap().to_string())
+    };
+    assert_eq!(level(&eval, "210").as_deref(), Some("12"), "{eval}");
+    assert_eq!(level(&ok(&["eval", o]), "210").as_deref(), Some("48"), "4 runs × 12 touches");
     // One class's touches at 210 held out, the others trained at 210 too; by default the touches
     // that train, pressed in three ways, say the robot will press in others.
     let auto = dir.join("auto");

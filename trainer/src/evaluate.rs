@@ -1,6 +1,8 @@
 //! Evaluation: loss, accuracy and predictions of a model on normalised windows
 //! ([`Samples`]), in batches; a touch read as several windows answers with the mean of their
-//! probabilities.
+//! probabilities; [`levels`] its accuracy at each level of the touches' conditions.
+
+pub mod levels;
 
 use pvt3_models::Model;
 

@@ -1,5 +1,6 @@
 //! `pvt3 eval`: a checkpoint's accuracy on a fold (by default its own data's test fold), per
-//! class and as a confusion matrix (printed, and drawn as SVG), or with `--anytime` against the
+//! class, at each level of the touches' recorded conditions (`evaluate::levels`) and as a
+//! confusion matrix (printed, and drawn as SVG), or with `--anytime` against the
 //! share of each touch it has seen (printed, and drawn). A cross-validation's directory is
 //! eval_cv.rs's: all its runs together.
 
@@ -9,12 +10,16 @@ use anyhow::{bail, Context, Result};
 use pvt3_models::Model;
 use pvt3_trainer::anytime::{self, CalibratedOn, Prefixes};
 use pvt3_trainer::checkpoint::{self, Meta};
+use pvt3_trainer::data::{windows::Samples, Condition};
 use pvt3_trainer::data::{Dataset, TEST_FOLD};
-use pvt3_trainer::{data::windows::Samples, evaluate::{evaluate, Evaluation}};
+use pvt3_trainer::evaluate::levels::{self, Level};
+use pvt3_trainer::evaluate::{evaluate, Evaluation};
 use pvt3_trainer::plot::{self, anytime as anytime_picture, confusion};
 use pvt3_trainer::run_dir::CV_SUMMARY;
 
-/// Accuracy of a checkpoint on a data set (by default its test fold, or all samples).
+/// Accuracy of a checkpoint on a data set (by default its test fold, or all samples): overall,
+/// per class, at each level of the conditions its touches record (speed, force) and as a
+/// confusion matrix.
 #[derive(clap::Args)]
 pub struct EvalArgs {
     /// Checkpoint directory (or a run directory holding model/), or a cross-validation's
@@ -154,19 +159,28 @@ pub fn run(a: EvalArgs) -> Result<()> {
     let e = evaluate(&run.model, &samples)?;
     let title = format!("{}: fold {fold}, {} touches, accuracy {:.4}", a.checkpoint.display(), e.labels.len(), e.accuracy);
     if a.json {
-        return print_json(&run.meta.classes, &e, (fold, samples.len()), (&title, &a.picture_of(CONFUSION)));
+        let conditions = by_condition(&run.data.conditions, &run.indices, &e.labels, &e.predictions);
+        return print_json(&run.meta.classes, &e, &conditions, (fold, samples.len()), (&title, &a.picture_of(CONFUSION)));
     }
     let windows = if samples.len() > run.indices.len() { format!(", {} windows", samples.len()) } else { String::new() };
     println!("{} samples (fold {fold}{windows}): accuracy {:.4}, loss {:.4}", run.indices.len(), e.accuracy, e.loss);
     if let (true, Some(test)) = (fold == Folds::One(TEST_FOLD), run.meta.provenance.test_accuracy) {
         println!("(the checkpoint's own record: test accuracy {test:.4})");
     }
+    report_levels(&by_condition(&run.data.conditions, &run.indices, &e.labels, &e.predictions));
     report_classes(&run.meta.classes, &e.labels, &e.predictions, &title, &a.picture_of(CONFUSION))
 }
 
-/// `pvt3 eval --json`: the evaluation `e` of `(fold, windows)` as one JSON object, its confusion
-/// matrix drawn to `picture` under `title` as the table's is.
-fn print_json(classes: &[String], e: &Evaluation, (fold, windows): (Folds, usize), (title, picture): (&str, &Path)) -> Result<()> {
+/// `pvt3 eval --json`: the evaluation `e` of `(fold, windows)` as one JSON object, with its
+/// accuracy at each level of the touches' `conditions`; its confusion matrix drawn to `picture`
+/// under `title` as the table's is.
+fn print_json(
+    classes: &[String],
+    e: &Evaluation,
+    conditions: &[(String, Vec<Level>)],
+    (fold, windows): (Folds, usize),
+    (title, picture): (&str, &Path),
+) -> Result<()> {
     let m = confusion::matrix(&e.labels, &e.predictions, classes.len());
     plot::write(picture, &confusion::svg(&m, classes, title)).with_context(|| format!("drawing {}", picture.display()))?;
     let per_class: Vec<_> = classes
@@ -177,12 +191,36 @@ fn print_json(classes: &[String], e: &Evaluation, (fold, windows): (Folds, usize
             serde_json::json!({"class": name, "samples": n, "accuracy": if n == 0 { None } else { Some(right as f64 / n as f64) }})
         })
         .collect();
+    let per_condition: serde_json::Map<String, serde_json::Value> = conditions
+        .iter()
+        .map(|(name, levels)| {
+            let levels = levels.iter().map(|l| serde_json::json!({"level": l.level, "touches": l.touches, "accuracy": l.accuracy()}));
+            (name.clone(), levels.collect())
+        })
+        .collect();
     let out = serde_json::json!({
         "fold": fold.to_string(), "touches": e.labels.len(), "windows": windows, "accuracy": e.accuracy, "loss": e.loss,
-        "classes": classes, "per_class": per_class, "confusion": m, "picture": picture,
+        "classes": classes, "per_class": per_class, "per_condition": per_condition, "confusion": m, "picture": picture,
     });
     println!("{out}");
     Ok(())
+}
+
+/// Each condition the touches record (`conditions`), its accuracy at each level answered: answer
+/// `k` is `predictions[k]` to the data set's touch `touches[k]`, labelled `labels[k]`.
+pub fn by_condition(conditions: &[Condition], touches: &[usize], labels: &[u32], predictions: &[u32]) -> Vec<(String, Vec<Level>)> {
+    conditions.iter().map(|c| (c.name.clone(), levels::by_level(c, touches, labels, predictions))).collect()
+}
+
+/// [`by_condition`] as a table a condition.
+pub fn report_levels(conditions: &[(String, Vec<Level>)]) {
+    for (name, levels) in conditions {
+        println!("{name:<24} {:>8} {:>8}", "touches", "accuracy");
+        for l in levels {
+            println!("{:<24} {:>8} {:>8.3}", l.level, l.touches, l.accuracy());
+        }
+        println!();
+    }
 }
 
 /// Accuracy per class and the confusion matrix of `labels` answered `predictions`, printed; the

@@ -14,7 +14,7 @@ use pvt3_trainer::cv::mean_std;
 use pvt3_trainer::evaluate::evaluate;
 use pvt3_trainer::run_dir::{CrossValidation, Run, CV_SUMMARY};
 
-use crate::eval::{draw_anytime, print_tenths, report_classes, EvalArgs, Folds, Loaded, ANYTIME, CONFUSION};
+use crate::eval::{by_condition, draw_anytime, print_tenths, report_classes, report_levels, EvalArgs, Folds, Loaded, ANYTIME, CONFUSION};
 
 /// Whether `pvt3 eval`'s directory is a cross-validation's (it holds cv.json).
 pub fn applies(a: &EvalArgs) -> bool {
@@ -31,10 +31,13 @@ pub fn run(a: &EvalArgs) -> Result<()> {
         return anytime_report(a, &runs, what);
     }
     let (mut classes, mut labels, mut predictions, mut accuracies) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut touches, mut conditions) = (Vec::new(), Vec::new());
     for dir in &runs {
         let run = load(dir, a, &mut classes)?;
         let e = evaluate(&run.model, &run.samples())?;
         accuracies.push(e.accuracy);
+        touches.extend(&run.indices);
+        conditions = run.data.conditions;
         labels.extend(e.labels);
         predictions.extend(e.predictions);
     }
@@ -44,6 +47,7 @@ pub fn run(a: &EvalArgs) -> Result<()> {
     println!("their {} answers together:", labels.len());
     let right = labels.iter().zip(&predictions).filter(|(l, p)| l == p).count() as f64 / labels.len() as f64;
     let title = format!("{dir}: {n} {what}, fold {fold}, {} answers, accuracy {right:.4}", labels.len());
+    report_levels(&by_condition(&conditions, &touches, &labels, &predictions));
     report_classes(&classes, &labels, &predictions, &title, &a.picture_of(CONFUSION))
 }
 
