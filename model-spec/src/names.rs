@@ -88,6 +88,15 @@ pub enum Role {
 }
 
 impl Role {
+    /// Fitted to the training set before the first step and held there, not trained: the
+    /// spectral head's standardisation. Trained, its scale grows free of weight decay and lets the
+    /// head fit the training touches' spectra (docs/robustness.md, "A standardisation fitted").
+    pub fn is_fitted(self) -> bool {
+        matches!(self, Role::StandardScale | Role::StandardShift)
+    }
+}
+
+impl Role {
     /// The role of variable `name` of `rank` axes.
     pub fn of(name: &str, rank: usize) -> Role {
         let (parent, leaf) = name.rsplit_once('.').unwrap_or(("", name));

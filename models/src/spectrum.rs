@@ -4,7 +4,7 @@
 //! frames of the kept temporal tokens received so far (`pvt3_spec::spectrum`'s docs: the whole
 //! window's at the end of a touch, so the head streams and answers early like the transformer);
 //! the features are standardised (a scale and a shift per feature, fitted to the training set by
-//! the trainer and trained on) and mapped linearly to class logits, which are added to the
+//! the trainer and held there) and mapped linearly to class logits, which are added to the
 //! transformer's. A logistic regression on such features alone is a strong texture classifier
 //! (`bench/spectral_probe.py`); the head puts that inside the one model that is exported.
 //!

@@ -1,6 +1,7 @@
 //! The spectral head's standardisation, fitted to the training set before the first step: each
 //! feature's scale and shift make it mean 0 and standard deviation 1 over the training samples,
-//! as a linear classifier's inputs are standardised. They are trained on from there.
+//! as a linear classifier's inputs are standardised, and they stay so: the optimiser leaves them
+//! where they were fitted (`Role::is_fitted`).
 
 use candle_core::{Device, Tensor};
 use candle_nn::VarMap;

@@ -454,3 +454,24 @@ fn learnt_alone_has_no_distance(data: &Dataset) -> bool {
     std::fs::remove_dir_all(dir).unwrap();
     none
 }
+
+/// The spectral head's standardisation is fitted before the first step and held there, while
+/// its linear map trains: after one epoch and after four they are the same bits.
+#[test]
+fn the_spectral_standardisation_stays_where_it_was_fitted() {
+    let data = tiny_data();
+    let config = Config { network: pvt3_models::Pvt3Config { spectral_bands: 2, ..Default::default() }.into(), ..tiny_config() };
+    let run = RunSpec { config, ..spec(&data, 4, Some(1)) };
+    let dir = out_dir("spectral-fitted");
+    let load = |dir: &PathBuf| candle_core::safetensors::load(Checkpoint(&Run(dir).last()).weights(), &Device::Cpu).unwrap();
+    assert!(train(&run, &dir, false, &ProgressBar::hidden()).unwrap().is_none());
+    let first = load(&dir);
+    train(&RunSpec { pause_after: None, ..run }, &dir, true, &ProgressBar::hidden()).unwrap().unwrap();
+    let last = load(&dir);
+    for name in ["spectral.scale", "spectral.shift"] {
+        assert_eq!(flat_of(&first, name), flat_of(&last, name), "{name}: fitted, not trained");
+    }
+    assert_ne!(flat_of(&first, "spectral.scale"), vec![1.0; 4 * 3], "fitted to the training windows");
+    assert_ne!(flat_of(&first, "spectral.linear.weight"), flat_of(&last, "spectral.linear.weight"), "the map trains");
+    std::fs::remove_dir_all(dir).unwrap();
+}
