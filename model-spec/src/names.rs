@@ -94,9 +94,7 @@ impl Role {
     pub fn is_fitted(self) -> bool {
         matches!(self, Role::StandardScale | Role::StandardShift)
     }
-}
 
-impl Role {
     /// The role of variable `name` of `rank` axes.
     pub fn of(name: &str, rank: usize) -> Role {
         let (parent, leaf) = name.rsplit_once('.').unwrap_or(("", name));

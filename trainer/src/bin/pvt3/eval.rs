@@ -158,8 +158,8 @@ pub fn run(a: EvalArgs) -> Result<()> {
     }
     let e = evaluate(&run.model, &samples)?;
     let title = format!("{}: fold {fold}, {} touches, accuracy {:.4}", a.checkpoint.display(), e.labels.len(), e.accuracy);
+    let conditions = by_condition(&run.data.conditions, &run.indices, &e.labels, &e.predictions);
     if a.json {
-        let conditions = by_condition(&run.data.conditions, &run.indices, &e.labels, &e.predictions);
         return print_json(&run.meta.classes, &e, &conditions, (fold, samples.len()), (&title, &a.picture_of(CONFUSION)));
     }
     let windows = if samples.len() > run.indices.len() { format!(", {} windows", samples.len()) } else { String::new() };
@@ -167,7 +167,7 @@ pub fn run(a: EvalArgs) -> Result<()> {
     if let (true, Some(test)) = (fold == Folds::One(TEST_FOLD), run.meta.provenance.test_accuracy) {
         println!("(the checkpoint's own record: test accuracy {test:.4})");
     }
-    report_levels(&by_condition(&run.data.conditions, &run.indices, &e.labels, &e.predictions));
+    report_levels(&conditions);
     report_classes(&run.meta.classes, &e.labels, &e.predictions, &title, &a.picture_of(CONFUSION))
 }
 
