@@ -1,12 +1,12 @@
 //! The spectral head (`pvt3_models::spectrum` in training, `pvt3_spec::spectrum` for its maths)
 //! as ONNX nodes, from the file's input and the key bias: the frames' weights ([`FRAME_WEIGHTS`],
-//! the kept tokens the bias has not hidden), each channel's weighted level, normalised, the
-//! Fourier transform of the weighted, detrended frames (the `DFT` op, an FFT in tract and
-//! onnxruntime, where the trainer multiplies by the transform's matrix), the band sums of the
-//! squared transform over the frames weighed and the channel's variance, their logarithms, and
-//! the linear map with the standardisation folded in, named [`SPECTRAL_LOGITS`]. A streaming
-//! runtime feeds the temporal stage the window so far along with the bias, and the head reads
-//! exactly the frames received.
+//! the kept tokens the bias has not hidden), each channel's weighted level, normalised (a
+//! feature unless `spectral_levels` is off), the Fourier transform of the weighted, detrended
+//! frames (the `DFT` op, an FFT in tract and onnxruntime, where the trainer multiplies by the
+//! transform's matrix), the band sums of the squared transform over the frames weighed and the
+//! channel's variance, their logarithms, and the linear map with the standardisation folded in,
+//! named [`SPECTRAL_LOGITS`]. A streaming runtime feeds the temporal stage the window so far
+//! along with the bias, and the head reads exactly the frames received.
 
 use pvt3_format::{FRAME_WEIGHTS, INPUT, SPECTRAL_LOGITS, TOKEN_BIAS};
 use pvt3_spec::baked::{BakedPvt3, BakedSpectrum, Dense};
@@ -46,8 +46,12 @@ pub(crate) fn spectral_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, n
     let level = g.op(Op::Div, &[&level, &weighed]);
     let centred = g.op(Op::Sub, &[&x, &level]);
     let centred = g.op(Op::Mul, &[&centred, &weights]);
-    let std = g.f32s("spectral_norm_std", &[channels, 1], norm.std.clone());
-    let level = g.op(Op::Div, &[&level, &std]);
+    let level = if c.spectral_levels() {
+        let std = g.f32s("spectral_norm_std", &[channels, 1], norm.std.clone());
+        g.op(Op::Div, &[&level, &std])
+    } else {
+        level
+    };
     // A real signal for the DFT op: [b, channels, frames, 1] → [b, channels, frames, 2].
     let real = g.i64s("spectral_real", &[4], vec![-1, channels as i64, frames as i64, 1]);
     let centred = g.op(Op::Reshape, &[&centred, &real]);
@@ -73,7 +77,7 @@ pub(crate) fn spectral_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, n
     let floor = g.f32s("power_floor", &[1], vec![POWER_FLOOR as f32]);
     let power = g.op(Op::Add, &[&power, &floor]);
     let log_power = g.op(Op::Log, &[&power]);
-    let features = g.node(Op::Concat, &[&level, &log_power], vec![int("axis", 2)], None);
+    let features = if c.spectral_levels() { g.node(Op::Concat, &[&level, &log_power], vec![int("axis", 2)], None) } else { log_power };
     let flat = g.i64s("spectral_features", &[2], vec![-1, c.spectral_features() as i64]);
     let features = g.op(Op::Reshape, &[&features, &flat]);
     let logits = linear(g, &features, &standardised(s), "spectral_linear");

@@ -98,6 +98,11 @@ impl Config {
         }
     }
 
+    /// Whether the spectral head reads the channels' levels (`Pvt3Config::spectral_levels`).
+    pub fn spectral_levels(&self) -> bool {
+        matches!(&self.network, Network::Pvt3(p) if p.spectral_levels)
+    }
+
     /// Whether the model has a patch-selection mask (`Pvt3Config::patch_selection`).
     pub fn patch_selection(&self) -> bool {
         matches!(&self.network, Network::Pvt3(p) if p.patch_selection)

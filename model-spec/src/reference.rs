@@ -99,7 +99,7 @@ fn patches(m: &BakedPvt3, sample: &[f32], k: usize) -> Vec<Vec<f64>> {
 }
 
 /// The spectral head's logits for one sample from the frames of its first `tokens` temporal
-/// tokens that the model keeps: per channel, the level and the log band powers of the detrended
+/// tokens that the model keeps: per channel, the level (unless off) and the log band powers of the detrended
 /// frames by the transform's definition (`spectrum`'s docs), standardised, then the linear map.
 fn spectral_logits(m: &BakedPvt3, s: &BakedSpectrum, sample: &[f32], tokens: usize) -> Vec<f64> {
     let c = &m.config;
@@ -113,7 +113,9 @@ fn spectral_logits(m: &BakedPvt3, s: &BakedSpectrum, sample: &[f32], tokens: usi
         let parts: Vec<f64> = (0..2 * k)
             .map(|f| row.iter().zip(&weights).enumerate().map(|(n, (v, w))| w * (*v as f64 - level) * dft[n * 2 * k + f]).sum())
             .collect();
-        features.push(level);
+        if c.spectral_levels() {
+            features.push(level);
+        }
         features.extend((0..bands).map(|j| {
             let power: f64 = parts.iter().enumerate().map(|(f, p)| p * p * band[f * bands + j]).sum();
             (power * frames as f64 / weighed + spectrum::POWER_FLOOR).ln()

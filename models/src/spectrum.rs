@@ -1,8 +1,9 @@
 //! The spectral head of PVT³ (`Config::spectral_bands() > 0`): what a texture's vibration says,
-//! given to the network directly. For each sensor channel, its mean level and the log power of
-//! `spectral_bands` frequency bands (geometrically spaced) of its detrended signal, over the
-//! frames of the kept temporal tokens received so far (`pvt3_spec::spectrum`'s docs: the whole
-//! window's at the end of a touch, so the head streams and answers early like the transformer);
+//! given to the network directly. For each sensor channel, its mean level (unless
+//! `spectral_levels` is off) and the log power of `spectral_bands` frequency bands
+//! (geometrically spaced) of its detrended signal, over the frames of the kept temporal tokens
+//! received so far (`pvt3_spec::spectrum`'s docs: the whole window's at the end of a touch, so
+//! the head streams and answers early like the transformer);
 //! the features are standardised (a scale and a shift per feature, fitted to the training set by
 //! the trainer and held there) and mapped linearly to class logits, which are added to the
 //! transformer's. A logistic regression on such features alone is a strong texture classifier
@@ -31,6 +32,8 @@ pub struct Spectrum {
     linear: Linear,
     channels: usize,
     frames: usize,
+    /// `Config::spectral_levels`.
+    levels: bool,
 }
 
 impl Spectrum {
@@ -47,12 +50,14 @@ impl Spectrum {
             linear: linear(f, cfg.classes, vb.pp(names::LINEAR))?,
             channels: cfg.sensor_channels(),
             frames: t,
+            levels: cfg.spectral_levels(),
         })
     }
 
     /// The unstandardised features `[b, channels · (1 + bands)]` of windows `[b, h, w, (c,) t]`
     /// from the frames `weights` selects (`[t]`, `pvt3_spec::spectrum::frame_weights`): per
-    /// channel its mean level, then the log power of each band of the detrended signal.
+    /// channel its mean level (unless the levels are off: `[b, channels · bands]`), then the log
+    /// power of each band of the detrended signal.
     pub fn features(&self, x: &Tensor, weights: &[f64]) -> candle_core::Result<Tensor> {
         let b = x.dim(0)?;
         let weighed = weighed_frames(weights);
@@ -62,7 +67,8 @@ impl Spectrum {
         let transform = rows.broadcast_sub(&level)?.broadcast_mul(&w)?.matmul(&self.dft)?;
         let power = (transform.sqr()?.matmul(&self.bands)? * (self.frames as f64 / weighed))?;
         let log_power = (power + POWER_FLOOR)?.log()?;
-        Tensor::cat(&[&level, &log_power], 1)?.reshape((b, ()))
+        let features = if self.levels { Tensor::cat(&[&level, &log_power], 1)? } else { log_power };
+        features.reshape((b, ()))
     }
 
     /// Logits `[b, classes]` from the frames `weights` selects.
@@ -106,6 +112,24 @@ mod tests {
         for (j, v) in f[1..].iter().enumerate().filter(|(j, _)| *j != band) {
             assert!((*v as f64) < (2.0 * POWER_FLOOR).ln(), "band {j}: {v}");
         }
+    }
+
+    /// Without levels, the features are the band powers alone: a channel's level moved, as a
+    /// press or the sliding direction moves it, changes none of them.
+    #[test]
+    fn without_levels_a_channel_s_level_is_not_read() {
+        let cfg = Config { frames: 40, height: 2, width: 1, patch_height: 1, patch_width: 1, ..Config::icub20() };
+        let network = Pvt3Config { spectral_bands: 4, spectral_levels: false, ..Default::default() };
+        let head = Spectrum::new(&Config { network: network.into(), ..cfg }, VarBuilder::zeros(DType::F32, &Device::Cpu)).unwrap();
+        let window = |level: f32| -> Tensor {
+            let v: Vec<f32> = (0..80).map(|i| if i < 40 { level } else { 0.0 } + ((i * 7) % 11) as f32).collect();
+            Tensor::from_vec(v, (1, 2, 1, 40), &Device::Cpu).unwrap()
+        };
+        let features =
+            |level: f32| -> Vec<f32> { head.features(&window(level), &[1.0; 40]).unwrap().flatten_all().unwrap().to_vec1().unwrap() };
+        assert_eq!(features(0.0).len(), 2 * 4);
+        let (low, high) = (features(0.0), features(30.0));
+        assert!(low.iter().zip(&high).all(|(a, b)| (a - b).abs() < 1e-4), "{low:?} against {high:?}");
     }
 
     /// The frames a weight leaves out change nothing, and those it keeps do: the features of the

@@ -131,6 +131,9 @@ fn baked_equals_masked_parent_with_several_heads_and_tubelets() {
 fn baked_equals_masked_parent_with_a_spectral_head() {
     let cfg = Config { network: Pvt3Config { spectral_bands: 8, ..Default::default() }.into(), ..Config::icub20() };
     check_against_parent(cfg.clone(), true, true);
+    let no_levels =
+        Config { network: Pvt3Config { spectral_bands: 8, spectral_levels: false, ..Default::default() }.into(), ..cfg.clone() };
+    check_against_parent(no_levels, true, true);
     let (parent, varmap) = Pvt3::init(&cfg, 9).unwrap();
     let baked = bake(&cfg, &varmap_tensors(&varmap).unwrap()).unwrap();
     // The head is counted: 2 · 60 · 9 standardisation values, a 20 × 540 map and its bias.

@@ -1,6 +1,7 @@
 //! A BioTac-shaped PVT³ with a spectral head (a standardisation and a normalisation other than
-//! the identity, a third of its temporal tokens pruned) and raw windows for it: what the export test runs in onnxruntime and the runtime
-//! test in tract, each against the f64 reference of the same baked model.
+//! the identity, a third of its temporal tokens pruned; reading the channels' levels or not) and
+//! raw windows for it: what the export test runs in onnxruntime and the runtime test in tract,
+//! each against the f64 reference of the same baked model.
 
 use pvt3_models::weights::varmap_tensors;
 use pvt3_models::{Config, Pvt3, Rng};
@@ -18,8 +19,9 @@ pub struct SpectralCase {
     pub normalised: Vec<f32>,
 }
 
-pub fn spectral_case(windows: usize) -> SpectralCase {
-    let cfg = Config { network: pvt3_spec::Pvt3Config { spectral_bands: 16, ..Default::default() }.into(), ..Config::biotac20() };
+pub fn spectral_case(windows: usize, levels: bool) -> SpectralCase {
+    let network = pvt3_spec::Pvt3Config { spectral_bands: 16, spectral_levels: levels, ..Default::default() };
+    let cfg = Config { network: network.into(), ..Config::biotac20() };
     let (_, varmap) = Pvt3::init(&cfg, 6).unwrap();
     let mut tensors = varmap_tensors(&varmap).unwrap();
     let mut rng = Rng::new(7);

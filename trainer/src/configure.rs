@@ -147,8 +147,7 @@ pub fn robust(
     let last = does.pop().expect("the channel scale is always chosen");
     let does = if does.is_empty() { last.to_string() } else { format!("{} and {last}", does.join(", ")) };
     notes.push(format!(
-        "{why}, so a robot will touch in others: training {does} ({}; --robust off trains as asked, --extrapolate 1 \
-         --extrapolate-levels for forces beyond the trained ones: docs/robustness.md)",
+        "{why}, so a robot will touch in others: training {does} ({}; --robust off trains as asked: docs/robustness.md)",
         chose.join(" ")
     ));
     Ok((cfg, options))
@@ -243,10 +242,11 @@ pub fn apply_overrides(cfg: Config, overrides: &[String]) -> Result<Config> {
     let usage = |s: String| Error::Usage(s);
     let mut value = serde_json::to_value(&cfg).map_err(|e| usage(format!("the configuration does not serialise: {e}")))?;
     if cfg.architecture() == Architecture::Pvt3 {
-        // A file leaves these fields out while they are off.
+        // A file leaves these fields out while they are at their defaults.
         let fields = value.as_object_mut().expect("a config is a JSON object");
         fields.insert("patch_selection".into(), cfg.patch_selection().into());
         fields.insert("patch_dropout".into(), cfg.patch_dropout().into());
+        fields.insert("spectral_levels".into(), cfg.spectral_levels().into());
     }
     for o in overrides {
         let (key, raw) = field_and_value(o)?;
@@ -355,7 +355,9 @@ mod tests {
         // PVT³'s own field, and not RAEC's.
         let biotac = Config::preset("biotac20").unwrap();
         let set = super::apply_overrides(biotac.clone(), &["spectral_bands=16".into(), "patch_selection=true".into()]).unwrap();
-        assert_eq!((set.spectral_bands(), set.patch_selection()), (16, true));
+        assert_eq!((set.spectral_bands(), set.spectral_levels(), set.patch_selection()), (16, true, true));
+        let set = super::apply_overrides(biotac.clone(), &["spectral_bands=16".into(), "spectral_levels=false".into()]).unwrap();
+        assert_eq!((set.spectral_bands(), set.spectral_levels()), (16, false));
         let err = super::apply_overrides(biotac, &["latent=20".into()]).unwrap_err().to_string();
         assert!(err.contains("unknown field `latent`; a pvt3 model's fields"), "{err}");
     }

@@ -177,9 +177,8 @@ pub struct Augmentation {
     /// as force or speed, in two levels or more) and neither --aug-channel-scale nor --extrapolate
     /// is asked, train with `--aug-channel-scale 0.15`, `--aug-stretch 1` unless a stretch is
     /// asked, and a PVT³ of a sensor's channels with `--set spectral_bands=16` unless the bands are
-    /// set, and say so (what it changes, and `--extrapolate 1 --extrapolate-levels` for forces
-    /// beyond the trained ones: docs/robustness.md); a set that records no conditions trains as
-    /// asked. `on`: as if it recorded them; `off`: as asked.
+    /// set, and say so (what it changes: docs/robustness.md); a set that records no conditions
+    /// trains as asked. `on`: as if it recorded them; `off`: as asked.
     #[arg(long, value_enum, default_value_t = Robust::Auto, help_heading = AUGMENTATION)]
     #[serde(default = "Robust::before_auto")]
     pub robust: Robust,

@@ -48,13 +48,13 @@ impl Config {
         }
     }
 
-    /// PVT³: the spectral head's features, a level and `spectral_bands` log powers per channel
-    /// (0 without the head).
+    /// PVT³: the spectral head's features, per channel a level (unless `spectral_levels` is off)
+    /// and `spectral_bands` log powers (0 without the head).
     pub fn spectral_features(&self) -> usize {
         if self.spectral_bands() == 0 {
             0
         } else {
-            self.sensor_channels() * (1 + self.spectral_bands())
+            self.sensor_channels() * (usize::from(self.spectral_levels()) + self.spectral_bands())
         }
     }
 

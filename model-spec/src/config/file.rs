@@ -49,6 +49,9 @@ pub(super) struct ConfigFile {
     decoder_from_state: Option<bool>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     spectral_bands: Option<usize>,
+    /// Written only when off, so that the files of models whose head reads the levels read as before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    spectral_levels: Option<bool>,
     /// Written only when on, so that the files of models without the mask read as before.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     patch_selection: Option<bool>,
@@ -72,6 +75,7 @@ impl TryFrom<ConfigFile> for Config {
         let (m, pvt3, vit, raec) = (f.model, Pvt3Config::default(), VitConfig::default(), RaecConfig::default());
         if m != Architecture::Pvt3 {
             foreign(m, "spectral_bands", f.spectral_bands, pvt3.spectral_bands)?;
+            foreign(m, "spectral_levels", f.spectral_levels, pvt3.spectral_levels)?;
             foreign(m, "patch_selection", f.patch_selection, pvt3.patch_selection)?;
             foreign(m, "patch_dropout", f.patch_dropout, pvt3.patch_dropout)?;
         }
@@ -88,6 +92,7 @@ impl TryFrom<ConfigFile> for Config {
         let network = match m {
             Architecture::Pvt3 => Pvt3Config {
                 spectral_bands: f.spectral_bands.unwrap_or(pvt3.spectral_bands),
+                spectral_levels: f.spectral_levels.unwrap_or(pvt3.spectral_levels),
                 patch_selection: f.patch_selection.unwrap_or(pvt3.patch_selection),
                 patch_dropout: f.patch_dropout.unwrap_or(pvt3.patch_dropout),
             }
@@ -151,12 +156,14 @@ impl From<Config> for ConfigFile {
             reconstruction_weight: None,
             decoder_from_state: None,
             spectral_bands: None,
+            spectral_levels: None,
             patch_selection: None,
             patch_dropout: None,
         };
         match c.network {
             Network::Pvt3(p) => {
                 f.spectral_bands = Some(p.spectral_bands);
+                f.spectral_levels = (!p.spectral_levels).then_some(false);
                 f.patch_selection = p.patch_selection.then_some(true);
                 f.patch_dropout = (p.patch_dropout != 0.0).then_some(p.patch_dropout);
             }
@@ -214,6 +221,17 @@ mod tests {
         let raec = BEFORE_THE_SPLIT.replace(r#""model":"pvt3""#, r#""model":"raec""#).replace('}', r#","patch_selection":true}"#);
         let msg = serde_json::from_str::<Config>(&raec).unwrap_err().to_string();
         assert!(msg.contains("patch_selection = true: not a field of a raec model"), "{msg}");
+    }
+
+    #[test]
+    fn spectral_levels_are_written_only_when_off() {
+        let with = Config { network: Pvt3Config { spectral_bands: 4, ..Default::default() }.into(), ..Config::icub20() };
+        assert!(serde_json::to_value(&with).unwrap().get("spectral_levels").is_none());
+        let without = Config { network: Pvt3Config { spectral_bands: 4, spectral_levels: false, ..Default::default() }.into(), ..with };
+        let written = serde_json::to_value(&without).unwrap();
+        assert_eq!(written["spectral_levels"], false);
+        assert_eq!(serde_json::from_value::<Config>(written).unwrap(), without);
+        assert_eq!((with.spectral_features(), without.spectral_features()), (60 * 5, 60 * 4));
     }
 
     #[test]

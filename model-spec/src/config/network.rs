@@ -76,12 +76,17 @@ impl Network {
 }
 
 /// PVT³'s own fields.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pvt3Config {
     /// Frequency bands of the spectral head (`crate::spectrum`), which adds to the transformer's
     /// logits a linear map of each channel's mean level and log band powers over the kept frames
     /// received so far (the whole window at the end of a touch); 0 has no such head.
     pub spectral_bands: usize,
+    /// Whether the spectral head reads each channel's mean level beside its band powers. Off, it
+    /// reads the band powers alone: what a texture makes the sensor vibrate, and not the press,
+    /// which sets a capacitive channel's level, nor the sliding direction, which shifts it
+    /// (docs/robustness.md); the transformer reads the levels all the same.
+    pub spectral_levels: bool,
     /// A patch-selection mask (`patch_mask`, one entry per patch of the grid, starting at one)
     /// scales each patch's embeddings, as the frame mask scales a temporal token's; a patch whose
     /// entry is zero is dropped from the spatial sequence, so pruning it removes its token and
@@ -93,6 +98,12 @@ pub struct Pvt3Config {
     /// answer from any part of the image loses less when patch selection prunes some. Evaluation
     /// and every exported form read all patches. 0: off.
     pub patch_dropout: f64,
+}
+
+impl Default for Pvt3Config {
+    fn default() -> Self {
+        Self { spectral_bands: 0, spectral_levels: true, patch_selection: false, patch_dropout: 0.0 }
+    }
 }
 
 /// ViT's own fields.
