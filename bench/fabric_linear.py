@@ -8,7 +8,8 @@ tested on 10 and 150 (both directions); trained on the negative speeds and teste
 ones (the other sliding direction, docs/robustness.md "Robust by default"); and, for comparison,
 on a random quarter of the touches held out. Then each fabric's channel levels against the force:
 a straight line through its levels at 120, 150 and 180, and how far it misses the levels at each
-force, beside the spread of the levels across its touches at one force.
+force, beside the spread of the levels across its touches at one force. Last, each fabric's
+vibration at each force and sliding direction: its touches' `spread`, the mean over channels.
 
     target/onnx-venv/bin/python bench/fabric_linear.py FABRICSLIDE   # needs numpy
 
@@ -96,6 +97,21 @@ def main():
             miss = np.abs(coef[0] + coef[1] * f - mean[f]).mean()
             spread = levels[(labels == c) & (forces == f)].std(0).mean()
             print(f"| {fabric} | {f} | {miss:.1f} | {spread:.1f} |")
+    vibration(touches, labels, forces, speeds, names)
+
+
+def vibration(touches, labels, forces, speeds, names):
+    """Each fabric's mean `spread` (log standard deviation, over channels and touches) at each
+    force, negative and positive speeds apart: how much it vibrates under each press."""
+    spread = np.array([features(a, "spread").mean() for a in touches])
+    levels = sorted(set(forces))
+    print("\n| fabric | speeds | " + " | ".join(f"force {f}" for f in levels) + " |")
+    print("|---|---|" + "---:|" * len(levels))
+    for fabric, c in names.items():
+        for sign, side in [(-1, "negative"), (1, "positive")]:
+            at = [(labels == c) & (forces == f) & (np.sign(speeds) == sign) for f in levels]
+            if any(m.any() for m in at):
+                print(f"| {fabric} | {side} | " + " | ".join(f"{spread[m].mean():.2f}" if m.any() else "—" for m in at) + " |")
 
 
 if __name__ == "__main__":
