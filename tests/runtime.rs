@@ -295,24 +295,33 @@ fn a_spectral_head_runs_in_tract_as_the_reference_and_streams() {
 }
 
 /// A camera's model: the layout `pvt3 cv` derives for 30 × 40 RGB frames (patches of 10 × 10
-/// pixels, 12 a frame, the GelSight preset's widths) with a patch mask, a quarter of its frames
+/// pixels, 12 a frame, the GelSight preset's widths, a spectral head over the image's space) with a patch mask, a quarter of its frames
 /// and half of its patches pruned and the others scaled, normalised pixel by pixel; with its
 /// candle form and the metadata it is exported with.
 fn camera_model() -> (Pvt3, pvt3_spec::baked::BakedPvt3, Normalization, pvt3_export::Metadata) {
     let layout = Config { classes: 5, ..Config::for_sensor(&[30, 40, 3, 25]).unwrap() };
-    let cfg = Config { network: pvt3_models::Pvt3Config { patch_selection: true, ..Default::default() }.into(), ..layout };
+    let pvt3_spec::Network::Pvt3(network) = layout.network else { panic!("a camera's layout is a PVT³") };
+    let cfg = Config { network: pvt3_models::Pvt3Config { patch_selection: true, ..network }.into(), ..layout };
     assert_eq!((cfg.patch_height, cfg.patch_width, cfg.num_patches(), cfg.dim), (10, 10, 12, 64));
+    assert_eq!((cfg.spectral_space(), cfg.spectral_bands()), (true, 12), "a camera's layout has a spectral head over the image");
     let (model, varmap) = Pvt3::init(&cfg, 7).unwrap();
     let unpruned = bake(&cfg, &varmap_tensors(&varmap).unwrap()).unwrap();
     let scales: Vec<f32> = (0..25).map(|t| if t % 4 == 3 { 0.0 } else { 1.0 - t as f32 / 50.0 }).collect();
     varmap.data().lock().unwrap()["frame_mask"].set(&candle_core::Tensor::new(scales, &candle_core::Device::Cpu).unwrap()).unwrap();
     let patches: Vec<f32> = (0..12).map(|p| if p % 2 == 1 { 0.0 } else { 0.5 + p as f32 / 10.0 }).collect();
     varmap.data().lock().unwrap()["patch_mask"].set(&candle_core::Tensor::new(patches, &candle_core::Device::Cpu).unwrap()).unwrap();
+    // A spectral standardisation that magnifies the features, so that the head's term is large.
+    let features = cfg.spectral_features();
+    let scale =
+        candle_core::Tensor::new((0..features).map(|i| 20.0 + i as f32 / 10.0).collect::<Vec<_>>(), &candle_core::Device::Cpu).unwrap();
+    varmap.data().lock().unwrap()["spectral.scale"].set(&scale).unwrap();
     let baked = bake(&cfg, &varmap_tensors(&varmap).unwrap()).unwrap();
     assert_eq!((baked.kept_tokens.len(), baked.kept_patches.len()), (19, 6));
-    // Half the patches: about half the spatial transformer's and the embedding's work.
-    let frames_only = unpruned.mult_adds() as f64 * 19.0 / 25.0;
-    assert!((baked.mult_adds() as f64) < 0.6 * frames_only, "{} of {frames_only}", baked.mult_adds());
+    // Half the patches: about half the spatial transformer's and the embedding's work (the
+    // spectral head reads every pixel of every frame).
+    let head = cfg.spectral_mult_adds() as f64;
+    let frames_only = (unpruned.mult_adds() as f64 - head) * 19.0 / 25.0;
+    assert!((baked.mult_adds() as f64 - head) < 0.6 * frames_only, "{} of {frames_only}", baked.mult_adds());
     let (pixels, mut rng) = (30 * 40 * 3, pvt3_models::Rng::new(8));
     let norm = Normalization {
         mean: (0..pixels).map(|_| 100.0 + 30.0 * rng.normal()).collect(),
@@ -340,6 +349,9 @@ fn a_camera_model_equals_the_reference_in_every_form() {
     let mut normalised = Vec::new();
     raw.chunks(pixels * 25).for_each(|sample| norm.apply_into(sample, &mut normalised));
     let reference = reference::forward(&baked, &normalised, 2).unwrap();
+    let headless = reference::forward(&pvt3_spec::baked::BakedPvt3 { spectrum: None, ..baked.clone() }, &normalised, 2).unwrap();
+    let term = reference.iter().flatten().zip(headless.iter().flatten()).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    assert!(term > 0.1, "the spectral head adds {term} to a logit");
     let within = |got: &[f32], form: &str| {
         let worst = got.iter().zip(reference.iter().flatten()).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
         assert!(worst <= 1e-5, "{form} against the f64 reference: {worst:e}");

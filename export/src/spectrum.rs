@@ -18,12 +18,18 @@ use pvt3_format::onnx::{int, Op};
 use crate::graph::Graph;
 use crate::layers::linear;
 
+mod space;
+
 /// The spectral head's logits `[batch, classes]`, named [`SPECTRAL_LOGITS`].
 pub(crate) fn spectral_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, norm: &Normalization) -> String {
     let c = &m.config;
     let (channels, frames, bands) = (c.sensor_channels(), c.frames, c.spectral_bands());
     let k = bins(frames);
     let weighed = frame_weights(g, m);
+    if c.spectral_space() {
+        let logits = space::logits(g, m, s, norm, &weighed);
+        return g.node(Op::Identity, &[&logits], vec![], Some(SPECTRAL_LOGITS));
+    }
 
     // Every operand of the element-wise ops below is [channels, frames] or [b, channels, 1]: tract
     // runs those in one pass, where a [channels, 1] or [frames] operand broadcast over the other
@@ -74,14 +80,22 @@ pub(crate) fn spectral_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, n
     let variance = g.f32s("spectral_norm_variance", &[channels, bands], variance);
     let power = g.op(Op::Div, &[&power, &variance]);
     let power = g.op(Op::Div, &[&power, &weighed]);
+    let logits = logits_of(g, m, s, &level, &power);
+    g.node(Op::Identity, &[&logits], vec![], Some(SPECTRAL_LOGITS))
+}
+
+/// The logits of per-channel `level`s `[b, channels, 1]` and band `power`s `[b, channels,
+/// bands]`: the powers' logarithms (the floor added) after the levels unless they are off, then
+/// the linear map with the standardisation folded in.
+fn logits_of(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, level: &str, power: &str) -> String {
+    let c = &m.config;
     let floor = g.f32s("power_floor", &[1], vec![POWER_FLOOR as f32]);
-    let power = g.op(Op::Add, &[&power, &floor]);
+    let power = g.op(Op::Add, &[power, &floor]);
     let log_power = g.op(Op::Log, &[&power]);
-    let features = if c.spectral_levels() { g.node(Op::Concat, &[&level, &log_power], vec![int("axis", 2)], None) } else { log_power };
+    let features = if c.spectral_levels() { g.node(Op::Concat, &[level, &log_power], vec![int("axis", 2)], None) } else { log_power };
     let flat = g.i64s("spectral_features", &[2], vec![-1, c.spectral_features() as i64]);
     let features = g.op(Op::Reshape, &[&features, &flat]);
-    let logits = linear(g, &features, &standardised(s), "spectral_linear");
-    g.node(Op::Identity, &[&logits], vec![], Some(SPECTRAL_LOGITS))
+    linear(g, &features, &standardised(s), "spectral_linear")
 }
 
 /// The head's linear map with the standardisation folded in, one op instead of three:

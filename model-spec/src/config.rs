@@ -103,6 +103,11 @@ impl Config {
         matches!(&self.network, Network::Pvt3(p) if p.spectral_levels)
     }
 
+    /// Whether the spectral head reads an image's space (`Pvt3Config::spectral_space`).
+    pub fn spectral_space(&self) -> bool {
+        matches!(&self.network, Network::Pvt3(p) if p.spectral_space && p.spectral_bands > 0)
+    }
+
     /// Whether the model has a patch-selection mask (`Pvt3Config::patch_selection`).
     pub fn patch_selection(&self) -> bool {
         matches!(&self.network, Network::Pvt3(p) if p.patch_selection)
@@ -147,7 +152,9 @@ impl Config {
         }
         let divides = match &self.network {
             Network::Pvt3(p) => {
-                if p.spectral_bands > self.frames / 2 {
+                if p.spectral_space && p.spectral_bands > 0 {
+                    crate::spectrum::space::band_of(self.height, self.width, p.spectral_bands)?;
+                } else if p.spectral_bands > self.frames / 2 {
                     return Err(Error::Config(format!(
                         "spectral_bands = {} is more than the {} frequencies above 0 of {} frames",
                         p.spectral_bands,

@@ -107,6 +107,14 @@ fn spectral_logits(m: &BakedPvt3, s: &BakedSpectrum, sample: &[f32], tokens: usi
     let (k, dft, band) = (spectrum::bins(frames), spectrum::dft_matrix(frames), spectrum::band_matrix(frames, bands));
     let weights = spectrum::frame_weights(frames, c.tubelet, tokens, |t| m.kept_tokens.contains(&t));
     let weighed = spectrum::weighed_frames(&weights);
+    if c.spectral_space() {
+        let standard: Vec<f64> = space_features(m, sample, &weights, weighed)
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v * s.scale[i] as f64 + s.shift[i] as f64)
+            .collect();
+        return dense(&s.linear, &standard);
+    }
     let mut features = Vec::with_capacity(s.scale.len());
     for row in sample.chunks(frames) {
         let level = row.iter().zip(&weights).map(|(v, w)| *v as f64 * w).sum::<f64>() / weighed;
@@ -123,6 +131,45 @@ fn spectral_logits(m: &BakedPvt3, s: &BakedSpectrum, sample: &[f32], tokens: usi
     }
     let standard: Vec<f64> = features.iter().enumerate().map(|(i, v)| v * s.scale[i] as f64 + s.shift[i] as f64).collect();
     dense(&s.linear, &standard)
+}
+
+/// The features of a spectral head over the image's space, by `spectrum::space`'s definition:
+/// per colour, its weighted mean level (unless off), then the log of each ring's weighted mean
+/// power, the transform summed term by term.
+fn space_features(m: &BakedPvt3, sample: &[f32], weights: &[f64], weighed: f64) -> Vec<f64> {
+    let c = &m.config;
+    let (h, w, colours, frames, bands) = (c.height, c.width, c.channels, c.frames, c.spectral_bands());
+    let k = spectrum::space::width_bins(w);
+    let of = spectrum::space::band_of(h, w, bands).expect("a validated configuration");
+    let sizes = spectrum::space::band_sizes(&of, bands);
+    let tau = 2.0 * std::f64::consts::PI;
+    let mut features = Vec::with_capacity(colours * (1 + bands));
+    for ci in 0..colours {
+        let (mut level, mut power) = (0.0, vec![0.0; bands]);
+        for (t, wt) in weights.iter().enumerate().filter(|(_, wt)| **wt != 0.0) {
+            let v = |y: usize, x: usize| sample[((y * w + x) * colours + ci) * frames + t] as f64;
+            level += wt * (0..h).flat_map(|y| (0..w).map(move |x| (y, x))).map(|(y, x)| v(y, x)).sum::<f64>() / (h * w) as f64;
+            for ky in 0..h {
+                for kx in 0..k {
+                    let Some(j) = of[ky * k + kx] else { continue };
+                    let (mut re, mut im) = (0.0, 0.0);
+                    for y in 0..h {
+                        for x in 0..w {
+                            let angle = tau * (((ky * y) % h) as f64 / h as f64 + ((kx * x) % w) as f64 / w as f64);
+                            re += v(y, x) * angle.cos();
+                            im -= v(y, x) * angle.sin();
+                        }
+                    }
+                    power[j] += wt * (re * re + im * im) / (h * w) as f64 / sizes[j] as f64;
+                }
+            }
+        }
+        if c.spectral_levels() {
+            features.push(level / weighed);
+        }
+        features.extend(power.iter().map(|p| (p / weighed + spectrum::POWER_FLOOR).ln()));
+    }
+    features
 }
 
 /// Logits `[batch][classes]` for `batch` raw samples laid out back to back.

@@ -11,6 +11,8 @@
 //! expected power after any number of frames. With every frame kept and received, `N = T`: the
 //! whole window's periodogram.
 
+pub mod space;
+
 /// Power added before the logarithm (normalised units), so that a silent band is finite.
 pub const POWER_FLOOR: f64 = 1e-6;
 
@@ -46,14 +48,19 @@ pub fn weighed_frames(weights: &[f64]) -> f64 {
 /// then its `sin`, so that a row vector of frames times it gives the transform's real and
 /// (negated) imaginary parts, scaled so that white noise of unit variance has unit power.
 pub fn dft_matrix(frames: usize) -> Vec<f64> {
-    let k = bins(frames);
-    let norm = (frames as f64).sqrt();
-    let mut m = vec![0.0; frames * 2 * k];
-    for n in 0..frames {
+    cos_sin_matrix(frames, bins(frames))
+}
+
+/// `[n, 2 · k]` row-major: value `m`'s `cos(2π f m / n) / √n` for each frequency `f < k`, then
+/// its `sin` ([`dft_matrix`] of `k = bins(n)`; an image's axes in [`space`]).
+pub fn cos_sin_matrix(n: usize, k: usize) -> Vec<f64> {
+    let norm = (n as f64).sqrt();
+    let mut m = vec![0.0; n * 2 * k];
+    for i in 0..n {
         for f in 0..k {
-            let angle = 2.0 * std::f64::consts::PI * ((f * n) % frames) as f64 / frames as f64;
-            m[n * 2 * k + f] = angle.cos() / norm;
-            m[n * 2 * k + k + f] = angle.sin() / norm;
+            let angle = 2.0 * std::f64::consts::PI * ((f * i) % n) as f64 / n as f64;
+            m[i * 2 * k + f] = angle.cos() / norm;
+            m[i * 2 * k + k + f] = angle.sin() / norm;
         }
     }
     m

@@ -9,6 +9,10 @@
 //! transformer's. A logistic regression on such features alone is a strong texture classifier
 //! (`bench/spectral_probe.py`); the head puts that inside the one model that is exported.
 //!
+//! Over an image's space (`spectral_space`), the features are each colour's level and ring
+//! powers of every frame (`pvt3_spec::spectrum::space`), averaged over the same frames: a
+//! camera's texture wherever the imprint lies.
+//!
 //! The transform is a plain product with `[cos | sin]` columns here (the trainer's candle graph),
 //! and a Fourier transform op in the exported graph; the f64 reference computes it from the same
 //! [`dft_matrix`] (the band maths live in `pvt3_spec::spectrum`).
@@ -16,7 +20,7 @@
 use candle_core::{DType, Device, Tensor, D};
 use candle_nn::{linear, Init, Linear, Module, VarBuilder};
 use pvt3_spec::names;
-use pvt3_spec::spectrum::{band_matrix, bins, dft_matrix, weighed_frames, POWER_FLOOR};
+use pvt3_spec::spectrum::{band_matrix, bins, dft_matrix, space, weighed_frames, POWER_FLOOR};
 
 use crate::Config;
 
@@ -34,6 +38,51 @@ pub struct Spectrum {
     frames: usize,
     /// `Config::spectral_levels`.
     levels: bool,
+    /// For a head over the image's space, its transform.
+    space: Option<Space>,
+}
+
+/// The constants of a head over the image's space: the width's and the height's `[cos | sin]`
+/// matrices and the ring means of the powers `[kx][ky]`.
+#[derive(Clone, Debug)]
+struct Space {
+    width: Tensor,
+    height: Tensor,
+    rings: Tensor,
+    /// Height, width, colours and bands.
+    dims: (usize, usize, usize, usize),
+}
+
+impl Space {
+    fn new(cfg: &Config) -> candle_core::Result<Self> {
+        let (h, w, bands) = (cfg.height, cfg.width, cfg.spectral_bands());
+        let k = space::width_bins(w);
+        let rings = space::ring_means(h, w, bands).map_err(candle_core::Error::wrap)?;
+        let constant = |v: Vec<f64>, shape: (usize, usize)| Tensor::from_vec(v, shape, &Device::Cpu)?.to_dtype(DType::F32);
+        Ok(Self {
+            width: constant(space::cos_sin_matrix(w, k), (w, 2 * k))?,
+            height: constant(space::cos_sin_matrix(h, h), (h, 2 * h))?,
+            rings: constant(rings, (k * h, bands))?,
+            dims: (h, w, cfg.channels, bands),
+        })
+    }
+
+    /// `[b, frames, colours]` levels and `[b, frames, colours · bands]` ring powers of windows
+    /// `[b, h, w, (colours,) frames]`.
+    fn per_frame(&self, x: &Tensor) -> candle_core::Result<(Tensor, Tensor)> {
+        let (h, w, c, bands) = self.dims;
+        let (b, t, k) = (x.dim(0)?, x.dim(D::Minus1)?, space::width_bins(w));
+        let frames = x.reshape((b, h, w, c, t))?.permute((0, 4, 3, 1, 2))?.contiguous()?;
+        let level = frames.reshape((b, t, c, h * w))?.mean(D::Minus1)?;
+        let rows = frames.reshape((b * t * c * h, w))?.matmul(&self.width)?.reshape((b * t * c, h, 2 * k))?;
+        let columns = rows.transpose(1, 2)?.contiguous()?.reshape((b * t * c * 2 * k, h))?.matmul(&self.height)?;
+        let z = columns.reshape((b * t * c, 2 * k, 2 * h))?;
+        let block = |i: usize, j: usize| z.narrow(1, i * k, k)?.narrow(2, j * h, h);
+        let real = (block(0, 0)? - block(1, 1)?)?;
+        let imaginary = (block(0, 1)? + block(1, 0)?)?;
+        let power = (real.sqr()? + imaginary.sqr()?)?.reshape((b * t * c, k * h))?.matmul(&self.rings)?;
+        Ok((level, power.reshape((b, t, c * bands))?))
+    }
 }
 
 impl Spectrum {
@@ -51,6 +100,7 @@ impl Spectrum {
             channels: cfg.sensor_channels(),
             frames: t,
             levels: cfg.spectral_levels(),
+            space: if cfg.spectral_space() { Some(Space::new(cfg)?) } else { None },
         })
     }
 
@@ -62,6 +112,14 @@ impl Spectrum {
         let b = x.dim(0)?;
         let weighed = weighed_frames(weights);
         let w = Tensor::from_iter(weights.iter().map(|v| *v as f32), x.device())?.reshape((1, self.frames))?;
+        if let Some(space) = &self.space {
+            let (level, power) = space.per_frame(x)?;
+            let (c, bands) = (space.dims.2, space.dims.3);
+            let mean = |v: &Tensor| v.broadcast_mul(&w.reshape((1, self.frames, 1))?)?.sum(1)? / weighed;
+            let log_power = (mean(&power)? + POWER_FLOOR)?.log()?.reshape((b, c, bands))?;
+            let features = if self.levels { Tensor::cat(&[&mean(&level)?.reshape((b, c, 1))?, &log_power], 2)? } else { log_power };
+            return features.reshape((b, ()));
+        }
         let rows = x.reshape((b * self.channels, self.frames))?;
         let level = (rows.broadcast_mul(&w)?.sum_keepdim(D::Minus1)? / weighed)?;
         let transform = rows.broadcast_sub(&level)?.broadcast_mul(&w)?.matmul(&self.dft)?;

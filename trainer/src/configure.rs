@@ -188,7 +188,11 @@ fn base_config(data: &Dataset, choice: &ModelChoice, notes: &mut Vec<String>) ->
     let layout = if pvt3_spec::config::is_image(derived.height, derived.width) {
         let (ph, pw) = (derived.patch_height, derived.patch_width);
         let grid = format!("{} × {}", derived.height / ph, derived.width / pw);
-        format!("derived a camera's layout, patches of {ph} × {pw} pixels ({grid} a frame), one token per {} frames", derived.tubelet)
+        let head = match derived.spectral_space() {
+            true => format!(", a spectral head over the image's space ({} rings)", derived.spectral_bands()),
+            false => String::new(),
+        };
+        format!("derived a camera's layout, patches of {ph} × {pw} pixels ({grid} a frame){head}, one token per {} frames", derived.tubelet)
     } else {
         format!(
             "derived the BioTac layout, one token per {} frames of all {} values of a frame",
@@ -247,6 +251,7 @@ pub fn apply_overrides(cfg: Config, overrides: &[String]) -> Result<Config> {
         fields.insert("patch_selection".into(), cfg.patch_selection().into());
         fields.insert("patch_dropout".into(), cfg.patch_dropout().into());
         fields.insert("spectral_levels".into(), cfg.spectral_levels().into());
+        fields.insert("spectral_space".into(), cfg.spectral_space().into());
     }
     for o in overrides {
         let (key, raw) = field_and_value(o)?;

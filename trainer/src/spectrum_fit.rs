@@ -1,40 +1,85 @@
 //! The spectral head's standardisation, fitted to the training set before the first step: each
 //! feature's scale and shift make it mean 0 and standard deviation 1 over the training samples,
 //! as a linear classifier's inputs are standardised, and they stay so: the optimiser leaves them
-//! where they were fitted (`Role::is_fitted`).
+//! where they were fitted (`Role::is_fitted`). A head over an image's space has its linear map
+//! fitted too, as a logistic regression whose penalty its validation fold chooses ([`logistic`]),
+//! and held likewise (`train::learner`): the network trains beside it.
 
 use candle_core::{Device, Tensor};
 use candle_nn::VarMap;
+use pvt3_models::spectrum::Spectrum;
 use pvt3_models::Model;
 use pvt3_spec::names;
 
 use crate::data::windows::Samples;
 use crate::Result;
 
+pub mod logistic;
+
+/// The logistic regression's penalties, strongest first: the validation fold takes the first of
+/// those it reads best.
+const PENALTIES: [f64; 6] = [1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 3e-4];
+
+/// The penalty without a validation fold (a final model's): the one PhysiCLeAR's first
+/// validation fold chose (docs/camera.md, "The image's spectrum").
+const PENALTY: f64 = 1e-3;
+
 /// Sets `spectral.scale` and `spectral.shift` of a PVT³ model with a spectral head from the
-/// features of `train`; does nothing for other models.
-pub fn fit(model: &Model, varmap: &VarMap, train: &Samples) -> Result<()> {
+/// features of `train`, and for a head over an image's space its linear map, the penalty chosen
+/// on `val` (when not empty); does nothing for other models.
+pub fn fit(model: &Model, varmap: &VarMap, train: &Samples, val: &Samples) -> Result<()> {
     let Some((pvt3, spectrum)) = model.pvt3("the spectral head").ok().and_then(|m| Some((m, m.spectrum()?))) else {
         return Ok(());
     };
     let whole = pvt3.frame_weights(pvt3.config().time_tokens())?;
-    let rows: Vec<usize> = (0..train.len()).collect();
-    let mut features = Vec::with_capacity(train.len());
-    for chunk in rows.chunks(256) {
-        let (x, _) = train.batch(chunk, |_| {})?;
-        features.push(spectrum.features(&x, &whole)?);
-    }
-    let features = Tensor::cat(&features, 0)?.to_dtype(candle_core::DType::F64)?;
+    let (features, labels) = features_of(spectrum, &whole, train)?;
     let mean = features.mean(0)?;
     let std = features.broadcast_sub(&mean)?.sqr()?.mean(0)?.sqrt()?;
     let scale = (std + 1e-6)?.recip()?;
     let shift = (mean.neg()? * &scale)?;
+    let mut fitted = vec![(names::spectral(names::SCALE), scale.clone()), (names::spectral(names::SHIFT), shift.clone())];
+    if pvt3.config().spectral_space() {
+        let standard = |f: &Tensor| -> Result<Vec<Vec<f64>>> { Ok(f.broadcast_mul(&scale)?.broadcast_add(&shift)?.to_vec2::<f64>()?) };
+        let rows = standard(&features)?;
+        let validation = match val.is_empty() {
+            true => None,
+            false => features_of(spectrum, &whole, val).and_then(|(f, labels)| Ok((standard(&f)?, labels))).map(Some)?,
+        };
+        let classes = pvt3.config().classes;
+        let regression = logistic::fit(&rows, &labels, classes, penalty(&rows, &labels, classes, validation));
+        let f = rows.first().map_or(0, Vec::len);
+        let linear = |leaf: &str| names::spectral(&names::join(&[names::LINEAR, leaf]));
+        fitted.push((linear(names::WEIGHT), Tensor::from_vec(regression.weight, (classes, f), &Device::Cpu)?));
+        fitted.push((linear(names::BIAS), Tensor::from_vec(regression.bias, classes, &Device::Cpu)?));
+    }
     let vars = varmap.data().lock().expect("the variable map's lock");
-    for (name, value) in [(names::spectral(names::SCALE), scale), (names::spectral(names::SHIFT), shift)] {
-        let var = vars.get(&name).ok_or(pvt3_spec::Error::MissingTensor { task: "fit the spectral standardisation", name })?;
+    for (name, value) in fitted {
+        let var = vars.get(&name).ok_or(pvt3_spec::Error::MissingTensor { task: "fit the spectral head", name })?;
         var.set(&value.to_dtype(candle_core::DType::F32)?.to_device(&Device::Cpu)?)?;
     }
     Ok(())
+}
+
+/// The unstandardised features `[n, features]` (f64) of `set`'s windows and their labels.
+fn features_of(spectrum: &Spectrum, whole: &[f64], set: &Samples) -> Result<(Tensor, Vec<usize>)> {
+    let rows: Vec<usize> = (0..set.len()).collect();
+    let (mut features, mut labels) = (Vec::with_capacity(set.len()), Vec::with_capacity(set.len()));
+    for chunk in rows.chunks(256) {
+        let (x, y) = set.batch(chunk, |_| {})?;
+        features.push(spectrum.features(&x, whole)?);
+        labels.extend(y.to_dtype(candle_core::DType::U32)?.to_vec1::<u32>()?.into_iter().map(|l| l as usize));
+    }
+    Ok((Tensor::cat(&features, 0)?.to_dtype(candle_core::DType::F64)?, labels))
+}
+
+/// The penalty of [`PENALTIES`] whose fit reads the validation windows best (the strongest among
+/// equals), or [`PENALTY`] without them.
+fn penalty(rows: &[Vec<f64>], labels: &[usize], classes: usize, validation: Option<(Vec<Vec<f64>>, Vec<usize>)>) -> f64 {
+    let Some((val_rows, val_labels)) = validation else { return PENALTY };
+    let correct =
+        |p: f64| logistic::fit(rows, labels, classes, p).predict(&val_rows).iter().zip(&val_labels).filter(|(a, b)| a == b).count();
+    let scored: Vec<(f64, usize)> = PENALTIES.iter().map(|p| (*p, correct(*p))).collect();
+    scored.iter().fold(scored[0], |best, s| if s.1 > best.1 { *s } else { best }).0
 }
 
 #[cfg(test)]
@@ -56,7 +101,8 @@ mod tests {
         let x: Vec<f32> = (0..n * l).map(|i| 5.0 * ((i / 75) % 60) as f32 + (1.0 + (i / 75 % 7) as f32) * rng.normal()).collect();
         let data = Dataset::in_memory(x, cfg.sample_shape(), vec![0; n]);
         let train = Samples::unnormalised(&data);
-        super::fit(&model, &varmap, &train).unwrap();
+        super::fit(&model, &varmap, &train, &Samples::unnormalised(&Dataset::in_memory(Vec::new(), cfg.sample_shape(), Vec::new())))
+            .unwrap();
         let spectrum = model.pvt3("test").unwrap().spectrum().unwrap();
         let (x, _) = train.batch(&(0..n).collect::<Vec<_>>(), |_| {}).unwrap();
         let data = varmap.data().lock().unwrap();

@@ -213,7 +213,7 @@ fn start(sensors: &mut [Sensor], spec: &RunSpec, opts: &TrainOptions, state: Opt
             // A run from given weights (fine-tuning) keeps its spectral heads as they are.
             if spec.start.is_none() {
                 for sensor in sensors.iter() {
-                    crate::spectrum_fit::fit(&sensor.net.learner.model, &sensor.net.learner.varmap, &sensor.train_set)?;
+                    crate::spectrum_fit::fit(&sensor.net.learner.model, &sensor.net.learner.varmap, &sensor.train_set, &sensor.val_set)?;
                 }
             }
             for sensor in sensors.iter() {

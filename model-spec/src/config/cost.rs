@@ -48,13 +48,15 @@ impl Config {
         }
     }
 
-    /// PVT³: the spectral head's features, per channel a level (unless `spectral_levels` is off)
-    /// and `spectral_bands` log powers (0 without the head).
+    /// PVT³: the spectral head's features, per channel (per colour, for a head over the image's
+    /// space) a level (unless `spectral_levels` is off) and `spectral_bands` log powers (0
+    /// without the head).
     pub fn spectral_features(&self) -> usize {
+        let read = if self.spectral_space() { self.channels } else { self.sensor_channels() };
         if self.spectral_bands() == 0 {
             0
         } else {
-            self.sensor_channels() * (usize::from(self.spectral_levels()) + self.spectral_bands())
+            read * (usize::from(self.spectral_levels()) + self.spectral_bands())
         }
     }
 
@@ -68,17 +70,26 @@ impl Config {
         }
     }
 
-    /// The spectral head's multiply-adds as the exported graph computes them: per channel a
+    /// The spectral head's multiply-adds as the exported graph computes them: over an image's
+    /// space, the products of its transform; otherwise per channel a
     /// Fourier transform of the frames (counted as a radix-2 FFT's `2 T log2 T`), the band sums of
     /// the squared transform, then the linear map.
     pub fn spectral_mult_adds(&self) -> u64 {
         if self.spectral_bands() == 0 {
             return 0;
         }
+        let linear = (self.spectral_features() * self.classes) as u64;
+        if self.spectral_space() {
+            // Per colour of each frame: the products with the width's and the height's cos | sin
+            // matrices, then the band sums of the powers.
+            let (h, w, k) = (self.height, self.width, crate::spectrum::space::width_bins(self.width));
+            let frame = h * w * 2 * k + 2 * k * h * 2 * h + h * k * self.spectral_bands();
+            return (self.frames * self.channels * frame) as u64 + linear;
+        }
         let t = self.frames as f64;
         let fft = (2.0 * t * t.log2()).ceil() as u64;
         let bands = (2 * spectral_bins(self.frames) * self.spectral_bands()) as u64;
-        self.sensor_channels() as u64 * (fft + bands) + (self.spectral_features() * self.classes) as u64
+        self.sensor_channels() as u64 * (fft + bands) + linear
     }
 
     /// Multiply-adds of one transformer layer over `seqs` sequences of `len` tokens.

@@ -52,6 +52,9 @@ pub(super) struct ConfigFile {
     /// Written only when off, so that the files of models whose head reads the levels read as before.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     spectral_levels: Option<bool>,
+    /// Written only when on, so that the files of models whose head reads frames read as before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    spectral_space: Option<bool>,
     /// Written only when on, so that the files of models without the mask read as before.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     patch_selection: Option<bool>,
@@ -76,6 +79,7 @@ impl TryFrom<ConfigFile> for Config {
         if m != Architecture::Pvt3 {
             foreign(m, "spectral_bands", f.spectral_bands, pvt3.spectral_bands)?;
             foreign(m, "spectral_levels", f.spectral_levels, pvt3.spectral_levels)?;
+            foreign(m, "spectral_space", f.spectral_space, pvt3.spectral_space)?;
             foreign(m, "patch_selection", f.patch_selection, pvt3.patch_selection)?;
             foreign(m, "patch_dropout", f.patch_dropout, pvt3.patch_dropout)?;
         }
@@ -93,6 +97,7 @@ impl TryFrom<ConfigFile> for Config {
             Architecture::Pvt3 => Pvt3Config {
                 spectral_bands: f.spectral_bands.unwrap_or(pvt3.spectral_bands),
                 spectral_levels: f.spectral_levels.unwrap_or(pvt3.spectral_levels),
+                spectral_space: f.spectral_space.unwrap_or(pvt3.spectral_space),
                 patch_selection: f.patch_selection.unwrap_or(pvt3.patch_selection),
                 patch_dropout: f.patch_dropout.unwrap_or(pvt3.patch_dropout),
             }
@@ -157,6 +162,7 @@ impl From<Config> for ConfigFile {
             decoder_from_state: None,
             spectral_bands: None,
             spectral_levels: None,
+            spectral_space: None,
             patch_selection: None,
             patch_dropout: None,
         };
@@ -164,6 +170,7 @@ impl From<Config> for ConfigFile {
             Network::Pvt3(p) => {
                 f.spectral_bands = Some(p.spectral_bands);
                 f.spectral_levels = (!p.spectral_levels).then_some(false);
+                f.spectral_space = p.spectral_space.then_some(true);
                 f.patch_selection = p.patch_selection.then_some(true);
                 f.patch_dropout = (p.patch_dropout != 0.0).then_some(p.patch_dropout);
             }

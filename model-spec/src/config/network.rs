@@ -87,6 +87,12 @@ pub struct Pvt3Config {
     /// which sets a capacitive channel's level, nor the sliding direction, which shifts it
     /// (docs/robustness.md); the transformer reads the levels all the same.
     pub spectral_levels: bool,
+    /// Whether the spectral head reads an image's space instead of each channel's frames: for
+    /// each colour of each frame, its mean level and the mean power of `spectral_bands` rings of
+    /// spatial frequency (`crate::spectrum::space`), averaged over the kept frames received so
+    /// far. A texture's spectrum stays where the imprint moves, so it reads a camera's texture
+    /// wherever the gel is pressed (docs/camera.md).
+    pub spectral_space: bool,
     /// A patch-selection mask (`patch_mask`, one entry per patch of the grid, starting at one)
     /// scales each patch's embeddings, as the frame mask scales a temporal token's; a patch whose
     /// entry is zero is dropped from the spatial sequence, so pruning it removes its token and
@@ -102,7 +108,7 @@ pub struct Pvt3Config {
 
 impl Default for Pvt3Config {
     fn default() -> Self {
-        Self { spectral_bands: 0, spectral_levels: true, patch_selection: false, patch_dropout: 0.0 }
+        Self { spectral_bands: 0, spectral_levels: true, spectral_space: false, patch_selection: false, patch_dropout: 0.0 }
     }
 }
 

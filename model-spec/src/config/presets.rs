@@ -15,6 +15,11 @@ pub const IMAGE_SIDE: usize = 16;
 /// About how many patches a derived layout cuts an image into: 3 × 4 of a 3:4 frame.
 const IMAGE_PATCHES: f64 = 12.0;
 
+/// Rings of spatial frequency the spectral head of a camera's layout reads (fewer where a small
+/// image has not that many): its band powers alone classify PhysiCLeAR's objects better than the
+/// transformer does (docs/camera.md, "The image's spectrum").
+const IMAGE_BANDS: usize = 12;
+
 /// Whether frames of `height` × `width` values are a camera's images ([`IMAGE_SIDE`]).
 pub fn is_image(height: usize, width: usize) -> bool {
     height >= IMAGE_SIDE && width >= IMAGE_SIDE
@@ -64,7 +69,8 @@ impl Config {
     /// divisor of `frames` nearest (in ratio) to `frames / 40`, so that about 40 temporal tokens
     /// remain, as in the BioTac preset. A camera's images ([`is_image`]) are cut into about 12
     /// square patches (sides the divisors of height and width nearest `√(height · width / 12)`:
-    /// 10 × 10 pixels of 30 × 40), the rest the GelSight preset's. Any other sensor gets the BioTac
+    /// 10 × 10 pixels of 30 × 40), with a spectral head over the image's space, the rest the
+    /// GelSight preset's. Any other sensor gets the BioTac
     /// layout, which assumes no grid: all channels of a tubelet form one token (one patch covering
     /// the frame), the rest the BioTac preset's. `None` for a shape that is not 3 or 4 axes of
     /// positive lengths.
@@ -81,7 +87,9 @@ impl Config {
         if is_image(height, width) {
             let side = ((height * width) as f64 / IMAGE_PATCHES).sqrt();
             let (patch_height, patch_width) = (nearest_divisor(height, side), nearest_divisor(width, side));
-            return Some(Self { height, width, channels, frames, patch_height, patch_width, tubelet, ..Self::gelsight() });
+            let bands = (1..=IMAGE_BANDS).rev().find(|b| crate::spectrum::space::band_of(height, width, *b).is_ok()).unwrap_or(0);
+            let network = Pvt3Config { spectral_bands: bands, spectral_space: bands > 0, ..Pvt3Config::default() }.into();
+            return Some(Self { height, width, channels, frames, patch_height, patch_width, tubelet, network, ..Self::gelsight() });
         }
         Some(Self { height, width, channels, frames, patch_height: height, patch_width: width, tubelet, ..Self::biotac20() })
     }
@@ -134,6 +142,8 @@ impl Config {
     /// slower, 0.9 s against 0.05 s per batch of 32).
     pub fn for_model(self, model: Architecture) -> Self {
         match model {
+            // A PVT³ layout keeps its own fields (a camera's spectral head).
+            Architecture::Pvt3 if matches!(self.network, Network::Pvt3(_)) => self,
             Architecture::Pvt3 => Self { network: Network::new(model), ..self },
             Architecture::Vit => {
                 let (patch_height, patch_width, tile_rows) = match (self.height, self.width) {

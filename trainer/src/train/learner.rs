@@ -76,9 +76,10 @@ impl Learner {
     /// `model` over `varmap`, trained by an optimiser of the variables of `own`.
     fn with(model: Model, varmap: VarMap, own: &VarMap, opts: &TrainOptions) -> Result<Self> {
         let masks = vars_where(&varmap, is_mask).into_iter().map(|v| v.as_tensor().clone()).collect();
+        let space_head = model.pvt3("").is_ok_and(|m| m.config().spectral_space());
         let optimizer = AdamW::new(own, opts.optimization.weight_decay, |n, v| match Role::of(n, v.rank()) {
             Role::Mask => opts.pruning.mask_lr,
-            role if role.is_fitted() => 0.0,
+            role if role.is_fitted() || (space_head && n.starts_with(pvt3_spec::names::SPECTRAL)) => 0.0,
             _ => 1.0,
         })?;
         let matrices = vars_where(own, is_weight_matrix);

@@ -475,3 +475,28 @@ fn the_spectral_standardisation_stays_where_it_was_fitted() {
     assert_ne!(flat_of(&first, "spectral.linear.weight"), flat_of(&last, "spectral.linear.weight"), "the map trains");
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// A spectral head over the image's space has its whole map fitted before the first step (a
+/// logistic regression from zero, whose two classes' rows are each other's negatives, as no
+/// random start's are) and held there while the network trains beside it.
+#[test]
+fn a_head_over_the_image_is_fitted_and_held() {
+    let data = tiny_data();
+    let network = pvt3_models::Pvt3Config { spectral_bands: 2, spectral_space: true, ..Default::default() };
+    let run = RunSpec { config: Config { network: network.into(), ..tiny_config() }, ..spec(&data, 4, Some(1)) };
+    let dir = out_dir("spectral-space-fitted");
+    let load = |dir: &PathBuf| candle_core::safetensors::load(Checkpoint(&Run(dir).last()).weights(), &Device::Cpu).unwrap();
+    assert!(train(&run, &dir, false, &ProgressBar::hidden()).unwrap().is_none());
+    let first = load(&dir);
+    train(&RunSpec { pause_after: None, ..run }, &dir, true, &ProgressBar::hidden()).unwrap().unwrap();
+    let last = load(&dir);
+    for name in ["spectral.scale", "spectral.shift", "spectral.linear.weight", "spectral.linear.bias"] {
+        assert_eq!(flat_of(&first, name), flat_of(&last, name), "{name}: fitted, not trained");
+    }
+    let (weight, bias) = (flat_of(&first, "spectral.linear.weight"), flat_of(&first, "spectral.linear.bias"));
+    let features = weight.len() / 2;
+    assert!(weight[..features].iter().zip(&weight[features..]).all(|(a, b)| (a + b).abs() < 1e-6), "{weight:?}");
+    assert!((bias[0] + bias[1]).abs() < 1e-6 && weight.iter().any(|w| w.abs() > 1e-3), "{weight:?} {bias:?}");
+    assert_ne!(flat_of(&first, "patch_embed.weight"), flat_of(&last, "patch_embed.weight"), "the network trains");
+    std::fs::remove_dir_all(dir).unwrap();
+}

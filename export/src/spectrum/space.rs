@@ -1,0 +1,83 @@
+//! The spectral head over an image's space (`pvt3_spec::spectrum::space`) as ONNX nodes: the
+//! frames normalised, each colour of each frame transformed by products with the width's and the
+//! height's `[cos | sin]` matrices (plain `MatMul`s: the two-dimensional transform of a small
+//! frame, in tract and onnxruntime alike), the powers `(CC − SS)² + (CS + SC)²` of its four
+//! blocks summed into rings, each colour's level beside them, all weighed over the frames
+//! received ([`FRAME_WEIGHTS`]) as the temporal head weighs them, the logarithms, and the linear
+//! map with the standardisation folded in.
+
+use pvt3_format::onnx::{int, ints, Op};
+use pvt3_format::{FRAME_WEIGHTS, INPUT};
+use pvt3_spec::baked::{BakedPvt3, BakedSpectrum};
+use pvt3_spec::normalization::Normalization;
+use pvt3_spec::Config;
+use pvt3_spec::spectrum::space;
+
+use crate::graph::Graph;
+
+/// The head's logits `[batch, classes]`; `weighed` is the frames weighed, `[1]`.
+pub(super) fn logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, norm: &Normalization, weighed: &str) -> String {
+    let c = &m.config;
+    let (colours, frames, bands) = (c.channels, c.frames, c.spectral_bands());
+    let per_frame = per_frame(g, c, norm);
+    // Levels and rings [b, frames, colours · (1 + bands)], weighed over the frames.
+    let shape = g.i64s("space_per_frame", &[3], vec![-1, frames as i64, (colours * (1 + bands)) as i64]);
+    let joined = g.op(Op::Reshape, &[&per_frame, &shape]);
+    let joined = g.node(Op::Transpose, &[&joined], vec![ints("perm", &[0, 2, 1])], None);
+    let column = g.i64s("space_frames_column", &[2], vec![frames as i64, 1]);
+    let column = g.op(Op::Reshape, &[FRAME_WEIGHTS, &column]);
+    let weighted = g.op(Op::MatMul, &[&joined, &column]);
+    let weighted = g.op(Op::Div, &[&weighted, weighed]);
+    let per_colour = g.i64s("space_per_colour", &[3], vec![-1, colours as i64, 1 + bands as i64]);
+    let weighted = g.op(Op::Reshape, &[&weighted, &per_colour]);
+    let axis = g.i64s("space_feature_axis", &[1], vec![2]);
+    let (zero, one, end) =
+        (g.i64s("space_zero", &[1], vec![0]), g.i64s("space_one", &[1], vec![1]), g.i64s("space_end", &[1], vec![1 + bands as i64]));
+    let level = g.op(Op::Slice, &[&weighted, &zero, &one, &axis]);
+    let power = g.op(Op::Slice, &[&weighted, &one, &end, &axis]);
+    super::logits_of(g, m, s, &level, &power)
+}
+
+/// Each colour's level and ring powers of every frame, `[b, frames, colours, 1 + bands]`, from the
+/// file's input normalised.
+fn per_frame(g: &mut Graph, c: &Config, norm: &Normalization) -> String {
+    let (h, w, colours, frames, bands) = (c.height, c.width, c.channels, c.frames, c.spectral_bands());
+    let k = space::width_bins(w);
+    let dims = |v: &[usize]| v.iter().map(|d| *d as i64).collect::<Vec<_>>();
+    let shape = g.i64s("space_window", &[5], [vec![-1], dims(&[h, w, colours, frames])].concat());
+    let x = g.op(Op::Reshape, &[INPUT, &shape]);
+    let mean = g.f32s("space_norm_mean", &[h, w, colours, 1], norm.mean.clone());
+    let std = g.f32s("space_norm_std", &[h, w, colours, 1], norm.std.clone());
+    let x = g.op(Op::Sub, &[&x, &mean]);
+    let x = g.op(Op::Div, &[&x, &std]);
+    // [b, frames, colours, h, w]: a frame's colour is one matrix.
+    let x = g.node(Op::Transpose, &[&x], vec![ints("perm", &[0, 4, 3, 1, 2])], None);
+    let pixels = g.i64s("space_pixels", &[4], [vec![-1], dims(&[frames, colours, h * w])].concat());
+    let flat = g.op(Op::Reshape, &[&x, &pixels]);
+    let mean_column = g.f32s("space_mean_column", &[h * w, 1], vec![1.0 / (h * w) as f32; h * w]);
+    let level = g.op(Op::MatMul, &[&flat, &mean_column]);
+    let across = g.f32s("space_width_dft", &[w, 2 * k], space::cos_sin_matrix(w, k).iter().map(|v| *v as f32).collect());
+    let rows = g.op(Op::MatMul, &[&x, &across]);
+    let rows = g.node(Op::Transpose, &[&rows], vec![ints("perm", &[0, 1, 2, 4, 3])], None);
+    let down = g.f32s("space_height_dft", &[h, 2 * h], space::cos_sin_matrix(h, h).iter().map(|v| *v as f32).collect());
+    let z = g.op(Op::MatMul, &[&rows, &down]);
+    // The four blocks [kx, ky] of the products: cos or sin across, cos or sin down.
+    let axes = g.i64s("space_block_axes", &[2], vec![3, 4]);
+    let block = |g: &mut Graph, i: usize, j: usize| {
+        let start = g.i64s(&format!("space_block_{i}{j}_start"), &[2], dims(&[i * k, j * h]));
+        let end = g.i64s(&format!("space_block_{i}{j}_end"), &[2], dims(&[(i + 1) * k, (j + 1) * h]));
+        g.op(Op::Slice, &[&z, &start, &end, &axes])
+    };
+    let (cc, cs, sc, ss) = (block(g, 0, 0), block(g, 0, 1), block(g, 1, 0), block(g, 1, 1));
+    let real = g.op(Op::Sub, &[&cc, &ss]);
+    let imaginary = g.op(Op::Add, &[&cs, &sc]);
+    let real = g.op(Op::Mul, &[&real, &real]);
+    let imaginary = g.op(Op::Mul, &[&imaginary, &imaginary]);
+    let power = g.op(Op::Add, &[&real, &imaginary]);
+    let bins = g.i64s("space_bins", &[4], [vec![-1], dims(&[frames, colours, k * h])].concat());
+    let power = g.op(Op::Reshape, &[&power, &bins]);
+    let rings = space::ring_means(h, w, bands).expect("a validated configuration").iter().map(|v| *v as f32).collect();
+    let rings = g.f32s("space_rings", &[k * h, bands], rings);
+    let power = g.op(Op::MatMul, &[&power, &rings]);
+    g.node(Op::Concat, &[&level, &power], vec![int("axis", 3)], None)
+}

@@ -1,0 +1,117 @@
+//! The band maths of the spectral head over an image (`Pvt3Config::spectral_space`): what a
+//! camera's texture is, wherever on the gel it is pressed. A frame's power spectrum does not move
+//! when the imprint does, so the head reads, for each colour of each frame, the mean power of
+//! `bands` rings of spatial frequency (geometrically spaced radii, the zero frequency left out),
+//! beside the colour's mean level, and averages them over the kept frames received so far as the
+//! temporal head does (`super`'s docs: the weights `w_n` and `N`). The trainer's candle head,
+//! the f64 reference and the exporter all read these matrices.
+//!
+//! A frame `v[y, x]` of `h × w` has the transform `F(ky, kx) = Σ v[y, x] e^{−2πi (ky y / h +
+//! kx x / w)} / √(h w)` (white noise of unit variance has unit power), read one-sided in `x`:
+//! `ky < h`, `kx ≤ w / 2`. Frequency `(ky, kx)` has the radius `√((fy / h)² + (kx / w)²)`, `fy`
+//! the signed frequency of `ky`. A band's power is the mean `|F|²` of the frequencies in it.
+
+pub use super::cos_sin_matrix;
+use crate::{Error, Result};
+
+/// Columns `kx` of the one-sided transform of a row of `width` values.
+pub fn width_bins(width: usize) -> usize {
+    width / 2 + 1
+}
+
+/// The radius of frequency `(ky, kx)` of an `h × w` frame.
+pub fn radius(h: usize, w: usize, ky: usize, kx: usize) -> f64 {
+    let fy = if ky <= h / 2 { ky as f64 } else { ky as f64 - h as f64 };
+    ((fy / h as f64).powi(2) + (kx as f64 / w as f64).powi(2)).sqrt()
+}
+
+/// The band of each frequency, `[ky][kx]` row-major over `h × width_bins(w)`: `None` for the zero
+/// frequency (the level's), else `j` of the `bands` rings whose radii `e_j = r₀ (r₁ / r₀)^(j /
+/// bands)` run from the lowest radius, `r₀ = 1 / max(h, w)`, to the highest, `r₁`, each ring
+/// `[e_j, e_{j+1})` and the last closed. Fails if a ring holds no frequency (too many bands for
+/// so small a frame).
+pub fn band_of(h: usize, w: usize, bands: usize) -> Result<Vec<Option<usize>>> {
+    let k = width_bins(w);
+    let top = (0..h).flat_map(|ky| (0..k).map(move |kx| radius(h, w, ky, kx))).fold(0.0, f64::max);
+    let low = 1.0 / h.max(w) as f64;
+    let edge = |j: usize| low * (top / low).powf(j as f64 / bands as f64);
+    let of = |r: f64| -> Option<usize> {
+        if r < low * (1.0 - 1e-9) {
+            return None;
+        }
+        Some((0..bands).find(|&j| r < edge(j + 1) * (1.0 - 1e-12)).unwrap_or(bands - 1))
+    };
+    let found: Vec<Option<usize>> = (0..h).flat_map(|ky| (0..k).map(move |kx| (ky, kx))).map(|(ky, kx)| of(radius(h, w, ky, kx))).collect();
+    if let Some(j) = (0..bands).find(|j| !found.contains(&Some(*j))) {
+        return Err(Error::Config(format!(
+            "spectral_bands = {bands}: ring {j} of a {h} × {w} frame's spatial spectrum holds no frequency; take fewer bands"
+        )));
+    }
+    Ok(found)
+}
+
+/// Frequencies in each band.
+pub fn band_sizes(of: &[Option<usize>], bands: usize) -> Vec<usize> {
+    (0..bands).map(|j| of.iter().filter(|b| **b == Some(j)).count()).collect()
+}
+
+/// `[kx · h + ky, band]` row-major: `1 / size` where frequency `(ky, kx)` belongs to the band,
+/// so that the powers laid out `[kx][ky]` (as a product with the width's matrix, then the
+/// height's, leaves them) times it are the bands' mean powers.
+pub fn ring_means(h: usize, w: usize, bands: usize) -> Result<Vec<f64>> {
+    let k = width_bins(w);
+    let of = band_of(h, w, bands)?;
+    let sizes = band_sizes(&of, bands);
+    let mut m = vec![0.0; k * h * bands];
+    for ky in 0..h {
+        for kx in 0..k {
+            if let Some(j) = of[ky * k + kx] {
+                m[(kx * h + ky) * bands + j] = 1.0 / sizes[j] as f64;
+            }
+        }
+    }
+    Ok(m)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every frequency but the zero one lies in exactly one band, and no band is empty, at the
+    /// sizes a camera is imported at; too many bands for a small frame is an error.
+    #[test]
+    fn the_rings_tile_the_frequencies_above_zero() {
+        for (h, w, bands) in [(30, 40, 12), (60, 80, 16), (16, 16, 8), (240, 320, 16), (31, 17, 6)] {
+            let of = band_of(h, w, bands).unwrap();
+            assert_eq!(of.len(), h * width_bins(w));
+            assert_eq!(of[0], None, "{h} × {w}: the zero frequency is the level's");
+            assert!(of[1..].iter().all(Option::is_some), "{h} × {w}");
+            assert!(band_sizes(&of, bands).iter().all(|n| *n > 0));
+            // The rings grow outward: a higher band never holds a lower radius.
+            let mut by_band = vec![(f64::MAX, 0.0f64); bands];
+            for ky in 0..h {
+                for kx in 0..width_bins(w) {
+                    if let Some(j) = of[ky * width_bins(w) + kx] {
+                        let r = radius(h, w, ky, kx);
+                        by_band[j] = (by_band[j].0.min(r), by_band[j].1.max(r));
+                    }
+                }
+            }
+            assert!(by_band.windows(2).all(|p| p[0].1 <= p[1].0), "{h} × {w}: {by_band:?}");
+        }
+        assert!(band_of(16, 16, 40).is_err());
+    }
+
+    /// The transform's matrix is the definition's: a cosine of frequency 3 over 8 values gives
+    /// √8 / 2 at frequency 3's real part and nothing else.
+    #[test]
+    fn the_matrix_transforms() {
+        let m = cos_sin_matrix(8, 5);
+        let row: Vec<f64> = (0..8).map(|i| (2.0 * std::f64::consts::PI * 3.0 * i as f64 / 8.0).cos()).collect();
+        let out: Vec<f64> = (0..10).map(|f| (0..8).map(|i| row[i] * m[i * 10 + f]).sum()).collect();
+        for (f, v) in out.iter().enumerate() {
+            let want = if f == 3 { 8f64.sqrt() / 2.0 } else { 0.0 };
+            assert!((v - want).abs() < 1e-12, "{f}: {v}");
+        }
+    }
+}
