@@ -185,11 +185,12 @@ fn base_config(data: &Dataset, choice: &ModelChoice, notes: &mut Vec<String>) ->
     let shape = window.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(" × ");
     let derived = Config::for_sensor(&window)
         .ok_or_else(|| Error::Usage(format!("samples of shape {shape}: expected [height, width, (channels,) frames]")))?;
+    let chosen = derived.clone().for_model(architecture);
     let layout = if pvt3_spec::config::is_image(derived.height, derived.width) {
         let (ph, pw) = (derived.patch_height, derived.patch_width);
         let grid = format!("{} × {}", derived.height / ph, derived.width / pw);
-        let head = match derived.spectral_space() {
-            true => format!(", a spectral head over the image's space ({} rings)", derived.spectral_bands()),
+        let head = match chosen.spectral_space() {
+            true => format!(", a spectral head over the image's space ({} rings)", chosen.spectral_bands()),
             false => String::new(),
         };
         format!("derived a camera's layout, patches of {ph} × {pw} pixels ({grid} a frame){head}, one token per {} frames", derived.tubelet)
@@ -204,7 +205,7 @@ fn base_config(data: &Dataset, choice: &ModelChoice, notes: &mut Vec<String>) ->
         "no preset takes samples of {shape}: {layout} ({} temporal tokens); `pvt3 info --json` and --config FILE to choose otherwise",
         derived.time_tokens()
     ));
-    Ok(derived.for_model(architecture))
+    Ok(chosen)
 }
 
 /// The options that only some models or values allow.
