@@ -152,7 +152,7 @@ impl Config {
         }
         let divides = match &self.network {
             Network::Pvt3(p) => {
-                if p.spectral_space && p.spectral_bands > 0 {
+                if self.spectral_space() {
                     crate::spectrum::space::band_of(self.height, self.width, p.spectral_bands)?;
                 } else if p.spectral_bands > self.frames / 2 {
                     return Err(Error::Config(format!(
