@@ -295,7 +295,8 @@ fn a_spectral_head_runs_in_tract_as_the_reference_and_streams() {
 }
 
 /// A camera's model: the layout `pvt3 cv` derives for 30 × 40 RGB frames (patches of 10 × 10
-/// pixels, 12 a frame, the GelSight preset's widths, a spectral head over the image's space) with a patch mask, a quarter of its frames
+/// pixels, 12 a frame, the GelSight preset's widths, a spectral head over the image's space with
+/// its rings and histogram) with a patch mask, a quarter of its frames
 /// and half of its patches pruned and the others scaled, normalised pixel by pixel; with its
 /// candle form and the metadata it is exported with.
 fn camera_model() -> (Pvt3, pvt3_spec::baked::BakedPvt3, Normalization, pvt3_export::Metadata) {
@@ -303,17 +304,22 @@ fn camera_model() -> (Pvt3, pvt3_spec::baked::BakedPvt3, Normalization, pvt3_exp
     let pvt3_spec::Network::Pvt3(network) = layout.network else { panic!("a camera's layout is a PVT³") };
     let cfg = Config { network: pvt3_models::Pvt3Config { patch_selection: true, ..network }.into(), ..layout };
     assert_eq!((cfg.patch_height, cfg.patch_width, cfg.num_patches(), cfg.dim), (10, 10, 12, 64));
-    assert_eq!((cfg.spectral_space(), cfg.spectral_bands()), (true, 12), "a camera's layout has a spectral head over the image");
+    assert_eq!(
+        (cfg.spectral_space(), cfg.spectral_bands(), cfg.spectral_histogram()),
+        (true, 12, 24),
+        "a camera's layout has a spectral head over the image, with a histogram"
+    );
     let (model, varmap) = Pvt3::init(&cfg, 7).unwrap();
     let unpruned = bake(&cfg, &varmap_tensors(&varmap).unwrap()).unwrap();
     let scales: Vec<f32> = (0..25).map(|t| if t % 4 == 3 { 0.0 } else { 1.0 - t as f32 / 50.0 }).collect();
     varmap.data().lock().unwrap()["frame_mask"].set(&candle_core::Tensor::new(scales, &candle_core::Device::Cpu).unwrap()).unwrap();
     let patches: Vec<f32> = (0..12).map(|p| if p % 2 == 1 { 0.0 } else { 0.5 + p as f32 / 10.0 }).collect();
     varmap.data().lock().unwrap()["patch_mask"].set(&candle_core::Tensor::new(patches, &candle_core::Device::Cpu).unwrap()).unwrap();
-    // A spectral standardisation that magnifies the features, so that the head's term is large.
+    // A spectral standardisation that magnifies the features, so that the head's term is large
+    // (about 14 on a logit; errors of f32 grow with it).
     let features = cfg.spectral_features();
     let scale =
-        candle_core::Tensor::new((0..features).map(|i| 20.0 + i as f32 / 10.0).collect::<Vec<_>>(), &candle_core::Device::Cpu).unwrap();
+        candle_core::Tensor::new((0..features).map(|i| 10.0 + i as f32 / 20.0).collect::<Vec<_>>(), &candle_core::Device::Cpu).unwrap();
     varmap.data().lock().unwrap()["spectral.scale"].set(&scale).unwrap();
     let baked = bake(&cfg, &varmap_tensors(&varmap).unwrap()).unwrap();
     assert_eq!((baked.kept_tokens.len(), baked.kept_patches.len()), (19, 6));

@@ -80,19 +80,29 @@ pub(crate) fn spectral_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, n
     let variance = g.f32s("spectral_norm_variance", &[channels, bands], variance);
     let power = g.op(Op::Div, &[&power, &variance]);
     let power = g.op(Op::Div, &[&power, &weighed]);
-    let logits = logits_of(g, m, s, &level, &power);
+    let logits = logits_of(g, m, s, &level, &power, None);
     g.node(Op::Identity, &[&logits], vec![], Some(SPECTRAL_LOGITS))
 }
 
 /// The logits of per-channel `level`s `[b, channels, 1]` and band `power`s `[b, channels,
 /// bands]`: the powers' logarithms (the floor added) after the levels unless they are off, then
-/// the linear map with the standardisation folded in.
-fn logits_of(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, level: &str, power: &str) -> String {
+/// the `histogram` `[b, channels, bins]` if the head has one, then the linear map with the
+/// standardisation folded in.
+fn logits_of(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, level: &str, power: &str, histogram: Option<&str>) -> String {
     let c = &m.config;
     let floor = g.f32s("power_floor", &[1], vec![POWER_FLOOR as f32]);
     let power = g.op(Op::Add, &[power, &floor]);
     let log_power = g.op(Op::Log, &[&power]);
-    let features = if c.spectral_levels() { g.node(Op::Concat, &[level, &log_power], vec![int("axis", 2)], None) } else { log_power };
+    let mut parts: Vec<&str> = Vec::with_capacity(3);
+    if c.spectral_levels() {
+        parts.push(level);
+    }
+    parts.push(&log_power);
+    parts.extend(histogram);
+    let features = match parts.len() {
+        1 => log_power.clone(),
+        _ => g.node(Op::Concat, &parts, vec![int("axis", 2)], None),
+    };
     let flat = g.i64s("spectral_features", &[2], vec![-1, c.spectral_features() as i64]);
     let features = g.op(Op::Reshape, &[&features, &flat]);
     linear(g, &features, &standardised(s), "spectral_linear")

@@ -108,6 +108,15 @@ impl Config {
         matches!(&self.network, Network::Pvt3(p) if p.spectral_space && p.spectral_bands > 0)
     }
 
+    /// The bins of a head over the image's space's histogram (`Pvt3Config::spectral_histogram`); 0
+    /// without one.
+    pub fn spectral_histogram(&self) -> usize {
+        match &self.network {
+            Network::Pvt3(p) if self.spectral_space() => p.spectral_histogram,
+            _ => 0,
+        }
+    }
+
     /// Whether the model has a patch-selection mask (`Pvt3Config::patch_selection`).
     pub fn patch_selection(&self) -> bool {
         matches!(&self.network, Network::Pvt3(p) if p.patch_selection)
@@ -152,6 +161,15 @@ impl Config {
         }
         let divides = match &self.network {
             Network::Pvt3(p) => {
+                if p.spectral_histogram != 0 && !self.spectral_space() {
+                    return Err(Error::Config(format!(
+                        "spectral_histogram = {}: only a spectral head over an image's space (spectral_space) reads a histogram; set spectral_histogram=0 too",
+                        p.spectral_histogram
+                    )));
+                }
+                if p.spectral_histogram == 1 {
+                    return Err(Error::Config("spectral_histogram = 1: a histogram needs at least 2 bins (0 has none)".into()));
+                }
                 if self.spectral_space() {
                     crate::spectrum::space::band_of(self.height, self.width, p.spectral_bands)?;
                 } else if p.spectral_bands > self.frames / 2 {

@@ -135,20 +135,32 @@ fn spectral_logits(m: &BakedPvt3, s: &BakedSpectrum, sample: &[f32], tokens: usi
 
 /// The features of a spectral head over the image's space, by `spectrum::space`'s definition:
 /// per colour, its weighted mean level (unless off), then the log of each ring's weighted mean
-/// power, the transform summed term by term.
+/// power, the transform summed term by term, then each bin's weighted mean share of the pixels.
 fn space_features(m: &BakedPvt3, sample: &[f32], weights: &[f64], weighed: f64) -> Vec<f64> {
     let c = &m.config;
     let (h, w, colours, frames, bands) = (c.height, c.width, c.channels, c.frames, c.spectral_bands());
+    let bins = c.spectral_histogram();
+    let (edges, width) = (spectrum::space::histogram_edges(bins), spectrum::space::histogram_width(bins));
+    // Bin j's share of a value: its share above the bin's lower edge less that above its upper.
+    let share = |v: f64, j: usize| -> f64 {
+        let lower = if j == 0 { 1.0 } else { spectrum::space::share_above(v, edges[j - 1], width) };
+        let upper = if j + 1 == bins { 0.0 } else { spectrum::space::share_above(v, edges[j], width) };
+        lower - upper
+    };
     let k = spectrum::space::width_bins(w);
     let of = spectrum::space::band_of(h, w, bands).expect("a validated configuration");
     let sizes = spectrum::space::band_sizes(&of, bands);
     let tau = 2.0 * std::f64::consts::PI;
-    let mut features = Vec::with_capacity(colours * (1 + bands));
+    let mut features = Vec::with_capacity(c.spectral_features());
     for ci in 0..colours {
-        let (mut level, mut power) = (0.0, vec![0.0; bands]);
+        let (mut level, mut power, mut histogram) = (0.0, vec![0.0; bands], vec![0.0; bins]);
         for (t, wt) in weights.iter().enumerate().filter(|(_, wt)| **wt != 0.0) {
             let v = |y: usize, x: usize| sample[((y * w + x) * colours + ci) * frames + t] as f64;
-            level += wt * (0..h).flat_map(|y| (0..w).map(move |x| (y, x))).map(|(y, x)| v(y, x)).sum::<f64>() / (h * w) as f64;
+            let pixels = || (0..h).flat_map(|y| (0..w).map(move |x| (y, x))).map(|(y, x)| v(y, x));
+            level += wt * pixels().sum::<f64>() / (h * w) as f64;
+            for (j, bin) in histogram.iter_mut().enumerate() {
+                *bin += wt * pixels().map(|p| share(p, j)).sum::<f64>() / (h * w) as f64;
+            }
             for ky in 0..h {
                 for kx in 0..k {
                     let Some(j) = of[ky * k + kx] else { continue };
@@ -168,6 +180,7 @@ fn space_features(m: &BakedPvt3, sample: &[f32], weights: &[f64], weighed: f64) 
             features.push(level / weighed);
         }
         features.extend(power.iter().map(|p| (p / weighed + spectrum::POWER_FLOOR).ln()));
+        features.extend(histogram.iter().map(|b| b / weighed));
     }
     features
 }

@@ -9,9 +9,9 @@
 //! transformer's. A logistic regression on such features alone is a strong texture classifier
 //! (`bench/spectral_probe.py`); the head puts that inside the one model that is exported.
 //!
-//! Over an image's space (`spectral_space`), the features are each colour's level and ring
-//! powers of every frame (`pvt3_spec::spectrum::space`), averaged over the same frames: a
-//! camera's texture wherever the imprint lies.
+//! Over an image's space (`spectral_space`), the features are each colour's level, ring
+//! powers and histogram (`spectral_histogram`) of every frame (`pvt3_spec::spectrum::space`),
+//! averaged over the same frames: a camera's texture and press wherever the imprint lies.
 //!
 //! The transform is a plain product with `[cos | sin]` columns here (the trainer's candle graph),
 //! and a Fourier transform op in the exported graph; the f64 reference computes it from the same
@@ -43,37 +43,72 @@ pub struct Spectrum {
 }
 
 /// The constants of a head over the image's space: the width's and the height's `[cos | sin]`
-/// matrices and the ring means of the powers `[kx][ky]`.
+/// matrices, the ring means of the powers `[kx][ky]` and the histogram's differences.
 #[derive(Clone, Debug)]
 struct Space {
     width: Tensor,
     height: Tensor,
     rings: Tensor,
+    /// `space::histogram_matrix`'s `[bins − 1, bins]` and `[bins]`, when the head has a histogram.
+    histogram: Option<(Tensor, Tensor)>,
     /// Height, width, colours and bands.
     dims: (usize, usize, usize, usize),
 }
 
+/// A head over the image's space's quantities of each frame of a batch: `[b, frames, colours]`
+/// levels, `[b, frames, colours · bands]` ring powers and `[b, frames, colours · bins]` histograms.
+struct PerFrame {
+    level: Tensor,
+    power: Tensor,
+    histogram: Option<Tensor>,
+}
+
 impl Space {
     fn new(cfg: &Config) -> candle_core::Result<Self> {
-        let (h, w, bands) = (cfg.height, cfg.width, cfg.spectral_bands());
+        let (h, w, bands, bins) = (cfg.height, cfg.width, cfg.spectral_bands(), cfg.spectral_histogram());
         let k = space::width_bins(w);
         let rings = space::ring_means(h, w, bands).map_err(candle_core::Error::wrap)?;
         let constant = |v: Vec<f64>, shape: (usize, usize)| Tensor::from_vec(v, shape, &Device::Cpu)?.to_dtype(DType::F32);
+        let histogram = match bins {
+            0 => None,
+            _ => {
+                let (d, first) = space::histogram_matrix(bins);
+                Some((constant(d, (bins - 1, bins))?, constant(first, (1, bins))?))
+            }
+        };
         Ok(Self {
             width: constant(space::cos_sin_matrix(w, k), (w, 2 * k))?,
             height: constant(space::cos_sin_matrix(h, h), (h, 2 * h))?,
             rings: constant(rings, (k * h, bands))?,
+            histogram,
             dims: (h, w, cfg.channels, bands),
         })
     }
 
-    /// `[b, frames, colours]` levels and `[b, frames, colours · bands]` ring powers of windows
-    /// `[b, h, w, (colours,) frames]`.
-    fn per_frame(&self, x: &Tensor) -> candle_core::Result<(Tensor, Tensor)> {
+    /// Each colour's histogram `[rows, bins]` of `pixels` `[rows, h · w]`: the mean share above
+    /// each interior edge, then the bins' differences.
+    fn histogram(&self, pixels: &Tensor, (d, first): &(Tensor, Tensor)) -> candle_core::Result<Tensor> {
+        let bins = first.dim(1)?;
+        let width = space::histogram_width(bins);
+        let above = space::histogram_edges(bins)
+            .into_iter()
+            .map(|e| pixels.affine(1.0 / width, 0.5 - e / width)?.clamp(0f32, 1f32)?.mean_keepdim(D::Minus1))
+            .collect::<candle_core::Result<Vec<_>>>()?;
+        Tensor::cat(&above, 1)?.matmul(d)?.broadcast_add(first)
+    }
+
+    /// The levels, ring powers and histograms of each frame of windows `[b, h, w, (colours,)
+    /// frames]`.
+    fn per_frame(&self, x: &Tensor) -> candle_core::Result<PerFrame> {
         let (h, w, c, bands) = self.dims;
         let (b, t, k) = (x.dim(0)?, x.dim(D::Minus1)?, space::width_bins(w));
         let frames = x.reshape((b, h, w, c, t))?.permute((0, 4, 3, 1, 2))?.contiguous()?;
-        let level = frames.reshape((b, t, c, h * w))?.mean(D::Minus1)?;
+        let pixels = frames.reshape((b * t * c, h * w))?;
+        let level = pixels.mean(D::Minus1)?.reshape((b, t, c))?;
+        let histogram = match &self.histogram {
+            Some(m) => Some(self.histogram(&pixels, m)?.reshape((b, t, ()))?),
+            None => None,
+        };
         let rows = frames.reshape((b * t * c * h, w))?.matmul(&self.width)?.reshape((b * t * c, h, 2 * k))?;
         let columns = rows.transpose(1, 2)?.contiguous()?.reshape((b * t * c * 2 * k, h))?.matmul(&self.height)?;
         let z = columns.reshape((b * t * c, 2 * k, 2 * h))?;
@@ -81,7 +116,7 @@ impl Space {
         let real = (block(0, 0)? - block(1, 1)?)?;
         let imaginary = (block(0, 1)? + block(1, 0)?)?;
         let power = (real.sqr()? + imaginary.sqr()?)?.reshape((b * t * c, k * h))?.matmul(&self.rings)?;
-        Ok((level, power.reshape((b, t, c * bands))?))
+        Ok(PerFrame { level, power: power.reshape((b, t, c * bands))?, histogram })
     }
 }
 
@@ -113,12 +148,10 @@ impl Spectrum {
         let weighed = weighed_frames(weights);
         let w = Tensor::from_iter(weights.iter().map(|v| *v as f32), x.device())?.reshape((1, self.frames))?;
         if let Some(space) = &self.space {
-            let (level, power) = space.per_frame(x)?;
-            let (c, bands) = (space.dims.2, space.dims.3);
+            let f = space.per_frame(x)?;
             let mean = |v: &Tensor| v.broadcast_mul(&w.reshape((1, self.frames, 1))?)?.sum(1)? / weighed;
-            let log_power = (mean(&power)? + POWER_FLOOR)?.log()?.reshape((b, c, bands))?;
-            let features = if self.levels { Tensor::cat(&[&mean(&level)?.reshape((b, c, 1))?, &log_power], 2)? } else { log_power };
-            return features.reshape((b, ()));
+            let histogram = f.histogram.as_ref().map(mean).transpose()?;
+            return self.space_features(space, &mean(&f.level)?, &mean(&f.power)?, histogram.as_ref(), b);
         }
         let rows = x.reshape((b * self.channels, self.frames))?;
         let level = (rows.broadcast_mul(&w)?.sum_keepdim(D::Minus1)? / weighed)?;
@@ -127,6 +160,45 @@ impl Spectrum {
         let log_power = (power + POWER_FLOOR)?.log()?;
         let features = if self.levels { Tensor::cat(&[&level, &log_power], 1)? } else { log_power };
         features.reshape((b, ()))
+    }
+
+    /// The features of each frame alone of windows `[b, h, w, (c,) t]` over an image's space,
+    /// `[b · kept, features]` for the frames `weights` keeps (as [`Spectrum::features`] of a
+    /// window whose one received frame it is): the rows a head over the image's space is fitted
+    /// to (`pvt3_trainer`'s `spectrum_fit`), 25 a touch where a touch alone is one.
+    pub fn frame_features(&self, x: &Tensor, weights: &[f64]) -> candle_core::Result<Tensor> {
+        let space =
+            self.space.as_ref().ok_or_else(|| candle_core::Error::Msg("features by frame: a head over an image's space only".into()))?;
+        let kept: Vec<u32> = (0..self.frames).filter(|n| weights[*n] > 0.0).map(|n| n as u32).collect();
+        let kept = Tensor::new(kept.as_slice(), x.device())?;
+        let f = space.per_frame(x)?;
+        let (b, n) = (x.dim(0)?, kept.dim(0)?);
+        let frames = |v: &Tensor| v.index_select(&kept, 1)?.reshape((b * n, ()));
+        let histogram = f.histogram.as_ref().map(frames).transpose()?;
+        self.space_features(space, &frames(&f.level)?, &frames(&f.power)?, histogram.as_ref(), b * n)
+    }
+
+    /// `[rows, features]`: per colour its level (unless the levels are off), log ring powers and
+    /// histogram, from `level` `[rows, colours]`, `power` `[rows, colours · bands]` and
+    /// `histogram` `[rows, colours · bins]`.
+    fn space_features(
+        &self,
+        space: &Space,
+        level: &Tensor,
+        power: &Tensor,
+        histogram: Option<&Tensor>,
+        rows: usize,
+    ) -> candle_core::Result<Tensor> {
+        let (c, bands) = (space.dims.2, space.dims.3);
+        let mut parts = Vec::with_capacity(3);
+        if self.levels {
+            parts.push(level.reshape((rows, c, 1))?);
+        }
+        parts.push((power + POWER_FLOOR)?.log()?.reshape((rows, c, bands))?);
+        if let Some(histogram) = histogram {
+            parts.push(histogram.reshape((rows, c, ()))?);
+        }
+        Tensor::cat(&parts, 2)?.reshape((rows, ()))
     }
 
     /// Logits `[b, classes]` from the frames `weights` selects.
@@ -205,5 +277,48 @@ mod tests {
         let features = |x: &Tensor, w: &[f64]| -> Vec<f32> { head.features(x, w).unwrap().flatten_all().unwrap().to_vec1().unwrap() };
         assert_eq!(features(&window(0.0), &weights), features(&window(-3.5), &weights));
         assert_ne!(features(&window(0.0), &[1.0; 40]), features(&window(-3.5), &[1.0; 40]));
+    }
+
+    /// A head over the image's space with a histogram: a frame's features by frame are those of
+    /// a window whose one received frame it is, and a frame of one value has its histogram in
+    /// that value's bin (shared with the next where it lies between their centres).
+    #[test]
+    fn frames_alone_are_windows_of_one_frame_and_the_histogram_bins_values() {
+        let network = Pvt3Config { spectral_bands: 3, spectral_space: true, spectral_histogram: 6, ..Default::default() };
+        let cfg = Config {
+            frames: 4,
+            height: 16,
+            width: 16,
+            channels: 1,
+            patch_height: 16,
+            patch_width: 16,
+            network: network.into(),
+            ..Config::icub20()
+        };
+        let head = Spectrum::new(&cfg, VarBuilder::zeros(DType::F32, &Device::Cpu)).unwrap();
+        // Frame n: a ramp across the image around a level of n − 2, the last frame all 1.25.
+        let v: Vec<f32> = (0..16 * 16 * 4)
+            .map(|i| {
+                let (p, n) = (i / 4, i % 4);
+                if n == 3 {
+                    1.25
+                } else {
+                    n as f32 - 2.0 + (p % 16) as f32 / 16.0
+                }
+            })
+            .collect();
+        let x = Tensor::from_vec(v, (1, 16, 16, 4), &Device::Cpu).unwrap();
+        let rows: Vec<Vec<f32>> = head.frame_features(&x, &[1.0, 0.0, 1.0, 1.0]).unwrap().to_vec2().unwrap();
+        assert_eq!((rows.len(), rows[0].len()), (3, cfg.spectral_features()));
+        for (row, n) in rows.iter().zip([0, 2, 3]) {
+            let alone: Vec<f64> = (0..4).map(|m| if m == n { 1.0 } else { 0.0 }).collect();
+            let window: Vec<f32> = head.features(&x, &alone).unwrap().flatten_all().unwrap().to_vec1().unwrap();
+            assert!(row.iter().zip(&window).all(|(a, b)| (a - b).abs() < 1e-5), "frame {n}: {row:?} against {window:?}");
+        }
+        // Bins of width 1 over ±3: 1.25 lies three quarters of the way from bin 3's centre (0.5)
+        // to bin 4's (1.5), so bin 4 holds 0.75 of it and bin 3 0.25.
+        let histogram = &rows[2][1 + 3..];
+        let want = [0.0, 0.0, 0.0, 0.25, 0.75, 0.0];
+        assert!(histogram.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-6), "{histogram:?}");
     }
 }

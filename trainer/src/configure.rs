@@ -190,7 +190,11 @@ fn base_config(data: &Dataset, choice: &ModelChoice, notes: &mut Vec<String>) ->
         let (ph, pw) = (derived.patch_height, derived.patch_width);
         let grid = format!("{} × {}", derived.height / ph, derived.width / pw);
         let head = match chosen.spectral_space() {
-            true => format!(", a spectral head over the image's space ({} rings)", chosen.spectral_bands()),
+            true => format!(
+                ", a spectral head over the image's space ({} rings, a histogram of {} bins)",
+                chosen.spectral_bands(),
+                chosen.spectral_histogram()
+            ),
             false => String::new(),
         };
         format!("derived a camera's layout, patches of {ph} × {pw} pixels ({grid} a frame){head}, one token per {} frames", derived.tubelet)
@@ -253,6 +257,7 @@ pub fn apply_overrides(cfg: Config, overrides: &[String]) -> Result<Config> {
         fields.insert("patch_dropout".into(), cfg.patch_dropout().into());
         fields.insert("spectral_levels".into(), cfg.spectral_levels().into());
         fields.insert("spectral_space".into(), cfg.spectral_space().into());
+        fields.insert("spectral_histogram".into(), cfg.spectral_histogram().into());
     }
     for o in overrides {
         let (key, raw) = field_and_value(o)?;

@@ -3,11 +3,13 @@
 //! as a linear classifier's inputs are standardised, and they stay so: the optimiser leaves them
 //! where they were fitted (`Role::is_fitted`). A head over an image's space has its linear map
 //! fitted too, as a logistic regression whose penalty its validation fold chooses ([`logistic`]),
-//! and held likewise (`train::learner`): the network trains beside it.
+//! and held likewise (`train::learner`): the network trains beside it. Its rows, and those of
+//! its standardisation, are every frame of the training windows alone, as a touch is read when
+//! its first frame arrives: 25 rows a touch where PhysiCLeAR gives 3 or 4 touches an object
+//! (docs/camera.md, "Every frame a row"); the penalty is chosen on whole validation windows.
 
 use candle_core::{Device, Tensor};
 use candle_nn::VarMap;
-use pvt3_models::spectrum::Spectrum;
 use pvt3_models::Model;
 use pvt3_spec::names;
 
@@ -32,7 +34,10 @@ pub fn fit(model: &Model, varmap: &VarMap, train: &Samples, val: &Samples) -> Re
         return Ok(());
     };
     let whole = pvt3.frame_weights(pvt3.config().time_tokens())?;
-    let (features, labels) = features_of(spectrum, &whole, train)?;
+    let (features, labels) = match pvt3.config().spectral_space() {
+        true => features_of(train, |x| spectrum.frame_features(x, &whole))?,
+        false => features_of(train, |x| spectrum.features(x, &whole))?,
+    };
     let mean = features.mean(0)?;
     let std = features.broadcast_sub(&mean)?.sqr()?.mean(0)?.sqrt()?;
     let scale = (std + 1e-6)?.recip()?;
@@ -43,7 +48,7 @@ pub fn fit(model: &Model, varmap: &VarMap, train: &Samples, val: &Samples) -> Re
         let rows = standard(&features)?;
         let validation = match val.is_empty() {
             true => None,
-            false => features_of(spectrum, &whole, val).and_then(|(f, labels)| Ok((standard(&f)?, labels))).map(Some)?,
+            false => features_of(val, |x| spectrum.features(x, &whole)).and_then(|(f, labels)| Ok((standard(&f)?, labels))).map(Some)?,
         };
         let classes = pvt3.config().classes;
         let regression = logistic::fit(&rows, &labels, classes, penalty(&rows, &labels, classes, validation));
@@ -60,14 +65,18 @@ pub fn fit(model: &Model, varmap: &VarMap, train: &Samples, val: &Samples) -> Re
     Ok(())
 }
 
-/// The unstandardised features `[n, features]` (f64) of `set`'s windows and their labels.
-fn features_of(spectrum: &Spectrum, whole: &[f64], set: &Samples) -> Result<(Tensor, Vec<usize>)> {
+/// The unstandardised features `[rows, features]` (f64) that `read` gives of `set`'s windows
+/// (a row a window, or several: its frames), and each row's label.
+fn features_of(set: &Samples, read: impl Fn(&Tensor) -> candle_core::Result<Tensor>) -> Result<(Tensor, Vec<usize>)> {
     let rows: Vec<usize> = (0..set.len()).collect();
     let (mut features, mut labels) = (Vec::with_capacity(set.len()), Vec::with_capacity(set.len()));
     for chunk in rows.chunks(256) {
         let (x, y) = set.batch(chunk, |_| {})?;
-        features.push(spectrum.features(&x, whole)?);
-        labels.extend(y.to_dtype(candle_core::DType::U32)?.to_vec1::<u32>()?.into_iter().map(|l| l as usize));
+        let f = read(&x)?;
+        let per_window = f.dim(0)? / chunk.len();
+        let y = y.to_dtype(candle_core::DType::U32)?.to_vec1::<u32>()?;
+        labels.extend(y.into_iter().flat_map(|l| std::iter::repeat_n(l as usize, per_window)));
+        features.push(f);
     }
     Ok((Tensor::cat(&features, 0)?.to_dtype(candle_core::DType::F64)?, labels))
 }

@@ -2,40 +2,74 @@
 //! frames normalised, each colour of each frame transformed by products with the width's and the
 //! height's `[cos | sin]` matrices (plain `MatMul`s: the two-dimensional transform of a small
 //! frame, in tract and onnxruntime alike), the powers `(CC − SS)² + (CS + SC)²` of its four
-//! blocks summed into rings, each colour's level beside them, all weighed over the frames
-//! received ([`FRAME_WEIGHTS`]) as the temporal head weighs them, the logarithms, and the linear
-//! map with the standardisation folded in.
+//! blocks summed into rings, each colour's level beside them and its histogram after them (each
+//! value's share above each interior edge, a clamp built of `Max`es, then the bins' differences),
+//! all weighed over the frames received ([`FRAME_WEIGHTS`]) as the temporal head weighs them, the
+//! logarithms of the powers, and the linear map with the standardisation folded in.
 
 use pvt3_format::onnx::{int, ints, Op};
 use pvt3_format::{FRAME_WEIGHTS, INPUT};
 use pvt3_spec::baked::{BakedPvt3, BakedSpectrum};
 use pvt3_spec::normalization::Normalization;
-use pvt3_spec::Config;
 use pvt3_spec::spectrum::space;
+use pvt3_spec::Config;
 
 use crate::graph::Graph;
 
 /// The head's logits `[batch, classes]`; `weighed` is the frames weighed, `[1]`.
 pub(super) fn logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, norm: &Normalization, weighed: &str) -> String {
     let c = &m.config;
-    let (colours, frames, bands) = (c.channels, c.frames, c.spectral_bands());
+    let (colours, frames, bands, bins) = (c.channels, c.frames, c.spectral_bands(), c.spectral_histogram());
     let per_frame = per_frame(g, c, norm);
-    // Levels and rings [b, frames, colours · (1 + bands)], weighed over the frames.
-    let shape = g.i64s("space_per_frame", &[3], vec![-1, frames as i64, (colours * (1 + bands)) as i64]);
+    // Levels, rings and histograms [b, frames, colours · (1 + bands + bins)], weighed over the frames.
+    let each = 1 + bands + bins;
+    let shape = g.i64s("space_per_frame", &[3], vec![-1, frames as i64, (colours * each) as i64]);
     let joined = g.op(Op::Reshape, &[&per_frame, &shape]);
     let joined = g.node(Op::Transpose, &[&joined], vec![ints("perm", &[0, 2, 1])], None);
     let column = g.i64s("space_frames_column", &[2], vec![frames as i64, 1]);
     let column = g.op(Op::Reshape, &[FRAME_WEIGHTS, &column]);
     let weighted = g.op(Op::MatMul, &[&joined, &column]);
     let weighted = g.op(Op::Div, &[&weighted, weighed]);
-    let per_colour = g.i64s("space_per_colour", &[3], vec![-1, colours as i64, 1 + bands as i64]);
+    let per_colour = g.i64s("space_per_colour", &[3], vec![-1, colours as i64, each as i64]);
     let weighted = g.op(Op::Reshape, &[&weighted, &per_colour]);
     let axis = g.i64s("space_feature_axis", &[1], vec![2]);
     let (zero, one, end) =
         (g.i64s("space_zero", &[1], vec![0]), g.i64s("space_one", &[1], vec![1]), g.i64s("space_end", &[1], vec![1 + bands as i64]));
     let level = g.op(Op::Slice, &[&weighted, &zero, &one, &axis]);
     let power = g.op(Op::Slice, &[&weighted, &one, &end, &axis]);
-    super::logits_of(g, m, s, &level, &power)
+    let histogram = (bins > 0).then(|| {
+        let last = g.i64s("space_histogram_end", &[1], vec![each as i64]);
+        g.op(Op::Slice, &[&weighted, &end, &last, &axis])
+    });
+    super::logits_of(g, m, s, &level, &power, histogram.as_deref())
+}
+
+/// Each colour's histogram of every frame `[b, frames, colours, bins]` from its normalised
+/// pixels `[b, frames, colours, h · w]` (`mean_column` their mean): each value's share above each
+/// interior edge, `clamp(z, 0, 1)` of `z = (v − e) / Δ + ½` as `max(−max(−z, −1), 0)` (exact in
+/// f32, where `max(z, 0) − max(z − 1, 0)` would round), its mean, then the bins' differences.
+fn histogram(g: &mut Graph, c: &Config, pixels: &str, mean_column: &str) -> String {
+    let (frames, colours, bins, n) = (c.frames, c.channels, c.spectral_histogram(), c.height * c.width);
+    let (edges, width) = (space::histogram_edges(bins), space::histogram_width(bins));
+    let shape = g.i64s("space_histogram_pixels", &[5], vec![-1, frames as i64, colours as i64, 1, n as i64]);
+    let v = g.op(Op::Reshape, &[pixels, &shape]);
+    let minus_scale = g.f32s("space_histogram_minus_scale", &[1], vec![(-1.0 / width) as f32]);
+    let v = g.op(Op::Mul, &[&v, &minus_scale]);
+    // −z for every edge: [b, frames, colours, edges, h · w].
+    let offsets = g.f32s("space_histogram_offsets", &[bins - 1, 1], edges.iter().map(|e| (e / width - 0.5) as f32).collect());
+    let minus_z = g.op(Op::Add, &[&v, &offsets]);
+    let (minus_one, zero) = (g.f32s("space_histogram_minus_one", &[1], vec![-1.0]), g.f32s("space_histogram_zero", &[1], vec![0.0]));
+    let below_one = g.op(Op::Max, &[&minus_z, &minus_one]);
+    let below_one = g.op(Op::Sub, &[&zero, &below_one]);
+    let share = g.op(Op::Max, &[&below_one, &zero]);
+    let above = g.op(Op::MatMul, &[&share, mean_column]);
+    let per_edge = g.i64s("space_histogram_edges", &[4], vec![-1, frames as i64, colours as i64, bins as i64 - 1]);
+    let above = g.op(Op::Reshape, &[&above, &per_edge]);
+    let (d, first) = space::histogram_matrix(bins);
+    let d = g.f32s("space_histogram_differences", &[bins - 1, bins], d.iter().map(|v| *v as f32).collect());
+    let first = g.f32s("space_histogram_first", &[bins], first.iter().map(|v| *v as f32).collect());
+    let histogram = g.op(Op::MatMul, &[&above, &d]);
+    g.op(Op::Add, &[&histogram, &first])
 }
 
 /// Each colour's level and ring powers of every frame, `[b, frames, colours, 1 + bands]`, from the
@@ -79,5 +113,11 @@ fn per_frame(g: &mut Graph, c: &Config, norm: &Normalization) -> String {
     let rings = space::ring_means(h, w, bands).expect("a validated configuration").iter().map(|v| *v as f32).collect();
     let rings = g.f32s("space_rings", &[k * h, bands], rings);
     let power = g.op(Op::MatMul, &[&power, &rings]);
-    g.node(Op::Concat, &[&level, &power], vec![int("axis", 3)], None)
+    match c.spectral_histogram() {
+        0 => g.node(Op::Concat, &[&level, &power], vec![int("axis", 3)], None),
+        _ => {
+            let histogram = histogram(g, c, &flat, &mean_column);
+            g.node(Op::Concat, &[&level, &power, &histogram], vec![int("axis", 3)], None)
+        }
+    }
 }

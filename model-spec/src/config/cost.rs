@@ -49,15 +49,20 @@ impl Config {
     }
 
     /// PVT³: the spectral head's features, per channel (per colour, for a head over the image's
-    /// space) a level (unless `spectral_levels` is off) and `spectral_bands` log powers (0
-    /// without the head).
+    /// space) a level (unless `spectral_levels` is off), `spectral_bands` log powers and, over
+    /// the image's space, the histogram's bins (0 without the head).
     pub fn spectral_features(&self) -> usize {
         let read = if self.spectral_space() { self.channels } else { self.sensor_channels() };
         if self.spectral_bands() == 0 {
             0
         } else {
-            read * (usize::from(self.spectral_levels()) + self.spectral_bands())
+            read * self.spectral_features_per_channel()
         }
+    }
+
+    /// The spectral head's features of one channel (of one colour over the image's space).
+    pub fn spectral_features_per_channel(&self) -> usize {
+        usize::from(self.spectral_levels()) + self.spectral_bands() + self.spectral_histogram()
     }
 
     /// The spectral head's parameters: a scale and a shift per feature, and the linear map.
@@ -83,7 +88,10 @@ impl Config {
             // Per colour of each frame: the products with the width's and the height's cos | sin
             // matrices, then the band sums of the powers.
             let (h, w, k) = (self.height, self.width, crate::spectrum::space::width_bins(self.width));
-            let frame = h * w * 2 * k + 2 * k * h * 2 * h + h * k * self.spectral_bands();
+            // The histogram: each interior edge's mean over the pixels, then the bins' differences.
+            let (bins, edges) = (self.spectral_histogram(), self.spectral_histogram().saturating_sub(1));
+            let histogram = h * w * edges + edges * bins;
+            let frame = h * w * 2 * k + 2 * k * h * 2 * h + h * k * self.spectral_bands() + histogram;
             return (self.frames * self.channels * frame) as u64 + linear;
         }
         let t = self.frames as f64;

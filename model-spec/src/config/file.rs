@@ -55,6 +55,9 @@ pub(super) struct ConfigFile {
     /// Written only when on, so that the files of models whose head reads frames read as before.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     spectral_space: Option<bool>,
+    /// Written only when not zero, so that the files of models without it read as before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    spectral_histogram: Option<usize>,
     /// Written only when on, so that the files of models without the mask read as before.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     patch_selection: Option<bool>,
@@ -80,6 +83,7 @@ impl TryFrom<ConfigFile> for Config {
             foreign(m, "spectral_bands", f.spectral_bands, pvt3.spectral_bands)?;
             foreign(m, "spectral_levels", f.spectral_levels, pvt3.spectral_levels)?;
             foreign(m, "spectral_space", f.spectral_space, pvt3.spectral_space)?;
+            foreign(m, "spectral_histogram", f.spectral_histogram, pvt3.spectral_histogram)?;
             foreign(m, "patch_selection", f.patch_selection, pvt3.patch_selection)?;
             foreign(m, "patch_dropout", f.patch_dropout, pvt3.patch_dropout)?;
         }
@@ -98,6 +102,7 @@ impl TryFrom<ConfigFile> for Config {
                 spectral_bands: f.spectral_bands.unwrap_or(pvt3.spectral_bands),
                 spectral_levels: f.spectral_levels.unwrap_or(pvt3.spectral_levels),
                 spectral_space: f.spectral_space.unwrap_or(pvt3.spectral_space),
+                spectral_histogram: f.spectral_histogram.unwrap_or(pvt3.spectral_histogram),
                 patch_selection: f.patch_selection.unwrap_or(pvt3.patch_selection),
                 patch_dropout: f.patch_dropout.unwrap_or(pvt3.patch_dropout),
             }
@@ -163,6 +168,7 @@ impl From<Config> for ConfigFile {
             spectral_bands: None,
             spectral_levels: None,
             spectral_space: None,
+            spectral_histogram: None,
             patch_selection: None,
             patch_dropout: None,
         };
@@ -171,6 +177,7 @@ impl From<Config> for ConfigFile {
                 f.spectral_bands = Some(p.spectral_bands);
                 f.spectral_levels = (!p.spectral_levels).then_some(false);
                 f.spectral_space = p.spectral_space.then_some(true);
+                f.spectral_histogram = (p.spectral_histogram != 0).then_some(p.spectral_histogram);
                 f.patch_selection = p.patch_selection.then_some(true);
                 f.patch_dropout = (p.patch_dropout != 0.0).then_some(p.patch_dropout);
             }
@@ -250,5 +257,22 @@ mod tests {
         assert_eq!(serde_json::from_value::<Config>(written).unwrap(), on);
         let all = Config { network: Pvt3Config { patch_dropout: 1.0, ..Default::default() }.into(), ..Config::icub20() };
         assert!(all.validate().unwrap_err().to_string().contains("patch_dropout = 1 is not in [0, 1)"));
+    }
+
+    /// The histogram is written only when the head has one, reads back, counts in the features,
+    /// and is refused where no head over an image's space reads it.
+    #[test]
+    fn a_histogram_is_written_only_when_there_is_one() {
+        let camera = Config::for_sensor(&[30, 40, 3, 25]).unwrap();
+        assert_eq!(camera.spectral_histogram(), 24);
+        assert_eq!(camera.spectral_features(), 3 * (1 + 12 + 24));
+        let written = serde_json::to_value(&camera).unwrap();
+        assert_eq!(written["spectral_histogram"], 24);
+        assert_eq!(serde_json::from_value::<Config>(written).unwrap(), camera);
+        let icub = Config { network: Pvt3Config { spectral_bands: 4, ..Default::default() }.into(), ..Config::icub20() };
+        assert!(serde_json::to_value(&icub).unwrap().get("spectral_histogram").is_none());
+        let frames = Config { network: Pvt3Config { spectral_bands: 4, spectral_histogram: 8, ..Default::default() }.into(), ..icub };
+        let msg = frames.validate().unwrap_err().to_string();
+        assert!(msg.contains("spectral_histogram = 8") && msg.contains("spectral_space"), "{msg}");
     }
 }

@@ -93,6 +93,12 @@ pub struct Pvt3Config {
     /// far. A texture's spectrum stays where the imprint moves, so it reads a camera's texture
     /// wherever the gel is pressed (docs/camera.md).
     pub spectral_space: bool,
+    /// Bins of a histogram of each colour's normalised pixel values, read by a head over the
+    /// image's space beside the rings (`crate::spectrum::space::histogram_matrix`): how much of
+    /// the gel a touch presses and how far, which a spectrum does not say; 0 has none. Soft bins
+    /// (each value shared linearly between the two nearest bins' centres) over
+    /// `[-HISTOGRAM_RANGE, HISTOGRAM_RANGE]`, the outer two holding the tails.
+    pub spectral_histogram: usize,
     /// A patch-selection mask (`patch_mask`, one entry per patch of the grid, starting at one)
     /// scales each patch's embeddings, as the frame mask scales a temporal token's; a patch whose
     /// entry is zero is dropped from the spatial sequence, so pruning it removes its token and
@@ -108,7 +114,14 @@ pub struct Pvt3Config {
 
 impl Default for Pvt3Config {
     fn default() -> Self {
-        Self { spectral_bands: 0, spectral_levels: true, spectral_space: false, patch_selection: false, patch_dropout: 0.0 }
+        Self {
+            spectral_bands: 0,
+            spectral_levels: true,
+            spectral_space: false,
+            spectral_histogram: 0,
+            patch_selection: false,
+            patch_dropout: 0.0,
+        }
     }
 }
 

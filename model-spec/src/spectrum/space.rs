@@ -10,6 +10,11 @@
 //! kx x / w)} / √(h w)` (white noise of unit variance has unit power), read one-sided in `x`:
 //! `ky < h`, `kx ≤ w / 2`. Frequency `(ky, kx)` has the radius `√((fy / h)² + (kx / w)²)`, `fy`
 //! the signed frequency of `ky`. A band's power is the mean `|F|²` of the frequencies in it.
+//!
+//! Beside them, with `spectral_histogram` bins, the head reads each colour's histogram of the
+//! frame's normalised values ([`histogram_matrix`]): the share of the gel a touch presses, and
+//! how far, wherever it lies. Its bins are soft, so that it is continuous in the values and the
+//! f32 forms equal the f64 reference.
 
 pub use super::cos_sin_matrix;
 use crate::{Error, Result};
@@ -73,9 +78,69 @@ pub fn ring_means(h: usize, w: usize, bands: usize) -> Result<Vec<f64>> {
     Ok(m)
 }
 
+/// Half the histogram's range, in the normalised values' units (a pixel's standard deviations
+/// over the training frames). PhysiCLeAR read best over ±3 of ±2 … ±6 (docs/camera.md).
+pub const HISTOGRAM_RANGE: f64 = 3.0;
+
+/// The width `Δ = 2 R / bins` of each of `bins` bins over `[−R, R]`, `R` = [`HISTOGRAM_RANGE`].
+pub fn histogram_width(bins: usize) -> f64 {
+    2.0 * HISTOGRAM_RANGE / bins as f64
+}
+
+/// The interior edges `e_j = −R + j Δ`, `j = 1 … bins − 1`.
+pub fn histogram_edges(bins: usize) -> Vec<f64> {
+    (1..bins).map(|j| -HISTOGRAM_RANGE + j as f64 * histogram_width(bins)).collect()
+}
+
+/// The share of a value `v` above `edge`: `clamp((v − edge) / Δ + ½, 0, 1)`, so that a value
+/// within `Δ / 2` of an edge is shared linearly between the bins beside it (a bin's share of `v`
+/// is a triangle of half-width Δ about its centre; the outer two also hold the tails).
+pub fn share_above(v: f64, edge: f64, width: f64) -> f64 {
+    ((v - edge) / width + 0.5).clamp(0.0, 1.0)
+}
+
+/// `[bins − 1, bins]` row-major and `[bins]`: the bins' shares `h = c · D + first` from the mean
+/// shares `c_j` above the interior edges ([`share_above`]): `h_0 = 1 − c_1`, `h_j = c_j − c_{j+1}`,
+/// `h_{bins−1} = c_{bins−1}`. The shares sum to one.
+pub fn histogram_matrix(bins: usize) -> (Vec<f64>, Vec<f64>) {
+    let mut d = vec![0.0; (bins - 1) * bins];
+    // Interior edge j (row j) is bin j's upper edge and bin j + 1's lower one.
+    for j in 0..bins - 1 {
+        d[j * bins + j] = -1.0;
+        d[j * bins + j + 1] = 1.0;
+    }
+    let first = (0..bins).map(|j| if j == 0 { 1.0 } else { 0.0 }).collect();
+    (d, first)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The matrix form of the histogram is its definition: each bin's share of a value is its
+    /// share above the bin's lower edge less its share above the upper one, and the shares of a
+    /// value sum to one, wherever it lies.
+    #[test]
+    fn the_histogram_s_matrix_is_its_definition() {
+        let bins = 6;
+        let (d, first) = histogram_matrix(bins);
+        let (edges, width) = (histogram_edges(bins), histogram_width(bins));
+        for v in [-9.0, -3.0, -2.6, -0.3, 0.0, 0.49, 1.2, 2.99, 7.0] {
+            let c: Vec<f64> = edges.iter().map(|e| share_above(v, *e, width)).collect();
+            let h: Vec<f64> = (0..bins).map(|j| first[j] + (0..bins - 1).map(|i| c[i] * d[i * bins + j]).sum::<f64>()).collect();
+            let lower = |j: usize| if j == 0 { 1.0 } else { share_above(v, edges[j - 1], width) };
+            let upper = |j: usize| if j == bins - 1 { 0.0 } else { share_above(v, edges[j], width) };
+            for (j, hj) in h.iter().enumerate() {
+                assert!((hj - (lower(j) - upper(j))).abs() < 1e-12, "{v}: bin {j}");
+                assert!((0.0..=1.0).contains(hj), "{v}: bin {j} = {hj}");
+            }
+            assert!((h.iter().sum::<f64>() - 1.0).abs() < 1e-12, "{v}: {h:?}");
+        }
+        // A value at a bin's centre is that bin's alone; one at an edge is shared half and half.
+        let centre = -HISTOGRAM_RANGE + 2.5 * width;
+        assert_eq!(edges.iter().map(|e| share_above(centre, *e, width)).collect::<Vec<_>>(), vec![1.0, 1.0, 0.0, 0.0, 0.0]);
+        assert_eq!(share_above(edges[2], edges[2], width), 0.5);
+    }
 
     /// Every frequency but the zero one lies in exactly one band, and no band is empty, at the
     /// sizes a camera is imported at; too many bands for a small frame is an error.
