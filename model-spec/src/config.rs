@@ -161,25 +161,7 @@ impl Config {
         }
         let divides = match &self.network {
             Network::Pvt3(p) => {
-                if p.spectral_histogram != 0 && !self.spectral_space() {
-                    return Err(Error::Config(format!(
-                        "spectral_histogram = {}: only a spectral head over an image's space (spectral_space) reads a histogram; set spectral_histogram=0 too",
-                        p.spectral_histogram
-                    )));
-                }
-                if p.spectral_histogram == 1 {
-                    return Err(Error::Config("spectral_histogram = 1: a histogram needs at least 2 bins (0 has none)".into()));
-                }
-                if self.spectral_space() {
-                    crate::spectrum::space::band_of(self.height, self.width, p.spectral_bands)?;
-                } else if p.spectral_bands > self.frames / 2 {
-                    return Err(Error::Config(format!(
-                        "spectral_bands = {} is more than the {} frequencies above 0 of {} frames",
-                        p.spectral_bands,
-                        self.frames / 2,
-                        self.frames
-                    )));
-                }
+                self.validate_spectral(p)?;
                 vec![
                     ("patch_height", self.patch_height, "height", self.height),
                     ("patch_width", self.patch_width, "width", self.width),
@@ -223,6 +205,31 @@ impl Config {
             if v % p != 0 {
                 return Err(Error::Config(format!("{pn} = {p} does not divide {n} = {v}")));
             }
+        }
+        Ok(())
+    }
+
+    /// Checks that PVT³'s spectral head fits the window: its bands the frames' frequencies (or
+    /// the image's rings), and a histogram only over an image's space, of at least 2 bins.
+    fn validate_spectral(&self, p: &Pvt3Config) -> Result<()> {
+        if p.spectral_histogram != 0 && !self.spectral_space() {
+            return Err(Error::Config(format!(
+                "spectral_histogram = {}: only a spectral head over an image's space (spectral_space) reads a histogram; set spectral_histogram=0 too",
+                p.spectral_histogram
+            )));
+        }
+        if p.spectral_histogram == 1 {
+            return Err(Error::Config("spectral_histogram = 1: a histogram needs at least 2 bins (0 has none)".into()));
+        }
+        if self.spectral_space() {
+            crate::spectrum::space::band_of(self.height, self.width, p.spectral_bands)?;
+        } else if p.spectral_bands > self.frames / 2 {
+            return Err(Error::Config(format!(
+                "spectral_bands = {} is more than the {} frequencies above 0 of {} frames",
+                p.spectral_bands,
+                self.frames / 2,
+                self.frames
+            )));
         }
         Ok(())
     }
