@@ -86,15 +86,16 @@ impl Space {
     }
 
     /// Each colour's histogram `[rows, bins]` of `pixels` `[rows, h · w]`: the mean share above
-    /// each interior edge, then the bins' differences.
-    fn histogram(&self, pixels: &Tensor, (d, first): &(Tensor, Tensor)) -> candle_core::Result<Tensor> {
+    /// each interior edge, then the bins' differences; none without a histogram.
+    fn histogram(&self, pixels: &Tensor) -> candle_core::Result<Option<Tensor>> {
+        let Some((d, first)) = &self.histogram else { return Ok(None) };
         let bins = first.dim(1)?;
         let width = space::histogram_width(bins);
         let above = space::histogram_edges(bins)
             .into_iter()
             .map(|e| pixels.affine(1.0 / width, 0.5 - e / width)?.clamp(0f32, 1f32)?.mean_keepdim(D::Minus1))
             .collect::<candle_core::Result<Vec<_>>>()?;
-        Tensor::cat(&above, 1)?.matmul(d)?.broadcast_add(first)
+        Tensor::cat(&above, 1)?.matmul(d)?.broadcast_add(first).map(Some)
     }
 
     /// The levels, ring powers and histograms of each frame of windows `[b, h, w, (colours,)
@@ -105,10 +106,7 @@ impl Space {
         let frames = x.reshape((b, h, w, c, t))?.permute((0, 4, 3, 1, 2))?.contiguous()?;
         let pixels = frames.reshape((b * t * c, h * w))?;
         let level = pixels.mean(D::Minus1)?.reshape((b, t, c))?;
-        let histogram = match &self.histogram {
-            Some(m) => Some(self.histogram(&pixels, m)?.reshape((b, t, ()))?),
-            None => None,
-        };
+        let histogram = self.histogram(&pixels)?.map(|h| h.reshape((b, t, ()))).transpose()?;
         let rows = frames.reshape((b * t * c * h, w))?.matmul(&self.width)?.reshape((b * t * c, h, 2 * k))?;
         let columns = rows.transpose(1, 2)?.contiguous()?.reshape((b * t * c * 2 * k, h))?.matmul(&self.height)?;
         let z = columns.reshape((b * t * c, 2 * k, 2 * h))?;

@@ -51,7 +51,7 @@ pub fn fit(model: &Model, varmap: &VarMap, train: &Samples, val: &Samples) -> Re
             false => features_of(val, |x| spectrum.features(x, &whole)).and_then(|(f, labels)| Ok((standard(&f)?, labels))).map(Some)?,
         };
         let classes = pvt3.config().classes;
-        let regression = logistic::fit(&rows, &labels, classes, penalty(&rows, &labels, classes, validation));
+        let regression = regression(&rows, &labels, classes, validation);
         let f = rows.first().map_or(0, Vec::len);
         let linear = |leaf: &str| names::spectral(&names::join(&[names::LINEAR, leaf]));
         fitted.push((linear(names::WEIGHT), Tensor::from_vec(regression.weight, (classes, f), &Device::Cpu)?));
@@ -81,14 +81,16 @@ fn features_of(set: &Samples, read: impl Fn(&Tensor) -> candle_core::Result<Tens
     Ok((Tensor::cat(&features, 0)?.to_dtype(candle_core::DType::F64)?, labels))
 }
 
-/// The penalty of [`PENALTIES`] whose fit reads the validation windows best (the strongest among
-/// equals), or [`PENALTY`] without them.
-fn penalty(rows: &[Vec<f64>], labels: &[usize], classes: usize, validation: Option<(Vec<Vec<f64>>, Vec<usize>)>) -> f64 {
-    let Some((val_rows, val_labels)) = validation else { return PENALTY };
-    let correct =
-        |p: f64| logistic::fit(rows, labels, classes, p).predict(&val_rows).iter().zip(&val_labels).filter(|(a, b)| a == b).count();
-    let scored: Vec<(f64, usize)> = PENALTIES.iter().map(|p| (*p, correct(*p))).collect();
-    scored.iter().fold(scored[0], |best, s| if s.1 > best.1 { *s } else { best }).0
+/// The fit whose penalty of [`PENALTIES`] reads the validation windows best (the strongest among
+/// equals), or the fit with [`PENALTY`] without them.
+fn regression(rows: &[Vec<f64>], labels: &[usize], classes: usize, validation: Option<(Vec<Vec<f64>>, Vec<usize>)>) -> logistic::Fit {
+    let Some((val_rows, val_labels)) = validation else { return logistic::fit(rows, labels, classes, PENALTY) };
+    let scored = PENALTIES.iter().map(|p| {
+        let fit = logistic::fit(rows, labels, classes, *p);
+        let correct = fit.predict(&val_rows).iter().zip(&val_labels).filter(|(a, b)| a == b).count();
+        (fit, correct)
+    });
+    scored.reduce(|best, s| if s.1 > best.1 { s } else { best }).expect("penalties to choose from").0
 }
 
 #[cfg(test)]
