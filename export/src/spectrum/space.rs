@@ -45,10 +45,12 @@ pub(super) fn logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, norm: &Nor
 }
 
 /// Each colour's histogram of every frame `[b, frames, colours, bins]` from its normalised
-/// pixels `[b, frames, colours, h · w]` (`mean_column` their mean): each value's share above each
-/// interior edge, `clamp(z, 0, 1)` of `z = (v − e) / Δ + ½` as `max(−max(−z, −1), 0)` (exact in
-/// f32, where `max(z, 0) − max(z − 1, 0)` would round), its mean, then the bins' differences.
-fn histogram(g: &mut Graph, c: &Config, pixels: &str, mean_column: &str) -> String {
+/// pixels `[b, frames, colours, h · w]`: each value's share above each interior edge,
+/// `clamp(z, 0, 1)` of `z = (v − e) / Δ + ½` as `max(−max(−z, −1), 0)` (exact in f32, where
+/// `max(z, 0) − max(z − 1, 0)` would round), its sum over the pixels (a `ReduceSum`: a product
+/// with a column of ones packs the shares first, three times the sum's time in tract), then the
+/// bins' differences, divided by the pixels' count.
+fn histogram(g: &mut Graph, c: &Config, pixels: &str) -> String {
     let (frames, colours, bins, n) = (c.frames, c.channels, c.spectral_histogram(), c.height * c.width);
     let (edges, width) = (space::histogram_edges(bins), space::histogram_width(bins));
     let shape = g.i64s("space_histogram_pixels", &[5], vec![-1, frames as i64, colours as i64, 1, n as i64]);
@@ -62,11 +64,12 @@ fn histogram(g: &mut Graph, c: &Config, pixels: &str, mean_column: &str) -> Stri
     let below_one = g.op(Op::Max, &[&minus_z, &minus_one]);
     let below_one = g.op(Op::Sub, &[&zero, &below_one]);
     let share = g.op(Op::Max, &[&below_one, &zero]);
-    let above = g.op(Op::MatMul, &[&share, mean_column]);
+    let last = g.i64s("space_histogram_pixel_axis", &[1], vec![-1]);
+    let above = g.node(Op::ReduceSum, &[&share, &last], vec![int("keepdims", 1)], None);
     let per_edge = g.i64s("space_histogram_edges", &[4], vec![-1, frames as i64, colours as i64, bins as i64 - 1]);
     let above = g.op(Op::Reshape, &[&above, &per_edge]);
     let (d, first) = space::histogram_matrix(bins);
-    let d = g.f32s("space_histogram_differences", &[bins - 1, bins], d.iter().map(|v| *v as f32).collect());
+    let d = g.f32s("space_histogram_differences", &[bins - 1, bins], d.iter().map(|v| (v / n as f64) as f32).collect());
     let first = g.f32s("space_histogram_first", &[bins], first.iter().map(|v| *v as f32).collect());
     let histogram = g.op(Op::MatMul, &[&above, &d]);
     g.op(Op::Add, &[&histogram, &first])
@@ -116,7 +119,7 @@ fn per_frame(g: &mut Graph, c: &Config, norm: &Normalization) -> String {
     match c.spectral_histogram() {
         0 => g.node(Op::Concat, &[&level, &power], vec![int("axis", 3)], None),
         _ => {
-            let histogram = histogram(g, c, &flat, &mean_column);
+            let histogram = histogram(g, c, &flat);
             g.node(Op::Concat, &[&level, &power, &histogram], vec![int("axis", 3)], None)
         }
     }
