@@ -48,7 +48,7 @@ pub(super) fn logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, norm: &Nor
 /// pixels `[b, frames, colours, h · w]`: each value's share above each interior edge,
 /// `clamp(z, 0, 1)` of `z = (v − e) / Δ + ½` as `max(−max(−z, −1), 0)` (exact in f32, where
 /// `max(z, 0) − max(z − 1, 0)` would round), its sum over the pixels (a `ReduceSum`: a product
-/// with a column of ones packs the shares first, three times the sum's time in tract), then the
+/// with a column packs the shares first: 1.4 to 2.2 times the sum's time in tract), then the
 /// bins' differences, divided by the pixels' count.
 fn histogram(g: &mut Graph, c: &Config, pixels: &str) -> String {
     let (frames, colours, bins, n) = (c.frames, c.channels, c.spectral_histogram(), c.height * c.width);
