@@ -86,7 +86,8 @@ def logistic(x, y, classes, penalty, steps=600):
 
 
 def run(frames, labels, folds, k, family):
-    """Test accuracy of one run: validation fold k, test fold TEST_FOLD."""
+    """Validation and test accuracy of one run (validation fold k, test fold TEST_FOLD), and the
+    penalty its validation fold chose."""
     train, val, test = (folds != k) & (folds != TEST_FOLD), folds == k, folds == TEST_FOLD
     mean = frames[train].mean((0, 1))
     std = frames[train].std((0, 1)) + 1e-3
@@ -116,7 +117,7 @@ def run(frames, labels, folds, k, family):
     fits = [logistic(z(x), y, classes, p) for p in PENALTIES]
     scores = [accuracy(f, touches[val], labels[val]) for f in fits]
     best = int(np.argmax(scores))  # the strongest penalty among equals
-    return scores[best], accuracy(fits[best], touches[test], labels[test])
+    return scores[best], accuracy(fits[best], touches[test], labels[test]), PENALTIES[best]
 
 
 def main():
@@ -136,9 +137,9 @@ def main():
     for family in families:
         results = []
         for seed, k, folds in recorded:
-            val, test = run(frames, labels, folds, k, family)
+            val, test, penalty = run(frames, labels, folds, k, family)
             results.append((seed, test))
-            print(f"{family}: seed {seed} fold {k}: validation {val:.4f}, test {test:.4f}", file=sys.stderr)
+            print(f"{family}: seed {seed} fold {k}: validation {val:.4f}, test {test:.4f}, penalty {penalty:g}", file=sys.stderr)
         tests = [t for _, t in results]
         line = f"{family}: {len(tests)} runs, test {statistics.mean(tests):.4f}"
         seeds = sorted({s for s, _ in results})
