@@ -15,7 +15,10 @@ FAMILY is one of the rows below (all of them if none is given):
   ±3), one row a touch;
 - `histogram-frames`: the same, every frame a row;
 - `soft-frames`: soft bins (the trainer's, `pvt3_spec::spectrum::space::share_above`), every
-  frame a row: the camera layout's default.
+  frame a row (the camera layout's default from 42cd913);
+- `gradients-frames`: and soft histograms of each colour's differences between neighbouring
+  values across and down (`pvt3_spec::spectrum::space::Histogram`), every frame a row: the camera
+  layout's default.
 
 The values are normalised pixel by pixel by the training touches of each run (mean and standard
 deviation over their frames), as `pvt3 cv` normalises; a touch is read, as the head reads it
@@ -33,7 +36,7 @@ from camera_linear import TEST_FOLD, runs, t_975  # noqa: E402
 
 RINGS, BINS, RANGE = 12, 24, 3.0
 PENALTIES = [1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 3e-4]
-FAMILIES = ["rings", "rings-frames", "histogram", "histogram-frames", "soft-frames"]
+FAMILIES = ["rings", "rings-frames", "histogram", "histogram-frames", "soft-frames", "gradients-frames"]
 
 
 def ring_of(h, w, bands):
@@ -48,22 +51,33 @@ def ring_of(h, w, bands):
     return ring
 
 
-def per_frame(v, ring, soft):
-    """Levels `[T, C]`, ring powers `[T, C, RINGS]` and histograms `[T, C, BINS]` of one touch's
-    normalised frames `v` `[T, C, H, W]`."""
+def soft_histogram(values):
+    """Soft histograms `[T, C, BINS]` of values `[T, C, n]` (pvt3_spec::spectrum::space::share_above)."""
+    t, c = values.shape[:2]
+    width = 2 * RANGE / BINS
+    edges = -RANGE + width * np.arange(1, BINS)
+    above = np.clip((values[..., None, :] - edges[:, None]) / width + 0.5, 0, 1).mean(-1)
+    cumulative = np.concatenate([np.ones((t, c, 1)), above, np.zeros((t, c, 1))], -1)
+    return cumulative[..., :-1] - cumulative[..., 1:]
+
+
+def per_frame(v, ring, soft, gradients=False):
+    """Levels `[T, C]`, ring powers `[T, C, RINGS]` and histograms `[T, C, BINS]` (`[T, C, 3 ·
+    BINS]` with the gradients') of one touch's normalised frames `v` `[T, C, H, W]`."""
     t, c = v.shape[:2]
     power = np.abs(np.fft.rfft2(v, norm="ortho")) ** 2
     rings = np.stack([power[..., ring == j].mean(-1) for j in range(RINGS)], -1)
     pixels = v.reshape(t, c, -1)
-    width = 2 * RANGE / BINS
     if soft:
-        edges = -RANGE + width * np.arange(1, BINS)
-        above = np.clip((pixels[..., None, :] - edges[:, None]) / width + 0.5, 0, 1).mean(-1)
-        cumulative = np.concatenate([np.ones((t, c, 1)), above, np.zeros((t, c, 1))], -1)
-        histogram = cumulative[..., :-1] - cumulative[..., 1:]
+        histogram = soft_histogram(pixels)
     else:
+        width = 2 * RANGE / BINS
         index = np.clip(((pixels + RANGE) / width).astype(int), 0, BINS - 1)
         histogram = np.stack([(index == j).mean(-1) for j in range(BINS)], -1)
+    if gradients:
+        across = (v[..., :, 1:] - v[..., :, :-1]).reshape(t, c, -1)
+        down = (v[..., 1:, :] - v[..., :-1, :]).reshape(t, c, -1)
+        histogram = np.concatenate([histogram, soft_histogram(across), soft_histogram(down)], -1)
     return pixels.mean(-1), rings, histogram
 
 
@@ -93,11 +107,11 @@ def run(frames, labels, folds, k, family):
     std = frames[train].std((0, 1)) + 1e-3
     h, w = frames.shape[2:4]
     ring = ring_of(h, w, RINGS)
-    soft, with_histogram = family.startswith("soft"), family != "rings" and family != "rings-frames"
+    soft, with_histogram = family.startswith(("soft", "gradients")), family != "rings" and family != "rings-frames"
     rows, touches = [], []
     for touch in frames:
         v = ((touch - mean) / std).transpose(0, 3, 1, 2)  # [T, C, H, W]
-        level, power, histogram = per_frame(v, ring, soft)
+        level, power, histogram = per_frame(v, ring, soft, family.startswith("gradients"))
         parts = [level, np.log(power + 1e-6).reshape(len(v), -1)]
         whole = [level.mean(0), np.log(power.mean(0) + 1e-6).ravel()]
         if with_histogram:

@@ -296,7 +296,7 @@ fn a_spectral_head_runs_in_tract_as_the_reference_and_streams() {
 
 /// A camera's model: the layout `pvt3 cv` derives for 30 × 40 RGB frames (patches of 10 × 10
 /// pixels, 12 a frame, the GelSight preset's widths, a spectral head over the image's space with
-/// its rings and histogram) with a patch mask, a quarter of its frames
+/// its rings and the histograms of its values and gradients) with a patch mask, a quarter of its frames
 /// and half of its patches pruned and the others scaled, normalised pixel by pixel; with its
 /// candle form and the metadata it is exported with.
 fn camera_model() -> (Pvt3, pvt3_spec::baked::BakedPvt3, Normalization, pvt3_export::Metadata) {
@@ -305,9 +305,9 @@ fn camera_model() -> (Pvt3, pvt3_spec::baked::BakedPvt3, Normalization, pvt3_exp
     let cfg = Config { network: pvt3_models::Pvt3Config { patch_selection: true, ..network }.into(), ..layout };
     assert_eq!((cfg.patch_height, cfg.patch_width, cfg.num_patches(), cfg.dim), (10, 10, 12, 64));
     assert_eq!(
-        (cfg.spectral_space(), cfg.spectral_bands(), cfg.spectral_histogram()),
-        (true, 12, 24),
-        "a camera's layout has a spectral head over the image, with a histogram"
+        (cfg.spectral_space(), cfg.spectral_bands(), cfg.spectral_histogram(), cfg.spectral_gradients()),
+        (true, 12, 24, true),
+        "a camera's layout has a spectral head over the image, with histograms of its values and gradients"
     );
     let (model, varmap) = Pvt3::init(&cfg, 7).unwrap();
     let unpruned = bake(&cfg, &varmap_tensors(&varmap).unwrap()).unwrap();

@@ -117,6 +117,24 @@ impl Config {
         }
     }
 
+    /// Whether a head with a histogram also reads its colours' gradients' histograms
+    /// (`Pvt3Config::spectral_gradients`).
+    pub fn spectral_gradients(&self) -> bool {
+        matches!(&self.network, Network::Pvt3(p) if p.spectral_gradients && self.spectral_histogram() > 0)
+    }
+
+    /// The histograms a head over the image's space reads of each colour, each of
+    /// `spectral_histogram` bins (`spectrum::space::Histogram`): the values' and, with
+    /// gradients, the differences across and down; none without a histogram.
+    pub fn spectral_histograms(&self) -> &'static [crate::spectrum::space::Histogram] {
+        use crate::spectrum::space::Histogram;
+        match (self.spectral_histogram(), self.spectral_gradients()) {
+            (0, _) => &[],
+            (_, false) => &[Histogram::Values],
+            (_, true) => &Histogram::ALL,
+        }
+    }
+
     /// Whether the model has a patch-selection mask (`Pvt3Config::patch_selection`).
     pub fn patch_selection(&self) -> bool {
         matches!(&self.network, Network::Pvt3(p) if p.patch_selection)
@@ -217,6 +235,11 @@ impl Config {
                 "spectral_histogram = {}: only a spectral head over an image's space (spectral_space) reads a histogram; set spectral_histogram=0 too",
                 p.spectral_histogram
             )));
+        }
+        if p.spectral_gradients && self.spectral_histogram() == 0 {
+            return Err(Error::Config(
+                "spectral_gradients = true: the gradients' histograms take the values' bins, and spectral_histogram is 0; set spectral_gradients=false too".into(),
+            ));
         }
         if p.spectral_histogram == 1 {
             return Err(Error::Config("spectral_histogram = 1: a histogram needs at least 2 bins (0 has none)".into()));

@@ -135,7 +135,8 @@ fn spectral_logits(m: &BakedPvt3, s: &BakedSpectrum, sample: &[f32], tokens: usi
 
 /// The features of a spectral head over the image's space, by `spectrum::space`'s definition:
 /// per colour, its weighted mean level (unless off), then the log of each ring's weighted mean
-/// power, the transform summed term by term, then each bin's weighted mean share of the pixels.
+/// power, the transform summed term by term, then each bin's weighted mean share of the pixels
+/// (and of the gradients across and down, with `spectral_gradients`).
 fn space_features(m: &BakedPvt3, sample: &[f32], weights: &[f64], weighed: f64) -> Vec<f64> {
     let c = &m.config;
     let (h, w, colours, frames, bands) = (c.height, c.width, c.channels, c.frames, c.spectral_bands());
@@ -153,13 +154,18 @@ fn space_features(m: &BakedPvt3, sample: &[f32], weights: &[f64], weighed: f64) 
     let tau = 2.0 * std::f64::consts::PI;
     let mut features = Vec::with_capacity(c.spectral_features());
     for ci in 0..colours {
-        let (mut level, mut power, mut histogram) = (0.0, vec![0.0; bands], vec![0.0; bins]);
+        let kinds = c.spectral_histograms();
+        let (mut level, mut power, mut histogram) = (0.0, vec![0.0; bands], vec![0.0; kinds.len() * bins]);
         for (t, wt) in weights.iter().enumerate().filter(|(_, wt)| **wt != 0.0) {
             let v = |y: usize, x: usize| sample[((y * w + x) * colours + ci) * frames + t] as f64;
             let pixels = || (0..h).flat_map(|y| (0..w).map(move |x| (y, x))).map(|(y, x)| v(y, x));
             level += wt * pixels().sum::<f64>() / (h * w) as f64;
-            for (j, bin) in histogram.iter_mut().enumerate() {
-                *bin += wt * pixels().map(|p| share(p, j)).sum::<f64>() / (h * w) as f64;
+            for (kind, of_kind) in kinds.iter().zip(histogram.chunks_mut(bins.max(1))) {
+                let (rows, columns) = kind.shape(h, w);
+                let values = || (0..rows).flat_map(|y| (0..columns).map(move |x| (y, x))).map(|(y, x)| kind.at(v, y, x));
+                for (j, bin) in of_kind.iter_mut().enumerate() {
+                    *bin += wt * values().map(|p| share(p, j)).sum::<f64>() / (rows * columns) as f64;
+                }
             }
             for ky in 0..h {
                 for kx in 0..k {

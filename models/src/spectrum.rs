@@ -51,6 +51,8 @@ struct Space {
     rings: Tensor,
     /// `space::histogram_matrix`'s `[bins − 1, bins]` and `[bins]`, when the head has a histogram.
     histogram: Option<(Tensor, Tensor)>,
+    /// What it takes histograms of (`Config::spectral_histograms`).
+    histograms: &'static [space::Histogram],
     /// Height, width, colours and bands.
     dims: (usize, usize, usize, usize),
 }
@@ -81,6 +83,7 @@ impl Space {
             height: constant(space::cos_sin_matrix(h, h), (h, 2 * h))?,
             rings: constant(rings, (k * h, bands))?,
             histogram,
+            histograms: cfg.spectral_histograms(),
             dims: (h, w, cfg.channels, bands),
         })
     }
@@ -98,6 +101,26 @@ impl Space {
         Tensor::cat(&above, 1)?.matmul(d)?.broadcast_add(first).map(Some)
     }
 
+    /// Each colour's histograms `[rows, kinds · bins]` of `frames` `[b, t, colours, h, w]`, each
+    /// kind's ([`Space::histograms`]) bins in turn; none without a histogram.
+    fn histograms(&self, frames: &Tensor) -> candle_core::Result<Option<Tensor>> {
+        if self.histograms.is_empty() {
+            return Ok(None);
+        }
+        let (h, w, _, _) = self.dims;
+        let rows = frames.dims()[..3].iter().product::<usize>();
+        let of = |kind: &space::Histogram| -> candle_core::Result<Option<Tensor>> {
+            let values = match kind {
+                space::Histogram::Values => frames.clone(),
+                space::Histogram::Across => (frames.narrow(4, 1, w - 1)? - frames.narrow(4, 0, w - 1)?)?,
+                space::Histogram::Down => (frames.narrow(3, 1, h - 1)? - frames.narrow(3, 0, h - 1)?)?,
+            };
+            self.histogram(&values.reshape((rows, kind.values(h, w)))?)
+        };
+        let each = self.histograms.iter().map(of).collect::<candle_core::Result<Option<Vec<_>>>>()?;
+        each.map(|each| Tensor::cat(&each, 1)).transpose()
+    }
+
     /// The levels, ring powers and histograms of each frame of windows `[b, h, w, (colours,)
     /// frames]`.
     fn per_frame(&self, x: &Tensor) -> candle_core::Result<PerFrame> {
@@ -106,7 +129,7 @@ impl Space {
         let frames = x.reshape((b, h, w, c, t))?.permute((0, 4, 3, 1, 2))?.contiguous()?;
         let pixels = frames.reshape((b * t * c, h * w))?;
         let level = pixels.mean(D::Minus1)?.reshape((b, t, c))?;
-        let histogram = self.histogram(&pixels)?.map(|h| h.reshape((b, t, ()))).transpose()?;
+        let histogram = self.histograms(&frames)?.map(|h| h.reshape((b, t, ()))).transpose()?;
         let rows = frames.reshape((b * t * c * h, w))?.matmul(&self.width)?.reshape((b * t * c, h, 2 * k))?;
         let columns = rows.transpose(1, 2)?.contiguous()?.reshape((b * t * c * 2 * k, h))?.matmul(&self.height)?;
         let z = columns.reshape((b * t * c, 2 * k, 2 * h))?;
@@ -277,12 +300,14 @@ mod tests {
         assert_ne!(features(&window(0.0), &[1.0; 40]), features(&window(-3.5), &[1.0; 40]));
     }
 
-    /// A head over the image's space with a histogram: a frame's features by frame are those of
-    /// a window whose one received frame it is, and a frame of one value has its histogram in
-    /// that value's bin (shared with the next where it lies between their centres).
+    /// A head over the image's space with histograms: a frame's features by frame are those of a
+    /// window whose one received frame it is, a frame of one value has its histogram in that
+    /// value's bin (shared with the next where it lies between their centres), and the gradients'
+    /// histograms bin the differences across and down.
     #[test]
     fn frames_alone_are_windows_of_one_frame_and_the_histogram_bins_values() {
-        let network = Pvt3Config { spectral_bands: 3, spectral_space: true, spectral_histogram: 6, ..Default::default() };
+        let network =
+            Pvt3Config { spectral_bands: 3, spectral_space: true, spectral_histogram: 6, spectral_gradients: true, ..Default::default() };
         let cfg = Config {
             frames: 4,
             height: 16,
@@ -315,8 +340,12 @@ mod tests {
         }
         // Bins of width 1 over ±3: 1.25 lies three quarters of the way from bin 3's centre (0.5)
         // to bin 4's (1.5), so bin 4 holds 0.75 of it and bin 3 0.25.
-        let histogram = &rows[2][1 + 3..];
-        let want = [0.0, 0.0, 0.0, 0.25, 0.75, 0.0];
-        assert!(histogram.iter().zip(want).all(|(a, b)| (a - b).abs() < 1e-6), "{histogram:?}");
+        // Then the gradients': a flat frame's differences are all 0, on the edge between bins 2 and
+        // 3; the ramp's across are 1 / 16, 0.5625 of the way from bin 2's centre to bin 3's.
+        let close = |got: &[f32], want: &[f64]| got.len() == want.len() && got.iter().zip(want).all(|(a, b)| (*a as f64 - b).abs() < 1e-6);
+        let flat = [0.0, 0.0, 0.0, 0.25, 0.75, 0.0, 0.0, 0.0, 0.5, 0.5, 0.0, 0.0, 0.0, 0.0, 0.5, 0.5, 0.0, 0.0];
+        assert!(close(&rows[2][1 + 3..], &flat), "{:?}", &rows[2][1 + 3..]);
+        let ramp_gradients = [0.0, 0.0, 0.4375, 0.5625, 0.0, 0.0, 0.0, 0.0, 0.5, 0.5, 0.0, 0.0];
+        assert!(close(&rows[0][1 + 3 + 6..], &ramp_gradients), "{:?}", &rows[0][1 + 3 + 6..]);
     }
 }

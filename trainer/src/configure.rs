@@ -191,9 +191,10 @@ fn base_config(data: &Dataset, choice: &ModelChoice, notes: &mut Vec<String>) ->
         let grid = format!("{} × {}", derived.height / ph, derived.width / pw);
         let head = match chosen.spectral_space() {
             true => format!(
-                ", a spectral head over the image's space ({} rings, a histogram of {} bins)",
+                ", a spectral head over the image's space ({} rings, a histogram of {} bins{})",
                 chosen.spectral_bands(),
-                chosen.spectral_histogram()
+                chosen.spectral_histogram(),
+                if chosen.spectral_gradients() { " of the values and of their gradients across and down" } else { "" }
             ),
             false => String::new(),
         };
@@ -258,6 +259,7 @@ pub fn apply_overrides(cfg: Config, overrides: &[String]) -> Result<Config> {
         fields.insert("spectral_levels".into(), cfg.spectral_levels().into());
         fields.insert("spectral_space".into(), cfg.spectral_space().into());
         fields.insert("spectral_histogram".into(), cfg.spectral_histogram().into());
+        fields.insert("spectral_gradients".into(), cfg.spectral_gradients().into());
     }
     for o in overrides {
         let (key, raw) = field_and_value(o)?;

@@ -2,8 +2,10 @@
 //! frames normalised, each colour of each frame transformed by products with the width's and the
 //! height's `[cos | sin]` matrices (plain `MatMul`s: the two-dimensional transform of a small
 //! frame, in tract and onnxruntime alike), the powers `(CC − SS)² + (CS + SC)²` of its four
-//! blocks summed into rings, each colour's level beside them and its histogram after them (each
-//! value's share above each interior edge, a clamp built of `Max`es, then the bins' differences),
+//! blocks summed into rings, each colour's level beside them and its histograms after them, of its
+//! values and, with `spectral_gradients`, of the differences between neighbours across and down
+//! (`Slice`s and a `Sub`): each value's share above each interior edge, a clamp built of `Max`es,
+//! then the bins' differences;
 //! all weighed over the frames received ([`FRAME_WEIGHTS`]) as the temporal head weighs them, the
 //! logarithms of the powers, and the linear map with the standardisation folded in.
 
@@ -19,9 +21,10 @@ use crate::graph::Graph;
 /// The head's logits `[batch, classes]`; `weighed` is the frames weighed, `[1]`.
 pub(super) fn logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, norm: &Normalization, weighed: &str) -> String {
     let c = &m.config;
-    let (colours, frames, bands, bins) = (c.channels, c.frames, c.spectral_bands(), c.spectral_histogram());
+    let (colours, frames, bands, bins) = (c.channels, c.frames, c.spectral_bands(), c.spectral_histograms().len() * c.spectral_histogram());
     let per_frame = per_frame(g, c, norm);
-    // Levels, rings and histograms [b, frames, colours · (1 + bands + bins)], weighed over the frames.
+    // Levels, rings and histograms [b, frames, colours · (1 + bands + bins)], weighed over the frames
+    // (`bins` those of every histogram).
     let each = 1 + bands + bins;
     let shape = g.i64s("space_per_frame", &[3], vec![-1, frames as i64, (colours * each) as i64]);
     let joined = g.op(Op::Reshape, &[&per_frame, &shape]);
@@ -44,14 +47,46 @@ pub(super) fn logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, norm: &Nor
     super::logits_of(g, m, s, &level, &power, histogram.as_deref())
 }
 
-/// Each colour's histogram of every frame `[b, frames, colours, bins]` from its normalised
-/// pixels `[b, frames, colours, h · w]`: each value's share above each interior edge,
+/// Each colour's histograms of every frame `[b, frames, colours, kinds · bins]`
+/// (`Config::spectral_histograms`), from its normalised frames `x` `[b, frames, colours, h, w]`
+/// and their pixels `flat` `[b, frames, colours, h · w]`: the values' and the differences
+/// between neighbours across and down, each a [`histogram`].
+fn histograms(g: &mut Graph, c: &Config, x: &str, flat: &str) -> String {
+    let (h, w) = (c.height, c.width);
+    let difference = |g: &mut Graph, axis: usize, n: usize| {
+        let axis = g.i64s("space_gradient_axis", &[1], vec![axis as i64]);
+        let (zero, one) = (g.i64s("space_gradient_zero", &[1], vec![0]), g.i64s("space_gradient_one", &[1], vec![1]));
+        let (short, long) = (g.i64s("space_gradient_short", &[1], vec![n as i64 - 1]), g.i64s("space_gradient_long", &[1], vec![n as i64]));
+        let after = g.op(Op::Slice, &[x, &one, &long, &axis]);
+        let before = g.op(Op::Slice, &[x, &zero, &short, &axis]);
+        g.op(Op::Sub, &[&after, &before])
+    };
+    let each: Vec<String> = c
+        .spectral_histograms()
+        .iter()
+        .map(|kind| {
+            let values = match kind {
+                space::Histogram::Values => flat.to_string(),
+                space::Histogram::Across => difference(g, 4, w),
+                space::Histogram::Down => difference(g, 3, h),
+            };
+            histogram(g, c, &values, kind.values(h, w))
+        })
+        .collect();
+    match each.as_slice() {
+        [one] => one.clone(),
+        _ => g.node(Op::Concat, &each.iter().map(String::as_str).collect::<Vec<_>>(), vec![int("axis", 3)], None),
+    }
+}
+
+/// Each colour's histogram of every frame `[b, frames, colours, bins]` from `n` normalised
+/// values of each, `[b, frames, colours, …]`: each value's share above each interior edge,
 /// `clamp(z, 0, 1)` of `z = (v − e) / Δ + ½` as `max(−max(−z, −1), 0)` (exact in f32, where
 /// `max(z, 0) − max(z − 1, 0)` would round), its sum over the pixels (a `ReduceSum`: a product
 /// with a column packs the shares first: 1.4 to 2.2 times the sum's time in tract), then the
 /// bins' differences, divided by the pixels' count.
-fn histogram(g: &mut Graph, c: &Config, pixels: &str) -> String {
-    let (frames, colours, bins, n) = (c.frames, c.channels, c.spectral_histogram(), c.height * c.width);
+fn histogram(g: &mut Graph, c: &Config, pixels: &str, n: usize) -> String {
+    let (frames, colours, bins) = (c.frames, c.channels, c.spectral_histogram());
     let (edges, width) = (space::histogram_edges(bins), space::histogram_width(bins));
     let shape = g.i64s("space_histogram_pixels", &[5], vec![-1, frames as i64, colours as i64, 1, n as i64]);
     let v = g.op(Op::Reshape, &[pixels, &shape]);
@@ -119,7 +154,7 @@ fn per_frame(g: &mut Graph, c: &Config, norm: &Normalization) -> String {
     match c.spectral_histogram() {
         0 => g.node(Op::Concat, &[&level, &power], vec![int("axis", 3)], None),
         _ => {
-            let histogram = histogram(g, c, &flat);
+            let histogram = histograms(g, c, &x, &flat);
             g.node(Op::Concat, &[&level, &power, &histogram], vec![int("axis", 3)], None)
         }
     }

@@ -62,7 +62,7 @@ impl Config {
 
     /// The spectral head's features of one channel (of one colour over the image's space).
     pub fn spectral_features_per_channel(&self) -> usize {
-        usize::from(self.spectral_levels()) + self.spectral_bands() + self.spectral_histogram()
+        usize::from(self.spectral_levels()) + self.spectral_bands() + self.spectral_histograms().len() * self.spectral_histogram()
     }
 
     /// The spectral head's parameters: a scale and a shift per feature, and the linear map.
@@ -88,9 +88,9 @@ impl Config {
             // Per colour of each frame: the products with the width's and the height's cos | sin
             // matrices, then the band sums of the powers.
             let (h, w, k) = (self.height, self.width, crate::spectrum::space::width_bins(self.width));
-            // The histogram: each interior edge's mean over the pixels, then the bins' differences.
+            // Each histogram: each interior edge's mean over its values, then the bins' differences.
             let (bins, edges) = (self.spectral_histogram(), self.spectral_histogram().saturating_sub(1));
-            let histogram = h * w * edges + edges * bins;
+            let histogram: usize = self.spectral_histograms().iter().map(|k| k.values(h, w) * edges + edges * bins).sum();
             let frame = h * w * 2 * k + 2 * k * h * 2 * h + h * k * self.spectral_bands() + histogram;
             return (self.frames * self.channels * frame) as u64 + linear;
         }

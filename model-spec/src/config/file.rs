@@ -58,6 +58,9 @@ pub(super) struct ConfigFile {
     /// Written only when not zero, so that the files of models without it read as before.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     spectral_histogram: Option<usize>,
+    /// Written only when on, so that the files of models without them read as before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    spectral_gradients: Option<bool>,
     /// Written only when on, so that the files of models without the mask read as before.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     patch_selection: Option<bool>,
@@ -84,6 +87,7 @@ impl TryFrom<ConfigFile> for Config {
             foreign(m, "spectral_levels", f.spectral_levels, pvt3.spectral_levels)?;
             foreign(m, "spectral_space", f.spectral_space, pvt3.spectral_space)?;
             foreign(m, "spectral_histogram", f.spectral_histogram, pvt3.spectral_histogram)?;
+            foreign(m, "spectral_gradients", f.spectral_gradients, pvt3.spectral_gradients)?;
             foreign(m, "patch_selection", f.patch_selection, pvt3.patch_selection)?;
             foreign(m, "patch_dropout", f.patch_dropout, pvt3.patch_dropout)?;
         }
@@ -103,6 +107,7 @@ impl TryFrom<ConfigFile> for Config {
                 spectral_levels: f.spectral_levels.unwrap_or(pvt3.spectral_levels),
                 spectral_space: f.spectral_space.unwrap_or(pvt3.spectral_space),
                 spectral_histogram: f.spectral_histogram.unwrap_or(pvt3.spectral_histogram),
+                spectral_gradients: f.spectral_gradients.unwrap_or(pvt3.spectral_gradients),
                 patch_selection: f.patch_selection.unwrap_or(pvt3.patch_selection),
                 patch_dropout: f.patch_dropout.unwrap_or(pvt3.patch_dropout),
             }
@@ -169,6 +174,7 @@ impl From<Config> for ConfigFile {
             spectral_levels: None,
             spectral_space: None,
             spectral_histogram: None,
+            spectral_gradients: None,
             patch_selection: None,
             patch_dropout: None,
         };
@@ -178,6 +184,7 @@ impl From<Config> for ConfigFile {
                 f.spectral_levels = (!p.spectral_levels).then_some(false);
                 f.spectral_space = p.spectral_space.then_some(true);
                 f.spectral_histogram = (p.spectral_histogram != 0).then_some(p.spectral_histogram);
+                f.spectral_gradients = p.spectral_gradients.then_some(true);
                 f.patch_selection = p.patch_selection.then_some(true);
                 f.patch_dropout = (p.patch_dropout != 0.0).then_some(p.patch_dropout);
             }
@@ -259,20 +266,25 @@ mod tests {
         assert!(all.validate().unwrap_err().to_string().contains("patch_dropout = 1 is not in [0, 1)"));
     }
 
-    /// The histogram is written only when the head has one, reads back, counts in the features,
-    /// and is refused where no head over an image's space reads it.
+    /// The histogram and its gradients are written only when the head has them, read back, count
+    /// in the features, and are refused where no head over an image's space (or no histogram)
+    /// reads them.
     #[test]
     fn a_histogram_is_written_only_when_there_is_one() {
         let camera = Config::for_sensor(&[30, 40, 3, 25]).unwrap();
-        assert_eq!(camera.spectral_histogram(), 24);
-        assert_eq!(camera.spectral_features(), 3 * (1 + 12 + 24));
+        assert_eq!((camera.spectral_histogram(), camera.spectral_gradients()), (24, true));
+        assert_eq!(camera.spectral_features(), 3 * (1 + 12 + 3 * 24));
         let written = serde_json::to_value(&camera).unwrap();
-        assert_eq!(written["spectral_histogram"], 24);
+        assert_eq!((&written["spectral_histogram"], &written["spectral_gradients"]), (&24.into(), &true.into()));
         assert_eq!(serde_json::from_value::<Config>(written).unwrap(), camera);
         let icub = Config { network: Pvt3Config { spectral_bands: 4, ..Default::default() }.into(), ..Config::icub20() };
-        assert!(serde_json::to_value(&icub).unwrap().get("spectral_histogram").is_none());
+        let icub_file = serde_json::to_value(&icub).unwrap();
+        assert!(icub_file.get("spectral_histogram").is_none() && icub_file.get("spectral_gradients").is_none());
         let frames = Config { network: Pvt3Config { spectral_bands: 4, spectral_histogram: 8, ..Default::default() }.into(), ..icub };
         let msg = frames.validate().unwrap_err().to_string();
         assert!(msg.contains("spectral_histogram = 8") && msg.contains("spectral_space"), "{msg}");
+        let Network::Pvt3(p) = camera.network else { unreachable!() };
+        let flat = Config { network: Pvt3Config { spectral_histogram: 0, ..p }.into(), ..camera };
+        assert!(flat.validate().unwrap_err().to_string().contains("set spectral_gradients=false too"));
     }
 }

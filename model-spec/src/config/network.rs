@@ -99,6 +99,11 @@ pub struct Pvt3Config {
     /// (each value shared linearly between the two nearest bins' centres) over
     /// `[-HISTOGRAM_RANGE, HISTOGRAM_RANGE]`, the outer two holding the tails.
     pub spectral_histogram: usize,
+    /// Whether a head with a histogram also reads, with the same bins, histograms of each colour's
+    /// differences between neighbouring normalised pixels, across and down
+    /// (`crate::spectrum::space::Histogram`): how steep the imprint's slopes are and which way they
+    /// face, wherever it lies, which neither the values' histogram nor the rings' powers say.
+    pub spectral_gradients: bool,
     /// A patch-selection mask (`patch_mask`, one entry per patch of the grid, starting at one)
     /// scales each patch's embeddings, as the frame mask scales a temporal token's; a patch whose
     /// entry is zero is dropped from the spatial sequence, so pruning it removes its token and
@@ -119,6 +124,7 @@ impl Default for Pvt3Config {
             spectral_levels: true,
             spectral_space: false,
             spectral_histogram: 0,
+            spectral_gradients: false,
             patch_selection: false,
             patch_dropout: 0.0,
         }

@@ -14,7 +14,9 @@
 //! Beside them, with `spectral_histogram` bins, the head reads each colour's histogram of the
 //! frame's normalised values ([`histogram_matrix`]): the share of the gel a touch presses, and
 //! how far, wherever it lies. Its bins are soft, so that it is continuous in the values and the
-//! f32 forms equal the f64 reference.
+//! f32 forms equal the f64 reference. With `spectral_gradients`, it reads with the same bins the
+//! histograms of the differences between neighbouring values across and down ([`Histogram`]):
+//! how steep the imprint's slopes are and which way they face.
 
 pub use super::cos_sin_matrix;
 use crate::{Error, Result};
@@ -76,6 +78,47 @@ pub fn ring_means(h: usize, w: usize, bands: usize) -> Result<Vec<f64>> {
         }
     }
     Ok(m)
+}
+
+/// What a head over the image's space takes a histogram of, in each colour of each frame, in
+/// the order its features read them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Histogram {
+    /// The normalised values `v[y, x]`.
+    Values,
+    /// The differences across, `v[y, x + 1] − v[y, x]`.
+    Across,
+    /// The differences down, `v[y + 1, x] − v[y, x]`.
+    Down,
+}
+
+impl Histogram {
+    /// The values' histogram and the gradients'.
+    pub const ALL: [Histogram; 3] = [Histogram::Values, Histogram::Across, Histogram::Down];
+
+    /// Rows and columns of what it reads of an `h × w` frame.
+    pub fn shape(self, h: usize, w: usize) -> (usize, usize) {
+        match self {
+            Histogram::Values => (h, w),
+            Histogram::Across => (h, w - 1),
+            Histogram::Down => (h - 1, w),
+        }
+    }
+
+    /// How many values it reads of an `h × w` frame.
+    pub fn values(self, h: usize, w: usize) -> usize {
+        let (rows, columns) = self.shape(h, w);
+        rows * columns
+    }
+
+    /// Its value at `(y, x)` of [`Histogram::shape`] from the frame's values `v(y, x)`.
+    pub fn at(self, v: impl Fn(usize, usize) -> f64, y: usize, x: usize) -> f64 {
+        match self {
+            Histogram::Values => v(y, x),
+            Histogram::Across => v(y, x + 1) - v(y, x),
+            Histogram::Down => v(y + 1, x) - v(y, x),
+        }
+    }
 }
 
 /// Half the histogram's range, in the normalised values' units (a pixel's standard deviations
