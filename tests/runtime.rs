@@ -345,8 +345,8 @@ fn camera_model() -> (Pvt3, pvt3_spec::baked::BakedPvt3, Normalization, pvt3_exp
 }
 
 /// The camera model of [`camera_model`] in every form, 8-bit pixel values: candle's forward, the
-/// runtime on whole windows and frame by frame (its provisional answers too), tract-onnx and
-/// onnxruntime all equal the f64 reference within 1e-5.
+/// runtime on whole windows and frame by frame (its provisional answers too, the head's features
+/// computed frame by frame), tract-onnx and onnxruntime all equal the f64 reference within 1e-5.
 #[test]
 fn a_camera_model_equals_the_reference_in_every_form() {
     let (model, baked, norm, meta) = camera_model();
@@ -366,7 +366,11 @@ fn a_camera_model_equals_the_reference_in_every_form() {
     within(&model.forward(&x, None).unwrap().flatten_all().unwrap().to_vec1::<f32>().unwrap(), "candle");
     let dir = scratch("camera");
     let path = dir.join("camera.onnx");
-    pvt3_export::write(&pvt3_export::export(&baked, &norm, &meta).unwrap(), &path).unwrap();
+    let file = pvt3_export::export(&baked, &norm, &meta).unwrap();
+    // The head's seams, so that a session computes each frame's features as it arrives.
+    let seams: Vec<&str> = file.graph.iter().flat_map(|g| &g.node).flat_map(|n| &n.output).map(String::as_str).collect();
+    assert!(seams.contains(&pvt3_format::HEAD_FRAMES) && seams.contains(&pvt3_format::HEAD_FEATURES));
+    pvt3_export::write(&file, &path).unwrap();
     let c = Classifier::load(&path).unwrap();
     let (logits, _) = c.run(&raw, 2).unwrap();
     within(&logits, "the runtime");

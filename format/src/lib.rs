@@ -38,6 +38,14 @@ pub const SPECTRAL_LOGITS: &str = "spectral_logits";
 /// the weight is 0). A spectral file without it (written before it existed) reads the whole
 /// window, and a runtime classifies it whole only.
 pub const FRAME_WEIGHTS: &str = "frame_weights";
+/// Seam of a spectral head over an image's space (`spectral_space`; format 1.1, optional): every
+/// frame of the windows as a row, raw, `[batch · frames, height, width, channels]`.
+pub const HEAD_FRAMES: &str = "head_frames";
+/// Seam of a spectral head over an image's space (format 1.1, optional): each frame's features
+/// alone, before the frames are weighed, `[batch · frames, channels, features of a channel]`,
+/// computed from [`HEAD_FRAMES`] row by row. A streaming runtime computes a frame's row as it
+/// arrives and feeds the temporal stage the rows so far (zeros elsewhere) instead of the window.
+pub const HEAD_FEATURES: &str = "head_features";
 
 /// Metadata keys (`metadata_props` of the ONNX model).
 pub mod keys {

@@ -10,13 +10,14 @@ use tract_core::runtime::RunOptions;
 use tract_linalg::multithread::Executor;
 
 use pvt3_format::{
-    Header, FRAME_WEIGHTS, INPUT, LOGITS, PROBABILITIES, SPECTRAL_LOGITS, TOKEN_BIAS, TOKEN_ENCODINGS, TOKEN_FRAMES, TOKEN_INDEX,
+    Header, FRAME_WEIGHTS, HEAD_FEATURES, HEAD_FRAMES, INPUT, LOGITS, PROBABILITIES, SPECTRAL_LOGITS, TOKEN_BIAS, TOKEN_ENCODINGS,
+    TOKEN_FRAMES, TOKEN_INDEX,
 };
 
 use crate::error::{catch_panic, tract_error};
 use crate::kernels::Kernels;
 use crate::plan::{outputs_of, Plan};
-use crate::stages::Stages;
+use crate::stages::{Head, Stages};
 use crate::{Error, Result};
 use pvt3_format::onnx::GraphProto;
 
@@ -289,16 +290,16 @@ impl Classifier {
         if prefixes {
             temporal.push((TOKEN_BIAS, f32::fact([1, 1, 1, kept_index.len() + 1])));
         }
-        let window = self.has_tensor(FRAME_WEIGHTS).then(|| self.batch_shape(1));
-        if let Some(shape) = &window {
-            temporal.push((INPUT, f32::fact(shape)));
+        let head = self.has_tensor(FRAME_WEIGHTS).then(|| self.head(frames, &token_shape)).transpose()?;
+        if let Some(head) = &head {
+            temporal.push((head.input(), f32::fact(head.shape())));
         }
         Ok(Stages {
             // A session feeds the spatial stage the index of a kept token: below `kept`.
             spatial: self.optimise(self.wire(&spatial, &[TOKEN_ENCODINGS])?, &[(TOKEN_INDEX, kept)])?,
             temporal: self.optimise(self.wire(&temporal, &[PROBABILITIES])?, &[])?,
             prefixes,
-            window,
+            head,
             stop_rule: self.stop_rule(),
             camera: self.camera(),
             kept_index,
@@ -306,6 +307,21 @@ impl Classifier {
             dim: self.dim(),
             classes: self.classes().to_vec(),
         })
+    }
+
+    /// What the streaming spectral head's temporal stage reads: each frame's features, computed
+    /// frame by frame, where the file has the seams (`HEAD_FEATURES`); else the window so far.
+    fn head(&self, frames: usize, token_shape: &[usize]) -> Result<Head> {
+        if !self.has_tensor(HEAD_FEATURES) {
+            return Ok(Head::Window(self.batch_shape(1)));
+        }
+        let frame = [&[1], &token_shape[2..]].concat();
+        let model = self.wire(&[(HEAD_FRAMES, f32::fact(&frame))], &[HEAD_FEATURES])?;
+        let row =
+            model.output_outlets().and_then(|o| model.outlet_fact(o[0])).ok().and_then(|f| f.shape.as_concrete().map(<[usize]>::to_vec));
+        let row = row.ok_or_else(|| Error::NotOnnx { path: self.path.clone(), reason: format!("{HEAD_FEATURES} has no fixed shape") })?;
+        let shape = [&[frames], &row[1..]].concat();
+        Ok(Head::Features { plan: self.optimise(model, &[])?, shape })
     }
 
     fn validate(&self, frames: &[f32], batch: usize) -> Result<()> {

@@ -16,10 +16,9 @@ pub(crate) struct Stages {
     pub(crate) temporal: Plan,
     /// Whether the temporal stage reads a key bias, so that it can answer for a prefix.
     pub(crate) prefixes: bool,
-    /// For a file whose spectral head streams (`FRAME_WEIGHTS`), the shape of the window the
-    /// temporal stage reads, `[1, height, width, (channels,) frames]`: a session writes the kept
-    /// frames it receives into one, zeros elsewhere.
-    pub(crate) window: Option<Vec<usize>>,
+    /// For a file whose spectral head streams (`FRAME_WEIGHTS`), what its temporal stage reads of
+    /// the frames received.
+    pub(crate) head: Option<Head>,
     /// How a camera's frames become the model's (`Header::camera`).
     pub(crate) camera: Option<crate::picture::Camera>,
     /// The file's stopping rule (`Header::stop_rule`).
@@ -30,6 +29,35 @@ pub(crate) struct Stages {
     pub(crate) token_shape: Vec<usize>,
     pub(crate) dim: usize,
     pub(crate) classes: Vec<String>,
+}
+
+/// What a streaming spectral head's temporal stage reads of the frames received: a session keeps
+/// one buffer of [`Head::shape`], zeros where no kept frame has arrived.
+pub(crate) enum Head {
+    /// The window so far, `[1, height, width, (channels,) frames]`, each kept frame written in as
+    /// it arrives (`pvt3_format::INPUT`: a file without the head's seams).
+    Window(Vec<usize>),
+    /// Each frame's features alone, `[frames, channels, features]`
+    /// (`pvt3_format::HEAD_FEATURES`): `plan` computes a kept frame's row, `[1, height, width,
+    /// channels]` → `[1, channels, features]`, as it arrives, so that an answer reads only them.
+    Features { plan: Plan, shape: Vec<usize> },
+}
+
+impl Head {
+    /// The shape of what the temporal stage reads.
+    pub(crate) fn shape(&self) -> &[usize] {
+        match self {
+            Head::Window(shape) | Head::Features { shape, .. } => shape,
+        }
+    }
+
+    /// The temporal stage's input that it is.
+    pub(crate) fn input(&self) -> &'static str {
+        match self {
+            Head::Window(_) => pvt3_format::INPUT,
+            Head::Features { .. } => pvt3_format::HEAD_FEATURES,
+        }
+    }
 }
 
 impl Stages {

@@ -14,7 +14,10 @@
 //!
 //! A spectral head reads frames, not encodings: for a file whose head streams (`frame_weights`),
 //! the session keeps the kept frames received in a window (zeros elsewhere) and hands it to the
-//! temporal stage with the bias, from which the head weighs the frames received.
+//! temporal stage with the bias, from which the head weighs the frames received. A head over an
+//! image's space with its seams (`head_features`) is cut once more: the session computes each kept
+//! frame's features as the frame arrives and hands the temporal stage those rows instead, so an
+//! answer reads 25 rows of features, not every pixel of the window.
 
 use std::sync::Arc;
 
@@ -23,7 +26,7 @@ use tract_core::prelude::*;
 use crate::classifier::prediction;
 use crate::error::tract_error;
 use crate::plan::outputs_of;
-use crate::stages::Stages;
+use crate::stages::{Head, Stages};
 use crate::{Classifier, Error, Prediction, Result, Touch, TouchReader};
 
 /// A provisional answer ([`Session::peek`]).
@@ -49,9 +52,10 @@ pub struct Session {
     token: Vec<f32>,
     /// The encodings of the kept tokens completed so far, `[kept, dim]`.
     encodings: Vec<f32>,
-    /// For a spectral head, the window so far in the sample layout: the kept frames received,
-    /// zeros elsewhere.
-    window: Option<Vec<f32>>,
+    /// For a streaming spectral head, what its temporal stage reads of the frames so far
+    /// (`crate::stages::Head`): the window in the sample layout or each frame's features, of the
+    /// kept frames received, zeros elsewhere.
+    head: Option<Vec<f32>>,
     /// The class answered after each number of tokens of this touch, where one was asked: what
     /// the stopping rule's agreement reads.
     answered: Vec<Option<usize>>,
@@ -67,13 +71,13 @@ impl Classifier {
     /// A streaming session (builds the two stages on first use).
     pub fn session(&self) -> Result<Session> {
         let stages = self.stages()?;
-        let window = stages.window.as_ref().map(|shape| vec![0.0; shape.iter().product()]);
+        let head = stages.head.as_ref().map(|h| vec![0.0; h.shape().iter().product()]);
         Ok(Session {
             stages,
             received: 0,
             token: Vec::new(),
             encodings: Vec::new(),
-            window,
+            head,
             answered: Vec::new(),
             reader: None,
             background: None,
@@ -155,10 +159,7 @@ impl Session {
             return Err(Error::NonFinite { index, value: *value });
         }
         self.token.extend_from_slice(frame);
-        if let Some(window) = &mut self.window {
-            // The sample layout is frame-last: value `p` of frame `n` sits at `p · frames + n`.
-            window.iter_mut().skip(self.received).step_by(frames).zip(frame).for_each(|(w, v)| *w = *v);
-        }
+        self.head_takes(frame)?;
         self.received += 1;
         if self.received.is_multiple_of(tubelet) {
             let frames = Tensor::from_shape(&self.stages.token_shape, &self.token).map_err(tract_error)?;
@@ -166,6 +167,28 @@ impl Session {
             let out = self.stages.spatial.run(tvec!(frames.into(), index.into()))?;
             self.encodings.extend(outputs_of(&out, 0, self.stages.dim)?);
             self.token.clear();
+        }
+        Ok(())
+    }
+
+    /// The streaming spectral head's part of the next frame, a kept one: written into the window,
+    /// or its features computed.
+    fn head_takes(&mut self, frame: &[f32]) -> Result<()> {
+        let (Some(head), Some(so_far)) = (&self.stages.head, &mut self.head) else { return Ok(()) };
+        let n = self.received;
+        match head {
+            // The sample layout is frame-last: value `p` of frame `n` sits at `p · frames + n`.
+            Head::Window(shape) => {
+                let frames = *shape.last().expect("a window has a frame axis");
+                so_far.iter_mut().skip(n).step_by(frames).zip(frame).for_each(|(w, v)| *w = *v);
+            }
+            Head::Features { plan, shape } => {
+                let row: usize = shape[1..].iter().product();
+                let frame_shape = [&[1], &self.stages.token_shape[2..]].concat();
+                let frame = Tensor::from_shape(&frame_shape, frame).map_err(tract_error)?;
+                let out = plan.run(tvec!(frame.into()))?;
+                so_far[n * row..(n + 1) * row].copy_from_slice(&outputs_of(&out, 0, row)?);
+            }
         }
         Ok(())
     }
@@ -249,8 +272,8 @@ impl Session {
             let bias: Vec<f32> = (0..=total).map(|k| if k <= tokens { 0.0 } else { f32::NEG_INFINITY }).collect();
             inputs.push(Tensor::from_shape(&[1, 1, 1, total + 1], &bias).map_err(tract_error)?.into());
         }
-        if let (Some(shape), Some(window)) = (&self.stages.window, &self.window) {
-            inputs.push(Tensor::from_shape(shape, window).map_err(tract_error)?.into());
+        if let (Some(head), Some(so_far)) = (&self.stages.head, &self.head) {
+            inputs.push(Tensor::from_shape(head.shape(), so_far).map_err(tract_error)?.into());
         }
         let out = self.stages.temporal.run(inputs)?;
         Ok(prediction(&self.stages.classes, &outputs_of(&out, 0, self.stages.classes.len())?))
@@ -265,8 +288,8 @@ impl Session {
         self.received = 0;
         self.token.clear();
         self.encodings.clear();
-        if let Some(window) = &mut self.window {
-            window.fill(0.0);
+        if let Some(so_far) = &mut self.head {
+            so_far.fill(0.0);
         }
         self.answered.clear();
         self.background = None;

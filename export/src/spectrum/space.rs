@@ -7,10 +7,12 @@
 //! (`Slice`s and a `Sub`): each value's share above each interior edge, a clamp built of `Max`es,
 //! then the bins' differences;
 //! all weighed over the frames received ([`FRAME_WEIGHTS`]) as the temporal head weighs them, the
-//! logarithms of the powers, and the linear map with the standardisation folded in.
+//! logarithms of the powers, and the linear map with the standardisation folded in. Every frame is
+//! a row from the cut [`HEAD_FRAMES`] to each frame's features [`HEAD_FEATURES`], so that a
+//! streaming runtime computes a frame's features as it arrives and an answer reads only them.
 
 use pvt3_format::onnx::{int, ints, Op};
-use pvt3_format::{FRAME_WEIGHTS, INPUT};
+use pvt3_format::{FRAME_WEIGHTS, HEAD_FEATURES, HEAD_FRAMES, INPUT};
 use pvt3_spec::baked::{BakedPvt3, BakedSpectrum};
 use pvt3_spec::normalization::Normalization;
 use pvt3_spec::spectrum::space;
@@ -47,9 +49,9 @@ pub(super) fn logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, norm: &Nor
     super::logits_of(g, m, s, &level, &power, histogram.as_deref())
 }
 
-/// Each colour's histograms of every frame `[b, frames, colours, kinds · bins]`
-/// (`Config::spectral_histograms`), from its normalised frames `x` `[b, frames, colours, h, w]`
-/// and their pixels `flat` `[b, frames, colours, h · w]`: the values' and the differences
+/// Each colour's histograms of every frame `[n, colours, kinds · bins]`
+/// (`Config::spectral_histograms`), from its normalised frames `x` `[n, colours, h, w]` and their
+/// pixels `flat` `[n, colours, h · w]`: the values' and the differences
 /// between neighbours across and down, each a [`histogram`].
 fn histograms(g: &mut Graph, c: &Config, x: &str, flat: &str) -> String {
     let (h, w) = (c.height, c.width);
@@ -67,32 +69,32 @@ fn histograms(g: &mut Graph, c: &Config, x: &str, flat: &str) -> String {
         .map(|kind| {
             let values = match kind {
                 space::Histogram::Values => flat.to_string(),
-                space::Histogram::Across => difference(g, 4, w),
-                space::Histogram::Down => difference(g, 3, h),
+                space::Histogram::Across => difference(g, 3, w),
+                space::Histogram::Down => difference(g, 2, h),
             };
             histogram(g, c, &values, kind.values(h, w))
         })
         .collect();
     match each.as_slice() {
         [one] => one.clone(),
-        _ => g.node(Op::Concat, &each.iter().map(String::as_str).collect::<Vec<_>>(), vec![int("axis", 3)], None),
+        _ => g.node(Op::Concat, &each.iter().map(String::as_str).collect::<Vec<_>>(), vec![int("axis", 2)], None),
     }
 }
 
-/// Each colour's histogram of every frame `[b, frames, colours, bins]` from `n` normalised
-/// values of each, `[b, frames, colours, …]`: each value's share above each interior edge,
+/// Each colour's histogram of every frame `[n, colours, bins]` from `n` normalised values of
+/// each, `[n, colours, …]`: each value's share above each interior edge,
 /// `clamp(z, 0, 1)` of `z = (v − e) / Δ + ½` as `max(−max(−z, −1), 0)` (exact in f32, where
 /// `max(z, 0) − max(z − 1, 0)` would round), its sum over the pixels (a `ReduceSum`: a product
 /// with a column packs the shares first: 1.4 to 2.2 times the sum's time in tract), then the
 /// bins' differences, divided by the pixels' count.
 fn histogram(g: &mut Graph, c: &Config, pixels: &str, n: usize) -> String {
-    let (frames, colours, bins) = (c.frames, c.channels, c.spectral_histogram());
+    let (colours, bins) = (c.channels, c.spectral_histogram());
     let (edges, width) = (space::histogram_edges(bins), space::histogram_width(bins));
-    let shape = g.i64s("space_histogram_pixels", &[5], vec![-1, frames as i64, colours as i64, 1, n as i64]);
+    let shape = g.i64s("space_histogram_pixels", &[4], vec![-1, colours as i64, 1, n as i64]);
     let v = g.op(Op::Reshape, &[pixels, &shape]);
     let minus_scale = g.f32s("space_histogram_minus_scale", &[1], vec![(-1.0 / width) as f32]);
     let v = g.op(Op::Mul, &[&v, &minus_scale]);
-    // −z for every edge: [b, frames, colours, edges, h · w].
+    // −z for every edge: [n, colours, edges, values].
     let offsets = g.f32s("space_histogram_offsets", &[bins - 1, 1], edges.iter().map(|e| (e / width - 0.5) as f32).collect());
     let minus_z = g.op(Op::Add, &[&v, &offsets]);
     let (minus_one, zero) = (g.f32s("space_histogram_minus_one", &[1], vec![-1.0]), g.f32s("space_histogram_zero", &[1], vec![0.0]));
@@ -101,7 +103,7 @@ fn histogram(g: &mut Graph, c: &Config, pixels: &str, n: usize) -> String {
     let share = g.op(Op::Max, &[&below_one, &zero]);
     let last = g.i64s("space_histogram_pixel_axis", &[1], vec![-1]);
     let above = g.node(Op::ReduceSum, &[&share, &last], vec![int("keepdims", 1)], None);
-    let per_edge = g.i64s("space_histogram_edges", &[4], vec![-1, frames as i64, colours as i64, bins as i64 - 1]);
+    let per_edge = g.i64s("space_histogram_edges", &[3], vec![-1, colours as i64, bins as i64 - 1]);
     let above = g.op(Op::Reshape, &[&above, &per_edge]);
     let (d, first) = space::histogram_matrix(bins);
     let d = g.f32s("space_histogram_differences", &[bins - 1, bins], d.iter().map(|v| (v / n as f64) as f32).collect());
@@ -110,31 +112,36 @@ fn histogram(g: &mut Graph, c: &Config, pixels: &str, n: usize) -> String {
     g.op(Op::Add, &[&histogram, &first])
 }
 
-/// Each colour's level and ring powers of every frame, `[b, frames, colours, 1 + bands]`, from the
-/// file's input normalised.
+/// Each colour's level, ring powers and histograms of every frame, [`HEAD_FEATURES`] `[b ·
+/// frames, colours, 1 + bands + bins]`, from the file's input cut into frames ([`HEAD_FRAMES`]),
+/// normalised: every op after the cut reads one frame's row alone, so that a streaming runtime
+/// runs them on each frame as it arrives.
 fn per_frame(g: &mut Graph, c: &Config, norm: &Normalization) -> String {
     let (h, w, colours, frames, bands) = (c.height, c.width, c.channels, c.frames, c.spectral_bands());
     let k = space::width_bins(w);
     let dims = |v: &[usize]| v.iter().map(|d| *d as i64).collect::<Vec<_>>();
     let shape = g.i64s("space_window", &[5], [vec![-1], dims(&[h, w, colours, frames])].concat());
     let x = g.op(Op::Reshape, &[INPUT, &shape]);
-    let mean = g.f32s("space_norm_mean", &[h, w, colours, 1], norm.mean.clone());
-    let std = g.f32s("space_norm_std", &[h, w, colours, 1], norm.std.clone());
-    let x = g.op(Op::Sub, &[&x, &mean]);
+    let x = g.node(Op::Transpose, &[&x], vec![ints("perm", &[0, 4, 1, 2, 3])], None);
+    let rows = g.i64s("space_frame_rows", &[4], [vec![-1], dims(&[h, w, colours])].concat());
+    g.node(Op::Reshape, &[&x, &rows], vec![], Some(HEAD_FRAMES));
+    let mean = g.f32s("space_norm_mean", &[h, w, colours], norm.mean.clone());
+    let std = g.f32s("space_norm_std", &[h, w, colours], norm.std.clone());
+    let x = g.op(Op::Sub, &[HEAD_FRAMES, &mean]);
     let x = g.op(Op::Div, &[&x, &std]);
-    // [b, frames, colours, h, w]: a frame's colour is one matrix.
-    let x = g.node(Op::Transpose, &[&x], vec![ints("perm", &[0, 4, 3, 1, 2])], None);
-    let pixels = g.i64s("space_pixels", &[4], [vec![-1], dims(&[frames, colours, h * w])].concat());
+    // [n, colours, h, w]: a frame's colour is one matrix.
+    let x = g.node(Op::Transpose, &[&x], vec![ints("perm", &[0, 3, 1, 2])], None);
+    let pixels = g.i64s("space_pixels", &[3], [vec![-1], dims(&[colours, h * w])].concat());
     let flat = g.op(Op::Reshape, &[&x, &pixels]);
     let mean_column = g.f32s("space_mean_column", &[h * w, 1], vec![1.0 / (h * w) as f32; h * w]);
     let level = g.op(Op::MatMul, &[&flat, &mean_column]);
     let across = g.f32s("space_width_dft", &[w, 2 * k], space::cos_sin_matrix(w, k).iter().map(|v| *v as f32).collect());
     let rows = g.op(Op::MatMul, &[&x, &across]);
-    let rows = g.node(Op::Transpose, &[&rows], vec![ints("perm", &[0, 1, 2, 4, 3])], None);
+    let rows = g.node(Op::Transpose, &[&rows], vec![ints("perm", &[0, 1, 3, 2])], None);
     let down = g.f32s("space_height_dft", &[h, 2 * h], space::cos_sin_matrix(h, h).iter().map(|v| *v as f32).collect());
     let z = g.op(Op::MatMul, &[&rows, &down]);
     // The four blocks [kx, ky] of the products: cos or sin across, cos or sin down.
-    let axes = g.i64s("space_block_axes", &[2], vec![3, 4]);
+    let axes = g.i64s("space_block_axes", &[2], vec![2, 3]);
     let block = |g: &mut Graph, i: usize, j: usize| {
         let start = g.i64s(&format!("space_block_{i}{j}_start"), &[2], dims(&[i * k, j * h]));
         let end = g.i64s(&format!("space_block_{i}{j}_end"), &[2], dims(&[(i + 1) * k, (j + 1) * h]));
@@ -146,16 +153,14 @@ fn per_frame(g: &mut Graph, c: &Config, norm: &Normalization) -> String {
     let real = g.op(Op::Mul, &[&real, &real]);
     let imaginary = g.op(Op::Mul, &[&imaginary, &imaginary]);
     let power = g.op(Op::Add, &[&real, &imaginary]);
-    let bins = g.i64s("space_bins", &[4], [vec![-1], dims(&[frames, colours, k * h])].concat());
+    let bins = g.i64s("space_bins", &[3], [vec![-1], dims(&[colours, k * h])].concat());
     let power = g.op(Op::Reshape, &[&power, &bins]);
     let rings = space::ring_means(h, w, bands).expect("a validated configuration").iter().map(|v| *v as f32).collect();
     let rings = g.f32s("space_rings", &[k * h, bands], rings);
     let power = g.op(Op::MatMul, &[&power, &rings]);
-    match c.spectral_histogram() {
-        0 => g.node(Op::Concat, &[&level, &power], vec![int("axis", 3)], None),
-        _ => {
-            let histogram = histograms(g, c, &x, &flat);
-            g.node(Op::Concat, &[&level, &power, &histogram], vec![int("axis", 3)], None)
-        }
+    let mut parts = vec![level, power];
+    if c.spectral_histogram() > 0 {
+        parts.push(histograms(g, c, &x, &flat));
     }
+    g.node(Op::Concat, &parts.iter().map(String::as_str).collect::<Vec<_>>(), vec![int("axis", 2)], Some(HEAD_FEATURES))
 }
