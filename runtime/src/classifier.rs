@@ -319,7 +319,10 @@ impl Classifier {
         let model = self.wire(&[(HEAD_FRAMES, f32::fact(&frame))], &[HEAD_FEATURES])?;
         let row =
             model.output_outlets().and_then(|o| model.outlet_fact(o[0])).ok().and_then(|f| f.shape.as_concrete().map(<[usize]>::to_vec));
-        let row = row.ok_or_else(|| Error::NotOnnx { path: self.path.clone(), reason: format!("{HEAD_FEATURES} has no fixed shape") })?;
+        let row = row.filter(|r| r.first() == Some(&1)).ok_or_else(|| Error::NotOnnx {
+            path: self.path.clone(),
+            reason: format!("{HEAD_FEATURES} of one frame has no fixed shape [1, …]"),
+        })?;
         let shape = [&[frames], &row[1..]].concat();
         Ok(Head::Features { plan: self.optimise(model, &[])?, shape })
     }
