@@ -15,10 +15,10 @@ FAMILY is one of the rows below (all of them if none is given):
   ±3), one row a touch;
 - `histogram-frames`: the same, every frame a row;
 - `soft-frames`: soft bins (the trainer's, `pvt3_spec::spectrum::space::share_above`), every
-  frame a row (the camera layout's default from 42cd913);
+  frame a row: the camera layout's default;
 - `gradients-frames`: and soft histograms of each colour's differences between neighbouring
-  values across and down (`pvt3_spec::spectrum::space::Histogram`), every frame a row: the camera
-  layout's default.
+  values across and down (`pvt3_spec::spectrum::space::Histogram`), every frame a row: the head
+  of `--set spectral_gradients=true`.
 
 The values are normalised pixel by pixel by the training touches of each run (mean and standard
 deviation over their frames), as `pvt3 cv` normalises; a touch is read, as the head reads it

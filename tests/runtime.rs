@@ -296,18 +296,18 @@ fn a_spectral_head_runs_in_tract_as_the_reference_and_streams() {
 
 /// A camera's model: the layout `pvt3 cv` derives for 30 × 40 RGB frames (patches of 10 × 10
 /// pixels, 12 a frame, the GelSight preset's widths, a spectral head over the image's space with
-/// its rings and the histograms of its values and gradients) with a patch mask, a quarter of its frames
+/// its rings and histogram), the histograms of its gradients too (`spectral_gradients`), with a patch mask, a quarter of its frames
 /// and half of its patches pruned and the others scaled, normalised pixel by pixel; with its
 /// candle form and the metadata it is exported with.
 fn camera_model() -> (Pvt3, pvt3_spec::baked::BakedPvt3, Normalization, pvt3_export::Metadata) {
     let layout = Config { classes: 5, ..Config::for_sensor(&[30, 40, 3, 25]).unwrap() };
     let pvt3_spec::Network::Pvt3(network) = layout.network else { panic!("a camera's layout is a PVT³") };
-    let cfg = Config { network: pvt3_models::Pvt3Config { patch_selection: true, ..network }.into(), ..layout };
+    let cfg = Config { network: pvt3_models::Pvt3Config { patch_selection: true, spectral_gradients: true, ..network }.into(), ..layout };
     assert_eq!((cfg.patch_height, cfg.patch_width, cfg.num_patches(), cfg.dim), (10, 10, 12, 64));
     assert_eq!(
         (cfg.spectral_space(), cfg.spectral_bands(), cfg.spectral_histogram(), cfg.spectral_gradients()),
         (true, 12, 24, true),
-        "a camera's layout has a spectral head over the image, with histograms of its values and gradients"
+        "a camera's layout has a spectral head over the image, with a histogram (and here its gradients')"
     );
     let (model, varmap) = Pvt3::init(&cfg, 7).unwrap();
     let unpruned = bake(&cfg, &varmap_tensors(&varmap).unwrap()).unwrap();

@@ -271,8 +271,13 @@ mod tests {
     /// reads them.
     #[test]
     fn a_histogram_is_written_only_when_there_is_one() {
-        let camera = Config::for_sensor(&[30, 40, 3, 25]).unwrap();
-        assert_eq!((camera.spectral_histogram(), camera.spectral_gradients()), (24, true));
+        let layout = Config::for_sensor(&[30, 40, 3, 25]).unwrap();
+        assert_eq!((layout.spectral_histogram(), layout.spectral_gradients()), (24, false));
+        assert_eq!(layout.spectral_features(), 3 * (1 + 12 + 24));
+        let layout_file = serde_json::to_value(&layout).unwrap();
+        assert!(layout_file.get("spectral_gradients").is_none());
+        let Network::Pvt3(p) = layout.network else { unreachable!() };
+        let camera = Config { network: Pvt3Config { spectral_gradients: true, ..p }.into(), ..layout };
         assert_eq!(camera.spectral_features(), 3 * (1 + 12 + 3 * 24));
         let written = serde_json::to_value(&camera).unwrap();
         assert_eq!((&written["spectral_histogram"], &written["spectral_gradients"]), (&24.into(), &true.into()));

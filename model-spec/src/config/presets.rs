@@ -23,9 +23,9 @@ const IMAGE_BANDS: usize = 12;
 /// Bins of the histogram beside the rings in a camera's layout (over ±3 standard deviations, a
 /// quarter of one a bin): with it, PhysiCLeAR's objects read about 5 points better than by the
 /// rings alone (docs/camera.md, "The press's histogram").
-/// With the histograms of the gradients across and down beside it (`Pvt3Config::spectral_gradients`):
-/// chosen by the validation folds of PhysiCLeAR's cross-validation (docs/camera.md, "The
-/// gradients' histograms").
+/// The histograms of the gradients across and down beside it (`Pvt3Config::spectral_gradients`)
+/// are not the layout's: PhysiCLeAR's validation folds did not read better with them
+/// (docs/camera.md, "The gradients' histograms").
 const IMAGE_HISTOGRAM: usize = 24;
 
 /// Whether frames of `height` × `width` values are a camera's images ([`IMAGE_SIDE`]).
@@ -77,8 +77,8 @@ impl Config {
     /// divisor of `frames` nearest (in ratio) to `frames / 40`, so that about 40 temporal tokens
     /// remain, as in the BioTac preset. A camera's images ([`is_image`]) are cut into about 12
     /// square patches (sides the divisors of height and width nearest `√(height · width / 12)`:
-    /// 10 × 10 pixels of 30 × 40), with a spectral head over the image's space (rings and the
-    /// histograms of the values and of their gradients), the rest the
+    /// 10 × 10 pixels of 30 × 40), with a spectral head over the image's space (rings and a
+    /// histogram), the rest the
     /// GelSight preset's. Any other sensor gets the BioTac
     /// layout, which assumes no grid: all channels of a tubelet form one token (one patch covering
     /// the frame), the rest the BioTac preset's. `None` for a shape that is not 3 or 4 axes of
@@ -98,14 +98,9 @@ impl Config {
             let (patch_height, patch_width) = (nearest_divisor(height, side), nearest_divisor(width, side));
             let bands = (1..=IMAGE_BANDS).rev().find(|b| crate::spectrum::space::band_of(height, width, *b).is_ok()).unwrap_or(0);
             let histogram = if bands > 0 { IMAGE_HISTOGRAM } else { 0 };
-            let network = Pvt3Config {
-                spectral_bands: bands,
-                spectral_space: bands > 0,
-                spectral_histogram: histogram,
-                spectral_gradients: histogram > 0,
-                ..Pvt3Config::default()
-            }
-            .into();
+            let network =
+                Pvt3Config { spectral_bands: bands, spectral_space: bands > 0, spectral_histogram: histogram, ..Pvt3Config::default() }
+                    .into();
             return Some(Self { height, width, channels, frames, patch_height, patch_width, tubelet, network, ..Self::gelsight() });
         }
         Some(Self { height, width, channels, frames, patch_height: height, patch_width: width, tubelet, ..Self::biotac20() })
