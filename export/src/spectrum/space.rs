@@ -23,7 +23,7 @@ use crate::graph::Graph;
 /// The head's logits `[batch, classes]`; `weighed` is the frames weighed, `[1]`.
 pub(super) fn logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, norm: &Normalization, weighed: &str) -> String {
     let c = &m.config;
-    let (colours, frames, bands, bins) = (c.channels, c.frames, c.spectral_bands(), c.spectral_histograms().len() * c.spectral_histogram());
+    let (colours, frames, bands, bins) = (c.channels, c.frames, c.spectral_bands(), c.spectral_histogram_bins());
     let per_frame = per_frame(g, c, norm);
     // Levels, rings and histograms [b, frames, colours · (1 + bands + bins)], weighed over the frames
     // (`bins` those of every histogram).

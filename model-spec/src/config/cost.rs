@@ -62,7 +62,12 @@ impl Config {
 
     /// The spectral head's features of one channel (of one colour over the image's space).
     pub fn spectral_features_per_channel(&self) -> usize {
-        usize::from(self.spectral_levels()) + self.spectral_bands() + self.spectral_histograms().len() * self.spectral_histogram()
+        usize::from(self.spectral_levels()) + self.spectral_bands() + self.spectral_histogram_bins()
+    }
+
+    /// The bins of every histogram of one colour of a head over the image's space (0 without one).
+    pub fn spectral_histogram_bins(&self) -> usize {
+        self.spectral_histograms().len() * self.spectral_histogram()
     }
 
     /// The spectral head's parameters: a scale and a shift per feature, and the linear map.
