@@ -296,13 +296,14 @@ fn a_spectral_head_runs_in_tract_as_the_reference_and_streams() {
 
 /// A camera's model: the layout `pvt3 cv` derives for 30 × 40 RGB frames (patches of 10 × 10
 /// pixels, 12 a frame, the GelSight preset's widths, a spectral head over the image's space with
-/// its rings and histogram), the histograms of its gradients too (`spectral_gradients`), with a patch mask, a quarter of its frames
+/// its rings and histogram), the histograms of its gradients too (`spectral_gradients`), its
+/// frames' log ring powers averaged if `log_frames` (`spectral_log_frames`), with a patch mask, a quarter of its frames
 /// and half of its patches pruned and the others scaled, normalised pixel by pixel; with its
 /// candle form and the metadata it is exported with.
-fn camera_model() -> (Pvt3, pvt3_spec::baked::BakedPvt3, Normalization, pvt3_export::Metadata) {
+fn camera_model(log_frames: bool) -> (Pvt3, pvt3_spec::baked::BakedPvt3, Normalization, pvt3_export::Metadata) {
     let layout = Config { classes: 5, ..Config::for_sensor(&[30, 40, 3, 25]).unwrap() };
     let pvt3_spec::Network::Pvt3(network) = layout.network else { panic!("a camera's layout is a PVT³") };
-    let cfg = Config { network: pvt3_models::Pvt3Config { patch_selection: true, spectral_gradients: true, ..network }.into(), ..layout };
+    let cfg = Config { network: pvt3_models::Pvt3Config { patch_selection: true, spectral_gradients: true, spectral_log_frames: log_frames, ..network }.into(), ..layout };
     assert_eq!((cfg.patch_height, cfg.patch_width, cfg.num_patches(), cfg.dim), (10, 10, 12, 64));
     assert_eq!(
         (cfg.spectral_space(), cfg.spectral_bands(), cfg.spectral_histogram(), cfg.spectral_gradients()),
@@ -346,10 +347,17 @@ fn camera_model() -> (Pvt3, pvt3_spec::baked::BakedPvt3, Normalization, pvt3_exp
 
 /// The camera model of [`camera_model`] in every form, 8-bit pixel values: candle's forward, the
 /// runtime on whole windows and frame by frame (its provisional answers too, the head's features
-/// computed frame by frame), tract-onnx and onnxruntime all equal the f64 reference within 1e-5.
+/// computed frame by frame), tract-onnx and onnxruntime all equal the f64 reference within 1e-5,
+/// the log of the frames' mean ring power or the mean of their logs.
 #[test]
 fn a_camera_model_equals_the_reference_in_every_form() {
-    let (model, baked, norm, meta) = camera_model();
+    for log_frames in [false, true] {
+        camera_forms(log_frames);
+    }
+}
+
+fn camera_forms(log_frames: bool) {
+    let (model, baked, norm, meta) = camera_model(log_frames);
     let (pixels, mut rng) = (30 * 40 * 3, pvt3_models::Rng::new(9));
     let raw: Vec<f32> = (0..2 * pixels * 25).map(|_| (128.0 + 60.0 * rng.normal()).clamp(0.0, 255.0).round()).collect();
     let mut normalised = Vec::new();
@@ -404,7 +412,7 @@ fn a_camera_model_equals_the_reference_in_every_form() {
 /// reference on the frames so read.
 #[test]
 fn a_camera_s_frames_are_read_as_the_import_read_them() {
-    let (_, baked, norm, meta) = camera_model();
+    let (_, baked, norm, meta) = camera_model(true);
     let camera =
         pvt3_runtime::picture::Camera { recorded: [60, 80, 3], crop: None, size: Some([30, 40]), grey: false, subtract_first: true };
     let dir = scratch("camera-frames");

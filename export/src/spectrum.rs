@@ -90,9 +90,8 @@ pub(crate) fn spectral_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, n
 /// standardisation folded in.
 fn logits_of(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, level: &str, power: &str, histogram: Option<&str>) -> String {
     let c = &m.config;
-    let floor = g.f32s("power_floor", &[1], vec![POWER_FLOOR as f32]);
-    let power = g.op(Op::Add, &[power, &floor]);
-    let log_power = g.op(Op::Log, &[&power]);
+    // With `spectral_log_frames`, each frame's powers were taken the logarithm of already.
+    let log_power = if c.spectral_log_frames() { power.to_string() } else { log(g, power) };
     let mut parts: Vec<&str> = Vec::with_capacity(3);
     if c.spectral_levels() {
         parts.push(level);
@@ -106,6 +105,13 @@ fn logits_of(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, level: &str, power
     let flat = g.i64s("spectral_features", &[2], vec![-1, c.spectral_features() as i64]);
     let features = g.op(Op::Reshape, &[&features, &flat]);
     linear(g, &features, &standardised(s), "spectral_linear")
+}
+
+/// The logarithm of `power`, `POWER_FLOOR` added so that a silent band is finite.
+fn log(g: &mut Graph, power: &str) -> String {
+    let floor = g.f32s("power_floor", &[1], vec![POWER_FLOOR as f32]);
+    let power = g.op(Op::Add, &[power, &floor]);
+    g.op(Op::Log, &[&power])
 }
 
 /// The head's linear map with the standardisation folded in, one op instead of three:

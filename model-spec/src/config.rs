@@ -123,6 +123,12 @@ impl Config {
         matches!(&self.network, Network::Pvt3(p) if p.spectral_gradients && self.spectral_histogram() > 0)
     }
 
+    /// Whether a head over the image's space averages its frames' log ring powers
+    /// (`Pvt3Config::spectral_log_frames`).
+    pub fn spectral_log_frames(&self) -> bool {
+        matches!(&self.network, Network::Pvt3(p) if p.spectral_log_frames && self.spectral_space())
+    }
+
     /// The histograms a head over the image's space reads of each colour, each of
     /// `spectral_histogram` bins (`spectrum::space::Histogram`): the values' and, with
     /// gradients, the differences across and down; none without a histogram.
@@ -239,6 +245,11 @@ impl Config {
         if p.spectral_gradients && self.spectral_histogram() == 0 {
             return Err(Error::Config(
                 "spectral_gradients = true: the gradients' histograms take the values' bins, and spectral_histogram is 0; set spectral_gradients=false too".into(),
+            ));
+        }
+        if p.spectral_log_frames && !self.spectral_space() {
+            return Err(Error::Config(
+                "spectral_log_frames = true: only a spectral head over an image's space (spectral_space) reads frames apart; set spectral_log_frames=false too".into(),
             ));
         }
         if p.spectral_histogram == 1 {

@@ -135,7 +135,7 @@ fn spectral_logits(m: &BakedPvt3, s: &BakedSpectrum, sample: &[f32], tokens: usi
 
 /// The features of a spectral head over the image's space, by `spectrum::space`'s definition:
 /// per colour, its weighted mean level (unless off), then the log of each ring's weighted mean
-/// power, the transform summed term by term, then each bin's weighted mean share of the pixels
+/// power (with `spectral_log_frames`, the weighted mean of each frame's log), the transform summed term by term, then each bin's weighted mean share of the pixels
 /// (and of the gradients across and down, with `spectral_gradients`).
 fn space_features(m: &BakedPvt3, sample: &[f32], weights: &[f64], weighed: f64) -> Vec<f64> {
     let c = &m.config;
@@ -152,6 +152,7 @@ fn space_features(m: &BakedPvt3, sample: &[f32], weights: &[f64], weighed: f64) 
     let of = spectrum::space::band_of(h, w, bands).expect("a validated configuration");
     let sizes = spectrum::space::band_sizes(&of, bands);
     let tau = 2.0 * std::f64::consts::PI;
+    let log_frames = c.spectral_log_frames();
     let mut features = Vec::with_capacity(c.spectral_features());
     for ci in 0..colours {
         let kinds = c.spectral_histograms();
@@ -167,6 +168,7 @@ fn space_features(m: &BakedPvt3, sample: &[f32], weights: &[f64], weighed: f64) 
                     *bin += wt * values().map(|p| share(p, j)).sum::<f64>() / (rows * columns) as f64;
                 }
             }
+            let mut frame = vec![0.0; bands];
             for ky in 0..h {
                 for kx in 0..k {
                     let Some(j) = of[ky * k + kx] else { continue };
@@ -178,14 +180,17 @@ fn space_features(m: &BakedPvt3, sample: &[f32], weights: &[f64], weighed: f64) 
                             im -= v(y, x) * angle.sin();
                         }
                     }
-                    power[j] += wt * (re * re + im * im) / (h * w) as f64 / sizes[j] as f64;
+                    frame[j] += (re * re + im * im) / (h * w) as f64 / sizes[j] as f64;
                 }
+            }
+            for (sum, p) in power.iter_mut().zip(frame) {
+                *sum += wt * if log_frames { (p + spectrum::POWER_FLOOR).ln() } else { p };
             }
         }
         if c.spectral_levels() {
             features.push(level / weighed);
         }
-        features.extend(power.iter().map(|p| (p / weighed + spectrum::POWER_FLOOR).ln()));
+        features.extend(power.iter().map(|p| if log_frames { p / weighed } else { (p / weighed + spectrum::POWER_FLOOR).ln() }));
         features.extend(histogram.iter().map(|b| b / weighed));
     }
     features

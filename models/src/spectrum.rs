@@ -55,6 +55,8 @@ struct Space {
     histograms: &'static [space::Histogram],
     /// Height, width, colours and bands.
     dims: (usize, usize, usize, usize),
+    /// `Config::spectral_log_frames`: a window's log ring powers are its frames' mean.
+    log_frames: bool,
 }
 
 /// A head over the image's space's quantities of each frame of a batch: `[b, frames, colours]`
@@ -85,6 +87,7 @@ impl Space {
             histogram,
             histograms: cfg.spectral_histograms(),
             dims: (h, w, cfg.channels, bands),
+            log_frames: cfg.spectral_log_frames(),
         })
     }
 
@@ -141,6 +144,11 @@ impl Space {
     }
 }
 
+/// The logarithm of powers, `POWER_FLOOR` added so that a silent band is finite.
+fn log(power: &Tensor) -> candle_core::Result<Tensor> {
+    (power + POWER_FLOOR)?.log()
+}
+
 impl Spectrum {
     /// `vb` is the model's root; the head's variables are `spectral.{scale, shift, linear.*}`.
     pub fn new(cfg: &Config, vb: VarBuilder) -> candle_core::Result<Self> {
@@ -172,13 +180,17 @@ impl Spectrum {
             let f = space.per_frame(x)?;
             let mean = |v: &Tensor| v.broadcast_mul(&w.reshape((1, self.frames, 1))?)?.sum(1)? / weighed;
             let histogram = f.histogram.as_ref().map(mean).transpose()?;
-            return self.space_features(space, &mean(&f.level)?, &mean(&f.power)?, histogram.as_ref(), b);
+            let log_power = match space.log_frames {
+                true => mean(&log(&f.power)?)?,
+                false => log(&mean(&f.power)?)?,
+            };
+            return self.space_features(space, &mean(&f.level)?, &log_power, histogram.as_ref(), b);
         }
         let rows = x.reshape((b * self.channels, self.frames))?;
         let level = (rows.broadcast_mul(&w)?.sum_keepdim(D::Minus1)? / weighed)?;
         let transform = rows.broadcast_sub(&level)?.broadcast_mul(&w)?.matmul(&self.dft)?;
         let power = (transform.sqr()?.matmul(&self.bands)? * (self.frames as f64 / weighed))?;
-        let log_power = (power + POWER_FLOOR)?.log()?;
+        let log_power = log(&power)?;
         let features = if self.levels { Tensor::cat(&[&level, &log_power], 1)? } else { log_power };
         features.reshape((b, ()))
     }
@@ -196,17 +208,17 @@ impl Spectrum {
         let (b, n) = (x.dim(0)?, kept.dim(0)?);
         let frames = |v: &Tensor| v.index_select(&kept, 1)?.reshape((b * n, ()));
         let histogram = f.histogram.as_ref().map(frames).transpose()?;
-        self.space_features(space, &frames(&f.level)?, &frames(&f.power)?, histogram.as_ref(), b * n)
+        self.space_features(space, &frames(&f.level)?, &log(&frames(&f.power)?)?, histogram.as_ref(), b * n)
     }
 
     /// `[rows, features]`: per colour its level (unless the levels are off), log ring powers and
-    /// histogram, from `level` `[rows, colours]`, `power` `[rows, colours · bands]` and
+    /// histogram, from `level` `[rows, colours]`, `log_power` `[rows, colours · bands]` and
     /// `histogram` `[rows, colours · bins]`.
     fn space_features(
         &self,
         space: &Space,
         level: &Tensor,
-        power: &Tensor,
+        log_power: &Tensor,
         histogram: Option<&Tensor>,
         rows: usize,
     ) -> candle_core::Result<Tensor> {
@@ -215,7 +227,7 @@ impl Spectrum {
         if self.levels {
             parts.push(level.reshape((rows, c, 1))?);
         }
-        parts.push((power + POWER_FLOOR)?.log()?.reshape((rows, c, bands))?);
+        parts.push(log_power.reshape((rows, c, bands))?);
         if let Some(histogram) = histogram {
             parts.push(histogram.reshape((rows, c, ()))?);
         }
@@ -347,5 +359,45 @@ mod tests {
         assert!(close(&rows[2][1 + 3..], &flat), "{:?}", &rows[2][1 + 3..]);
         let ramp_gradients = [0.0, 0.0, 0.4375, 0.5625, 0.0, 0.0, 0.0, 0.0, 0.5, 0.5, 0.0, 0.0];
         assert!(close(&rows[0][1 + 3 + 6..], &ramp_gradients), "{:?}", &rows[0][1 + 3 + 6..]);
+    }
+
+    /// With `spectral_log_frames` a window's features are the mean of its kept frames'; without,
+    /// its ring powers' logarithms are those of the frames' mean power, larger by Jensen's
+    /// inequality where the frames' powers differ.
+    #[test]
+    fn log_frames_average_the_frames_features() {
+        let cfg = |log_frames| Config {
+            frames: 3,
+            height: 16,
+            width: 16,
+            channels: 1,
+            patch_height: 16,
+            patch_width: 16,
+            network: Pvt3Config {
+                spectral_bands: 3,
+                spectral_space: true,
+                spectral_histogram: 4,
+                spectral_log_frames: log_frames,
+                ..Default::default()
+            }
+            .into(),
+            ..Config::icub20()
+        };
+        // Frame n: a ramp across the image n + 1 steep, so that the frames' powers differ.
+        let v: Vec<f32> = (0..16 * 16 * 3).map(|i| ((i / 3) % 16) as f32 * ((i % 3) + 1) as f32 / 16.0).collect();
+        let x = Tensor::from_vec(v, (1, 16, 16, 3), &Device::Cpu).unwrap();
+        let weights = [1.0, 0.0, 1.0];
+        let features = |log_frames| {
+            let head = Spectrum::new(&cfg(log_frames), VarBuilder::zeros(DType::F32, &Device::Cpu)).unwrap();
+            let window: Vec<f32> = head.features(&x, &weights).unwrap().flatten_all().unwrap().to_vec1().unwrap();
+            let rows: Vec<Vec<f32>> = head.frame_features(&x, &weights).unwrap().to_vec2().unwrap();
+            (window, rows)
+        };
+        let (logs, rows) = features(true);
+        let mean: Vec<f32> = (0..logs.len()).map(|i| (rows[0][i] + rows[1][i]) / 2.0).collect();
+        assert!(logs.iter().zip(&mean).all(|(a, b)| (a - b).abs() < 1e-5), "{logs:?} against {mean:?}");
+        let (of_mean, _) = features(false);
+        assert!((1..4).all(|j| of_mean[j] > logs[j] + 0.01), "{of_mean:?} against {logs:?}");
+        assert!(of_mean.iter().zip(&logs).enumerate().all(|(i, (a, b))| (1..4).contains(&i) || (a - b).abs() < 1e-6));
     }
 }

@@ -260,6 +260,7 @@ pub fn apply_overrides(cfg: Config, overrides: &[String]) -> Result<Config> {
         fields.insert("spectral_space".into(), cfg.spectral_space().into());
         fields.insert("spectral_histogram".into(), cfg.spectral_histogram().into());
         fields.insert("spectral_gradients".into(), cfg.spectral_gradients().into());
+        fields.insert("spectral_log_frames".into(), cfg.spectral_log_frames().into());
     }
     for o in overrides {
         let (key, raw) = field_and_value(o)?;

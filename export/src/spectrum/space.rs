@@ -7,7 +7,8 @@
 //! (`Slice`s and a `Sub`): each value's share above each interior edge, a clamp built of `Max`es,
 //! then the bins' differences;
 //! all weighed over the frames received ([`FRAME_WEIGHTS`]) as the temporal head weighs them, the
-//! logarithms of the powers, and the linear map with the standardisation folded in. Every frame is
+//! logarithms of the powers (of each frame's, before the weighing, with `spectral_log_frames`),
+//! and the linear map with the standardisation folded in. Every frame is
 //! a row from the cut [`HEAD_FRAMES`] to each frame's features [`HEAD_FEATURES`], so that a
 //! streaming runtime computes a frame's features as it arrives and an answer reads only them.
 
@@ -112,7 +113,7 @@ fn histogram(g: &mut Graph, c: &Config, pixels: &str, n: usize) -> String {
     g.op(Op::Add, &[&histogram, &first])
 }
 
-/// Each colour's level, ring powers and histograms of every frame, [`HEAD_FEATURES`] `[b ·
+/// Each colour's level, ring powers (their logarithms, with `spectral_log_frames`) and histograms of every frame, [`HEAD_FEATURES`] `[b ·
 /// frames, colours, 1 + bands + bins]`, from the file's input cut into frames ([`HEAD_FRAMES`]),
 /// normalised: every op after the cut reads one frame's row alone, so that a streaming runtime
 /// runs them on each frame as it arrives.
@@ -158,6 +159,7 @@ fn per_frame(g: &mut Graph, c: &Config, norm: &Normalization) -> String {
     let rings = space::ring_means(h, w, bands).expect("a validated configuration").iter().map(|v| *v as f32).collect();
     let rings = g.f32s("space_rings", &[k * h, bands], rings);
     let power = g.op(Op::MatMul, &[&power, &rings]);
+    let power = if c.spectral_log_frames() { super::log(g, &power) } else { power };
     let mut parts = vec![level, power];
     if c.spectral_histogram() > 0 {
         parts.push(histograms(g, c, &x, &flat));

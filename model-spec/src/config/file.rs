@@ -61,6 +61,9 @@ pub(super) struct ConfigFile {
     /// Written only when on, so that the files of models without them read as before.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     spectral_gradients: Option<bool>,
+    /// Written only when on, so that the files of models whose head takes the log of the mean read as before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    spectral_log_frames: Option<bool>,
     /// Written only when on, so that the files of models without the mask read as before.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     patch_selection: Option<bool>,
@@ -88,6 +91,7 @@ impl TryFrom<ConfigFile> for Config {
             foreign(m, "spectral_space", f.spectral_space, pvt3.spectral_space)?;
             foreign(m, "spectral_histogram", f.spectral_histogram, pvt3.spectral_histogram)?;
             foreign(m, "spectral_gradients", f.spectral_gradients, pvt3.spectral_gradients)?;
+            foreign(m, "spectral_log_frames", f.spectral_log_frames, pvt3.spectral_log_frames)?;
             foreign(m, "patch_selection", f.patch_selection, pvt3.patch_selection)?;
             foreign(m, "patch_dropout", f.patch_dropout, pvt3.patch_dropout)?;
         }
@@ -108,6 +112,7 @@ impl TryFrom<ConfigFile> for Config {
                 spectral_space: f.spectral_space.unwrap_or(pvt3.spectral_space),
                 spectral_histogram: f.spectral_histogram.unwrap_or(pvt3.spectral_histogram),
                 spectral_gradients: f.spectral_gradients.unwrap_or(pvt3.spectral_gradients),
+                spectral_log_frames: f.spectral_log_frames.unwrap_or(pvt3.spectral_log_frames),
                 patch_selection: f.patch_selection.unwrap_or(pvt3.patch_selection),
                 patch_dropout: f.patch_dropout.unwrap_or(pvt3.patch_dropout),
             }
@@ -175,6 +180,7 @@ impl From<Config> for ConfigFile {
             spectral_space: None,
             spectral_histogram: None,
             spectral_gradients: None,
+            spectral_log_frames: None,
             patch_selection: None,
             patch_dropout: None,
         };
@@ -185,6 +191,7 @@ impl From<Config> for ConfigFile {
                 f.spectral_space = p.spectral_space.then_some(true);
                 f.spectral_histogram = (p.spectral_histogram != 0).then_some(p.spectral_histogram);
                 f.spectral_gradients = p.spectral_gradients.then_some(true);
+                f.spectral_log_frames = p.spectral_log_frames.then_some(true);
                 f.patch_selection = p.patch_selection.then_some(true);
                 f.patch_dropout = (p.patch_dropout != 0.0).then_some(p.patch_dropout);
             }
@@ -264,6 +271,25 @@ mod tests {
         assert_eq!(serde_json::from_value::<Config>(written).unwrap(), on);
         let all = Config { network: Pvt3Config { patch_dropout: 1.0, ..Default::default() }.into(), ..Config::icub20() };
         assert!(all.validate().unwrap_err().to_string().contains("patch_dropout = 1 is not in [0, 1)"));
+    }
+
+    /// Frames' logs are written only when on, read back, and refused without a head over an
+    /// image's space.
+    #[test]
+    fn log_frames_are_written_only_when_on() {
+        let layout = Config::for_sensor(&[30, 40, 3, 25]).unwrap();
+        assert!(serde_json::to_value(&layout).unwrap().get("spectral_log_frames").is_none());
+        let Network::Pvt3(p) = layout.network else { unreachable!() };
+        let on = Config { network: Pvt3Config { spectral_log_frames: true, ..p }.into(), ..layout };
+        assert!(on.spectral_log_frames());
+        let written = serde_json::to_value(&on).unwrap();
+        assert_eq!(written["spectral_log_frames"], true);
+        assert_eq!(serde_json::from_value::<Config>(written).unwrap(), on);
+        let frames = Config {
+            network: Pvt3Config { spectral_bands: 4, spectral_log_frames: true, ..Default::default() }.into(),
+            ..Config::icub20()
+        };
+        assert!(frames.validate().unwrap_err().to_string().contains("set spectral_log_frames=false too"));
     }
 
     /// The histogram and its gradients are written only when the head has them, read back, count

@@ -104,6 +104,12 @@ pub struct Pvt3Config {
     /// (`crate::spectrum::space::Histogram`): how steep the imprint's slopes are and which way they
     /// face, wherever it lies, which neither the values' histogram nor the rings' powers say.
     pub spectral_gradients: bool,
+    /// Whether a head over the image's space reads a touch as the mean of its frames' features,
+    /// the logarithm taken of each frame's ring powers, instead of the logarithm of their mean
+    /// power. The fit reads every frame as a row (docs/camera.md, "Every frame a row"), so the
+    /// touch is then read in the units it was fitted in. The levels and histograms are means
+    /// either way.
+    pub spectral_log_frames: bool,
     /// A patch-selection mask (`patch_mask`, one entry per patch of the grid, starting at one)
     /// scales each patch's embeddings, as the frame mask scales a temporal token's; a patch whose
     /// entry is zero is dropped from the spatial sequence, so pruning it removes its token and
@@ -125,6 +131,7 @@ impl Default for Pvt3Config {
             spectral_space: false,
             spectral_histogram: 0,
             spectral_gradients: false,
+            spectral_log_frames: false,
             patch_selection: false,
             patch_dropout: 0.0,
         }
