@@ -16,13 +16,17 @@ FAMILY is one of the rows below (all of them if none is given):
 - `histogram-frames`: the same, every frame a row;
 - `soft-frames`: soft bins (the trainer's, `pvt3_spec::spectrum::space::share_above`), every
   frame a row: the camera layout's default;
+- `logs-frames`: `soft-frames` with a touch read as the mean of its frames' features, each
+  frame's log ring powers averaged instead of the log of their mean power: the head of `--set
+  spectral_log_frames=true`;
 - `gradients-frames`: and soft histograms of each colour's differences between neighbouring
   values across and down (`pvt3_spec::spectrum::space::Histogram`), every frame a row: the head
   of `--set spectral_gradients=true`.
 
 The values are normalised pixel by pixel by the training touches of each run (mean and standard
 deviation over their frames), as `pvt3 cv` normalises; a touch is read, as the head reads it
-whole, by the mean of its frames' levels, powers and histograms. No test touch reaches the
+whole, by the mean of its frames' levels, powers and histograms (by the mean of their rows, in
+`logs-frames`). No test touch reaches the
 normalisation, the standardisation, the fit or the choice of penalty.
 """
 import statistics
@@ -36,7 +40,7 @@ from camera_linear import TEST_FOLD, runs, t_975  # noqa: E402
 
 RINGS, BINS, RANGE = 12, 24, 3.0
 PENALTIES = [1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 3e-4]
-FAMILIES = ["rings", "rings-frames", "histogram", "histogram-frames", "soft-frames", "gradients-frames"]
+FAMILIES = ["rings", "rings-frames", "histogram", "histogram-frames", "soft-frames", "logs-frames", "gradients-frames"]
 
 
 def ring_of(h, w, bands):
@@ -107,7 +111,7 @@ def run(frames, labels, folds, k, family):
     std = frames[train].std((0, 1)) + 1e-3
     h, w = frames.shape[2:4]
     ring = ring_of(h, w, RINGS)
-    soft, with_histogram = family.startswith(("soft", "gradients")), family != "rings" and family != "rings-frames"
+    soft, with_histogram = family.startswith(("soft", "logs", "gradients")), family != "rings" and family != "rings-frames"
     rows, touches = [], []
     for touch in frames:
         v = ((touch - mean) / std).transpose(0, 3, 1, 2)  # [T, C, H, W]
@@ -118,7 +122,8 @@ def run(frames, labels, folds, k, family):
             parts.append(histogram.reshape(len(v), -1))
             whole.append(histogram.mean(0).ravel())
         rows.append(np.concatenate(parts, 1))
-        touches.append(np.concatenate(whole))
+        # `logs-frames` reads a touch as its frames' rows read: their mean.
+        touches.append(rows[-1].mean(0) if family == "logs-frames" else np.concatenate(whole))
     rows, touches = np.array(rows), np.array(touches)
     if family.endswith("frames"):
         x, y = rows[train].reshape(-1, rows.shape[2]), np.repeat(labels[train], rows.shape[1])
