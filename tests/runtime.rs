@@ -297,9 +297,9 @@ fn a_spectral_head_runs_in_tract_as_the_reference_and_streams() {
 /// A camera's model: the layout `pvt3 cv` derives for 30 × 40 RGB frames (patches of 10 × 10
 /// pixels, 12 a frame, the GelSight preset's widths, a spectral head over the image's space with
 /// its rings and histogram), the histograms of its gradients too (`spectral_gradients`), its
-/// frames' log ring powers averaged if `log_frames` (`spectral_log_frames`), with a patch mask, a quarter of its frames
-/// and half of its patches pruned and the others scaled, normalised pixel by pixel; with its
-/// candle form and the metadata it is exported with.
+/// frames' log ring powers averaged if `log_frames` (`spectral_log_frames`), with a patch mask,
+/// a quarter of its frames and half of its patches pruned and the others scaled, normalised
+/// pixel by pixel; with its candle form and the metadata it is exported with.
 fn camera_model(log_frames: bool) -> (Pvt3, pvt3_spec::baked::BakedPvt3, Normalization, pvt3_export::Metadata) {
     let layout = Config { classes: 5, ..Config::for_sensor(&[30, 40, 3, 25]).unwrap() };
     let pvt3_spec::Network::Pvt3(network) = layout.network else { panic!("a camera's layout is a PVT³") };

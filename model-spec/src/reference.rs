@@ -135,8 +135,9 @@ fn spectral_logits(m: &BakedPvt3, s: &BakedSpectrum, sample: &[f32], tokens: usi
 
 /// The features of a spectral head over the image's space, by `spectrum::space`'s definition:
 /// per colour, its weighted mean level (unless off), then the log of each ring's weighted mean
-/// power (with `spectral_log_frames`, the weighted mean of each frame's log), the transform summed term by term, then each bin's weighted mean share of the pixels
-/// (and of the gradients across and down, with `spectral_gradients`).
+/// power (with `spectral_log_frames`, the weighted mean of each frame's log), the transform
+/// summed term by term, then each bin's weighted mean share of the pixels (and of the gradients
+/// across and down, with `spectral_gradients`).
 fn space_features(m: &BakedPvt3, sample: &[f32], weights: &[f64], weighed: f64) -> Vec<f64> {
     let c = &m.config;
     let (h, w, colours, frames, bands) = (c.height, c.width, c.channels, c.frames, c.spectral_bands());

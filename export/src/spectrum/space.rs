@@ -7,10 +7,10 @@
 //! (`Slice`s and a `Sub`): each value's share above each interior edge, a clamp built of `Max`es,
 //! then the bins' differences;
 //! all weighed over the frames received ([`FRAME_WEIGHTS`]) as the temporal head weighs them, the
-//! logarithms of the powers (of each frame's, before the weighing, with `spectral_log_frames`),
-//! and the linear map with the standardisation folded in. Every frame is
-//! a row from the cut [`HEAD_FRAMES`] to each frame's features [`HEAD_FEATURES`], so that a
-//! streaming runtime computes a frame's features as it arrives and an answer reads only them.
+//! logarithms of the powers (each frame's, before the weighing, with `spectral_log_frames`), and
+//! the linear map with the standardisation folded in. Every frame is a row from the cut
+//! [`HEAD_FRAMES`] to each frame's features [`HEAD_FEATURES`], so that a streaming runtime
+//! computes a frame's features as it arrives and an answer reads only them.
 
 use pvt3_format::onnx::{int, ints, Op};
 use pvt3_format::{FRAME_WEIGHTS, HEAD_FEATURES, HEAD_FRAMES, INPUT};
@@ -113,10 +113,10 @@ fn histogram(g: &mut Graph, c: &Config, pixels: &str, n: usize) -> String {
     g.op(Op::Add, &[&histogram, &first])
 }
 
-/// Each colour's level, ring powers (their logarithms, with `spectral_log_frames`) and histograms of every frame, [`HEAD_FEATURES`] `[b ·
-/// frames, colours, 1 + bands + bins]`, from the file's input cut into frames ([`HEAD_FRAMES`]),
-/// normalised: every op after the cut reads one frame's row alone, so that a streaming runtime
-/// runs them on each frame as it arrives.
+/// Each colour's level, ring powers (their logarithms, with `spectral_log_frames`) and
+/// histograms of every frame, [`HEAD_FEATURES`] `[b · frames, colours, 1 + bands + bins]`, from
+/// the file's input cut into frames ([`HEAD_FRAMES`]), normalised: every op after the cut reads
+/// one frame's row alone, so that a streaming runtime runs them on each frame as it arrives.
 fn per_frame(g: &mut Graph, c: &Config, norm: &Normalization) -> String {
     let (h, w, colours, frames, bands) = (c.height, c.width, c.channels, c.frames, c.spectral_bands());
     let k = space::width_bins(w);
