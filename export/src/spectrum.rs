@@ -80,26 +80,25 @@ pub(crate) fn spectral_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, n
     let variance = g.f32s("spectral_norm_variance", &[channels, bands], variance);
     let power = g.op(Op::Div, &[&power, &variance]);
     let power = g.op(Op::Div, &[&power, &weighed]);
-    let logits = logits_of(g, m, s, &level, &power, None);
+    let log_power = log(g, &power);
+    let logits = logits_of(g, m, s, &level, &log_power, None);
     g.node(Op::Identity, &[&logits], vec![], Some(SPECTRAL_LOGITS))
 }
 
-/// The logits of per-channel `level`s `[b, channels, 1]` and band `power`s `[b, channels,
-/// bands]`: the powers' logarithms (the floor added) after the levels unless they are off, then
-/// the `histogram` `[b, channels, bins]` if the head has one, then the linear map with the
-/// standardisation folded in.
-fn logits_of(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, level: &str, power: &str, histogram: Option<&str>) -> String {
+/// The logits of per-channel `level`s `[b, channels, 1]` and band powers' logarithms
+/// `log_power` `[b, channels, bands]` ([`log`]): the logarithms after the levels unless they are
+/// off, then the `histogram` `[b, channels, bins]` if the head has one, then the linear map with
+/// the standardisation folded in.
+fn logits_of(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, level: &str, log_power: &str, histogram: Option<&str>) -> String {
     let c = &m.config;
-    // With `spectral_log_frames`, each frame's powers were taken the logarithm of already.
-    let log_power = if c.spectral_log_frames() { power.to_string() } else { log(g, power) };
     let mut parts: Vec<&str> = Vec::with_capacity(3);
     if c.spectral_levels() {
         parts.push(level);
     }
-    parts.push(&log_power);
+    parts.push(log_power);
     parts.extend(histogram);
     let features = match parts.len() {
-        1 => log_power.clone(),
+        1 => log_power.to_string(),
         _ => g.node(Op::Concat, &parts, vec![int("axis", 2)], None),
     };
     let flat = g.i64s("spectral_features", &[2], vec![-1, c.spectral_features() as i64]);

@@ -47,7 +47,9 @@ pub(super) fn logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, norm: &Nor
         let last = g.i64s("space_histogram_end", &[1], vec![each as i64]);
         g.op(Op::Slice, &[&weighted, &end, &last, &axis])
     });
-    super::logits_of(g, m, s, &level, &power, histogram.as_deref())
+    // With `spectral_log_frames`, each frame's powers were taken the logarithm of already.
+    let log_power = if c.spectral_log_frames() { power } else { super::log(g, &power) };
+    super::logits_of(g, m, s, &level, &log_power, histogram.as_deref())
 }
 
 /// Each colour's histograms of every frame `[n, colours, kinds · bins]`
