@@ -325,7 +325,7 @@ fn camera_model(log_frames: bool) -> (Pvt3, pvt3_spec::baked::BakedPvt3, Normali
     let baked = bake(&cfg, &varmap_tensors(&varmap).unwrap()).unwrap();
     assert_eq!((baked.kept_tokens.len(), baked.kept_patches.len()), (19, 6));
     // Half the patches: about half the spatial transformer's and the embedding's work (the
-    // spectral head reads every pixel of every frame).
+    // spectral head's transform costs as much, a pruned patch's pixels read as 0).
     let head = cfg.spectral_mult_adds() as f64;
     let frames_only = (unpruned.mult_adds() as f64 - head) * 19.0 / 25.0;
     assert!((baked.mult_adds() as f64 - head) < 0.6 * frames_only, "{} of {frames_only}", baked.mult_adds());
@@ -382,6 +382,11 @@ fn camera_forms(log_frames: bool) {
     let c = Classifier::load(&path).unwrap();
     let (logits, _) = c.run(&raw, 2).unwrap();
     within(&logits, "the runtime");
+    // No form reads a pruned patch's pixels: other values there change no bit of an answer.
+    let kept = pvt3_spec::spectrum::space::kept_pixels(&baked.config, &baked.kept_patches);
+    let elsewhere: Vec<f32> = raw.iter().enumerate().map(|(i, v)| if kept[i % (pixels * 25) / 75] { *v } else { 255.0 - *v }).collect();
+    assert_ne!(elsewhere, raw);
+    assert_eq!(c.run(&elsewhere, 2).unwrap().0, logits, "a pruned patch's pixels changed an answer");
     tract_onnx_agrees(&path, &c, &raw, 2);
     let expected: Vec<f32> = reference.iter().flatten().map(|v| *v as f32).collect();
     let msg = onnx_check::assert_onnxruntime_matches(&path, (&[2, 30, 40, 3, 25], &raw), &expected, 1e-5, None);

@@ -137,7 +137,8 @@ fn spectral_logits(m: &BakedPvt3, s: &BakedSpectrum, sample: &[f32], tokens: usi
 /// per colour, its weighted mean level (unless off), then the log of each ring's weighted mean
 /// power (with `spectral_log_frames`, the weighted mean of each frame's log), the transform
 /// summed term by term, then each bin's weighted mean share of the pixels (and of the gradients
-/// across and down, with `spectral_gradients`).
+/// across and down, with `spectral_gradients`); a pruned patch's pixels read as 0
+/// (`spectrum::space::kept_pixels`).
 fn space_features(m: &BakedPvt3, sample: &[f32], weights: &[f64], weighed: f64) -> Vec<f64> {
     let c = &m.config;
     let (h, w, colours, frames, bands) = (c.height, c.width, c.channels, c.frames, c.spectral_bands());
@@ -154,12 +155,13 @@ fn space_features(m: &BakedPvt3, sample: &[f32], weights: &[f64], weighed: f64) 
     let sizes = spectrum::space::band_sizes(&of, bands);
     let tau = 2.0 * std::f64::consts::PI;
     let log_frames = c.spectral_log_frames();
+    let kept = spectrum::space::kept_pixels(c, &m.kept_patches);
     let mut features = Vec::with_capacity(c.spectral_features());
     for ci in 0..colours {
         let kinds = c.spectral_histograms();
         let (mut level, mut power, mut histogram) = (0.0, vec![0.0; bands], vec![0.0; kinds.len() * bins]);
         for (t, wt) in weights.iter().enumerate().filter(|(_, wt)| **wt != 0.0) {
-            let v = |y: usize, x: usize| sample[((y * w + x) * colours + ci) * frames + t] as f64;
+            let v = |y: usize, x: usize| if kept[y * w + x] { sample[((y * w + x) * colours + ci) * frames + t] as f64 } else { 0.0 };
             let pixels = || (0..h).flat_map(|y| (0..w).map(move |x| (y, x))).map(|(y, x)| v(y, x));
             level += wt * pixels().sum::<f64>() / (h * w) as f64;
             for (kind, of_kind) in kinds.iter().zip(histogram.chunks_mut(bins.max(1))) {

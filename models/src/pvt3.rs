@@ -5,13 +5,15 @@
 //! row-major over the patch grid and the feature index is `((dt · ph + dy) · pw + dx) · c + ci`.
 //! The frame mask scales each temporal token's patch embeddings before the CLS token and the
 //! position embedding are added; a patch mask (`patch_selection`) scales each patch's, and a
-//! patch whose entry is zero has no token at all.
+//! patch whose entry is zero has no token at all, its pixels read as 0 by a spectral head over the
+//! image's space ([`Pvt3::head_frames`]).
 
 use candle_core::{Tensor, D};
 use candle_nn::{linear, Init, Linear, Module, VarBuilder, VarMap};
 
 use pvt3_spec::names;
 use pvt3_spec::spectrum::frame_weights;
+use pvt3_spec::spectrum::space::kept_pixels;
 
 use crate::dropout::Dropout;
 use crate::fused_block::pack;
@@ -136,7 +138,7 @@ impl Pvt3 {
     pub fn classify_prefix(&self, x: &Tensor, sequence: &Tensor, tokens: usize, rng: Option<&mut Rng>) -> Result<(Tensor, Tensor)> {
         let (logits, pooled) = self.classify_sequence(sequence, tokens, rng)?;
         match &self.spectrum {
-            Some(spectrum) => Ok(((logits + spectrum.forward(x, &self.frame_weights(tokens)?)?)?, pooled)),
+            Some(spectrum) => Ok(((logits + spectrum.forward(&self.head_frames(x)?, &self.frame_weights(tokens)?)?)?, pooled)),
             None => Ok((logits, pooled)),
         }
     }
@@ -146,6 +148,24 @@ impl Pvt3 {
         self.cfg.check_prefix(tokens)?;
         let pooled = self.temporal.forward_cls(&sequence.narrow(1, 0, tokens + 1)?, rng)?;
         Ok((self.head.forward(&pooled)?, pooled))
+    }
+
+    /// What the spectral head reads of windows `x` `[b, h, w, (c,) t]`: for a head over the
+    /// image's space of a model whose patch mask pruned patches, `x` with their pixels at 0
+    /// (`pvt3_spec::spectrum::space::kept_pixels`); else `x`.
+    pub fn head_frames(&self, x: &Tensor) -> Result<Tensor> {
+        let c = &self.cfg;
+        let Some(kept) = self.kept_patches()?.filter(|_| c.spectral_space()) else { return Ok(x.clone()) };
+        let pixels: Vec<f32> = kept_pixels(c, &kept).into_iter().map(f32::from).collect();
+        let shape: Vec<usize> = [1, c.height, c.width].into_iter().chain(std::iter::repeat_n(1, x.rank() - 3)).collect();
+        Ok(x.broadcast_mul(&Tensor::from_vec(pixels, shape, x.device())?)?)
+    }
+
+    /// The patches the patch mask keeps (not zero), row-major over the grid, where it prunes any.
+    fn kept_patches(&self) -> Result<Option<Vec<usize>>> {
+        let Some(mask) = &self.patch_mask else { return Ok(None) };
+        let values = mask.to_vec1::<f32>()?;
+        Ok(values.contains(&0.0).then(|| (0..values.len()).filter(|p| values[*p] != 0.0).collect()))
     }
 
     /// The spectral head's weight of each frame (`pvt3_spec::spectrum::frame_weights`): the
@@ -180,11 +200,10 @@ impl Pvt3 {
             let ones = Tensor::ones(n, candle_core::DType::F32, self.pos_embed.device())?;
             return Ok(Selection { kept: None, scale: ones, pos: self.pos_embed.clone() });
         };
-        let values = mask.to_vec1::<f32>()?;
-        if values.iter().all(|v| *v != 0.0) {
+        let Some(kept) = self.kept_patches()? else {
             return Ok(Selection { kept: None, scale: mask.clone(), pos: self.pos_embed.clone() });
-        }
-        let kept: Vec<u32> = (0..n as u32).filter(|p| values[*p as usize] != 0.0).collect();
+        };
+        let kept: Vec<u32> = kept.into_iter().map(|p| p as u32).collect();
         let rows: Vec<u32> = std::iter::once(0).chain(kept.iter().map(|p| p + 1)).collect();
         let device = mask.device();
         let kept = Tensor::new(kept, device)?;

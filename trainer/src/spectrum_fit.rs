@@ -7,6 +7,8 @@
 //! its standardisation, are every frame of the training windows alone, as a touch is read when
 //! its first frame arrives: 25 rows a touch where PhysiCLeAR gives 3 or 4 touches an object
 //! (docs/camera.md, "Every frame a row"); the penalty is chosen on whole validation windows.
+//! Such a head reads a pruned patch's pixels as 0 (`Pvt3::head_frames`), so a run that prunes
+//! patches fits it again, to what it then reads (`train`).
 
 use candle_core::{Device, Tensor};
 use candle_nn::VarMap;
@@ -36,8 +38,8 @@ pub fn fit(model: &Model, varmap: &VarMap, train: &Samples, val: &Samples) -> Re
     };
     let whole = pvt3.frame_weights(pvt3.config().time_tokens())?;
     let (features, labels) = match pvt3.config().spectral_space() {
-        true => features_of(train, |x| spectrum.frame_features(x, &whole))?,
-        false => features_of(train, |x| spectrum.features(x, &whole))?,
+        true => features_of(train, |x| Ok(spectrum.frame_features(&pvt3.head_frames(x)?, &whole)?))?,
+        false => features_of(train, |x| Ok(spectrum.features(x, &whole)?))?,
     };
     let mean = features.mean(0)?;
     let std = features.broadcast_sub(&mean)?.sqr()?.mean(0)?.sqrt()?;
@@ -49,7 +51,9 @@ pub fn fit(model: &Model, varmap: &VarMap, train: &Samples, val: &Samples) -> Re
         let rows = standard(&features)?;
         let validation = match val.is_empty() {
             true => None,
-            false => features_of(val, |x| spectrum.features(x, &whole)).and_then(|(f, labels)| Ok((standard(&f)?, labels))).map(Some)?,
+            false => features_of(val, |x| Ok(spectrum.features(&pvt3.head_frames(x)?, &whole)?))
+                .and_then(|(f, labels)| Ok((standard(&f)?, labels)))
+                .map(Some)?,
         };
         let classes = pvt3.config().classes;
         let regression = regression(&rows, &labels, classes, validation);
@@ -68,7 +72,7 @@ pub fn fit(model: &Model, varmap: &VarMap, train: &Samples, val: &Samples) -> Re
 
 /// The unstandardised features `[rows, features]` (f64) that `read` gives of `set`'s windows
 /// (a row a window, or several: its frames), and each row's label.
-fn features_of(set: &Samples, read: impl Fn(&Tensor) -> candle_core::Result<Tensor>) -> Result<(Tensor, Vec<usize>)> {
+fn features_of(set: &Samples, read: impl Fn(&Tensor) -> Result<Tensor>) -> Result<(Tensor, Vec<usize>)> {
     let rows: Vec<usize> = (0..set.len()).collect();
     let (mut features, mut labels) = (Vec::with_capacity(set.len()), Vec::with_capacity(set.len()));
     for chunk in rows.chunks(256) {

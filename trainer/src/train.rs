@@ -210,8 +210,9 @@ fn start(sensors: &mut [Sensor], spec: &RunSpec, opts: &TrainOptions, state: Opt
             state
         }
         None => {
-            // A run from given weights (fine-tuning) keeps its spectral heads as they are.
-            if spec.start.is_none() {
+            // A run from given weights (fine-tuning) keeps its spectral heads as they are, unless
+            // it prunes patches: a head over the image's space then reads their pixels as 0.
+            if spec.start.is_none() || spec.pruning.as_ref().is_some_and(|p| p.patches > 0.0) {
                 for sensor in sensors.iter() {
                     crate::spectrum_fit::fit(&sensor.net.learner.model, &sensor.net.learner.varmap, &sensor.train_set, &sensor.val_set)?;
                 }

@@ -8,7 +8,8 @@
 //! then the bins' differences;
 //! all weighed over the frames received ([`FRAME_WEIGHTS`]) as the temporal head weighs them, the
 //! logarithms of the powers (each frame's, before the weighing, with `spectral_log_frames`), and
-//! the linear map with the standardisation folded in. Every frame is a row from the cut
+//! the linear map with the standardisation folded in. Where the patch mask pruned patches, the
+//! head reads the kept patches' pixels alone and the others as 0 ([`read_kept_pixels`]). Every frame is a row from the cut
 //! [`HEAD_FRAMES`] to each frame's features [`HEAD_FEATURES`], so that a streaming runtime
 //! computes a frame's features as it arrives and an answer reads only them.
 
@@ -25,7 +26,7 @@ use crate::graph::Graph;
 pub(super) fn logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, norm: &Normalization, weighed: &str) -> String {
     let c = &m.config;
     let (colours, frames, bands, bins) = (c.channels, c.frames, c.spectral_bands(), c.spectral_histogram_bins());
-    let per_frame = per_frame(g, c, norm);
+    let per_frame = per_frame(g, m, norm);
     // Levels, rings and histograms [b, frames, colours · (1 + bands + bins)], weighed over the frames
     // (`bins` those of every histogram).
     let each = 1 + bands + bins;
@@ -50,6 +51,22 @@ pub(super) fn logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, norm: &Nor
     // With `spectral_log_frames`, each frame's powers were taken the logarithm of already.
     let log_power = if c.spectral_log_frames() { power } else { super::log(g, &power) };
     super::logits_of(g, m, s, &level, &log_power, histogram.as_deref())
+}
+
+/// The frames [`HEAD_FRAMES`] `[n, h, w, colours]` as the head reads them where patches were
+/// pruned: one `Gather` takes each kept pixel's values and, in a pruned pixel's place, those of
+/// the frame's first kept pixel, which the head then multiplies by 0. No op reads a pruned
+/// patch's pixels.
+fn read_kept_pixels(g: &mut Graph, c: &Config, kept: &[bool]) -> String {
+    let (h, w, colours) = (c.height, c.width, c.channels);
+    let first = kept.iter().position(|k| *k).expect("a baked model keeps a patch");
+    let index = (0..h * w).flat_map(|p| (0..colours).map(move |k| (if kept[p] { p } else { first } * colours + k) as i64)).collect();
+    let index = g.i64s("space_kept_pixel_values", &[h * w * colours], index);
+    let flat = g.i64s("space_frame_values", &[2], vec![-1, (h * w * colours) as i64]);
+    let x = g.op(Op::Reshape, &[HEAD_FRAMES, &flat]);
+    let x = g.node(Op::Gather, &[&x, &index], vec![int("axis", 1)], None);
+    let frame = g.i64s("space_frame_pixels", &[4], vec![-1, h as i64, w as i64, colours as i64]);
+    g.op(Op::Reshape, &[&x, &frame])
 }
 
 /// Each colour's histograms of every frame `[n, colours, kinds · bins]`
@@ -117,9 +134,11 @@ fn histogram(g: &mut Graph, c: &Config, pixels: &str, n: usize) -> String {
 
 /// Each colour's level, ring powers (their logarithms, with `spectral_log_frames`) and
 /// histograms of every frame, [`HEAD_FEATURES`] `[b · frames, colours, 1 + bands + bins]`, from
-/// the file's input cut into frames ([`HEAD_FRAMES`]), normalised: every op after the cut reads
-/// one frame's row alone, so that a streaming runtime runs them on each frame as it arrives.
-fn per_frame(g: &mut Graph, c: &Config, norm: &Normalization) -> String {
+/// the file's input cut into frames ([`HEAD_FRAMES`]), normalised (a pruned patch's pixels at
+/// 0, [`read_kept_pixels`]): every op after the cut reads one frame's row alone, so that a
+/// streaming runtime runs them on each frame as it arrives.
+fn per_frame(g: &mut Graph, m: &BakedPvt3, norm: &Normalization) -> String {
+    let c = &m.config;
     let (h, w, colours, frames, bands) = (c.height, c.width, c.channels, c.frames, c.spectral_bands());
     let k = space::width_bins(w);
     let dims = |v: &[usize]| v.iter().map(|d| *d as i64).collect::<Vec<_>>();
@@ -128,10 +147,23 @@ fn per_frame(g: &mut Graph, c: &Config, norm: &Normalization) -> String {
     let x = g.node(Op::Transpose, &[&x], vec![ints("perm", &[0, 4, 1, 2, 3])], None);
     let rows = g.i64s("space_frame_rows", &[4], [vec![-1], dims(&[h, w, colours])].concat());
     g.node(Op::Reshape, &[&x, &rows], vec![], Some(HEAD_FRAMES));
+    let kept = (m.kept_patches.len() < c.num_patches()).then(|| space::kept_pixels(c, &m.kept_patches));
+    let x = match &kept {
+        Some(kept) => read_kept_pixels(g, c, kept),
+        None => HEAD_FRAMES.to_string(),
+    };
     let mean = g.f32s("space_norm_mean", &[h, w, colours], norm.mean.clone());
     let std = g.f32s("space_norm_std", &[h, w, colours], norm.std.clone());
-    let x = g.op(Op::Sub, &[HEAD_FRAMES, &mean]);
+    let x = g.op(Op::Sub, &[&x, &mean]);
     let x = g.op(Op::Div, &[&x, &std]);
+    let x = match &kept {
+        Some(kept) => {
+            let read = kept.iter().flat_map(|k| std::iter::repeat_n(f32::from(*k), colours)).collect();
+            let read = g.f32s("space_kept_pixels", &[h, w, colours], read);
+            g.op(Op::Mul, &[&x, &read])
+        }
+        None => x,
+    };
     // [n, colours, h, w]: a frame's colour is one matrix.
     let x = g.node(Op::Transpose, &[&x], vec![ints("perm", &[0, 3, 1, 2])], None);
     let pixels = g.i64s("space_pixels", &[3], [vec![-1], dims(&[colours, h * w])].concat());

@@ -17,13 +17,27 @@
 //! f32 forms equal the f64 reference. With `spectral_gradients`, it reads with the same bins the
 //! histograms of the differences between neighbouring values across and down ([`Histogram`]):
 //! how steep the imprint's slopes are and which way they face.
+//!
+//! A model whose patch mask pruned patches has the head read the frame with their pixels at 0,
+//! the normalised training mean ([`kept_pixels`]): no form reads a pruned patch's pixels, and the
+//! trainer fits the head again to what it then reads.
 
 pub use super::cos_sin_matrix;
-use crate::{Error, Result};
+use crate::{Config, Error, Result};
 
 /// Columns `kx` of the one-sided transform of a row of `width` values.
 pub fn width_bins(width: usize) -> usize {
     width / 2 + 1
+}
+
+/// Whether a head over the image's space reads each pixel `[y · w + x]` of a frame of a model
+/// that keeps `kept` patches (row-major over the grid): those of a kept patch. It reads every
+/// other pixel as 0.
+pub fn kept_pixels(c: &Config, kept: &[usize]) -> Vec<bool> {
+    let (ph, pw, gw) = (c.patch_height, c.patch_width, c.width / c.patch_width);
+    let mut of = vec![false; c.num_patches()];
+    kept.iter().for_each(|p| of[*p] = true);
+    (0..c.height).flat_map(|y| (0..c.width).map(move |x| (y, x))).map(|(y, x)| of[(y / ph) * gw + x / pw]).collect()
 }
 
 /// The radius of frequency `(ky, kx)` of an `h × w` frame.
@@ -208,6 +222,19 @@ mod tests {
             assert!(by_band.windows(2).all(|p| p[0].1 <= p[1].0), "{h} × {w}: {by_band:?}");
         }
         assert!(band_of(16, 16, 40).is_err());
+    }
+
+    /// A pruned patch's pixels, and only they, are not read: at 30 × 40 with patches of 10 × 10
+    /// (a grid of 3 × 4), keeping patches 1 and 6 reads columns 10 to 19 of rows 0 to 9 and
+    /// columns 20 to 29 of rows 10 to 19.
+    #[test]
+    fn the_kept_pixels_are_the_kept_patches() {
+        let c = Config::for_sensor(&[30, 40, 3, 25]).unwrap();
+        assert_eq!((c.patch_height, c.patch_width), (10, 10));
+        let kept = kept_pixels(&c, &[1, 6]);
+        let at = |y: usize, x: usize| (y < 10 && (10..20).contains(&x)) || ((10..20).contains(&y) && (20..30).contains(&x));
+        assert_eq!(kept, (0..30).flat_map(|y| (0..40).map(move |x| at(y, x))).collect::<Vec<_>>());
+        assert!(kept_pixels(&c, &(0..12).collect::<Vec<_>>()).iter().all(|k| *k));
     }
 
     /// The transform's matrix is the definition's: a cosine of frequency 3 over 8 values gives

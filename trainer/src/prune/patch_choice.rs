@@ -2,7 +2,9 @@
 //! mask stays close to one (docs/camera.md, "Patch selection"), so its magnitudes say little about
 //! which patches a class needs; the validation fold says it directly. One patch at a time, the patch
 //! without which the validation loss is lowest goes (greedy backward elimination): a patch count
-//! times the removed count evaluations of the validation fold, and no test touch read.
+//! times the removed count evaluations of the validation fold, and no test touch read. A head over
+//! the image's space reads a removed patch's pixels as 0 with its map as fitted (the fine-tuning
+//! fits it again), so the loss weighs what the head loses with the patch too.
 
 use std::path::Path;
 

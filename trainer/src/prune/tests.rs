@@ -133,3 +133,45 @@ fn patches_chosen_by_validation_keep_the_one_that_tells_the_classes_apart() {
         std::fs::remove_dir_all(dir).unwrap();
     }
 }
+
+/// A head over the image's space reads a pruned patch's pixels as 0, so pruning patches fits it
+/// again: the fine-tuned run's standardisation makes what the head now reads of each training
+/// frame mean 0 and variance 1, feature by feature, as a fit does; the parent's does not.
+#[test]
+fn pruning_patches_fits_a_head_over_the_image_again() {
+    let data = tiny_data();
+    let (dense, pruned) = (out_dir("ph-dense"), out_dir("ph-ft"));
+    let mut s = spec(&data, 2, None);
+    let network = pvt3_models::Pvt3Config { patch_selection: true, spectral_bands: 1, spectral_space: true, ..Default::default() };
+    s.config.network = network.into();
+    train(&s, &dense, false, &ProgressBar::hidden()).unwrap().unwrap();
+    let spec =
+        PruneSpec { channels: 0.0, frames: 0.0, patches: 50.0, scope: Scope::Local, weights: 0.0, patch_choice: PatchChoice::Magnitude };
+    prune_and_fine_tune(
+        &dense,
+        &data,
+        &PruneStage { spec, epochs: 1, lr: 1e-3, kept_patches: None },
+        &pruned,
+        false,
+        &ProgressBar::hidden(),
+    )
+    .unwrap()
+    .unwrap();
+    let (meta, model, varmap) = checkpoint::load(&pruned).unwrap();
+    let pvt3 = model.pvt3("the test").unwrap();
+    let train_set = Samples::new(&data, &data.split(0).unwrap().train, &meta.normalization);
+    let (x, _) = train_set.batch(&(0..train_set.len()).collect::<Vec<_>>(), |_| {}).unwrap();
+    let read = pvt3.spectrum().unwrap().frame_features(&pvt3.head_frames(&x).unwrap(), &[1.0; 8]).unwrap();
+    let moments = |varmap: &candle_nn::VarMap| -> (Vec<f32>, Vec<f32>) {
+        let t = varmap_tensors(varmap).unwrap();
+        let tensor = |name: &str| candle_core::Tensor::new(t[name].1.as_slice(), &candle_core::Device::Cpu).unwrap();
+        let z = read.broadcast_mul(&tensor("spectral.scale")).unwrap().broadcast_add(&tensor("spectral.shift")).unwrap();
+        (z.mean(0).unwrap().to_vec1().unwrap(), z.sqr().unwrap().mean(0).unwrap().to_vec1().unwrap())
+    };
+    let (mean, square) = moments(&varmap);
+    assert!(mean.iter().all(|m| m.abs() < 1e-3) && square.iter().all(|v| (v - 1.0).abs() < 1e-2), "{mean:?} {square:?}");
+    let (mean, square) = moments(&checkpoint::load(&dense).unwrap().2);
+    assert!(mean.iter().zip(&square).any(|(m, v)| m.abs() > 0.1 || (v - 1.0).abs() > 0.1), "the parent's: {mean:?} {square:?}");
+    std::fs::remove_dir_all(dense).unwrap();
+    std::fs::remove_dir_all(pruned).unwrap();
+}
