@@ -53,6 +53,26 @@ pub(super) fn logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, norm: &Nor
     super::logits_of(g, m, s, &level, &log_power, histogram.as_deref())
 }
 
+/// The frames [`HEAD_FRAMES`] `[n, h, w, colours]` normalised pixel by pixel, a pruned patch's
+/// pixels at 0, read from the kept pixels alone ([`read_kept_pixels`]).
+fn normalised(g: &mut Graph, m: &BakedPvt3, norm: &Normalization) -> String {
+    let c = &m.config;
+    let (h, w, colours) = (c.height, c.width, c.channels);
+    let kept = (m.kept_patches.len() < c.num_patches()).then(|| space::kept_pixels(c, &m.kept_patches));
+    let x = match &kept {
+        Some(kept) => read_kept_pixels(g, c, kept),
+        None => HEAD_FRAMES.to_string(),
+    };
+    let mean = g.f32s("space_norm_mean", &[h, w, colours], norm.mean.clone());
+    let std = g.f32s("space_norm_std", &[h, w, colours], norm.std.clone());
+    let x = g.op(Op::Sub, &[&x, &mean]);
+    let x = g.op(Op::Div, &[&x, &std]);
+    let Some(kept) = kept else { return x };
+    let read = kept.iter().flat_map(|k| std::iter::repeat_n(f32::from(*k), colours)).collect();
+    let read = g.f32s("space_kept_pixels", &[h, w, colours], read);
+    g.op(Op::Mul, &[&x, &read])
+}
+
 /// The frames [`HEAD_FRAMES`] `[n, h, w, colours]` as the head reads them where patches were
 /// pruned: one `Gather` takes each kept pixel's values and, in a pruned pixel's place, those of
 /// the frame's first kept pixel, which the head then multiplies by 0. No op reads a pruned
@@ -134,9 +154,9 @@ fn histogram(g: &mut Graph, c: &Config, pixels: &str, n: usize) -> String {
 
 /// Each colour's level, ring powers (their logarithms, with `spectral_log_frames`) and
 /// histograms of every frame, [`HEAD_FEATURES`] `[b · frames, colours, 1 + bands + bins]`, from
-/// the file's input cut into frames ([`HEAD_FRAMES`]), normalised (a pruned patch's pixels at
-/// 0, [`read_kept_pixels`]): every op after the cut reads one frame's row alone, so that a
-/// streaming runtime runs them on each frame as it arrives.
+/// the file's input cut into frames ([`HEAD_FRAMES`]), [`normalised`]: every op after the cut
+/// reads one frame's row alone, so that a streaming runtime runs them on each frame as it
+/// arrives.
 fn per_frame(g: &mut Graph, m: &BakedPvt3, norm: &Normalization) -> String {
     let c = &m.config;
     let (h, w, colours, frames, bands) = (c.height, c.width, c.channels, c.frames, c.spectral_bands());
@@ -147,23 +167,7 @@ fn per_frame(g: &mut Graph, m: &BakedPvt3, norm: &Normalization) -> String {
     let x = g.node(Op::Transpose, &[&x], vec![ints("perm", &[0, 4, 1, 2, 3])], None);
     let rows = g.i64s("space_frame_rows", &[4], [vec![-1], dims(&[h, w, colours])].concat());
     g.node(Op::Reshape, &[&x, &rows], vec![], Some(HEAD_FRAMES));
-    let kept = (m.kept_patches.len() < c.num_patches()).then(|| space::kept_pixels(c, &m.kept_patches));
-    let x = match &kept {
-        Some(kept) => read_kept_pixels(g, c, kept),
-        None => HEAD_FRAMES.to_string(),
-    };
-    let mean = g.f32s("space_norm_mean", &[h, w, colours], norm.mean.clone());
-    let std = g.f32s("space_norm_std", &[h, w, colours], norm.std.clone());
-    let x = g.op(Op::Sub, &[&x, &mean]);
-    let x = g.op(Op::Div, &[&x, &std]);
-    let x = match &kept {
-        Some(kept) => {
-            let read = kept.iter().flat_map(|k| std::iter::repeat_n(f32::from(*k), colours)).collect();
-            let read = g.f32s("space_kept_pixels", &[h, w, colours], read);
-            g.op(Op::Mul, &[&x, &read])
-        }
-        None => x,
-    };
+    let x = normalised(g, m, norm);
     // [n, colours, h, w]: a frame's colour is one matrix.
     let x = g.node(Op::Transpose, &[&x], vec![ints("perm", &[0, 3, 1, 2])], None);
     let pixels = g.i64s("space_pixels", &[3], [vec![-1], dims(&[colours, h * w])].concat());
