@@ -211,8 +211,9 @@ fn start(sensors: &mut [Sensor], spec: &RunSpec, opts: &TrainOptions, state: Opt
         }
         None => {
             // A run from given weights (fine-tuning) keeps its spectral heads as they are, unless
-            // it prunes patches: a head over the image's space then reads their pixels as 0.
-            if spec.start.is_none() || spec.pruning.as_ref().is_some_and(|p| p.patches > 0.0) {
+            // it prunes patches a head over the image's space read: it now reads them as 0.
+            let prunes_pixels = spec.config.spectral_space() && spec.pruning.as_ref().is_some_and(|p| p.patches > 0.0);
+            if spec.start.is_none() || prunes_pixels {
                 for sensor in sensors.iter() {
                     crate::spectrum_fit::fit(&sensor.net.learner.model, &sensor.net.learner.varmap, &sensor.train_set, &sensor.val_set)?;
                 }
