@@ -9,9 +9,10 @@
 //! all weighed over the frames received ([`FRAME_WEIGHTS`]) as the temporal head weighs them, the
 //! logarithms of the powers (each frame's, before the weighing, with `spectral_log_frames`), and
 //! the linear map with the standardisation folded in. Where the patch mask pruned patches, the
-//! head reads the kept patches' pixels alone and the others as 0 ([`read_kept_pixels`]). Every frame is a row from the cut
-//! [`HEAD_FRAMES`] to each frame's features [`HEAD_FEATURES`], so that a streaming runtime
-//! computes a frame's features as it arrives and an answer reads only them.
+//! head reads the kept patches' pixels alone and the others as 0 ([`read_kept_pixels`]). Every
+//! frame is a row from the cut [`HEAD_FRAMES`] to each frame's features [`HEAD_FEATURES`], so
+//! that a streaming runtime computes a frame's features as it arrives and an answer reads only
+//! them.
 
 use pvt3_format::onnx::{int, ints, Op};
 use pvt3_format::{FRAME_WEIGHTS, HEAD_FEATURES, HEAD_FRAMES, INPUT};
