@@ -30,7 +30,8 @@ const EVAL_BATCH: usize = 100;
 /// as much again cut into patches.
 const EVAL_VALUES: usize = 1 << 26;
 
-/// How many of `samples`' windows an evaluation batch takes.
+/// How many of `samples`' windows an evaluation batch takes; the spectral head's fit reads its
+/// windows in batches of this size too (`spectrum_fit`).
 pub fn eval_batch(samples: &Samples) -> usize {
     (EVAL_VALUES / samples.sample_len().max(1)).clamp(1, EVAL_BATCH)
 }

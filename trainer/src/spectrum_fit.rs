@@ -71,11 +71,13 @@ pub fn fit(model: &Model, varmap: &VarMap, train: &Samples, val: &Samples) -> Re
 }
 
 /// The unstandardised features `[rows, features]` (f64) that `read` gives of `set`'s windows
-/// (a row a window, or several: its frames), and each row's label.
+/// (a row a window, or several: its frames), and each row's label. The windows are read in
+/// evaluation batches, whose values are bounded: at a camera's full size, batches of 256
+/// windows and the head's transforms of them passed 20 GB (docs/camera.md).
 fn features_of(set: &Samples, read: impl Fn(&Tensor) -> Result<Tensor>) -> Result<(Tensor, Vec<usize>)> {
     let rows: Vec<usize> = (0..set.len()).collect();
     let (mut features, mut labels) = (Vec::with_capacity(set.len()), Vec::with_capacity(set.len()));
-    for chunk in rows.chunks(256) {
+    for chunk in rows.chunks(crate::evaluate::eval_batch(set)) {
         let (x, y) = set.batch(chunk, |_| {})?;
         let f = read(&x)?;
         let per_window = f.dim(0)? / chunk.len();
