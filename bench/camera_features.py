@@ -5,7 +5,7 @@ each fitted as the trainer fits the head (a multinomial logistic regression by N
 accelerated gradient, 600 passes, the penalty its validation fold reads best) on exactly the
 folds of a `pvt3 cv` run.
 
-    target/onnx-venv/bin/python bench/camera_features.py DATA.npz CV_DIR [FAMILY ...]   # needs numpy
+    target/onnx-venv/bin/python bench/camera_features.py DATA.npz CV_DIR [FAMILY ...] [--rings N] [--bins N] [--only SEED:FOLD,...]   # needs numpy
 
 FAMILY is one of the rows below (all of them if none is given):
 - `rings`: each colour's level and the log mean power of 12 rings of spatial frequency, the
@@ -21,7 +21,14 @@ FAMILY is one of the rows below (all of them if none is given):
   spectral_log_frames=true`;
 - `gradients-frames`: and soft histograms of each colour's differences between neighbouring
   values across and down (`pvt3_spec::spectrum::space::Histogram`), every frame a row: the head
-  of `--set spectral_gradients=true`.
+  of `--set spectral_gradients=true`;
+- `vote-frames`: `soft-frames` fitted alike, a touch read as the mean of its frames' log
+  probabilities (each frame's logits through a log-softmax) instead of by its frames' mean
+  features: not a head the trainer has.
+
+`--rings N` and `--bins N` (12 and 24, the camera layout's `spectral_bands` and
+`spectral_histogram`) change the head's rings and histogram bins; `--only 0:0,1:1` reads those
+runs (seed:validation fold) alone.
 
 The values are normalised pixel by pixel by the training touches of each run (mean and standard
 deviation over their frames), as `pvt3 cv` normalises; a touch is read, as the head reads it
@@ -40,7 +47,7 @@ from camera_linear import TEST_FOLD, runs, t_975  # noqa: E402
 
 RINGS, BINS, RANGE = 12, 24, 3.0
 PENALTIES = [1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 3e-4]
-FAMILIES = ["rings", "rings-frames", "histogram", "histogram-frames", "soft-frames", "logs-frames", "gradients-frames"]
+FAMILIES = ["rings", "rings-frames", "histogram", "histogram-frames", "soft-frames", "logs-frames", "gradients-frames", "vote-frames"]
 
 
 def ring_of(h, w, bands):
@@ -111,7 +118,7 @@ def run(frames, labels, folds, k, family):
     std = frames[train].std((0, 1)) + 1e-3
     h, w = frames.shape[2:4]
     ring = ring_of(h, w, RINGS)
-    soft, with_histogram = family.startswith(("soft", "logs", "gradients")), family != "rings" and family != "rings-frames"
+    soft, with_histogram = family.startswith(("soft", "logs", "gradients", "vote")), family != "rings" and family != "rings-frames"
     rows, touches = [], []
     for touch in frames:
         v = ((touch - mean) / std).transpose(0, 3, 1, 2)  # [T, C, H, W]
@@ -132,17 +139,34 @@ def run(frames, labels, folds, k, family):
     mu, sd = x.mean(0), x.std(0) + 1e-6
     z = lambda a: (a - mu) / sd  # noqa: E731
     classes = labels.max() + 1
-    accuracy = lambda fit, rows_, y_: ((z(rows_) @ fit[0].T + fit[1]).argmax(1) == y_).mean()  # noqa: E731
+    read = rows if family == "vote-frames" else touches
+
+    def accuracy(fit, which):
+        scores = z(read[which]) @ fit[0].T + fit[1]
+        if family == "vote-frames":  # [touches, T, classes]: the mean of each frame's log probabilities
+            scores = scores - scores.max(-1, keepdims=True)
+            scores = (scores - np.log(np.exp(scores).sum(-1, keepdims=True))).mean(1)
+        return (scores.argmax(1) == labels[which]).mean()
+
     fits = [logistic(z(x), y, classes, p) for p in PENALTIES]
-    scores = [accuracy(f, touches[val], labels[val]) for f in fits]
+    scores = [accuracy(f, val) for f in fits]
     best = int(np.argmax(scores))  # the strongest penalty among equals
-    return scores[best], accuracy(fits[best], touches[test], labels[test]), PENALTIES[best]
+    return scores[best], accuracy(fits[best], test), PENALTIES[best]
 
 
 def main():
-    args = sys.argv[1:]
+    global RINGS, BINS
+    args, options = sys.argv[1:], {}
+    for name in ["--rings", "--bins", "--only"]:
+        if name in args[:-1]:
+            i = args.index(name)
+            options[name] = args.pop(i + 1)
+            args.pop(i)
     if len(args) < 2:
         sys.exit(__doc__)
+    RINGS, BINS = int(options.get("--rings", RINGS)), int(options.get("--bins", BINS))
+    only = options.get("--only")
+    only = only and {tuple(int(v) for v in run.split(":")) for run in only.split(",")}
     families = args[2:] or FAMILIES
     unknown = [f for f in families if f not in FAMILIES]
     if unknown:
@@ -152,15 +176,17 @@ def main():
     if x.ndim == 4:
         x = x[:, :, :, None, :]
     frames = x.transpose(0, 4, 1, 2, 3).astype(np.float32)  # [N, T, H, W, C]
-    recorded = runs(args[1])
+    recorded = [r for r in runs(args[1]) if not only or r[:2] in only]
     for family in families:
-        results = []
+        label = family if (RINGS, BINS) == (12, 24) else f"{family} (rings {RINGS}, bins {BINS})"
+        results, vals = [], []
         for seed, k, folds in recorded:
             val, test, penalty = run(frames, labels, folds, k, family)
             results.append((seed, test))
-            print(f"{family}: seed {seed} fold {k}: validation {val:.4f}, test {test:.4f}, penalty {penalty:g}", file=sys.stderr)
+            vals.append(val)
+            print(f"{label}: seed {seed} fold {k}: validation {val:.4f}, test {test:.4f}, penalty {penalty:g}", file=sys.stderr)
         tests = [t for _, t in results]
-        line = f"{family}: {len(tests)} runs, test {statistics.mean(tests):.4f}"
+        line = f"{label}: {len(tests)} runs, validation {statistics.mean(vals):.4f}, test {statistics.mean(tests):.4f}"
         seeds = sorted({s for s, _ in results})
         if len(tests) > 1:
             line += f" ± {statistics.stdev(tests):.4f}"
