@@ -45,7 +45,8 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 from camera_linear import TEST_FOLD, runs, t_975  # noqa: E402
 
-RINGS, BINS, RANGE = 12, 24, 3.0
+LAYOUT = (12, 24)  # the camera layout's spectral_bands and spectral_histogram
+(RINGS, BINS), RANGE = LAYOUT, 3.0
 PENALTIES = [1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 3e-4]
 FAMILIES = ["rings", "rings-frames", "histogram", "histogram-frames", "soft-frames", "logs-frames", "gradients-frames", "vote-frames"]
 
@@ -166,7 +167,7 @@ def main():
         sys.exit(__doc__)
     RINGS, BINS = int(options.get("--rings", RINGS)), int(options.get("--bins", BINS))
     only = options.get("--only")
-    only = only and {tuple(int(v) for v in run.split(":")) for run in only.split(",")}
+    only = only and {tuple(int(v) for v in pair.split(":")) for pair in only.split(",")}
     families = args[2:] or FAMILIES
     unknown = [f for f in families if f not in FAMILIES]
     if unknown:
@@ -178,7 +179,7 @@ def main():
     frames = x.transpose(0, 4, 1, 2, 3).astype(np.float32)  # [N, T, H, W, C]
     recorded = [r for r in runs(args[1]) if not only or r[:2] in only]
     for family in families:
-        label = family if (RINGS, BINS) == (12, 24) else f"{family} (rings {RINGS}, bins {BINS})"
+        label = family if (RINGS, BINS) == LAYOUT else f"{family} (rings {RINGS}, bins {BINS})"
         results, vals = [], []
         for seed, k, folds in recorded:
             val, test, penalty = run(frames, labels, folds, k, family)
