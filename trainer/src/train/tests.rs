@@ -500,3 +500,42 @@ fn a_head_over_the_image_is_fitted_and_held() {
     assert_ne!(flat_of(&first, "patch_embed.weight"), flat_of(&last, "patch_embed.weight"), "the network trains");
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+/// At its end a run fits its head over the image's space again, with the penalty its start
+/// chose, to its training and validation touches (`refit_head`), once validation has chosen the
+/// epoch: the checkpoint's standardisation makes what the head reads of those frames mean 0 and
+/// variance 1, while the resume state keeps the fit to the training frames alone, held through
+/// the epochs; the result and the provenance record the test accuracy the checkpoint reads. The
+/// run is paused and resumed, so the penalty comes through the resume state.
+#[test]
+fn a_run_s_end_fits_its_head_over_the_image_again_to_its_training_and_validation_touches() {
+    let data = tiny_data();
+    let network = pvt3_models::Pvt3Config { spectral_bands: 2, spectral_space: true, ..Default::default() };
+    let run = RunSpec { config: Config { network: network.into(), ..tiny_config() }, ..spec(&data, 3, Some(1)) };
+    let dir = out_dir("spectral-space-refit");
+    assert!(train(&run, &dir, false, &ProgressBar::hidden()).unwrap().is_none());
+    let result = train(&RunSpec { pause_after: None, ..run }, &dir, true, &ProgressBar::hidden()).unwrap().unwrap();
+    let split = data.split(0).unwrap();
+    let (meta, model, _) = checkpoint::load(&Run(&dir).model()).unwrap();
+    let pvt3 = model.pvt3("the test").unwrap();
+    let read = |rows: &[usize]| -> Tensor {
+        let set = Samples::new(&data, rows, &meta.normalization);
+        let (x, _) = set.batch(&(0..set.len()).collect::<Vec<_>>(), |_| {}).unwrap();
+        pvt3.spectrum().unwrap().frame_features(&pvt3.head_frames(&x).unwrap(), &[1.0; 8]).unwrap()
+    };
+    let standardised = |dir: PathBuf, rows: &Tensor| -> (Vec<f32>, Vec<f32>, Vec<f32>) {
+        let t = candle_core::safetensors::load(Checkpoint(&dir).weights(), &Device::Cpu).unwrap();
+        let z = rows.broadcast_mul(&t["spectral.scale"]).unwrap().broadcast_add(&t["spectral.shift"]).unwrap();
+        (z.mean(0).unwrap().to_vec1().unwrap(), z.sqr().unwrap().mean(0).unwrap().to_vec1().unwrap(), flat_of(&t, "spectral.scale"))
+    };
+    let is_standard = |(mean, square, _): &(Vec<f32>, Vec<f32>, Vec<f32>)| {
+        mean.iter().all(|m| m.abs() < 1e-3) && square.iter().all(|v| (v - 1.0).abs() < 1e-2)
+    };
+    let saved = standardised(Run(&dir).model(), &read(&[split.train.as_slice(), &split.val].concat()));
+    let last = standardised(Run(&dir).last(), &read(&split.train));
+    assert!(is_standard(&saved) && is_standard(&last), "{saved:?} {last:?}");
+    assert_ne!(saved.2, last.2, "the checkpoint's head fitted again");
+    let test = crate::evaluate::evaluate(&model, &Samples::new(&data, &split.test, &meta.normalization)).unwrap().accuracy;
+    assert_eq!((result.test_accuracy, meta.provenance.test_accuracy), (test, Some(test)));
+    std::fs::remove_dir_all(dir).unwrap();
+}
