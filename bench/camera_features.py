@@ -21,10 +21,7 @@ FAMILY is one of the rows below (all of them if none is given):
   spectral_log_frames=true`;
 - `gradients-frames`: and soft histograms of each colour's differences between neighbouring
   values across and down (`pvt3_spec::spectrum::space::Histogram`), every frame a row: the head
-  of `--set spectral_gradients=true`;
-- `vote-frames`: `soft-frames` fitted alike, a touch read as the mean of its frames' log
-  probabilities (each frame's logits through a log-softmax) instead of by its frames' mean
-  features: not a head the trainer has.
+  of `--set spectral_gradients=true`.
 
 `--rings N` and `--bins N` (12 and 24, the camera layout's `spectral_bands` and
 `spectral_histogram`) change the head's rings and histogram bins; `--only 0:0,1:1` reads those
@@ -36,6 +33,7 @@ whole, by the mean of its frames' levels, powers and histograms (by the mean of 
 `logs-frames`). No test touch reaches the
 normalisation, the standardisation, the fit or the choice of penalty.
 """
+import argparse
 import statistics
 import sys
 from pathlib import Path
@@ -48,7 +46,7 @@ from camera_linear import TEST_FOLD, runs, t_975  # noqa: E402
 LAYOUT = (12, 24)  # the camera layout's spectral_bands and spectral_histogram
 (RINGS, BINS), RANGE = LAYOUT, 3.0
 PENALTIES = [1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 3e-4]
-FAMILIES = ["rings", "rings-frames", "histogram", "histogram-frames", "soft-frames", "logs-frames", "gradients-frames", "vote-frames"]
+FAMILIES = ["rings", "rings-frames", "histogram", "histogram-frames", "soft-frames", "logs-frames", "gradients-frames"]
 
 
 def ring_of(h, w, bands):
@@ -119,7 +117,7 @@ def run(frames, labels, folds, k, family):
     std = frames[train].std((0, 1)) + 1e-3
     h, w = frames.shape[2:4]
     ring = ring_of(h, w, RINGS)
-    soft, with_histogram = family.startswith(("soft", "logs", "gradients", "vote")), family != "rings" and family != "rings-frames"
+    soft, with_histogram = family.startswith(("soft", "logs", "gradients")), family != "rings" and family != "rings-frames"
     rows, touches = [], []
     for touch in frames:
         v = ((touch - mean) / std).transpose(0, 3, 1, 2)  # [T, C, H, W]
@@ -140,13 +138,9 @@ def run(frames, labels, folds, k, family):
     mu, sd = x.mean(0), x.std(0) + 1e-6
     z = lambda a: (a - mu) / sd  # noqa: E731
     classes = labels.max() + 1
-    read = rows if family == "vote-frames" else touches
 
     def accuracy(fit, which):
-        scores = z(read[which]) @ fit[0].T + fit[1]
-        if family == "vote-frames":  # [touches, T, classes]: the mean of each frame's log probabilities
-            scores = scores - scores.max(-1, keepdims=True)
-            scores = (scores - np.log(np.exp(scores).sum(-1, keepdims=True))).mean(1)
+        scores = z(touches[which]) @ fit[0].T + fit[1]
         return (scores.argmax(1) == labels[which]).mean()
 
     fits = [logistic(z(x), y, classes, p) for p in PENALTIES]
@@ -155,30 +149,35 @@ def run(frames, labels, folds, k, family):
     return scores[best], accuracy(fits[best], test), PENALTIES[best]
 
 
+def arguments():
+    """The command line, `--help` the module's docs."""
+    p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    p.add_argument("data", help="an imported camera data set (.npz)")
+    p.add_argument("runs", help="a `pvt3 cv` directory, whose runs' splits are read")
+    p.add_argument("families", nargs="*", metavar="FAMILY", help=f"the families to fit, of {', '.join(FAMILIES)} (all of them if none)")
+    p.add_argument("--rings", type=int, default=LAYOUT[0], help="rings of spatial frequency (the camera layout's spectral_bands)")
+    p.add_argument("--bins", type=int, default=LAYOUT[1], help="histogram bins (the camera layout's spectral_histogram)")
+    p.add_argument("--only", help="SEED:FOLD,...: these runs (seed, validation fold) alone")
+    a = p.parse_args()
+    unknown = [f for f in a.families if f not in FAMILIES]
+    if unknown:
+        p.error(f"unknown families {unknown}; the families are {FAMILIES}")
+    a.families = a.families or FAMILIES
+    return a
+
+
 def main():
     global RINGS, BINS
-    args, options = sys.argv[1:], {}
-    for name in ["--rings", "--bins", "--only"]:
-        if name in args[:-1]:
-            i = args.index(name)
-            options[name] = args.pop(i + 1)
-            args.pop(i)
-    if len(args) < 2:
-        sys.exit(__doc__)
-    RINGS, BINS = int(options.get("--rings", RINGS)), int(options.get("--bins", BINS))
-    only = options.get("--only")
-    only = only and {tuple(int(v) for v in pair.split(":")) for pair in only.split(",")}
-    families = args[2:] or FAMILIES
-    unknown = [f for f in families if f not in FAMILIES]
-    if unknown:
-        sys.exit(f"unknown families {unknown}; the families are {FAMILIES}")
-    data = np.load(args[0])
+    a = arguments()
+    RINGS, BINS = a.rings, a.bins
+    only = a.only and {tuple(int(v) for v in pair.split(":")) for pair in a.only.split(",")}
+    data = np.load(a.data)
     x, labels = data["x"], data["y"].astype(int)
     if x.ndim == 4:
         x = x[:, :, :, None, :]
     frames = x.transpose(0, 4, 1, 2, 3).astype(np.float32)  # [N, T, H, W, C]
-    recorded = [r for r in runs(args[1]) if not only or r[:2] in only]
-    for family in families:
+    recorded = [r for r in runs(a.runs) if not only or r[:2] in only]
+    for family in a.families:
         label = family if (RINGS, BINS) == LAYOUT else f"{family} (rings {RINGS}, bins {BINS})"
         results, vals = [], []
         for seed, k, folds in recorded:
