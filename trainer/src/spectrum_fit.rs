@@ -8,10 +8,7 @@
 //! its first frame arrives: 25 rows a touch where PhysiCLeAR gives 3 or 4 touches an object
 //! (docs/camera.md, "Every frame a row"); the penalty is chosen on whole validation windows.
 //! Such a head reads a pruned patch's pixels as 0 (`Pvt3::head_frames`), so a run that prunes
-//! patches fits it again, to what it then reads (`train`). At a run's end, once validation has
-//! chosen the epoch, the penalty and the stopping rule, it is fitted once more, with that
-//! penalty, to the training and validation touches together ([`refit`]): the map the test reads
-//! learns from every touch the run may read.
+//! patches fits it again, to what it then reads (`train`).
 
 use candle_core::{Device, Tensor};
 use candle_nn::VarMap;
@@ -34,80 +31,37 @@ const PENALTY: f64 = 3e-3;
 
 /// Sets `spectral.scale` and `spectral.shift` of a PVT³ model with a spectral head from the
 /// features of `train`, and for a head over an image's space its linear map, the penalty chosen
-/// on `val` (when not empty); does nothing for other models. Returns the penalty of a head over
-/// an image's space, which [`refit`] takes.
-pub fn fit(model: &Model, varmap: &VarMap, train: &Samples, val: &Samples) -> Result<Option<f64>> {
-    let Some((pvt3, spectrum)) = head(model) else { return Ok(None) };
+/// on `val` (when not empty); does nothing for other models.
+pub fn fit(model: &Model, varmap: &VarMap, train: &Samples, val: &Samples) -> Result<()> {
+    let Some((pvt3, spectrum)) = model.pvt3("the spectral head").ok().and_then(|m| Some((m, m.spectrum()?))) else {
+        return Ok(());
+    };
     let whole = pvt3.frame_weights(pvt3.config().time_tokens())?;
     let (features, labels) = match pvt3.config().spectral_space() {
         true => features_of(train, |x| Ok(spectrum.frame_features(&pvt3.head_frames(x)?, &whole)?))?,
         false => features_of(train, |x| Ok(spectrum.features(x, &whole)?))?,
     };
-    let (scale, shift) = standardisation(&features)?;
-    if !pvt3.config().spectral_space() {
-        assign(varmap, standardised_by(scale, shift))?;
-        return Ok(None);
-    }
-    let standard = |f: &Tensor| -> Result<Vec<Vec<f64>>> { Ok(f.broadcast_mul(&scale)?.broadcast_add(&shift)?.to_vec2::<f64>()?) };
-    let rows = standard(&features)?;
-    let validation = match val.is_empty() {
-        true => None,
-        false => features_of(val, |x| Ok(spectrum.features(&pvt3.head_frames(x)?, &whole)?))
-            .and_then(|(f, labels)| Ok((standard(&f)?, labels)))
-            .map(Some)?,
-    };
-    let (regression, penalty) = regression(&rows, &labels, pvt3.config().classes, validation);
-    assign(varmap, [standardised_by(scale, shift), mapped_by(&regression, pvt3.config().classes)?].concat())?;
-    Ok(Some(penalty))
-}
-
-/// Fits a head over an image's space again, its standardisation and its map with `penalty` (the
-/// one [`fit`] chose on the validation fold), to every frame of `set`: a run's training and
-/// validation touches, once validation has chosen the epoch and the penalty, so that the map the
-/// test reads learns from every touch the run may read (docs/camera.md, "The head fitted again").
-/// Does nothing for other models.
-pub fn refit(model: &Model, varmap: &VarMap, set: &Samples, penalty: f64) -> Result<()> {
-    let Some((pvt3, spectrum)) = head(model).filter(|(p, _)| p.config().spectral_space()) else { return Ok(()) };
-    let whole = pvt3.frame_weights(pvt3.config().time_tokens())?;
-    let (features, labels) = features_of(set, |x| Ok(spectrum.frame_features(&pvt3.head_frames(x)?, &whole)?))?;
-    let (scale, shift) = standardisation(&features)?;
-    let rows = features.broadcast_mul(&scale)?.broadcast_add(&shift)?.to_vec2::<f64>()?;
-    let regression = logistic::fit(&rows, &labels, pvt3.config().classes, penalty);
-    assign(varmap, [standardised_by(scale, shift), mapped_by(&regression, pvt3.config().classes)?].concat())
-}
-
-/// A PVT³ model's spectral head, if it has one.
-fn head(model: &Model) -> Option<(&pvt3_models::Pvt3, &pvt3_models::spectrum::Spectrum)> {
-    model.pvt3("the spectral head").ok().and_then(|m| Some((m, m.spectrum()?)))
-}
-
-/// Each feature's scale and shift `[features]` (f64) that make it mean 0 and standard deviation
-/// 1 over `features`' rows.
-fn standardisation(features: &Tensor) -> Result<(Tensor, Tensor)> {
     let mean = features.mean(0)?;
     let std = features.broadcast_sub(&mean)?.sqr()?.mean(0)?.sqrt()?;
     let scale = (std + 1e-6)?.recip()?;
     let shift = (mean.neg()? * &scale)?;
-    Ok((scale, shift))
-}
-
-/// The head's standardisation as its variables.
-fn standardised_by(scale: Tensor, shift: Tensor) -> Vec<(String, Tensor)> {
-    vec![(names::spectral(names::SCALE), scale), (names::spectral(names::SHIFT), shift)]
-}
-
-/// The head's linear map as its variables.
-fn mapped_by(regression: &logistic::Fit, classes: usize) -> Result<Vec<(String, Tensor)>> {
-    let f = regression.weight.len() / classes;
-    let linear = |leaf: &str| names::spectral(&names::join(&[names::LINEAR, leaf]));
-    Ok(vec![
-        (linear(names::WEIGHT), Tensor::from_vec(regression.weight.clone(), (classes, f), &Device::Cpu)?),
-        (linear(names::BIAS), Tensor::from_vec(regression.bias.clone(), classes, &Device::Cpu)?),
-    ])
-}
-
-/// Sets the model's variables `fitted` (as f32).
-fn assign(varmap: &VarMap, fitted: Vec<(String, Tensor)>) -> Result<()> {
+    let mut fitted = vec![(names::spectral(names::SCALE), scale.clone()), (names::spectral(names::SHIFT), shift.clone())];
+    if pvt3.config().spectral_space() {
+        let standard = |f: &Tensor| -> Result<Vec<Vec<f64>>> { Ok(f.broadcast_mul(&scale)?.broadcast_add(&shift)?.to_vec2::<f64>()?) };
+        let rows = standard(&features)?;
+        let validation = match val.is_empty() {
+            true => None,
+            false => features_of(val, |x| Ok(spectrum.features(&pvt3.head_frames(x)?, &whole)?))
+                .and_then(|(f, labels)| Ok((standard(&f)?, labels)))
+                .map(Some)?,
+        };
+        let classes = pvt3.config().classes;
+        let regression = regression(&rows, &labels, classes, validation);
+        let f = rows.first().map_or(0, Vec::len);
+        let linear = |leaf: &str| names::spectral(&names::join(&[names::LINEAR, leaf]));
+        fitted.push((linear(names::WEIGHT), Tensor::from_vec(regression.weight, (classes, f), &Device::Cpu)?));
+        fitted.push((linear(names::BIAS), Tensor::from_vec(regression.bias, classes, &Device::Cpu)?));
+    }
     let vars = varmap.data().lock().expect("the variable map's lock");
     for (name, value) in fitted {
         let var = vars.get(&name).ok_or(pvt3_spec::Error::MissingTensor { task: "fit the spectral head", name })?;
@@ -135,18 +89,13 @@ fn features_of(set: &Samples, read: impl Fn(&Tensor) -> Result<Tensor>) -> Resul
 }
 
 /// The fit whose penalty of [`PENALTIES`] reads the validation windows best (the strongest among
-/// equals), or the fit with [`PENALTY`] without them; and its penalty.
-fn regression(
-    rows: &[Vec<f64>],
-    labels: &[usize],
-    classes: usize,
-    validation: Option<(Vec<Vec<f64>>, Vec<usize>)>,
-) -> (logistic::Fit, f64) {
-    let Some((val_rows, val_labels)) = validation else { return (logistic::fit(rows, labels, classes, PENALTY), PENALTY) };
+/// equals), or the fit with [`PENALTY`] without them.
+fn regression(rows: &[Vec<f64>], labels: &[usize], classes: usize, validation: Option<(Vec<Vec<f64>>, Vec<usize>)>) -> logistic::Fit {
+    let Some((val_rows, val_labels)) = validation else { return logistic::fit(rows, labels, classes, PENALTY) };
     let scored = PENALTIES.iter().map(|p| {
         let fit = logistic::fit(rows, labels, classes, *p);
         let correct = fit.predict(&val_rows).iter().zip(&val_labels).filter(|(a, b)| a == b).count();
-        ((fit, *p), correct)
+        (fit, correct)
     });
     scored.reduce(|best, s| if s.1 > best.1 { s } else { best }).expect("penalties to choose from").0
 }

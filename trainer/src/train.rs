@@ -2,10 +2,8 @@
 //! and stepped by its [`Learner`]) with warm-up and cosine decay ([`Schedule`]), weight
 //! averaging ([`crate::average`]), and epoch selection by validation accuracy. Every epoch appends
 //! a line to `metrics.jsonl` and saves the run state under `last/`, so `--resume` continues an
-//! interrupted run exactly; the best epoch's checkpoint is kept under `model/` (its head over an
-//! image's space, if any, fitted again at the end to the training and validation touches:
-//! `crate::spectrum_fit::refit`). A joint run (`--joint`) is the same loop over two sensors
-//! ([`sensor::Sensor`]), which step together.
+//! interrupted run exactly; the best epoch's checkpoint is kept under `model/`. A joint run
+//! (`--joint`) is the same loop over two sensors ([`sensor::Sensor`]), which step together.
 //!
 //! Run directory: `model/` (the checkpoint), `last/` (resume state), `metrics.jsonl`,
 //! `result.json` (written when the run is complete); a joint run's other sensor has its own in
@@ -61,10 +59,6 @@ struct RunState {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     partner_best: Option<Best>,
     wall_seconds: f64,
-    /// Each sensor's head over an image's space: the penalty its map's fit took at the start,
-    /// which the fit again at the end takes ([`crate::spectrum_fit::refit`]).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    head_penalties: Vec<Option<f64>>,
 }
 
 impl RunState {
@@ -216,23 +210,19 @@ fn start(sensors: &mut [Sensor], spec: &RunSpec, opts: &TrainOptions, state: Opt
             state
         }
         None => {
-            // A run from given weights (fine-tuning) keeps its temporal spectral heads as they
-            // are. A head over the image's space is fitted again to the training touches: the
-            // run it starts from fitted it again to its validation touches at its end, and a run
-            // that prunes patches it read now reads them as 0.
-            let mut head_penalties = Vec::new();
+            // A run from given weights (fine-tuning) keeps its spectral heads as they are, unless
+            // it prunes patches a head over the image's space read: it now reads them as 0.
+            let prunes_pixels = spec.config.spectral_space() && spec.pruning.as_ref().is_some_and(|p| p.patches > 0.0);
+            if spec.start.is_none() || prunes_pixels {
+                for sensor in sensors.iter() {
+                    crate::spectrum_fit::fit(&sensor.net.learner.model, &sensor.net.learner.varmap, &sensor.train_set, &sensor.val_set)?;
+                }
+            }
             for sensor in sensors.iter() {
-                let penalty = match spec.start.is_none() || spec.config.spectral_space() {
-                    true => {
-                        crate::spectrum_fit::fit(&sensor.net.learner.model, &sensor.net.learner.varmap, &sensor.train_set, &sensor.val_set)?
-                    }
-                    false => None,
-                };
-                head_penalties.push(penalty);
                 let _ = std::fs::remove_file(Run(&sensor.dir).metrics());
             }
             let rng = Rng::new(opts.seed.wrapping_add(1));
-            RunState { epochs_done: 0, step: 0, rng, best: None, partner_best: None, wall_seconds: 0.0, head_penalties }
+            RunState { epochs_done: 0, step: 0, rng, best: None, partner_best: None, wall_seconds: 0.0 }
         }
     };
     for sensor in sensors.iter_mut() {
@@ -279,11 +269,7 @@ fn save_last(
 fn finish(sensors: &[Sensor], spec: &RunSpec, opts: &TrainOptions, run: &mut RunState) -> Result<RunResult> {
     let mut result = None;
     for (i, sensor) in sensors.iter().enumerate().rev() {
-        let mut best = run.best_of(i).clone().ok_or_else(|| Error::Usage("no epoch was trained (epochs = 0)".into()))?;
-        calibrate_stopping(&Run(&sensor.dir).model(), &sensor.val_set)?;
-        if let Some(penalty) = run.head_penalties.get(i).copied().flatten() {
-            best.test_accuracy = refit_head(sensor, penalty)?.unwrap_or(best.test_accuracy);
-        }
+        let best = run.best_of(i).clone().ok_or_else(|| Error::Usage("no epoch was trained (epochs = 0)".into()))?;
         let done = RunResult {
             val_fold: spec.val_fold,
             seed: opts.seed,
@@ -293,6 +279,7 @@ fn finish(sensors: &[Sensor], spec: &RunSpec, opts: &TrainOptions, run: &mut Run
             epochs: opts.optimization.epochs,
             wall_seconds: run.wall_seconds,
         };
+        calibrate_stopping(&Run(&sensor.dir).model(), &sensor.val_set)?;
         write_json(&Run(&sensor.dir).result(), &done)?;
         result = Some(done);
     }
@@ -341,25 +328,6 @@ fn calibrate_stopping(dir: &Path, val_set: &Samples) -> Result<()> {
     let Some(pvt3) = crate::anytime::answering(&model) else { return Ok(()) };
     meta.provenance.stopping = Some(crate::anytime::prefixes(pvt3, val_set)?.calibrate());
     write_json_atomically(&Checkpoint(dir).provenance(), &meta.provenance)
-}
-
-/// Fits the head over the image's space of the checkpoint in the sensor's `model/` again, with
-/// `penalty`, to its training and validation touches ([`crate::spectrum_fit::refit`]), after
-/// validation has chosen the epoch, the penalty and the stopping rule; returns the test accuracy
-/// it then reads (`None` without test touches), which its provenance records. Nothing happens
-/// without validation touches (a final model fits every touch from the start).
-fn refit_head(sensor: &Sensor, penalty: f64) -> Result<Option<f64>> {
-    if sensor.val_set.is_empty() {
-        return Ok(None);
-    }
-    let dir = Run(&sensor.dir).model();
-    let (mut meta, model, varmap) = checkpoint::load(&dir)?;
-    let read = Samples::new(sensor.data, &[sensor.split.train.as_slice(), &sensor.split.val].concat(), &sensor.normalization);
-    crate::spectrum_fit::refit(&model, &varmap, &read, penalty)?;
-    let test = (!sensor.test_set.is_empty()).then(|| crate::evaluate::evaluate(&model, &sensor.test_set)).transpose()?.map(|e| e.accuracy);
-    meta.provenance.test_accuracy = test;
-    checkpoint::save(&dir, &varmap, &meta)?;
-    Ok(test)
 }
 
 /// Keeps the first `epochs` lines of a metrics log (a crash may have left one more).

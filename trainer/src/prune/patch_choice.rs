@@ -3,9 +3,8 @@
 //! which patches a class needs; the validation fold says it directly. One patch at a time, the patch
 //! without which the validation loss is lowest goes (greedy backward elimination): a patch count
 //! times the removed count evaluations of the validation fold, and no test touch read. A head over
-//! the image's space reads a removed patch's pixels as 0 with its map as fitted to the training
-//! touches (the fine-tuning fits it again), so the loss weighs what the head loses with the patch
-//! too.
+//! the image's space reads a removed patch's pixels as 0 with its map as fitted (the fine-tuning
+//! fits it again), so the loss weighs what the head loses with the patch too.
 
 use std::path::Path;
 
@@ -40,16 +39,13 @@ pub fn kept(
     if stage.spec.patches == 0.0 || stage.spec.patch_choice != PatchChoice::Validation {
         return Ok(None);
     }
-    let split = data.split_for(meta.provenance.val_fold)?;
-    if split.val.is_empty() {
+    let validation = data.split_for(meta.provenance.val_fold)?.val;
+    if validation.is_empty() {
         let why = format!("{} has no validation fold to choose patches by; prune it with --patch-choice magnitude", parent.display());
         return Err(Error::Usage(why));
     }
     let removed = plan[names::PATCH_MASK].iter().filter(|k| !**k).count();
-    let samples = Samples::new(data, &split.val, &meta.normalization);
-    // The parent's head over the image's space was fitted again to its validation touches at its
-    // end: fitted to its training touches alone, as at its start, it scores them as unseen.
-    crate::spectrum_fit::fit(model, varmap, &Samples::new(data, &split.train, &meta.normalization), &samples)?;
+    let samples = Samples::new(data, &validation, &meta.normalization);
     by_validation(model, varmap, &samples, removed, bar).map(Some)
 }
 
