@@ -74,9 +74,12 @@ pub fn configure(data: &Dataset, choice: &ModelChoice, options: &TrainOptions) -
             data.lengths.iter().min().unwrap_or(&0)
         ));
     }
-    let mut cfg = base_config(data, choice, &mut notes)?;
+    let (mut cfg, derived) = base_config(data, choice)?;
     cfg.classes = data.classes();
     cfg = apply_overrides(cfg, &choice.overrides)?;
+    if derived {
+        notes.push(derived_layout(&cfg, &data.window_shape()));
+    }
     cfg.dropout = choice.dropout.unwrap_or(cfg.dropout);
     let (cfg, options) = robust(data, cfg, options, &choice.overrides, &mut notes)?;
     cfg.validate()?;
@@ -164,53 +167,59 @@ pub const ROBUST_STRETCH: f64 = 1.0;
 pub const ROBUST_SPECTRAL_BANDS: usize = 16;
 
 /// The configuration before overrides: the preset named (in the chosen network's variant), the
-/// file given, else the preset whose window is the data's, else one derived for the data's shape.
-fn base_config(data: &Dataset, choice: &ModelChoice, notes: &mut Vec<String>) -> Result<Config> {
+/// file given, else the preset whose window is the data's, else one derived for the data's shape
+/// (then `true`: [`derived_layout`] says what was derived, once the overrides are applied).
+fn base_config(data: &Dataset, choice: &ModelChoice) -> Result<(Config, bool)> {
     let architecture = choice.architecture;
     let preset = |name: &str| match architecture {
         Architecture::Pvt3 => Config::preset(name),
         model => Config::sensor_preset(name, model),
     };
     if let Some(p) = &choice.preset {
-        return Ok(preset(p)?);
+        return Ok((preset(p)?, false));
     }
     if let Some(path) = &choice.config {
-        return resolve_config(&path.display().to_string());
+        return Ok((resolve_config(&path.display().to_string())?, false));
     }
     let window = data.window_shape();
     let fitting = pvt3_spec::config::PRESETS.iter().map(|p| Config::sensor_preset(p, architecture).expect("known preset"));
     if let Some(cfg) = fitting.into_iter().find(|c| c.sample_shape() == window) {
-        return Ok(cfg);
+        return Ok((cfg, false));
     }
-    let shape = window.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(" × ");
     let derived = Config::for_sensor(&window)
-        .ok_or_else(|| Error::Usage(format!("samples of shape {shape}: expected [height, width, (channels,) frames]")))?;
-    let chosen = derived.clone().for_model(architecture);
-    let layout = if pvt3_spec::config::is_image(derived.height, derived.width) {
-        let (ph, pw) = (derived.patch_height, derived.patch_width);
-        let grid = format!("{} × {}", derived.height / ph, derived.width / pw);
-        let head = match chosen.spectral_space() {
+        .ok_or_else(|| Error::Usage(format!("samples of shape {}: expected [height, width, (channels,) frames]", shape(&window))))?;
+    Ok((derived.for_model(architecture), true))
+}
+
+/// The note on a layout derived for samples of `window` (`Config::for_sensor`), as `cfg` has it
+/// after the user's overrides.
+fn derived_layout(cfg: &Config, window: &[usize]) -> String {
+    let layout = if pvt3_spec::config::is_image(cfg.height, cfg.width) {
+        let (ph, pw) = (cfg.patch_height, cfg.patch_width);
+        let grid = format!("{} × {}", cfg.height / ph, cfg.width / pw);
+        let head = match cfg.spectral_space() {
             true => format!(
                 ", a spectral head over the image's space ({} rings, a histogram of {} bins{})",
-                chosen.spectral_bands(),
-                chosen.spectral_histogram(),
-                if chosen.spectral_gradients() { " of the values and of their gradients across and down" } else { "" }
+                cfg.spectral_bands(),
+                cfg.spectral_histogram(),
+                if cfg.spectral_gradients() { " of the values and of their gradients across and down" } else { "" }
             ),
             false => String::new(),
         };
-        format!("derived a camera's layout, patches of {ph} × {pw} pixels ({grid} a frame){head}, one token per {} frames", derived.tubelet)
+        format!("a camera's layout, patches of {ph} × {pw} pixels ({grid} a frame){head}, one token per {} frames", cfg.tubelet)
     } else {
-        format!(
-            "derived the BioTac layout, one token per {} frames of all {} values of a frame",
-            derived.tubelet,
-            derived.sensor_channels()
-        )
+        format!("the BioTac layout, one token per {} frames of all {} values of a frame", cfg.tubelet, cfg.sensor_channels())
     };
-    notes.push(format!(
-        "no preset takes samples of {shape}: {layout} ({} temporal tokens); `pvt3 info --json` and --config FILE to choose otherwise",
-        derived.time_tokens()
-    ));
-    Ok(chosen)
+    format!(
+        "no preset takes samples of {}: derived {layout} ({} temporal tokens); `pvt3 info --json` and --config FILE to choose otherwise",
+        shape(window),
+        cfg.time_tokens()
+    )
+}
+
+/// `30 × 40 × 3 × 25`.
+fn shape(window: &[usize]) -> String {
+    window.iter().map(|d| d.to_string()).collect::<Vec<_>>().join(" × ")
 }
 
 /// The options that only some models or values allow.
@@ -355,6 +364,22 @@ mod tests {
         let mut on = asked;
         on.augmentation.robust = Robust::On;
         assert_eq!(robust(&data, &on, &[]).0, all);
+    }
+
+    #[test]
+    fn a_derived_layout_is_told_as_the_overrides_leave_it() {
+        // Four touches of 30 × 40 RGB, 25 frames: a camera's layout is derived.
+        let data = Dataset::in_memory(vec![0.0f32; 4 * 30 * 40 * 3 * 25], vec![30, 40, 3, 25], vec![0, 1, 0, 1]);
+        let note = |overrides: &[&str]| {
+            let choice = super::ModelChoice { overrides: overrides.iter().map(|o| o.to_string()).collect(), ..Default::default() };
+            let configured = super::configure(&data, &choice, &TrainOptions::default()).unwrap();
+            configured.notes.into_iter().find(|n| n.starts_with("no preset takes samples of 30 × 40 × 3 × 25")).unwrap()
+        };
+        let default = note(&[]);
+        assert!(default.contains("patches of 10 × 10 pixels (3 × 4 a frame), a spectral head over the image's space"), "{default}");
+        assert!(default.contains("one token per 1 frames (25 temporal tokens)"), "{default}");
+        let asked = note(&["tubelet=5", "spectral_histogram=0", "spectral_bands=0"]);
+        assert!(asked.contains("(3 × 4 a frame), one token per 5 frames (5 temporal tokens)"), "{asked}");
     }
 
     #[test]
