@@ -81,7 +81,10 @@ pub fn configure(data: &Dataset, choice: &ModelChoice, options: &TrainOptions) -
         notes.push(derived_layout(&cfg, &data.window_shape()));
     }
     cfg.dropout = choice.dropout.unwrap_or(cfg.dropout);
-    let (cfg, options) = robust(data, cfg, options, &choice.overrides, &mut notes)?;
+    let (cfg, mut options) = robust(data, cfg, options, &choice.overrides, &mut notes)?;
+    if let Some(note) = patience(&cfg, &mut options) {
+        notes.push(note);
+    }
     cfg.validate()?;
     check_options(&cfg, &options)?;
     let classes = class_names(data, choice.class_names.as_deref(), cfg.classes)?;
@@ -155,6 +158,26 @@ pub fn robust(
     ));
     Ok((cfg, options))
 }
+
+/// `--patience` where the user left it unasked: [`FITTED_HEAD_PATIENCE`] for a PVT³ whose spectral
+/// head over an image's space is fitted before the first step (a camera's layout), else none.
+/// Says so when it sets it.
+fn patience(cfg: &Config, options: &mut TrainOptions) -> Option<String> {
+    let patience = &mut options.optimization.patience;
+    if patience.is_some() || !cfg.spectral_space() {
+        return None;
+    }
+    *patience = Some(FITTED_HEAD_PATIENCE);
+    Some(format!(
+        "the head over the image's space is fitted before the first step, and validation peaks in the first epochs: a run stops once it has not risen for {FITTED_HEAD_PATIENCE} epochs (--patience {FITTED_HEAD_PATIENCE}; --patience 0 trains every epoch: docs/camera.md)"
+    ))
+}
+
+/// `--patience` of a model whose spectral head over an image's space is fitted: on PhysiCLeAR its
+/// validation accuracy is highest within the first 30 epochs and falls after (a run's longest
+/// wait between two rises was 17 epochs), so 20 epochs without a rise end a run where 100
+/// would select the same epoch (docs/camera.md, "Memory and time at image size").
+pub const FITTED_HEAD_PATIENCE: usize = 20;
 
 /// The spread of `--robust`'s per-channel factors: on FabricSlide the best measured for the other
 /// sliding direction, and no worse than none for unseen forces (docs/robustness.md).
@@ -380,6 +403,28 @@ mod tests {
         assert!(default.contains("one token per 1 frames (25 temporal tokens)"), "{default}");
         let asked = note(&["tubelet=5", "spectral_histogram=0", "spectral_bands=0"]);
         assert!(asked.contains("(3 × 4 a frame), one token per 5 frames (5 temporal tokens)"), "{asked}");
+    }
+
+    #[test]
+    fn a_model_with_a_fitted_head_over_the_image_stops_when_validation_stalls_unless_asked() {
+        let data = Dataset::in_memory(vec![0.0f32; 4 * 30 * 40 * 3 * 25], vec![30, 40, 3, 25], vec![0, 1, 0, 1]);
+        let patience = |overrides: &[&str], asked: Option<usize>| {
+            let choice = super::ModelChoice { overrides: overrides.iter().map(|o| o.to_string()).collect(), ..Default::default() };
+            let mut options = TrainOptions::default();
+            options.optimization.patience = asked;
+            let configured = super::configure(&data, &choice, &options).unwrap();
+            let said = configured.notes.iter().any(|n| n.contains("--patience 20; --patience 0 trains every epoch"));
+            (configured.options.optimization.patience, said)
+        };
+        assert_eq!(patience(&[], None), (Some(super::FITTED_HEAD_PATIENCE), true));
+        // Asked, even as 0: as asked, and nothing said.
+        assert_eq!(patience(&[], Some(0)), (Some(0), false));
+        assert_eq!(patience(&[], Some(5)), (Some(5), false));
+        // No head over the image: every epoch.
+        assert_eq!(patience(&["spectral_histogram=0", "spectral_bands=0"], None), (None, false));
+        let icub = Dataset::in_memory(vec![0.0f32; 4 * 6 * 10 * 75], vec![6, 10, 75], vec![0, 1, 0, 1]);
+        let configured = super::configure(&icub, &super::ModelChoice::default(), &TrainOptions::default()).unwrap();
+        assert_eq!(configured.options.optimization.patience, None);
     }
 
     #[test]

@@ -84,6 +84,14 @@ pub struct Optimization {
     /// Clip the global gradient norm to this (0: no clipping).
     #[arg(long, default_value_t = 1.0, help_heading = OPTIMISATION)]
     pub clip_grad: f64,
+    /// Stop a run once its validation accuracy has not risen (nor, at equal accuracy, its loss
+    /// fallen) for this many epochs; the best epoch is kept as always. 0 trains every epoch.
+    /// Unless asked: 0, and 20 for a model whose spectral head over an image's space is fitted
+    /// before the first step (a camera's layout), whose validation peaks in the first epochs
+    /// (docs/camera.md).
+    #[arg(long, help_heading = OPTIMISATION)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub patience: Option<usize>,
 }
 
 /// How training windows are changed as they are batched ([`crate::data::augment`]) and how a
@@ -301,8 +309,9 @@ mod tests {
     fn the_groups_write_and_read_one_flat_object_in_the_recorded_order() {
         let mut options = TrainOptions::default();
         options.distillation.teachers = Some("runs/cv".into());
+        options.optimization.patience = Some(20);
         let json = serde_json::to_string(&options).unwrap();
-        let order = "epochs batch_size lr lr_floor warmup_epochs weight_decay label_smoothing clip_grad aug_gain aug_noise \
+        let order = "epochs batch_size lr lr_floor warmup_epochs weight_decay label_smoothing clip_grad patience aug_gain aug_noise \
             aug_shift aug_scale aug_channel_scale aug_vibration aug_stretch aug_reverse aug_translate aug_flip mixup extrapolate extrapolate_levels robust ema seed l1 \
             mask_lr random_prune prefix_training distill distill_weight hold_pruned hold_zero_weights";
         let positions: Vec<usize> = order.split_whitespace().map(|k| json.find(&format!("\"{k}\":")).expect(k)).collect();
@@ -314,5 +323,8 @@ mod tests {
         let read: TrainOptions = serde_json::from_str(older).unwrap();
         assert_eq!((read.optimization.epochs, read.optimization.lr_floor, read.augmentation.gain), (3, 0.01, 0.2));
         assert_eq!((read.pruning.mask_lr, read.distillation.weight, read.held.pruned, read.seed), (1.0, 1.0, false, 7));
+        assert_eq!(read.optimization.patience, None);
+        // Left out while unasked, so that a run without it records the options it always did.
+        assert!(!serde_json::to_string(&TrainOptions::default()).unwrap().contains("patience"));
     }
 }

@@ -1,6 +1,7 @@
 //! The training loop: epochs of optimiser steps (`epoch`: a sensor's windows, augmented, batched
 //! and stepped by its [`Learner`]) with warm-up and cosine decay ([`Schedule`]), weight
-//! averaging ([`crate::average`]), and epoch selection by validation accuracy. Every epoch appends
+//! averaging ([`crate::average`]), epoch selection by validation accuracy, and a stop once it has
+//! not risen for `--patience` epochs. Every epoch appends
 //! a line to `metrics.jsonl` and saves the run state under `last/`, so `--resume` continues an
 //! interrupted run exactly; the best epoch's checkpoint is kept under `model/`. A joint run
 //! (`--joint`) is the same loop over two sensors ([`sensor::Sensor`]), which step together.
@@ -44,6 +45,7 @@ pub struct RunResult {
     pub val_accuracy: f64,
     #[serde(deserialize_with = "nan_from_null")]
     pub test_accuracy: f64,
+    /// The epochs trained: the options' `epochs`, or fewer where `patience` stopped the run.
     pub epochs: usize,
     pub wall_seconds: f64,
 }
@@ -133,6 +135,9 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
     let mut logs = sensors.iter().map(|s| open_log(&Run(&s.dir).metrics())).collect::<Result<Vec<_>>>()?;
     let first_epoch = run.epochs_done + 1;
     for epoch in first_epoch..=opts.optimization.epochs {
+        if stalled(&run, sensors.len(), opts.optimization.patience) {
+            break;
+        }
         if spec.pause_after.is_some_and(|p| epoch - first_epoch >= p) {
             return Ok(None);
         }
@@ -163,6 +168,15 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
         ));
     }
     finish(&sensors, spec, &opts, &mut run).map(Some)
+}
+
+/// Whether `--patience` stops the run after its epochs done: every sensor's validation has not
+/// improved for that many epochs. Asked before an epoch, not after, so that a run interrupted
+/// after its last epoch stops where it would have.
+fn stalled(run: &RunState, sensors: usize, patience: Option<usize>) -> bool {
+    let Some(patience) = patience.filter(|p| *p > 0) else { return false };
+    let best = |i: usize| if i == 0 { &run.best } else { &run.partner_best };
+    (0..sensors).all(|i| best(i).as_ref().is_some_and(|b| run.epochs_done >= b.epoch + patience))
 }
 
 /// The configuration, options and state of the run to resume from its checkpoint `dir` (a
@@ -276,7 +290,7 @@ fn finish(sensors: &[Sensor], spec: &RunSpec, opts: &TrainOptions, run: &mut Run
             best_epoch: best.epoch,
             val_accuracy: best.val_accuracy,
             test_accuracy: best.test_accuracy,
-            epochs: opts.optimization.epochs,
+            epochs: run.epochs_done,
             wall_seconds: run.wall_seconds,
         };
         calibrate_stopping(&Run(&sensor.dir).model(), &sensor.val_set)?;

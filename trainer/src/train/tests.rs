@@ -62,6 +62,7 @@ fn options(epochs: usize) -> TrainOptions {
             weight_decay: 0.01,
             label_smoothing: 0.1,
             clip_grad: 1.0,
+            patience: None,
         },
         augmentation: Augmentation {
             gain: 0.1,
@@ -499,4 +500,22 @@ fn a_head_over_the_image_is_fitted_and_held() {
     assert!((bias[0] + bias[1]).abs() < 1e-6 && weight.iter().any(|w| w.abs() > 1e-3), "{weight:?} {bias:?}");
     assert_ne!(flat_of(&first, "patch_embed.weight"), flat_of(&last, "patch_embed.weight"), "the network trains");
     std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// `--patience` ends a run once validation has stalled that long: every epoch until then is the
+/// run's without it, the result counts the epochs trained, and a paused run stops where it would.
+#[test]
+fn patience_stops_a_run_whose_validation_stalls_and_resumes_exactly() {
+    let data = tiny_data();
+    let dir = resumes_exactly("patience", &data, options_with(30, |o| o.optimization.patience = Some(2)));
+    let r: RunResult = read_json(&Run(&dir).result()).unwrap();
+    let trained = metrics(&dir);
+    assert!(trained.len() < 30, "stopped: {r:?}");
+    assert_eq!((r.epochs, trained.len()), (r.best_epoch + 2, r.best_epoch + 2), "{r:?}");
+    let every = out_dir("patience-every");
+    let all = train(&spec(&data, 30, None), &every, false, &ProgressBar::hidden()).unwrap().unwrap();
+    assert_eq!(all.epochs, 30);
+    assert_eq!(metrics(&every)[..trained.len()], trained[..], "the same epochs until the stop");
+    std::fs::remove_dir_all(dir).unwrap();
+    std::fs::remove_dir_all(every).unwrap();
 }
