@@ -303,7 +303,11 @@ fn a_spectral_head_runs_in_tract_as_the_reference_and_streams() {
 fn camera_model(log_frames: bool) -> (Pvt3, pvt3_spec::baked::BakedPvt3, Normalization, pvt3_export::Metadata) {
     let layout = Config { classes: 5, ..Config::for_sensor(&[30, 40, 3, 25]).unwrap() };
     let pvt3_spec::Network::Pvt3(network) = layout.network else { panic!("a camera's layout is a PVT³") };
-    let cfg = Config { network: pvt3_models::Pvt3Config { patch_selection: true, spectral_gradients: true, spectral_log_frames: log_frames, ..network }.into(), ..layout };
+    let cfg = Config {
+        network: pvt3_models::Pvt3Config { patch_selection: true, spectral_gradients: true, spectral_log_frames: log_frames, ..network }
+            .into(),
+        ..layout
+    };
     assert_eq!((cfg.patch_height, cfg.patch_width, cfg.num_patches(), cfg.dim), (10, 10, 12, 64));
     assert_eq!(
         (cfg.spectral_space(), cfg.spectral_bands(), cfg.spectral_histogram(), cfg.spectral_gradients()),
@@ -448,6 +452,14 @@ fn a_camera_s_frames_are_read_as_the_import_read_them() {
         let worst = got.probabilities.iter().zip(&expected).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
         assert!(worst <= 1e-5, "camera frames against the reference: {worst:e}");
     }
+    // Whole touches as a data set lays them out, frames last (`pvt3-run` given the camera's bytes).
+    let laid: Vec<u8> = (0..2).flat_map(|_| (0..60 * 80 * 3).flat_map(|i| touch.iter().map(move |f| f[i]))).collect();
+    for got in c.classify_camera_touches(&laid, 2).unwrap() {
+        let worst = got.probabilities.iter().zip(&expected).map(|(a, b)| (*a as f64 - b).abs()).fold(0.0, f64::max);
+        assert!(worst <= 1e-5, "whole touches of camera frames against the reference: {worst:e}");
+    }
+    let err = c.classify_camera_touches(&laid[1..], 2).unwrap_err().to_string();
+    assert!(err.contains("are not 2 touches of whole camera frames of 14400 bytes"), "{err}");
     let err = session.push_camera_frame(&touch[0][1..]).unwrap_err();
     assert!(matches!(err, Error::FrameLength { got: 14399, expected: 14400 }), "{err}");
     std::fs::remove_dir_all(dir).unwrap();

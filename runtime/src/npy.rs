@@ -1,5 +1,5 @@
-//! A minimal `.npy` reader for the robot-side command line: little-endian float32, float64 or
-//! int16, C order. Small enough to keep the runtime free of array and zip crates.
+//! A minimal `.npy` reader for the robot-side command line: little-endian float32, float64,
+//! int16 or 8-bit unsigned (a camera's frames, as `pvt3 import` keeps them), C order. Small enough to keep the runtime free of array and zip crates.
 
 use crate::{Error, Result};
 
@@ -36,7 +36,8 @@ pub fn read_npy(path: &std::path::Path) -> Result<(Vec<usize>, Vec<f32>)> {
         "<f4" => (4, |b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
         "<f8" => (8, |b| f64::from_le_bytes(b.try_into().expect("8 bytes")) as f32),
         "<i2" => (2, |b| i16::from_le_bytes([b[0], b[1]]) as f32),
-        other => return Err(bad(&format!("dtype {other} is not supported (use float32, float64 or int16)"))),
+        "|u1" => (1, |b| f32::from(b[0])),
+        other => return Err(bad(&format!("dtype {other} is not supported (use float32, float64, int16 or uint8)"))),
     };
     if data.len() != count * width {
         return Err(bad(&format!("holds {} bytes of data; shape {shape:?} needs {}", data.len(), count * width)));

@@ -1,8 +1,41 @@
 //! [`Session::push_camera_frame`]: a camera's 8-bit frames, as the camera gives them, read as
-//! the training's import read its videos ([`crate::picture::Picture::read_as`]).
+//! the training's import read its videos ([`crate::picture::Picture::read_as`]); and
+//! [`Classifier::classify_camera_touches`], whole touches of them (`pvt3-run`).
 
 use crate::picture::Picture;
-use crate::{Error, Result, Session};
+use crate::{Classifier, Error, Prediction, Result, Session};
+
+impl Classifier {
+    /// The answers for `batch` touches of a camera's 8-bit frames as it gives them, laid out as a
+    /// data set holds touches, frames last: `[batch, height, width, channels, frames]` of the
+    /// camera's frame ([`Classifier::camera_frame_len`] values a frame), each touch's frames
+    /// pushed in order to a session ([`Session::push_camera_frame`]) and answered at its end. A
+    /// model read less the touch's first frame takes that frame first, one more than its window.
+    pub fn classify_camera_touches(&self, values: &[u8], batch: usize) -> Result<Vec<Prediction>> {
+        let frame_len = self.camera_frame_len();
+        if batch == 0 {
+            return Err(Error::EmptyBatch);
+        }
+        let touch_len = values.len() / batch;
+        if touch_len * batch != values.len() || touch_len % frame_len != 0 || touch_len == 0 {
+            let got = values.len();
+            return Err(Error::Touch(format!("{got} bytes are not {batch} touches of whole camera frames of {frame_len} bytes")));
+        }
+        let frames = touch_len / frame_len;
+        let mut session = self.session()?;
+        let mut frame = vec![0u8; frame_len];
+        values
+            .chunks_exact(touch_len)
+            .map(|touch| {
+                for t in 0..frames {
+                    frame.iter_mut().enumerate().for_each(|(i, v)| *v = touch[i * frames + t]);
+                    session.push_camera_frame(&frame)?;
+                }
+                session.finish()
+            })
+            .collect()
+    }
+}
 
 impl Session {
     /// Takes the camera's next frame, 8-bit, `[height, width, channels]` row-major, channels

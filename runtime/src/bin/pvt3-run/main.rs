@@ -1,7 +1,10 @@
 //! `pvt3-run MODEL.onnx INPUT.npy`: classify tactile windows on the robot with the pvt3 runtime.
 //! INPUT holds one window `[height, width, (channels,) frames]` or a batch of them, raw sensor
-//! values as recorded (axes of length 1 may be left out). Prints one line per window: index,
-//! class, label, probability; with `--json`, one JSON object per window with every probability.
+//! values as recorded (axes of length 1 may be left out); for a model of a camera's frames that
+//! records how `pvt3 import` read them (`pvt3.camera`), INPUT may instead hold touches of the
+//! camera's 8-bit frames as it gives them, read as the import read them. Prints one line per
+//! window: index, class, label, probability; with `--json`, one JSON object per window with
+//! every probability.
 //! `--help` and `--version` answer on standard output.
 //!
 //! `pvt3-run --bench MODEL.onnx [THREADS [SECONDS]]` measures latency on this machine instead
@@ -20,8 +23,12 @@ const USAGE: &str = "usage: pvt3-run [--json] MODEL.onnx INPUT.npy
        pvt3-run --help | --version
 
 Classifies the window(s) in INPUT (raw sensor values, [batch,] height, width, [channels,] frames;
-axes of length 1 may be left out) with the exported model, one line per window: index, class,
-label, probability; --json prints one JSON object per window instead, with every probability.
+axes of length 1 may be left out; float32, float64, int16 or uint8) with the exported model, one
+line per window: index, class, label, probability; --json prints one JSON object per window
+instead, with every probability. For a model of a camera's frames that records how pvt3 import
+read them, INPUT may hold the camera's 8-bit frames as it gives them ([batch,] its height, width,
+channels, frames: one more, first, for a model read less the touch's first), each read as the
+import read them.
 --bench measures latency instead, on THREADS threads (default 1) for about SECONDS (default 2)
 per measurement: batch 1 and 32, batch 1 with tract's own kernels and with kernels timed at load,
 the first call, and a streamed touch (per kept frame, per pruned frame, end of touch; not for a
@@ -66,9 +73,15 @@ fn usage() -> ExitCode {
 fn run(model: &str, input: &str, json: bool) -> pvt3_runtime::Result<()> {
     let classifier = Classifier::load(model)?;
     let (shape, values) = read_npy(std::path::Path::new(input))?;
-    let batch =
-        windows(&shape, classifier.sample_shape()).map_err(|reason| pvt3_runtime::Error::Npy { path: input.to_string(), reason })?;
-    for (i, p) in classifier.classify_batch(&values, batch)?.iter().enumerate() {
+    let npy = |reason| pvt3_runtime::Error::Npy { path: input.to_string(), reason };
+    // The model's own windows, else touches of the camera's frames as it gives them.
+    let camera = classifier.camera().and_then(|c| batch_of(&shape[..shape.len().saturating_sub(1)], &c.recorded));
+    let predictions = match (windows(&shape, classifier.sample_shape()), camera) {
+        (Ok(batch), _) => classifier.classify_batch(&values, batch)?,
+        (Err(_), Some(touches)) => classifier.classify_camera_touches(&bytes(&values).map_err(npy)?, touches)?,
+        (Err(why), None) => return Err(npy(why)),
+    };
+    for (i, p) in predictions.iter().enumerate() {
         match json {
             true => {
                 let line = serde_json::json!({"window": i, "class": p.class, "label": p.label, "probabilities": p.probabilities});
@@ -88,14 +101,10 @@ fn windows(shape: &[usize], sample: &[usize]) -> Result<usize, String> {
     if shape.contains(&0) {
         return Err(format!("an empty array, of shape [{}]", numbers(shape, ", ")));
     }
+    if let Some(batch) = batch_of(shape, sample) {
+        return Ok(batch);
+    }
     let long = |s: &[usize]| s.iter().copied().filter(|&n| n != 1).collect::<Vec<_>>();
-    let (got, want) = (long(shape), long(sample));
-    if got == want {
-        return Ok(1);
-    }
-    if got.len() == want.len() + 1 && got[1..] == want[..] {
-        return Ok(got[0]);
-    }
     let (frames, space) = sample.split_last().expect("a frame axis");
     let hint = match shape.split_last() {
         Some((n, rest)) if n != frames && long(rest).ends_with(&long(space)) => {
@@ -110,9 +119,41 @@ fn windows(shape: &[usize], sample: &[usize]) -> Result<usize, String> {
     ))
 }
 
+/// How many arrays of `one` an array of `shape` holds, one or a batch of them, axes of length 1
+/// left in or out; `None` where it holds neither.
+fn batch_of(shape: &[usize], one: &[usize]) -> Option<usize> {
+    let long = |s: &[usize]| s.iter().copied().filter(|&n| n != 1).collect::<Vec<_>>();
+    let (got, want) = (long(shape), long(one));
+    match got.len() == want.len() + 1 && got[1..] == want[..] {
+        true => Some(got[0]),
+        false => (got == want && !shape.contains(&0)).then_some(1),
+    }
+}
+
+/// The array's values as a camera's bytes, or which is not one.
+fn bytes(values: &[f32]) -> Result<Vec<u8>, String> {
+    let byte = |(i, v): (usize, &f32)| match v.fract() == 0.0 && (0.0..=255.0).contains(v) {
+        true => Ok(*v as u8),
+        false => Err(format!("value {i} is {v}: a camera's frames are 8-bit, 0 to 255")),
+    };
+    values.iter().enumerate().map(byte).collect()
+}
+
 #[cfg(test)]
 mod tests {
-    use super::windows;
+    use super::{batch_of, bytes, windows};
+
+    #[test]
+    fn a_camera_s_touches_are_told_from_the_model_s_windows_by_their_frames_size() {
+        let recorded = [240, 320, 3];
+        assert_eq!(batch_of(&[240, 320, 3], &recorded), Some(1));
+        assert_eq!(batch_of(&[5, 240, 320, 3], &recorded), Some(5));
+        assert_eq!(batch_of(&[30, 40, 3], &recorded), None);
+        assert_eq!(batch_of(&[240, 320], &[240, 320, 1]), Some(1), "grey");
+        assert_eq!(bytes(&[0.0, 255.0, 7.0]), Ok(vec![0, 255, 7]));
+        assert!(bytes(&[0.0, 0.5]).unwrap_err().starts_with("value 1 is 0.5"));
+        assert!(bytes(&[256.0]).is_err() && bytes(&[-1.0]).is_err());
+    }
 
     #[test]
     fn one_window_or_a_batch_with_or_without_axes_of_length_one() {
