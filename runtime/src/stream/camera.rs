@@ -17,7 +17,7 @@ impl Classifier {
             return Err(Error::EmptyBatch);
         }
         let touch_len = values.len() / batch;
-        if touch_len * batch != values.len() || touch_len % frame_len != 0 || touch_len == 0 {
+        if touch_len * batch != values.len() || !touch_len.is_multiple_of(frame_len) || touch_len == 0 {
             let got = values.len();
             return Err(Error::Touch(format!("{got} bytes are not {batch} touches of whole camera frames of {frame_len} bytes")));
         }
