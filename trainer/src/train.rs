@@ -135,7 +135,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
     let mut logs = sensors.iter().map(|s| open_log(&Run(&s.dir).metrics())).collect::<Result<Vec<_>>>()?;
     let first_epoch = run.epochs_done + 1;
     for epoch in first_epoch..=opts.optimization.epochs {
-        if stalled(&run, sensors.len(), opts.optimization.patience) {
+        if stalled(&mut run, sensors.len(), opts.optimization.patience) {
             break;
         }
         if spec.pause_after.is_some_and(|p| epoch - first_epoch >= p) {
@@ -173,10 +173,10 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
 /// Whether `--patience` stops the run after its epochs done: every sensor's validation has not
 /// improved for that many epochs. Asked before an epoch, not after, so that a run interrupted
 /// after its last epoch stops where it would have.
-fn stalled(run: &RunState, sensors: usize, patience: Option<usize>) -> bool {
+fn stalled(run: &mut RunState, sensors: usize, patience: Option<usize>) -> bool {
     let Some(patience) = patience.filter(|p| *p > 0) else { return false };
-    let best = |i: usize| if i == 0 { &run.best } else { &run.partner_best };
-    (0..sensors).all(|i| best(i).as_ref().is_some_and(|b| run.epochs_done >= b.epoch + patience))
+    let done = run.epochs_done;
+    (0..sensors).all(|i| run.best_of(i).as_ref().is_some_and(|b| done >= b.epoch + patience))
 }
 
 /// The configuration, options and state of the run to resume from its checkpoint `dir` (a

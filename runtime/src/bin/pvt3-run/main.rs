@@ -126,7 +126,7 @@ fn batch_of(shape: &[usize], one: &[usize]) -> Option<usize> {
     let (got, want) = (long(shape), long(one));
     match got.len() == want.len() + 1 && got[1..] == want[..] {
         true => Some(got[0]),
-        false => (got == want && !shape.contains(&0)).then_some(1),
+        false => (got == want).then_some(1),
     }
 }
 
