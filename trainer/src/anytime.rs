@@ -12,8 +12,9 @@
 
 use pvt3_format::{answers_agree, StopRule};
 use pvt3_models::Pvt3;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 
+use crate::provenance::{CalibratedOn, Stopping};
 use crate::Result;
 use crate::{data::windows::Samples, evaluate::eval_batch};
 
@@ -37,33 +38,6 @@ pub struct Prefixes {
     pub class: Vec<Vec<u32>>,
     pub labels: Vec<u32>,
     pub tokens: usize,
-}
-
-/// The stopping rule and what it did on the samples it was calibrated (or measured) on.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Stopping {
-    pub rule: StopRule,
-    /// Accuracy with the whole touch.
-    pub full_accuracy: f64,
-    /// Accuracy when stopping by the rule.
-    pub accuracy: f64,
-    /// The share of the touch used before stopping, on average (1: the whole touch).
-    pub mean_share: f64,
-    /// Which validation answers the rule was calibrated on (the figures above are theirs).
-    #[serde(default)]
-    pub calibrated_on: CalibratedOn,
-}
-
-/// Where a stopping rule was calibrated.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum CalibratedOn {
-    /// The run's own validation fold (`pvt3 train`).
-    #[default]
-    ValidationFold,
-    /// The validation answers of every run of a cross-validation, each run's model on its own
-    /// validation fold (`pvt3 cv`).
-    CrossValidation { runs: usize, samples: usize },
 }
 
 /// Every sample's provisional class probabilities after 1, 2, … every temporal token

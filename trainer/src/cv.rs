@@ -13,9 +13,9 @@ use std::sync::Mutex;
 use indicatif::{MultiProgress, ProgressBar};
 use serde::{Deserialize, Serialize};
 
-use crate::anytime::Stopping;
 use crate::checkpoint::{read_json, write_json_atomically};
 use crate::data::TEST_FOLD;
+use crate::provenance::Stopping;
 use crate::prune::{prune_and_fine_tune, PruneStage};
 use crate::run_dir::{CrossValidation, Run, CV_CURVES, CV_PARTNER_CURVES, CV_SUMMARY};
 use crate::train::{train, RunResult, RunSpec};

@@ -2,15 +2,16 @@
 //! PVT³ runs together (each run's model on its own validation fold, thousands of samples where a
 //! single run has about 200), written into every run's provenance, so that any of them exports
 //! with it (docs/anytime.md, "Calibrated on a cross-validation"). Each run's validation fold is
-//! the one it recorded ([`crate::checkpoint::Provenance::dataset`]); the test fold is never read.
+//! the one it recorded ([`crate::provenance::Provenance::dataset`]); the test fold is never read.
 
 use std::collections::HashMap;
 use std::path::PathBuf;
 
-use crate::anytime::{Prefixes, Stopping};
+use crate::anytime::Prefixes;
 use crate::checkpoint::{self, write_json_atomically};
-use crate::data::Dataset;
 use crate::data::windows::Samples;
+use crate::data::Dataset;
+use crate::provenance::Stopping;
 use crate::run_dir::Checkpoint;
 use crate::Result;
 

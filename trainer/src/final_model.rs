@@ -10,50 +10,15 @@ use indicatif::ProgressBar;
 use pvt3_models::weights::varmap_tensors;
 use pvt3_spec::names;
 use pvt3_spec::prune::PatchChoice;
-use serde::{Deserialize, Serialize};
 
-use crate::anytime::Stopping;
 use crate::checkpoint::{self, read_json, write_json_atomically, Meta};
 use crate::cv::CvSummary;
 use crate::data::Dataset;
+use crate::provenance::{Expected, Stopping};
 use crate::prune::{prune_and_fine_tune, PruneStage};
 use crate::run_dir::{Checkpoint, CrossValidation, Run, CV_SUMMARY};
 use crate::train::{train, RunResult, RunSpec};
 use crate::{Error, Result};
-
-/// What a final model is expected to score: the cross-validation's test accuracy over its runs.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-pub struct Expected {
-    /// The cross-validation's directory.
-    pub cv: String,
-    pub seeds: Vec<u64>,
-    pub runs: usize,
-    /// Of the pruned and fine-tuned runs, where the cross-validation pruned.
-    pub pruned: bool,
-    pub mean_test_accuracy: f64,
-    pub std_test_accuracy: f64,
-    /// Student's t over the seeds' means; `None` with one seed.
-    pub ci95_test_accuracy: Option<[f64; 2]>,
-    /// The epochs the runs selected by validation (of their fine-tuning, when pruned), whose
-    /// median the final model trained.
-    pub selected_epochs: Vec<usize>,
-}
-
-/// The expected accuracy in words, as `pvt3 final` and `pvt3 eval`'s refusal say it.
-impl std::fmt::Display for Expected {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{:.4} ± {:.4}", self.mean_test_accuracy, self.std_test_accuracy)?;
-        if let Some([lo, hi]) = self.ci95_test_accuracy {
-            write!(f, ", 95 % interval of the mean [{lo:.4}, {hi:.4}]")?;
-        }
-        let seeds = match self.seeds.len() {
-            1 => " (one seed: no interval)".to_string(),
-            n => format!(" ({n} seeds)"),
-        };
-        let pruned = if self.pruned { "pruned " } else { "" };
-        write!(f, ", the test accuracy of the cross-validation {}'s {} {pruned}runs{seeds}", self.cv, self.runs)
-    }
-}
 
 /// A final model as a cross-validation chose it.
 #[derive(Clone, Debug)]

@@ -19,6 +19,7 @@ pub mod metrics;
 pub mod optim;
 pub mod options;
 pub mod plot;
+pub mod provenance;
 pub mod prune;
 pub mod run_dir;
 pub mod schedule;

@@ -14,9 +14,9 @@ pub struct EpochMetrics {
     pub train_loss: f64,
     pub train_accuracy: f64,
     /// NaN (`null`) where nothing validates (a final model).
-    #[serde(deserialize_with = "crate::checkpoint::nan_from_null")]
+    #[serde(deserialize_with = "crate::provenance::nan_from_null")]
     pub val_loss: f64,
-    #[serde(deserialize_with = "crate::checkpoint::nan_from_null")]
+    #[serde(deserialize_with = "crate::provenance::nan_from_null")]
     pub val_accuracy: f64,
     /// Measured only at the epochs that improved on validation (the candidates).
     pub test_accuracy: Option<f64>,

@@ -1,5 +1,5 @@
 //! The training hyper-parameters, as the command line takes them and as a run's provenance
-//! records them (`checkpoint::Provenance`), so that `--resume` continues with the same ones.
+//! records them (`provenance::Provenance`), so that `--resume` continues with the same ones.
 //! They come in groups by concern, each passed where it is used: the optimiser's
 //! ([`Optimization`]), the augmentation's ([`Augmentation`]), the selection masks' and pruning's
 //! ([`Pruning`], [`HeldZeros`]), distillation's ([`Distillation`]) and joint learning's

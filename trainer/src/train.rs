@@ -12,27 +12,27 @@
 
 use std::fs::File;
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 use indicatif::ProgressBar;
-use pvt3_models::{Config, Rng};
+use pvt3_models::Config;
 use pvt3_spec::prune::PruneSpec;
 use pvt3_spec::weights::Tensors;
 use serde::{Deserialize, Serialize};
 
-use crate::checkpoint::{self, nan_from_null, read_json, write_json, write_json_atomically};
+use crate::checkpoint::{self, write_json, write_json_atomically};
 use crate::data::windows::Samples;
 use crate::data::Dataset;
 use crate::joint::Partner;
-use crate::optim::is_weight_matrix;
 use crate::options::TrainOptions;
+use crate::provenance::nan_from_null;
 use crate::run_dir::{Checkpoint, Run};
 use crate::schedule::Schedule;
 use crate::{Error, Result};
-use learner::is_mask;
 pub use learner::Learner;
-use sensor::{Sensor, Validated};
+use run_state::{Found, RunState};
+use sensor::Sensor;
 /// The outcome of a finished run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RunResult {
@@ -48,41 +48,6 @@ pub struct RunResult {
     /// The epochs trained: the options' `epochs`, or fewer where `patience` stopped the run.
     pub epochs: usize,
     pub wall_seconds: f64,
-}
-
-/// What `last/state.json` remembers between epochs.
-#[derive(Clone, Debug, Serialize, Deserialize)]
-struct RunState {
-    epochs_done: usize,
-    step: usize,
-    rng: Rng,
-    best: Option<Best>,
-    /// A joint run's: the partner network's best epoch so far.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    partner_best: Option<Best>,
-    wall_seconds: f64,
-}
-
-impl RunState {
-    /// The best epoch so far of the run's sensor `i` (0: the run's own, 1: a joint run's other).
-    fn best_of(&mut self, i: usize) -> &mut Option<Best> {
-        if i == 0 {
-            &mut self.best
-        } else {
-            &mut self.partner_best
-        }
-    }
-}
-
-#[derive(Clone, Debug, Serialize, Deserialize)]
-struct Best {
-    epoch: usize,
-    #[serde(deserialize_with = "nan_from_null")]
-    val_accuracy: f64,
-    #[serde(deserialize_with = "nan_from_null")]
-    val_loss: f64,
-    #[serde(deserialize_with = "nan_from_null")]
-    test_accuracy: f64,
 }
 
 /// Everything a run needs besides its output directory.
@@ -110,32 +75,27 @@ pub struct RunSpec<'a> {
 /// network trains beside, into the run directory `out/partner/` (its resume state inside
 /// `out/last/`, so that the two resume together).
 pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Result<Option<RunResult>> {
-    let run_dir = Run(out);
-    if resume && run_dir.result().exists() {
-        check_resumed_split(spec, &run_dir.model())?;
-        return read_json(&run_dir.result()).map(Some);
-    }
-    let resumable = checkpoint::existing_dir(&run_dir.last());
-    if !resume && (resumable.is_some() || run_dir.result().exists()) {
-        return Err(Error::Usage(format!(
-            "{} already holds a run; pass --resume to continue it, or choose another output directory",
-            out.display()
-        )));
-    }
-    let (config, opts, state) = match resumable.filter(|_| resume) {
-        Some(dir) => resumed(spec, dir)?,
-        None => (spec.config.clone(), spec.options.clone(), None),
+    let (config, opts, last) = match run_state::find(spec, out, resume)? {
+        Found::Finished(result) => return Ok(Some(result)),
+        Found::Run { config, opts, last } => (config, opts, last),
     };
-    let mut sensors = sensors(spec, config, &opts, out)?;
+    // A run from given weights (fine-tuning) keeps its spectral heads as they are, unless it
+    // prunes patches a head over the image's space read: it now reads them as 0.
+    let prunes_pixels = spec.config.spectral_space() && spec.pruning.as_ref().is_some_and(|p| p.patches > 0.0);
+    let fit_heads = last.is_none() && (spec.start.is_none() || prunes_pixels);
+    let mut sensors = sensor::of_run(spec, config, &opts, out)?;
+    let mut run = run_state::begin(&mut sensors, &opts, last)?;
+    for sensor in &mut sensors {
+        sensor.ready(fit_heads, &opts)?;
+    }
     let steps_per_epoch = sensors[0].split.train.len().div_ceil(opts.optimization.batch_size);
     let schedule = Schedule::new(&opts.optimization, steps_per_epoch);
-    let mut run = start(&mut sensors, spec, &opts, state)?;
     bar.set_length((opts.optimization.epochs * steps_per_epoch) as u64);
     bar.set_position((run.epochs_done * steps_per_epoch) as u64);
     let mut logs = sensors.iter().map(|s| open_log(&Run(&s.dir).metrics())).collect::<Result<Vec<_>>>()?;
     let first_epoch = run.epochs_done + 1;
     for epoch in first_epoch..=opts.optimization.epochs {
-        if stalled(&mut run, sensors.len(), opts.optimization.patience) {
+        if run.stalled(sensors.len(), opts.optimization.patience) {
             break;
         }
         if spec.pause_after.is_some_and(|p| epoch - first_epoch >= p) {
@@ -150,7 +110,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
         let seconds = started.elapsed().as_secs_f64();
         run.wall_seconds += seconds;
         run.epochs_done = epoch;
-        save_last(&sensors, &run_dir.last(), &run, (spec.val_fold, &spec.pruning), (epoch, &validated))?;
+        run_state::save_last(&sensors, &Run(out).last(), &run, (spec.val_fold, &spec.pruning), (epoch, &validated))?;
         for ((sensor, log), (tally, val)) in sensors.iter().zip(&mut logs).zip(trained.tallies.iter().zip(&validated)) {
             let line = trained.line(epoch, seconds, tally, val);
             writeln!(log, "{}", serde_json::to_string(&line).expect("plain data")).map_err(Error::io(&sensor.dir))?;
@@ -168,114 +128,6 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
         ));
     }
     finish(&sensors, spec, &opts, &mut run).map(Some)
-}
-
-/// Whether `--patience` stops the run after its epochs done: every sensor's validation has not
-/// improved for that many epochs. Asked before an epoch, not after, so that a run interrupted
-/// after its last epoch stops where it would have.
-fn stalled(run: &mut RunState, sensors: usize, patience: Option<usize>) -> bool {
-    let Some(patience) = patience.filter(|p| *p > 0) else { return false };
-    let done = run.epochs_done;
-    (0..sensors).all(|i| run.best_of(i).as_ref().is_some_and(|b| done >= b.epoch + patience))
-}
-
-/// The configuration, options and state of the run to resume from its checkpoint `dir` (a
-/// `last/`): a resumed run keeps the configuration and options it started with.
-fn resumed(spec: &RunSpec, dir: PathBuf) -> Result<(Config, TrainOptions, Option<(PathBuf, RunState)>)> {
-    check_resumed_split(spec, &dir)?;
-    let (_, meta) = checkpoint::load_meta(&dir)?;
-    let state = read_json::<RunState>(&Checkpoint(&dir).state())?;
-    Ok((meta.config, meta.provenance.options, Some((dir, state))))
-}
-
-/// The run's sensors, each with its options and run directory (made here): the run's own, its
-/// teachers loaded (`--distill`), and a joint run's other sensor.
-fn sensors<'a>(spec: &RunSpec<'a>, config: Config, opts: &TrainOptions, out: &Path) -> Result<Vec<Sensor<'a>>> {
-    let mut main = Sensor::new(spec.data, config, spec.classes.clone(), (spec.val_fold, opts), out, (spec.start.as_ref(), None))?;
-    let mut sensors = Vec::new();
-    if let Some(p) = &spec.partner {
-        p.check(main.data, &main.config, &main.classes, opts)?;
-        let share = opts.joint.as_ref().is_some_and(|j| j.share_temporal).then_some(&main.net.learner.varmap);
-        let options = Partner::options(opts, spec.data);
-        let dir = Run(out).partner();
-        sensors.push(Sensor::new(p.data, p.config.clone(), p.classes.clone(), (spec.val_fold, &options), &dir, (None, share))?);
-    }
-    if let Some(teachers) = &opts.distillation.teachers {
-        let trained_on = (spec.val_fold, &main.data.trained_on());
-        let teachers = crate::distill::Teachers::load(Path::new(teachers), trained_on, &main.normalization, &main.classes, out)?;
-        main.net.learner.teachers = Some(teachers);
-    }
-    sensors.insert(0, main);
-    for sensor in &sensors {
-        std::fs::create_dir_all(&sensor.dir).map_err(Error::io(&sensor.dir))?;
-    }
-    Ok(sensors)
-}
-
-/// The run's state at its first epoch: restored from `state` when resuming, otherwise fresh (the
-/// spectral heads fitted, the metrics logs cleared); then the zeros that fine-tuning holds.
-fn start(sensors: &mut [Sensor], spec: &RunSpec, opts: &TrainOptions, state: Option<(PathBuf, RunState)>) -> Result<RunState> {
-    let run = match state {
-        Some((dir, state)) => {
-            for (i, sensor) in sensors.iter_mut().enumerate() {
-                sensor.restore(&in_last(&dir, i), state.step)?;
-                truncate_metrics(&Run(&sensor.dir).metrics(), state.epochs_done)?;
-            }
-            state
-        }
-        None => {
-            // A run from given weights (fine-tuning) keeps its spectral heads as they are, unless
-            // it prunes patches a head over the image's space read: it now reads them as 0.
-            let prunes_pixels = spec.config.spectral_space() && spec.pruning.as_ref().is_some_and(|p| p.patches > 0.0);
-            if spec.start.is_none() || prunes_pixels {
-                for sensor in sensors.iter() {
-                    crate::spectrum_fit::fit(&sensor.net.learner.model, &sensor.net.learner.varmap, &sensor.train_set, &sensor.val_set)?;
-                }
-            }
-            for sensor in sensors.iter() {
-                let _ = std::fs::remove_file(Run(&sensor.dir).metrics());
-            }
-            let rng = Rng::new(opts.seed.wrapping_add(1));
-            RunState { epochs_done: 0, step: 0, rng, best: None, partner_best: None, wall_seconds: 0.0 }
-        }
-    };
-    for sensor in sensors.iter_mut() {
-        if opts.held.pruned {
-            sensor.net.learner.hold_zeros(is_mask)?;
-        }
-        if opts.held.zero_weights {
-            sensor.net.learner.hold_zeros(is_weight_matrix)?;
-        }
-    }
-    Ok(run)
-}
-
-/// Where sensor `i`'s resume state lives in the run's `last/` directory `dir`.
-fn in_last(dir: &Path, i: usize) -> PathBuf {
-    if i == 0 {
-        dir.to_path_buf()
-    } else {
-        Checkpoint(dir).partner()
-    }
-}
-
-/// The end of an epoch's resume state: every sensor's weights, optimiser and average, and the
-/// run's state, replacing `last` at once.
-fn save_last(
-    sensors: &[Sensor],
-    last: &Path,
-    run: &RunState,
-    (val_fold, pruning): (Option<usize>, &Option<PruneSpec>),
-    (epoch, validated): (usize, &[Validated]),
-) -> Result<()> {
-    checkpoint::replace_dir(last, |dir| {
-        for (i, (sensor, val)) in sensors.iter().zip(validated).enumerate() {
-            let sub = in_last(dir, i);
-            std::fs::create_dir_all(&sub).map_err(Error::io(&sub))?;
-            sensor.save_last(&sub, &sensor.meta(val_fold, pruning, epoch, val.accuracy, None))?;
-        }
-        write_json(&Checkpoint(dir).state(), run)
-    })
 }
 
 /// The finished run's results, a joint run's other sensor's first (a run with its `result.json`
@@ -304,31 +156,6 @@ fn open_log(path: &Path) -> Result<File> {
     std::fs::OpenOptions::new().create(true).append(true).open(path).map_err(Error::io(path))
 }
 
-/// Refuses to continue the run whose checkpoint is `dir` (and its partner's) on data split
-/// otherwise than it recorded, naming what differs (another file, another seed's folds, other
-/// held-out levels).
-fn check_resumed_split(spec: &RunSpec, dir: &Path) -> Result<()> {
-    let partner = spec.partner.as_ref().map(|p| (p.data, Checkpoint(dir).partner()));
-    for (data, checkpoint) in std::iter::once((spec.data, dir.to_path_buf())).chain(partner) {
-        let Some(existing) = checkpoint::existing_dir(&checkpoint) else { continue };
-        let (_, meta) = checkpoint::load_meta(&existing)?;
-        if let Some(recorded) = &meta.provenance.trained_on {
-            let held = |h: Option<&crate::data::HoldOut>| h.map_or("no held-out levels".to_string(), |h| format!("held out {h}"));
-            data.check_split(
-                recorded,
-                &format!(
-                    "the run in {} (seed {}, {}; this command: {})",
-                    existing.display(),
-                    meta.provenance.seed,
-                    held(meta.provenance.held_out.as_ref()),
-                    held(data.held_out.as_ref())
-                ),
-            )?;
-        }
-    }
-    Ok(())
-}
-
 /// Calibrates the stopping rule of provisional answers ([`crate::anytime`]) for the PVT³
 /// checkpoint in `dir` on the validation samples, into its provenance (which the exporter
 /// writes into the file). Other networks give no provisional answers, and a run with nothing to
@@ -344,18 +171,10 @@ fn calibrate_stopping(dir: &Path, val_set: &Samples) -> Result<()> {
     write_json_atomically(&Checkpoint(dir).provenance(), &meta.provenance)
 }
 
-/// Keeps the first `epochs` lines of a metrics log (a crash may have left one more).
-fn truncate_metrics(path: &Path, epochs: usize) -> Result<()> {
-    let Ok(text) = std::fs::read_to_string(path) else {
-        return Ok(());
-    };
-    let kept: String = text.lines().take(epochs).map(|l| format!("{l}\n")).collect();
-    std::fs::write(path, kept).map_err(Error::io(path))
-}
-
 mod epoch;
 mod learner;
 pub mod loss;
+mod run_state;
 mod sensor;
 
 #[cfg(test)]

@@ -8,7 +8,7 @@ use pvt3_spec::normalization::Normalization;
 use pvt3_spec::weights::read_tensors;
 
 use super::*;
-use crate::checkpoint::Provenance;
+use crate::provenance::Provenance;
 
 #[test]
 fn the_runtime_stays_finite_and_close_to_the_f64_reference_on_extreme_inputs() {

@@ -8,17 +8,22 @@ use candle_nn::VarMap;
 use pvt3_models::{Config, Rng};
 use pvt3_spec::prune::PruneSpec;
 use pvt3_spec::weights::Tensors;
+use serde::{Deserialize, Serialize};
 
-use super::{Best, Learner};
+use super::learner::is_mask;
+use super::{Learner, RunSpec};
 use crate::average::WeightAverage;
-use crate::checkpoint::{self, Meta, Provenance};
+use crate::checkpoint::{self, Meta};
 use crate::data::normalization::Normalization;
 use crate::data::{Dataset, Split};
+use crate::joint::Partner;
+use crate::optim::is_weight_matrix;
 use crate::options::TrainOptions;
-use crate::run_dir::Checkpoint;
+use crate::provenance::nan_from_null;
+use crate::provenance::Provenance;
 use crate::run_dir::Run;
-use crate::Result;
 use crate::{data::windows::Samples, evaluate::evaluate};
+use crate::{Error, Result};
 
 /// One sensor's network in a run and what its epochs read: its split as windows, normalised,
 /// its learner and weight average. A joint run (`--joint`) trains two side by side.
@@ -104,23 +109,18 @@ impl<'a> Sensor<'a> {
         self.crops.then(|| Samples::cropped(self.data, &self.split.train, &self.normalization, stretch, rng))
     }
 
-    /// The weights, optimiser state and weight average of the checkpoint `dir` (a `last/`).
-    pub(super) fn restore(&mut self, dir: &Path, step: usize) -> Result<()> {
-        pvt3_models::weights::load_weights(&self.net.learner.varmap, &Checkpoint(dir).weights())?;
-        self.net.learner.optimizer.load(&Checkpoint(dir).optimizer(), step)?;
-        if let Some(average) = &mut self.net.average {
-            average.load(&Checkpoint(dir).average())?;
+    /// Readies the network for the epochs of this call: its spectral heads fitted to its
+    /// training windows (`fit_heads`: a fresh run's), then the zeros fine-tuning holds.
+    pub(super) fn ready(&mut self, fit_heads: bool, opts: &TrainOptions) -> Result<()> {
+        let learner = &mut self.net.learner;
+        if fit_heads {
+            crate::spectrum_fit::fit(&learner.model, &learner.varmap, &self.train_set, &self.val_set)?;
         }
-        Ok(())
-    }
-
-    /// Writes the resume state of this sensor's network into `dir` (a `last/` being filled).
-    pub(super) fn save_last(&self, dir: &Path, meta: &Meta) -> Result<()> {
-        checkpoint::write_files(dir, &self.net.learner.varmap, meta)?;
-        let files = Checkpoint(dir);
-        self.net.learner.optimizer.save(&files.optimizer())?;
-        if let Some(average) = &self.net.average {
-            average.save(&files.average())?;
+        if opts.held.pruned {
+            learner.hold_zeros(is_mask)?;
+        }
+        if opts.held.zero_weights {
+            learner.hold_zeros(is_weight_matrix)?;
         }
         Ok(())
     }
@@ -181,6 +181,42 @@ impl<'a> Sensor<'a> {
         }
         Ok(Validated { loss: val.loss, accuracy: val.accuracy, test_accuracy })
     }
+}
+
+/// The run's sensors, each with its options and run directory (made here): the run's own, its
+/// teachers loaded (`--distill`), and a joint run's other sensor.
+pub(super) fn of_run<'a>(spec: &RunSpec<'a>, config: Config, opts: &TrainOptions, out: &Path) -> Result<Vec<Sensor<'a>>> {
+    let mut main = Sensor::new(spec.data, config, spec.classes.clone(), (spec.val_fold, opts), out, (spec.start.as_ref(), None))?;
+    let mut sensors = Vec::new();
+    if let Some(p) = &spec.partner {
+        p.check(main.data, &main.config, &main.classes, opts)?;
+        let share = opts.joint.as_ref().is_some_and(|j| j.share_temporal).then_some(&main.net.learner.varmap);
+        let options = Partner::options(opts, spec.data);
+        let dir = Run(out).partner();
+        sensors.push(Sensor::new(p.data, p.config.clone(), p.classes.clone(), (spec.val_fold, &options), &dir, (None, share))?);
+    }
+    if let Some(teachers) = &opts.distillation.teachers {
+        let trained_on = (spec.val_fold, &main.data.trained_on());
+        let teachers = crate::distill::Teachers::load(Path::new(teachers), trained_on, &main.normalization, &main.classes, out)?;
+        main.net.learner.teachers = Some(teachers);
+    }
+    sensors.insert(0, main);
+    for sensor in &sensors {
+        std::fs::create_dir_all(&sensor.dir).map_err(Error::io(&sensor.dir))?;
+    }
+    Ok(sensors)
+}
+
+/// A sensor's best epoch so far, by validation.
+#[derive(Clone, Debug, Serialize, Deserialize)]
+pub(super) struct Best {
+    pub(super) epoch: usize,
+    #[serde(deserialize_with = "nan_from_null")]
+    pub(super) val_accuracy: f64,
+    #[serde(deserialize_with = "nan_from_null")]
+    pub(super) val_loss: f64,
+    #[serde(deserialize_with = "nan_from_null")]
+    pub(super) test_accuracy: f64,
 }
 
 /// A sensor's validation at the end of an epoch.

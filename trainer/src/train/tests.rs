@@ -8,6 +8,7 @@ use indicatif::ProgressBar;
 use pvt3_models::{Config, Rng};
 
 use super::*;
+use crate::checkpoint::read_json;
 use crate::data::{Dataset, Frames};
 use crate::options::{Augmentation, Distillation, HeldZeros, Optimization, Pruning, Robust};
 use crate::run_dir::CrossValidation;

@@ -8,13 +8,14 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context, Result};
 use pvt3_models::Model;
-use pvt3_trainer::anytime::{self, CalibratedOn, Prefixes};
+use pvt3_trainer::anytime::{self, Prefixes};
 use pvt3_trainer::checkpoint::{self, Meta};
 use pvt3_trainer::data::{windows::Samples, Condition};
 use pvt3_trainer::data::{Dataset, TEST_FOLD};
 use pvt3_trainer::evaluate::levels::{self, Level};
 use pvt3_trainer::evaluate::{evaluate, Evaluation};
 use pvt3_trainer::plot::{self, anytime as anytime_picture, confusion};
+use pvt3_trainer::provenance::CalibratedOn;
 use pvt3_trainer::run_dir::CV_SUMMARY;
 
 /// Accuracy of a checkpoint on a data set (by default its test fold, or all samples): overall,
