@@ -4,7 +4,8 @@
 # states, masks, metrics.jsonl, checkpoints' JSON, pictures, the exported .onnx), but for the
 # wall-clock seconds that metrics.jsonl, result.json and state.json record.
 #
-#   bash bench/same_bytes.sh BASE [FABRICSLIDE]     e.g. bash bench/same_bytes.sh HEAD~3 ../data/FabricSlide
+#   bash bench/same_bytes.sh BASE [FABRICSLIDE [PHYSICLEAR]]
+#   e.g. bash bench/same_bytes.sh HEAD~3 ../data/FabricSlide ../data/octopi
 #
 # The runs, two epochs each (a pruned run fine-tunes one more):
 #   icub     iCub-20, 50 % of channels and 30 % of frames pruned, exported;
@@ -12,15 +13,20 @@
 #   joint    iCub-20 learnt jointly with BioTac-20 (--joint, pulled together from epoch 1);
 #   fabric   FabricSlide imported from its CSV files (the .npz compared too), the positive speeds
 #            held out, with --extrapolate and --extrapolate-levels; only when FABRICSLIDE is given
-#            (a checkout of wngfra/FabricSlide).
+#            (a checkout of wngfra/FabricSlide);
+#   camera   PhysiCLeAR imported from its GelSight videos at 30 × 40 (the .npz compared too) and
+#            trained with the camera's derived layout, its head fitted, exported; only when
+#            PHYSICLEAR is given (a checkout of clear-nus/octopi; FFmpeg decodes, about 2 minutes
+#            an import).
 # Both binaries are built in the tests' profile (`ci`), each in a target directory of its own (cargo
 # names a workspace's crates by their path in it, so two checkouts would share their files); BASE
 # is checked out as a git worktree under target/same-bytes/. Prints one line per run and fails on
 # the first difference.
 set -euo pipefail
 cd "$(dirname "$0")/.."
-base=${1:?usage: bash bench/same_bytes.sh BASE [FABRICSLIDE]}
+base=${1:?usage: bash bench/same_bytes.sh BASE [FABRICSLIDE [PHYSICLEAR]]}
 fabric=${2:-}
+physiclear=${3:-}
 out=target/same-bytes
 rm -rf "$out/runs"
 mkdir -p "$out/runs"
@@ -50,6 +56,14 @@ if [ -n "$fabric" ]; then
   cmp "$out/runs/fabric-base.npz" "$out/runs/fabric-head.npz"
   echo "fabric import: the same bytes"
   runs+=("fabric|train --data $out/runs/fabric-head.npz --hold-out speed=10,20,50,100,120,150 --extrapolate 1 --extrapolate-levels --epochs 2")
+fi
+if [ -n "$physiclear" ]; then
+  for who in base head; do
+    "$out/pvt3-$who" import "$physiclear/dataset" --name '{class}_*' --size 30x40 --allow-short --out "$out/runs/physiclear-$who.npz" >/dev/null
+  done
+  cmp "$out/runs/physiclear-base.npz" "$out/runs/physiclear-head.npz"
+  echo "physiclear import: the same bytes"
+  runs+=("camera|train --data $out/runs/physiclear-head.npz --epochs 2 --export OUT/model.onnx")
 fi
 
 for run in "${runs[@]}"; do

@@ -550,7 +550,7 @@ fn a_camera_s_videos_import_and_train() {
     // The exported file says how the camera's frames were read; a session takes them as FFmpeg
     // gives them, 48 × 64 RGB, the first of a touch its background.
     let c = pvt3_runtime::Classifier::load(&onnx).unwrap();
-    let camera = pvt3_runtime::picture::Camera { recorded: [48, 64, 3], crop: None, size: Some([12, 16]), grey: true, subtract_first: true };
+    let camera = pvt3_runtime::Camera { recorded: [48, 64, 3], crop: None, size: Some([12, 16]), grey: true, subtract_first: true };
     assert_eq!(c.camera(), Some(camera));
     let raw = Command::new("ffmpeg").args(["-v", "error", "-i"]).arg(videos.join("smooth_tile_0.mov")).args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"]).output().unwrap();
     let mut session = c.session().unwrap();

@@ -301,7 +301,7 @@ fn a_spectral_head_runs_in_tract_as_the_reference_and_streams() {
 /// a quarter of its frames and half of its patches pruned and the others scaled, normalised
 /// pixel by pixel; with its candle form and the metadata it is exported with.
 fn camera_model(log_frames: bool) -> (Pvt3, pvt3_spec::baked::BakedPvt3, Normalization, pvt3_export::Metadata) {
-    let layout = Config { classes: 5, ..Config::for_sensor(&[30, 40, 3, 25]).unwrap() };
+    let layout = Config { classes: 5, ..Config::for_sensor(pvt3_spec::Sensor::Camera, &[30, 40, 3, 25]).unwrap() };
     let pvt3_spec::Network::Pvt3(network) = layout.network else { panic!("a camera's layout is a PVT³") };
     let cfg = Config {
         network: pvt3_models::Pvt3Config { patch_selection: true, spectral_gradients: true, spectral_log_frames: log_frames, ..network }
@@ -423,7 +423,7 @@ fn camera_forms(log_frames: bool) {
 fn a_camera_s_frames_are_read_as_the_import_read_them() {
     let (_, baked, norm, meta) = camera_model(true);
     let camera =
-        pvt3_runtime::picture::Camera { recorded: [60, 80, 3], crop: None, size: Some([30, 40]), grey: false, subtract_first: true };
+        pvt3_runtime::Camera { recorded: [60, 80, 3], crop: None, size: Some([30, 40]), grey: false, subtract_first: true };
     let dir = scratch("camera-frames");
     let path = dir.join("camera.onnx");
     pvt3_export::write(&pvt3_export::export(&baked, &norm, &pvt3_export::Metadata { camera: Some(camera), ..meta }).unwrap(), &path)
@@ -435,7 +435,7 @@ fn a_camera_s_frames_are_read_as_the_import_read_them() {
     let touch: Vec<Vec<u8>> =
         (0..26).map(|_| (0..60 * 80 * 3).map(|_| (128.0 + 60.0 * rng.normal()).clamp(0.0, 255.0) as u8).collect()).collect();
     let read =
-        |f: &[u8]| pvt3_runtime::picture::Picture { height: 60, width: 80, channels: 3, data: f.to_vec() }.read_as(&camera).unwrap().data;
+        |f: &[u8]| pvt3_runtime::Picture { height: 60, width: 80, channels: 3, data: f.to_vec() }.read_as(&camera).unwrap().data;
     let background = read(&touch[0]);
     let pixels = 30 * 40 * 3;
     let mut sample = vec![0f32; pixels * 25];

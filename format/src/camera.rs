@@ -34,6 +34,27 @@ impl std::str::FromStr for Crop {
     }
 }
 
+impl Crop {
+    /// Whether the crop lies within a frame of `height` × `width`, or why not: the one check of
+    /// a crop, for a file's camera and a frame alike.
+    pub fn fits(&self, height: usize, width: usize) -> Result<(), String> {
+        if self.top.saturating_add(self.height) > height || self.left.saturating_add(self.width) > width {
+            return Err(format!("the crop {self} does not fit in a frame of {height} × {width}"));
+        }
+        Ok(())
+    }
+}
+
+/// `size` (`[height, width]`), where frames of `height` × `width` can be shrunk to it by area
+/// averaging, or why not: the one check of a size, for a file's camera and a frame alike.
+pub(crate) fn shrinking(size: [usize; 2], height: usize, width: usize) -> Result<[usize; 2], String> {
+    let [h, w] = size;
+    if h == 0 || w == 0 || h > height || w > width {
+        return Err(format!("the size {h} × {w} is not a shrinking of {height} × {width} (area averaging only shrinks)"));
+    }
+    Ok(size)
+}
+
 impl std::fmt::Display for Crop {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "{}x{}+{}+{}", self.height, self.width, self.top, self.left)
@@ -79,12 +100,12 @@ impl Camera {
         if h == 0 || w == 0 || !(c == 1 || c == 3) {
             return Some(format!("recorded frames of {h} × {w} × {c}: expected a height, a width and 1 or 3 channels"));
         }
-        if let Some(crop) = self.crop.filter(|k| k.top.saturating_add(k.height) > h || k.left.saturating_add(k.width) > w) {
-            return Some(format!("the crop {crop} does not fit in a recorded frame of {h} × {w}"));
+        if let Some(Err(why)) = self.crop.map(|k| k.fits(h, w)) {
+            return Some(why);
         }
         let (ch, cw) = self.crop.map_or((h, w), |k| (k.height, k.width));
-        if let Some([sh, sw]) = self.size.filter(|[sh, sw]| *sh == 0 || *sw == 0 || *sh > ch || *sw > cw) {
-            return Some(format!("the size {sh} × {sw} is not a shrinking of {ch} × {cw}"));
+        if let Some(Err(why)) = self.size.map(|size| shrinking(size, ch, cw)) {
+            return Some(why);
         }
         let read = self.read_shape();
         (read != [dims.height, dims.width, dims.channels])
@@ -117,7 +138,7 @@ mod tests {
         assert_eq!(serde_json::from_str::<Camera>(&json).unwrap(), camera);
         let problems = [
             (Camera { grey: false, ..camera }, "reads frames of [30, 40, 3], but the model's are [30, 40, 1]"),
-            (Camera { recorded: [200, 320, 3], ..camera }, "does not fit in a recorded frame of 200 × 320"),
+            (Camera { recorded: [200, 320, 3], ..camera }, "does not fit in a frame of 200 × 320"),
             (Camera { size: Some([300, 40]), ..camera }, "the size 300 × 40 is not a shrinking of 240 × 240"),
             (Camera { recorded: [240, 320, 2], ..camera }, "expected a height, a width and 1 or 3 channels"),
         ];

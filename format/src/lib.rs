@@ -3,15 +3,27 @@
 //! (the integrity digest), which format version it is and what its metadata says ([`Header`]).
 //! Both sides read these from here and nowhere else; the runtime depends on this crate and tract
 //! alone.
+//!
+//! What the file's reading metadata means is here too, as code both sides run: how a camera's
+//! frames become the model's ([`Camera`], [`Picture::read_as`], and which frames of a recording a
+//! touch takes, [`span`]) and how a touch is read by distance or at one force ([`read_touch`],
+//! [`TouchReader`], [`resample`]). `pvt3 import` reads its touches with it, and a robot's
+//! runtime reads its own alike.
 
 mod camera;
 mod digest;
 mod header;
 pub mod onnx;
+mod picture;
+pub mod resample;
+pub mod span;
+mod touch;
 
 pub use camera::{Camera, Crop};
 pub use digest::{digest, verify, Integrity};
 pub use header::{answers_agree, top_class, Dims, Header, HeaderError, Reading, StopRule, FORMAT_VERSION};
+pub use picture::Picture;
+pub use touch::{read_touch, ReadError, Touch, TouchReader};
 
 /// Input: raw sensor frames `[batch, height, width, (channels,) frames]`.
 pub const INPUT: &str = "frames";

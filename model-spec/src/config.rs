@@ -16,7 +16,7 @@ pub mod presets;
 use serde::{Deserialize, Serialize};
 
 pub use network::{Architecture, Network, Pvt3Config, RaecConfig, VitConfig};
-pub use presets::{is_image, PRESETS};
+pub use presets::PRESETS;
 
 use crate::{Error, Result};
 

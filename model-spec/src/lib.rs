@@ -14,9 +14,11 @@ pub mod normalization;
 pub mod prune;
 pub mod reference;
 pub mod rng;
+pub mod sensor;
 pub mod spectrum;
 pub mod weights;
 
 pub use config::{Architecture, Config, Network, Pvt3Config, RaecConfig, VitConfig};
 pub use error::{Error, Result};
 pub use rng::Rng;
+pub use sensor::Sensor;

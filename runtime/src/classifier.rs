@@ -147,7 +147,7 @@ impl Classifier {
     /// How a camera's 8-bit frames become the model's (`pvt3.camera`: crop, size, grey, less
     /// the touch's first frame), for a model trained on camera frames `pvt3 import` read from
     /// videos or images; `None`: frames are given as the model reads them.
-    pub fn camera(&self) -> Option<crate::picture::Camera> {
+    pub fn camera(&self) -> Option<crate::Camera> {
         self.header.camera
     }
 
@@ -166,7 +166,7 @@ impl Classifier {
     /// are then classified, or streamed into a session, as any frames. A model without a
     /// reading returns the frames as they are.
     pub fn read_touch(&self, frames: &[f32], touch: crate::Touch) -> Result<Vec<f32>> {
-        crate::read_touch(frames, self.frame_len(), &self.header.reading.unwrap_or_default(), touch)
+        Ok(crate::read_touch(frames, self.frame_len(), &self.header.reading.unwrap_or_default(), touch)?)
     }
 
     /// The frames of a window the model reads; the others were pruned.

@@ -48,6 +48,17 @@ pub enum Error {
     Tract(String),
 }
 
+/// A touch the file's reading cannot read, as the runtime reports it.
+impl From<pvt3_format::ReadError> for Error {
+    fn from(e: pvt3_format::ReadError) -> Self {
+        match e {
+            pvt3_format::ReadError::Touch(reason) => Self::Touch(reason),
+            pvt3_format::ReadError::NonFinite { index, value } => Self::NonFinite { index, value },
+            pvt3_format::ReadError::FrameLength { got, expected } => Self::FrameLength { got, expected },
+        }
+    }
+}
+
 pub type Result<T> = std::result::Result<T, Error>;
 
 pub(crate) fn tract_error(e: impl std::fmt::Display) -> Error {

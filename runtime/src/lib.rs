@@ -25,12 +25,9 @@ mod heap;
 mod kernels;
 mod npy;
 mod onnx;
-pub mod picture;
 mod plan;
-mod reading;
 #[cfg(feature = "spectral")]
 mod real_dft;
-pub mod resample;
 #[cfg(target_arch = "x86_64")]
 mod small_products;
 mod stages;
@@ -44,8 +41,9 @@ pub use heap::keep_freed_memory;
 pub use kernels::{tune as tune_kernels, Kernels};
 pub use npy::read_npy;
 pub use plan::declutter;
-pub use pvt3_format::StopRule;
-pub use reading::{read_touch, Reading, Touch, TouchReader};
+/// How the robot's recordings become the model's frames: the file's contract, run here as the
+/// training's import ran it (a camera's pictures, a touch by distance or at one force).
+pub use pvt3_format::{read_touch, Camera, Crop, Picture, Reading, StopRule, Touch, TouchReader};
 pub use stream::{Peek, Session};
 
 /// The library's version and the file format it reads, e.g. `0.1.0 (format 1.1)`: what

@@ -20,7 +20,7 @@ pub(crate) struct Stages {
     /// the frames received.
     pub(crate) head: Option<Head>,
     /// How a camera's frames become the model's (`Header::camera`).
-    pub(crate) camera: Option<crate::picture::Camera>,
+    pub(crate) camera: Option<crate::Camera>,
     /// The file's stopping rule (`Header::stop_rule`).
     pub(crate) stop_rule: Option<StopRule>,
     /// For each temporal token, its index among the kept tokens.

@@ -7,6 +7,7 @@
 use std::path::{Path, PathBuf};
 
 use pvt3_models::{Architecture, Config};
+use pvt3_spec::Sensor;
 
 use crate::checkpoint;
 use crate::data::{Dataset, TEST_FOLD};
@@ -78,7 +79,7 @@ pub fn configure(data: &Dataset, choice: &ModelChoice, options: &TrainOptions) -
     cfg.classes = data.classes();
     cfg = apply_overrides(cfg, &choice.overrides)?;
     if derived {
-        notes.push(derived_layout(&cfg, &data.window_shape()));
+        notes.push(derived_layout(&cfg, data.sensor, &data.window_shape()));
     }
     cfg.dropout = choice.dropout.unwrap_or(cfg.dropout);
     let (cfg, mut options) = robust(data, cfg, options, &choice.overrides, &mut notes)?;
@@ -140,9 +141,8 @@ pub fn robust(
         chose.push(format!("--aug-stretch {ROBUST_STRETCH}"));
         does.push("reads windows at other speeds");
     }
-    let camera = pvt3_spec::config::is_image(cfg.height, cfg.width);
     let fits = cfg.architecture() == Architecture::Pvt3 && cfg.frames / 2 >= ROBUST_SPECTRAL_BANDS;
-    let cfg = if fits && cfg.spectral_bands() == 0 && !overridden(overrides, "spectral_bands") && !camera {
+    let cfg = if fits && cfg.spectral_bands() == 0 && !overridden(overrides, "spectral_bands") && data.sensor == Sensor::Array {
         let spectral = format!("spectral_bands={ROBUST_SPECTRAL_BANDS}");
         chose.push(format!("--set {spectral}"));
         does.push("reads each channel's spectrum beside");
@@ -209,15 +209,15 @@ fn base_config(data: &Dataset, choice: &ModelChoice) -> Result<(Config, bool)> {
     if let Some(cfg) = fitting.into_iter().find(|c| c.sample_shape() == window) {
         return Ok((cfg, false));
     }
-    let derived = Config::for_sensor(&window)
+    let derived = Config::for_sensor(data.sensor, &window)
         .ok_or_else(|| Error::Usage(format!("samples of shape {}: expected [height, width, (channels,) frames]", shape(&window))))?;
     Ok((derived.for_model(architecture), true))
 }
 
-/// The note on a layout derived for samples of `window` (`Config::for_sensor`), as `cfg` has it
-/// after the user's overrides.
-fn derived_layout(cfg: &Config, window: &[usize]) -> String {
-    let layout = if pvt3_spec::config::is_image(cfg.height, cfg.width) {
+/// The note on a layout derived for `sensor`'s samples of `window` (`Config::for_sensor`), as
+/// `cfg` has it after the user's overrides.
+fn derived_layout(cfg: &Config, sensor: Sensor, window: &[usize]) -> String {
+    let layout = if sensor == Sensor::Camera {
         let (ph, pw) = (cfg.patch_height, cfg.patch_width);
         let grid = format!("{} × {}", cfg.height / ph, cfg.width / pw);
         let head = match cfg.spectral_space() {
@@ -283,16 +283,10 @@ fn class_names(data: &Dataset, file: Option<&Path>, classes: usize) -> Result<Ve
 pub fn apply_overrides(cfg: Config, overrides: &[String]) -> Result<Config> {
     let usage = |s: String| Error::Usage(s);
     let mut value = serde_json::to_value(&cfg).map_err(|e| usage(format!("the configuration does not serialise: {e}")))?;
-    if cfg.architecture() == Architecture::Pvt3 {
-        // A file leaves these fields out while they are at their defaults.
-        let fields = value.as_object_mut().expect("a config is a JSON object");
-        fields.insert("patch_selection".into(), cfg.patch_selection().into());
-        fields.insert("patch_dropout".into(), cfg.patch_dropout().into());
-        fields.insert("spectral_levels".into(), cfg.spectral_levels().into());
-        fields.insert("spectral_space".into(), cfg.spectral_space().into());
-        fields.insert("spectral_histogram".into(), cfg.spectral_histogram().into());
-        fields.insert("spectral_gradients".into(), cfg.spectral_gradients().into());
-        fields.insert("spectral_log_frames".into(), cfg.spectral_log_frames().into());
+    // A file leaves some of the network's fields out while they are at their defaults.
+    let fields = value.as_object_mut().expect("a config is a JSON object");
+    for field in cfg.network.entries() {
+        fields.insert(field.name.into(), field.value);
     }
     for o in overrides {
         let (key, raw) = field_and_value(o)?;
@@ -365,7 +359,8 @@ mod tests {
         // A camera's frames: no spectral head, however long the window.
         let mut notes = Vec::new();
         let camera = Config { frames: 64, ..Config::gelsight() };
-        assert_eq!(super::robust(&data, camera, &asked, &[], &mut notes).unwrap().0.spectral_bands(), 0);
+        let camera_data = Dataset { sensor: pvt3_spec::Sensor::Camera, ..data.clone() };
+        assert_eq!(super::robust(&camera_data, camera, &asked, &[], &mut notes).unwrap().0.spectral_bands(), 0);
         // A window too short for the bands: no spectral head.
         let short = Dataset::in_memory(vec![0.0f32; 4 * 16], vec![1, 1, 16], vec![0, 1, 0, 1]);
         let short = Dataset { conditions: data.conditions.clone(), folds: data.folds.clone(), ..short };
@@ -444,5 +439,18 @@ mod tests {
         assert_eq!((set.spectral_bands(), set.spectral_levels()), (16, false));
         let err = super::apply_overrides(biotac, &["latent=20".into()]).unwrap_err().to_string();
         assert!(err.contains("unknown field `latent`; a pvt3 model's fields"), "{err}");
+    }
+
+    /// `--set` takes every field a network declares (`network_fields!`), at its default too, with
+    /// no list of its own to keep.
+    #[test]
+    fn set_takes_every_declared_field() {
+        for name in ["icub20", "vit-icub20", "raec-icub20"] {
+            let cfg = Config::preset(name).unwrap();
+            for field in cfg.network.entries() {
+                let set = super::apply_overrides(cfg.clone(), &[format!("{}={}", field.name, field.value)]);
+                assert_eq!(set.unwrap(), cfg, "{name}: --set {}={}", field.name, field.value);
+            }
+        }
     }
 }

@@ -27,19 +27,18 @@ use std::borrow::Cow;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, OnceLock};
 
-use pvt3_models::Rng;
-
 use crate::{Error, Result};
 pub use frames::Frames;
 
 pub mod augment;
+mod digest;
 mod file;
 mod frames;
 pub mod import;
 pub mod normalization;
 mod split;
 pub mod windows;
-pub use split::{Split, TrainedOn};
+pub use split::{Split, TrainedOn, FOLDS, TEST_FOLD};
 
 /// The arrays of a data set file, as `pvt3 import` writes them and [`Dataset::load`] reads them.
 pub mod key {
@@ -121,11 +120,6 @@ impl std::fmt::Display for HoldOut {
     }
 }
 
-/// The fold that holds the test set in the published protocol.
-pub const TEST_FOLD: usize = 4;
-/// Folds 0..FOLDS (the test fold included).
-pub const FOLDS: usize = 5;
-
 #[derive(Clone, Debug)]
 pub struct Dataset {
     /// Samples back to back, each in the model layout `[H, W, (C,) T]`: f32, or a camera's 8-bit
@@ -134,6 +128,9 @@ pub struct Dataset {
     pub x: Arc<Frames>,
     /// The layout of one sample: `[H, W, T]` or `[H, W, C, T]`; `T` is the longest touch's.
     pub sample_shape: Vec<usize>,
+    /// The kind of sensor the frames come from, decided once when the set is read
+    /// ([`pvt3_spec::Sensor::of`]): what every choice that differs between kinds reads.
+    pub sensor: pvt3_spec::Sensor,
     /// Each touch's frames (`T` for all unless the file holds `lengths`).
     pub lengths: Vec<usize>,
     /// Class names from the file (`class_names`), if it has them.
@@ -159,16 +156,7 @@ pub struct Dataset {
     pub digest: OnceLock<String>,
 }
 
-fn data_error(path: &Path, reason: impl Into<String>) -> Error {
-    Error::Data { path: path.to_path_buf(), reason: reason.into() }
-}
-
 impl Dataset {
-    /// Loads a data set; `seed` draws stratified folds when the file has none.
-    pub fn load(path: &Path, seed: u64) -> Result<Self> {
-        file::read(path, seed)
-    }
-
     /// Touches held in memory (`x` the layout `sample_shape` back to back), all in fold 0 and
     /// of full length: what a test builds a data set from.
     #[cfg(test)]
@@ -176,6 +164,7 @@ impl Dataset {
         let frames = *sample_shape.last().expect("a frame axis");
         Self {
             x: Arc::new(x.into()),
+            sensor: pvt3_spec::Sensor::of(&sample_shape),
             sample_shape,
             lengths: vec![frames; labels.len()],
             class_names: None,
@@ -258,12 +247,12 @@ impl Dataset {
         let names = self
             .class_names
             .as_ref()
-            .ok_or_else(|| data_error(&self.path, format!("class {name}: the set names no classes (pvt3 import writes their names)")))?;
+            .ok_or_else(|| Error::data(&self.path, format!("class {name}: the set names no classes (pvt3 import writes their names)")))?;
         names
             .iter()
             .position(|n| n == name)
             .map(|c| c as u32)
-            .ok_or_else(|| data_error(&self.path, format!("no class is named {name}; the set's classes are {}", names.join(", "))))
+            .ok_or_else(|| Error::data(&self.path, format!("no class is named {name}; the set's classes are {}", names.join(", "))))
     }
 
     /// Number of classes: the largest label + 1.
@@ -289,7 +278,7 @@ impl Dataset {
         let split =
             Split { train: pick(&|f| f != val_fold && f != TEST_FOLD), val: pick(&|f| f == val_fold), test: pick(&|f| f == TEST_FOLD) };
         if split.train.is_empty() || split.val.is_empty() {
-            return Err(data_error(&self.path, format!("fold {val_fold} leaves no training or validation samples")));
+            return Err(Error::data(&self.path, format!("fold {val_fold} leaves no training or validation samples")));
         }
         Ok(split)
     }
@@ -319,7 +308,7 @@ impl Dataset {
         match &self.held_out {
             Some(h) => data.hold_out(&HoldOut { seed, ..h.clone() })?,
             None => {
-                data.folds = stratified_folds(&data.labels, FOLDS, seed);
+                data.folds = split::stratified_folds(&data.labels, FOLDS, seed);
                 data.fold_seed = Some(seed);
             }
         }
@@ -334,17 +323,20 @@ impl Dataset {
         let known = || self.conditions.iter().map(|c| c.name.as_str()).collect::<Vec<_>>().join(", ");
         let condition = self.conditions.iter().find(|c| c.name == name).ok_or_else(|| {
             if self.conditions.is_empty() {
-                data_error(
+                Error::data(
                     &self.path,
                     format!("--hold-out {name}: the set records no conditions (pvt3 import --name reads them from file names)"),
                 )
             } else {
-                data_error(&self.path, format!("--hold-out {name}: no such condition; the set records {}", known()))
+                Error::data(&self.path, format!("--hold-out {name}: no such condition; the set records {}", known()))
             }
         })?;
         let all = condition.distinct();
         if let Some(bad) = levels.iter().find(|l| !all.contains(&l.as_str())) {
-            return Err(data_error(&self.path, format!("--hold-out {name}={bad}: no touch has that level; {name} has {}", all.join(", "))));
+            return Err(Error::data(
+                &self.path,
+                format!("--hold-out {name}={bad}: no touch has that level; {name} has {}", all.join(", ")),
+            ));
         }
         let class = h.class.as_deref().map(|c| self.class_label(c)).transpose()?;
         let held: Vec<bool> =
@@ -354,16 +346,16 @@ impl Dataset {
         for c in 0..self.classes() as u32 {
             let n = kept_labels.iter().filter(|l| **l == c).count();
             if n < TEST_FOLD {
-                return Err(data_error(
+                return Err(Error::data(
                     &self.path,
                     format!("--hold-out {h}: class {c} keeps {n} touches, too few to train and validate on {TEST_FOLD} folds"),
                 ));
             }
         }
         if held.iter().all(|h| !h) {
-            return Err(data_error(&self.path, format!("--hold-out {h}: holds out no touch")));
+            return Err(Error::data(&self.path, format!("--hold-out {h}: holds out no touch")));
         }
-        let folds = stratified_folds(&kept_labels, TEST_FOLD, seed);
+        let folds = split::stratified_folds(&kept_labels, TEST_FOLD, seed);
         for (k, &i) in kept.iter().enumerate() {
             self.folds[i] = folds[k];
         }
@@ -381,7 +373,7 @@ impl Dataset {
         let expected = cfg.sample_shape();
         let (frame, model_frame) = (&self.sample_shape[..self.sample_shape.len() - 1], &expected[..expected.len() - 1]);
         if frame != model_frame || (self.equal_lengths() && self.max_frames() < cfg.frames) {
-            return Err(data_error(
+            return Err(Error::data(
                 &self.path,
                 format!("samples are {:?} but the model expects {:?} ([height, width, (channels,) frames])", self.sample_shape, expected),
             ));
@@ -390,7 +382,7 @@ impl Dataset {
             self.folds[i] == TEST_FOLD && self.lengths[i] >= cfg.tubelet && cfg.architecture() == pvt3_models::Architecture::Pvt3
         };
         if let Some(i) = (0..self.len()).find(|&i| self.lengths[i] < cfg.frames && !short_test(i)) {
-            return Err(data_error(
+            return Err(Error::data(
                 &self.path,
                 format!(
                     "{} has {} frames, fewer than the model's window of {}: leave it out, or train a shorter window (--set frames=N)",
@@ -401,25 +393,10 @@ impl Dataset {
             ));
         }
         if let Some(bad) = self.labels.iter().find(|l| **l as usize >= cfg.classes) {
-            return Err(data_error(&self.path, format!("label {bad} is outside 0..{} of the model's classes", cfg.classes)));
+            return Err(Error::data(&self.path, format!("label {bad} is outside 0..{} of the model's classes", cfg.classes)));
         }
         Ok(())
     }
-}
-
-/// Deals each class's samples, shuffled by `seed`, round-robin into folds 0..folds_count.
-fn stratified_folds(labels: &[u32], folds_count: usize, seed: u64) -> Vec<usize> {
-    let mut rng = Rng::new(seed);
-    let mut folds = vec![0; labels.len()];
-    let classes = labels.iter().max().map_or(0, |m| *m + 1);
-    for c in 0..classes {
-        let mut members: Vec<usize> = (0..labels.len()).filter(|&i| labels[i] == c).collect();
-        rng.shuffle(&mut members);
-        for (k, i) in members.into_iter().enumerate() {
-            folds[i] = k % folds_count;
-        }
-    }
-    folds
 }
 
 #[cfg(test)]

@@ -27,6 +27,11 @@ pub enum Error {
 pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
+    /// A data set's error: the file `path` and what is wrong with it.
+    pub fn data(path: &std::path::Path, reason: impl Into<String>) -> Error {
+        Error::Data { path: path.to_path_buf(), reason: reason.into() }
+    }
+
     pub fn io(path: &std::path::Path) -> impl FnOnce(std::io::Error) -> Error + '_ {
         move |source| Error::Io { path: path.to_path_buf(), source }
     }

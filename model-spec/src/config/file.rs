@@ -5,11 +5,11 @@
 //! foreign ones at their defaults; they still read. A foreign field set to anything else (a
 //! `--set tile_rows=5` on a PVT³ model) is refused, naming it.
 
-use std::fmt::Debug;
-
+use serde::ser::SerializeMap;
 use serde::{Deserialize, Serialize};
+use serde_json::Value;
 
-use super::network::{Architecture, Network, Pvt3Config, RaecConfig, VitConfig};
+use super::network::{Architecture, Network};
 use super::Config;
 use crate::Error;
 
@@ -35,48 +35,30 @@ pub(super) struct ConfigFile {
     dropout: f64,
     #[serde(default = "super::default_eps")]
     layer_norm_eps: f64,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    tile_rows: Option<usize>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    rnn_hidden: Option<usize>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    latent: Option<usize>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    conv_channels: Option<usize>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    reconstruction_weight: Option<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    decoder_from_state: Option<bool>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    spectral_bands: Option<usize>,
-    /// Written only when off, so that the files of models whose head reads the levels read as before.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    spectral_levels: Option<bool>,
-    /// Written only when on, so that the files of models whose head reads frames read as before.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    spectral_space: Option<bool>,
-    /// Written only when not zero, so that the files of models without it read as before.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    spectral_histogram: Option<usize>,
-    /// Written only when on, so that the files of models without them read as before.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    spectral_gradients: Option<bool>,
-    /// Written only when on, so that the files of models whose head takes the log of the mean read as before.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    spectral_log_frames: Option<bool>,
-    /// Written only when on, so that the files of models without the mask read as before.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    patch_selection: Option<bool>,
-    /// Written only when not zero, likewise.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    patch_dropout: Option<f64>,
+    /// The network's own fields ([`Network::entries`]): written in their declared order, read
+    /// from whatever the fields above leave.
+    #[serde(flatten)]
+    network: NetworkFields,
 }
 
-/// Fails if a field of another network than `model` holds other than that network's default.
-fn foreign<T: PartialEq + Debug>(model: Architecture, name: &str, value: Option<T>, default: T) -> Result<(), Error> {
-    match value {
-        Some(v) if v != default => Err(Error::Config(format!("{name} = {v:?}: not a field of a {model} model"))),
-        _ => Ok(()),
+/// The fields of a file that are not shared: written as [`Network::entries`] says, in order;
+/// read as they come.
+#[derive(Clone)]
+struct NetworkFields(Vec<(String, Value)>);
+
+impl Serialize for NetworkFields {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for (name, value) in &self.0 {
+            map.serialize_entry(name, value)?;
+        }
+        map.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for NetworkFields {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        Ok(Self(serde_json::Map::deserialize(d)?.into_iter().collect()))
     }
 }
 
@@ -84,49 +66,8 @@ impl TryFrom<ConfigFile> for Config {
     type Error = Error;
 
     fn try_from(f: ConfigFile) -> Result<Self, Error> {
-        let (m, pvt3, vit, raec) = (f.model, Pvt3Config::default(), VitConfig::default(), RaecConfig::default());
-        if m != Architecture::Pvt3 {
-            foreign(m, "spectral_bands", f.spectral_bands, pvt3.spectral_bands)?;
-            foreign(m, "spectral_levels", f.spectral_levels, pvt3.spectral_levels)?;
-            foreign(m, "spectral_space", f.spectral_space, pvt3.spectral_space)?;
-            foreign(m, "spectral_histogram", f.spectral_histogram, pvt3.spectral_histogram)?;
-            foreign(m, "spectral_gradients", f.spectral_gradients, pvt3.spectral_gradients)?;
-            foreign(m, "spectral_log_frames", f.spectral_log_frames, pvt3.spectral_log_frames)?;
-            foreign(m, "patch_selection", f.patch_selection, pvt3.patch_selection)?;
-            foreign(m, "patch_dropout", f.patch_dropout, pvt3.patch_dropout)?;
-        }
-        if m != Architecture::Vit {
-            foreign(m, "tile_rows", f.tile_rows, vit.tile_rows)?;
-        }
-        if m != Architecture::Raec {
-            foreign(m, "rnn_hidden", f.rnn_hidden, raec.rnn_hidden)?;
-            foreign(m, "latent", f.latent, raec.latent)?;
-            foreign(m, "conv_channels", f.conv_channels, raec.conv_channels)?;
-            foreign(m, "reconstruction_weight", f.reconstruction_weight, raec.reconstruction_weight)?;
-            foreign(m, "decoder_from_state", f.decoder_from_state, raec.decoder_from_state)?;
-        }
-        let network = match m {
-            Architecture::Pvt3 => Pvt3Config {
-                spectral_bands: f.spectral_bands.unwrap_or(pvt3.spectral_bands),
-                spectral_levels: f.spectral_levels.unwrap_or(pvt3.spectral_levels),
-                spectral_space: f.spectral_space.unwrap_or(pvt3.spectral_space),
-                spectral_histogram: f.spectral_histogram.unwrap_or(pvt3.spectral_histogram),
-                spectral_gradients: f.spectral_gradients.unwrap_or(pvt3.spectral_gradients),
-                spectral_log_frames: f.spectral_log_frames.unwrap_or(pvt3.spectral_log_frames),
-                patch_selection: f.patch_selection.unwrap_or(pvt3.patch_selection),
-                patch_dropout: f.patch_dropout.unwrap_or(pvt3.patch_dropout),
-            }
-            .into(),
-            Architecture::Vit => VitConfig { tile_rows: f.tile_rows.unwrap_or(vit.tile_rows) }.into(),
-            Architecture::Raec => RaecConfig {
-                rnn_hidden: f.rnn_hidden.unwrap_or(raec.rnn_hidden),
-                latent: f.latent.unwrap_or(raec.latent),
-                conv_channels: f.conv_channels.unwrap_or(raec.conv_channels),
-                reconstruction_weight: f.reconstruction_weight.unwrap_or(raec.reconstruction_weight),
-                decoder_from_state: f.decoder_from_state.unwrap_or(raec.decoder_from_state),
-            }
-            .into(),
-        };
+        let value = |name: &str| f.network.0.iter().find(|(n, v)| n == name && !v.is_null()).map(|(_, v)| v.clone());
+        let network = Network::from_values(f.model, value)?;
         Ok(Config {
             height: f.height,
             width: f.width,
@@ -151,7 +92,8 @@ impl TryFrom<ConfigFile> for Config {
 
 impl From<Config> for ConfigFile {
     fn from(c: Config) -> Self {
-        let mut f = Self {
+        let written = c.network.entries().into_iter().filter(|e| e.written).map(|e| (e.name.to_string(), e.value));
+        Self {
             model: c.architecture(),
             height: c.height,
             width: c.width,
@@ -169,48 +111,15 @@ impl From<Config> for ConfigFile {
             classes: c.classes,
             dropout: c.dropout,
             layer_norm_eps: c.layer_norm_eps,
-            tile_rows: None,
-            rnn_hidden: None,
-            latent: None,
-            conv_channels: None,
-            reconstruction_weight: None,
-            decoder_from_state: None,
-            spectral_bands: None,
-            spectral_levels: None,
-            spectral_space: None,
-            spectral_histogram: None,
-            spectral_gradients: None,
-            spectral_log_frames: None,
-            patch_selection: None,
-            patch_dropout: None,
-        };
-        match c.network {
-            Network::Pvt3(p) => {
-                f.spectral_bands = Some(p.spectral_bands);
-                f.spectral_levels = (!p.spectral_levels).then_some(false);
-                f.spectral_space = p.spectral_space.then_some(true);
-                f.spectral_histogram = (p.spectral_histogram != 0).then_some(p.spectral_histogram);
-                f.spectral_gradients = p.spectral_gradients.then_some(true);
-                f.spectral_log_frames = p.spectral_log_frames.then_some(true);
-                f.patch_selection = p.patch_selection.then_some(true);
-                f.patch_dropout = (p.patch_dropout != 0.0).then_some(p.patch_dropout);
-            }
-            Network::Vit(v) => f.tile_rows = Some(v.tile_rows),
-            Network::Raec(r) => {
-                f.rnn_hidden = Some(r.rnn_hidden);
-                f.latent = Some(r.latent);
-                f.conv_channels = Some(r.conv_channels);
-                f.reconstruction_weight = Some(r.reconstruction_weight);
-                f.decoder_from_state = Some(r.decoder_from_state);
-            }
+            network: NetworkFields(written.collect()),
         }
-        f
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::config::network::Pvt3Config;
 
     /// A PVT³ configuration as checkpoints and `.onnx` files held it before the split: every
     /// network's fields, the foreign ones at their defaults (tests/fixtures/run-9809af1-paused).
@@ -277,7 +186,7 @@ mod tests {
     /// image's space.
     #[test]
     fn log_frames_are_written_only_when_on() {
-        let layout = Config::for_sensor(&[30, 40, 3, 25]).unwrap();
+        let layout = Config::for_sensor(crate::Sensor::Camera, &[30, 40, 3, 25]).unwrap();
         assert!(serde_json::to_value(&layout).unwrap().get("spectral_log_frames").is_none());
         let Network::Pvt3(p) = layout.network else { unreachable!() };
         let on = Config { network: Pvt3Config { spectral_log_frames: true, ..p }.into(), ..layout };
@@ -297,7 +206,7 @@ mod tests {
     /// reads them.
     #[test]
     fn a_histogram_is_written_only_when_there_is_one() {
-        let layout = Config::for_sensor(&[30, 40, 3, 25]).unwrap();
+        let layout = Config::for_sensor(crate::Sensor::Camera, &[30, 40, 3, 25]).unwrap();
         assert_eq!((layout.spectral_histogram(), layout.spectral_gradients()), (24, false));
         assert_eq!(layout.spectral_features(), 3 * (1 + 12 + 24));
         let layout_file = serde_json::to_value(&layout).unwrap();

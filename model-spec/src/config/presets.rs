@@ -3,14 +3,10 @@
 
 use super::network::{Architecture, Network, Pvt3Config, RaecConfig, VitConfig};
 use super::Config;
-use crate::{Error, Result};
+use crate::{Error, Result, Sensor};
 
 /// The sensor presets (PVT³); each also comes as `vit-NAME` and `raec-NAME`.
 pub const PRESETS: [&str; 3] = ["icub20", "biotac20", "gelsight"];
-
-/// The least height and width, in values, of a frame that is an image (a camera's): smaller grids
-/// are a tactile array's taxels or electrodes.
-pub const IMAGE_SIDE: usize = 16;
 
 /// About how many patches a derived layout cuts an image into: 3 × 4 of a 3:4 frame.
 const IMAGE_PATCHES: f64 = 12.0;
@@ -27,11 +23,6 @@ const IMAGE_BANDS: usize = 12;
 /// are not the layout's: PhysiCLeAR's validation folds did not read better with them
 /// (docs/camera.md, "The gradients' histograms").
 const IMAGE_HISTOGRAM: usize = 24;
-
-/// Whether frames of `height` × `width` values are a camera's images ([`IMAGE_SIDE`]).
-pub fn is_image(height: usize, width: usize) -> bool {
-    height >= IMAGE_SIDE && width >= IMAGE_SIDE
-}
 
 /// The divisor of `n` nearest `ideal` in ratio (the smaller of two as near).
 fn nearest_divisor(n: usize, ideal: f64) -> usize {
@@ -73,9 +64,10 @@ impl Config {
         Self { height: 19, width: 1, frames: 400, patch_height: 19, patch_width: 1, tubelet: 10, ..Self::icub20() }
     }
 
-    /// A sensor no preset fits, samples `[height, width, (channels,) frames]`. The tubelet is the
+    /// A sensor no preset fits, of kind `sensor` ([`Sensor::of`] the data), samples `[height,
+    /// width, (channels,) frames]`. The tubelet is the
     /// divisor of `frames` nearest (in ratio) to `frames / 40`, so that about 40 temporal tokens
-    /// remain, as in the BioTac preset. A camera's images ([`is_image`]) are cut into about 12
+    /// remain, as in the BioTac preset. A camera's images ([`Sensor::Camera`]) are cut into about 12
     /// square patches (sides the divisors of height and width nearest `√(height · width / 12)`:
     /// 10 × 10 pixels of 30 × 40), with a spectral head over the image's space (rings and a
     /// histogram), the rest the
@@ -83,7 +75,7 @@ impl Config {
     /// layout, which assumes no grid: all channels of a tubelet form one token (one patch covering
     /// the frame), the rest the BioTac preset's. `None` for a shape that is not 3 or 4 axes of
     /// positive lengths.
-    pub fn for_sensor(sample_shape: &[usize]) -> Option<Self> {
+    pub fn for_sensor(sensor: Sensor, sample_shape: &[usize]) -> Option<Self> {
         let (height, width, channels, frames) = match *sample_shape {
             [h, w, f] => (h, w, 1, f),
             [h, w, c, f] => (h, w, c, f),
@@ -93,7 +85,7 @@ impl Config {
             return None;
         }
         let tubelet = nearest_divisor(frames, frames as f64 / 40.0);
-        if is_image(height, width) {
+        if sensor == Sensor::Camera {
             let side = ((height * width) as f64 / IMAGE_PATCHES).sqrt();
             let (patch_height, patch_width) = (nearest_divisor(height, side), nearest_divisor(width, side));
             let bands = (1..=IMAGE_BANDS).rev().find(|b| crate::spectrum::space::band_of(height, width, *b).is_ok()).unwrap_or(0);
@@ -196,12 +188,15 @@ mod tests {
     #[test]
     fn a_new_sensor_gets_the_biotac_layout() {
         for (shape, tubelet) in [(vec![24, 1, 250], 5), (vec![19, 1, 400], 10), (vec![4, 4, 3, 64], 2), (vec![8, 8, 37], 1)] {
-            let cfg = Config::for_sensor(&shape).unwrap();
+            let cfg = Config::for_sensor(Sensor::of(&shape), &shape).unwrap();
             cfg.validate().unwrap();
             assert_eq!((cfg.sample_shape(), cfg.tubelet, cfg.num_patches()), (shape.clone(), tubelet, 1), "{shape:?}");
         }
-        assert_eq!(Config::for_sensor(&[19, 1, 400]).unwrap(), Config::biotac20());
-        assert!(Config::for_sensor(&[10, 75]).is_none() && Config::for_sensor(&[0, 1, 4]).is_none());
+        assert_eq!(Config::for_sensor(Sensor::of(&[19, 1, 400]), &[19, 1, 400]).unwrap(), Config::biotac20());
+        assert!(
+            Config::for_sensor(Sensor::of(&[10, 75]), &[10, 75]).is_none()
+                && Config::for_sensor(Sensor::of(&[0, 1, 4]), &[0, 1, 4]).is_none()
+        );
     }
 
     /// A camera's images are cut into about 12 patches, with the GelSight preset's widths.
@@ -213,7 +208,7 @@ mod tests {
             (vec![48, 64, 100], [16, 16], 2),
             (vec![16, 17, 3, 8], [4, 17], 1),
         ] {
-            let cfg = Config::for_sensor(&shape).unwrap();
+            let cfg = Config::for_sensor(Sensor::of(&shape), &shape).unwrap();
             cfg.validate().unwrap();
             assert_eq!(
                 (cfg.sample_shape(), [cfg.patch_height, cfg.patch_width], cfg.tubelet),
@@ -222,6 +217,10 @@ mod tests {
             );
             assert_eq!((cfg.dim, cfg.mlp_dim), (Config::gelsight().dim, Config::gelsight().mlp_dim));
         }
-        assert_eq!(Config::for_sensor(&[15, 40, 3, 25]).unwrap().num_patches(), 1, "a grid narrower than an image");
+        assert_eq!(
+            Config::for_sensor(Sensor::of(&[15, 40, 3, 25]), &[15, 40, 3, 25]).unwrap().num_patches(),
+            1,
+            "a grid narrower than an image"
+        );
     }
 }

@@ -229,7 +229,7 @@ mod tests {
     /// columns 20 to 29 of rows 10 to 19.
     #[test]
     fn the_kept_pixels_are_the_kept_patches() {
-        let c = Config::for_sensor(&[30, 40, 3, 25]).unwrap();
+        let c = Config::for_sensor(crate::Sensor::Camera, &[30, 40, 3, 25]).unwrap();
         assert_eq!((c.patch_height, c.patch_width), (10, 10));
         let kept = kept_pixels(&c, &[1, 6]);
         let at = |y: usize, x: usize| (y < 10 && (10..20).contains(&x)) || ((10..20).contains(&y) && (20..30).contains(&x));

@@ -1,9 +1,8 @@
 //! [`Session::push_camera_frame`]: a camera's 8-bit frames, as the camera gives them, read as
-//! the training's import read its videos ([`crate::picture::Picture::read_as`]); and
+//! the training's import read its videos ([`crate::Picture::read_as`]); and
 //! [`Classifier::classify_camera_touches`], whole touches of them (`pvt3-run`).
 
-use crate::picture::Picture;
-use crate::{Classifier, Error, Prediction, Result, Session};
+use crate::{Classifier, Error, Picture, Prediction, Result, Session};
 
 impl Classifier {
     /// The answers for `batch` touches of a camera's 8-bit frames as it gives them, laid out as a

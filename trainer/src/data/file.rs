@@ -10,20 +10,28 @@ use std::sync::{Arc, OnceLock};
 use ndarray::{ArrayD, IxDyn};
 use ndarray_npy::{NpzReader, ReadNpyExt, ReadableElement};
 
-use super::{data_error, key, stratified_folds, Condition, Dataset, Frames, FOLDS};
+use super::split::stratified_folds;
+use super::{key, Condition, Dataset, Frames, FOLDS};
 use crate::{Error, Result};
 
+impl Dataset {
+    /// Loads a data set; `seed` draws stratified folds when the file has none.
+    pub fn load(path: &Path, seed: u64) -> Result<Self> {
+        read(path, seed)
+    }
+}
+
 /// The data set at `path`; `seed` draws stratified folds when the file has none.
-pub(super) fn read(path: &Path, seed: u64) -> Result<Dataset> {
+fn read(path: &Path, seed: u64) -> Result<Dataset> {
     if !path.exists() {
-        return Err(data_error(path, "no such file or directory (expected an .npz file or a directory of .npy files)"));
+        return Err(Error::data(path, "no such file or directory (expected an .npz file or a directory of .npy files)"));
     }
     if path.is_dir() {
         dataset(path, &mut NpyDir(path.to_path_buf()), seed)
     } else {
         let file = File::open(path).map_err(Error::io(path))?;
         let npz =
-            NpzReader::new(std::io::BufReader::new(file)).map_err(|e| data_error(path, format!("not a readable .npz archive ({e})")))?;
+            NpzReader::new(std::io::BufReader::new(file)).map_err(|e| Error::data(path, format!("not a readable .npz archive ({e})")))?;
         dataset(path, &mut Npz(npz), seed)
     }
 }
@@ -59,6 +67,7 @@ fn dataset(path: &Path, src: &mut impl ArraySource, seed: u64) -> Result<Dataset
     };
     Ok(Dataset {
         x: Arc::new(x),
+        sensor: pvt3_spec::Sensor::of(&sample_shape),
         sample_shape,
         lengths,
         class_names,
@@ -81,7 +90,7 @@ fn sample_shape(path: &Path, shape: &[usize]) -> Result<Vec<usize>> {
         [_, c, t] => Ok(vec![c, 1, t]),
         [_, h, w, t] => Ok(vec![h, w, t]),
         [_, h, w, c, t] => Ok(vec![h, w, c, t]),
-        _ => Err(data_error(path, format!("`x` has shape {shape:?}; expected [N, H, W, T], [N, C, T] or [N, H, W, C, T]"))),
+        _ => Err(Error::data(path, format!("`x` has shape {shape:?}; expected [N, H, W, T], [N, C, T] or [N, H, W, C, T]"))),
     }
 }
 
@@ -93,7 +102,7 @@ fn lengths(a: &mut Arrays<'_, impl ArraySource>, n: usize, frames: usize) -> Res
     }
     let lengths = integers(a.path, key::LENGTHS, &a.numeric(key::LENGTHS)?, n)?;
     if let Some(i) = lengths.iter().position(|l| *l == 0 || *l as usize > frames) {
-        return Err(data_error(a.path, format!("`lengths`[{i}] = {} is not in 1..={frames}", lengths[i])));
+        return Err(Error::data(a.path, format!("`lengths`[{i}] = {} is not in 1..={frames}", lengths[i])));
     }
     Ok(lengths.into_iter().map(|l| l as usize).collect())
 }
@@ -102,7 +111,7 @@ fn lengths(a: &mut Arrays<'_, impl ArraySource>, n: usize, frames: usize) -> Res
 fn folds(path: &Path, fold: &ArrayD<f64>, n: usize) -> Result<Vec<usize>> {
     let folds = integers(path, key::FOLD, fold, n)?;
     if let Some(bad) = folds.iter().find(|f| **f as usize >= FOLDS) {
-        return Err(data_error(path, format!("fold {bad} is outside 0..={}", FOLDS - 1)));
+        return Err(Error::data(path, format!("fold {bad} is outside 0..={}", FOLDS - 1)));
     }
     Ok(folds.into_iter().map(|f| f as usize).collect())
 }
@@ -120,11 +129,11 @@ impl<S: ArraySource> Arrays<'_, S> {
     }
 
     fn missing(&self, key: &str) -> Error {
-        data_error(self.path, format!("no array `{key}` (found: {})", self.keys.join(", ")))
+        Error::data(self.path, format!("no array `{key}` (found: {})", self.keys.join(", ")))
     }
 
     fn numeric(&mut self, key: &str) -> Result<ArrayD<f64>> {
-        read_numeric(self.src, key).map_err(|e| data_error(self.path, format!("array `{key}`: {e}")))
+        read_numeric(self.src, key).map_err(|e| Error::data(self.path, format!("array `{key}`: {e}")))
     }
 
     /// The lines of a text array (UTF-8 bytes), if the file has it; `count`, how many it must have.
@@ -133,12 +142,12 @@ impl<S: ArraySource> Arrays<'_, S> {
             return Ok(None);
         }
         let path = self.path;
-        let bytes = self.src.read::<u8>(key).map_err(|e| data_error(path, format!("array `{key}` (UTF-8 bytes): {e}")))?;
-        let text =
-            String::from_utf8(bytes.iter().copied().collect()).map_err(|_| data_error(path, format!("array `{key}` is not UTF-8 text")))?;
+        let bytes = self.src.read::<u8>(key).map_err(|e| Error::data(path, format!("array `{key}` (UTF-8 bytes): {e}")))?;
+        let text = String::from_utf8(bytes.iter().copied().collect())
+            .map_err(|_| Error::data(path, format!("array `{key}` is not UTF-8 text")))?;
         let names: Vec<String> = text.lines().map(String::from).collect();
         if let Some(count) = count.filter(|c| *c != names.len()) {
-            return Err(data_error(path, format!("array `{key}` names {} lines; expected {count}", names.len())));
+            return Err(Error::data(path, format!("array `{key}` names {} lines; expected {count}", names.len())));
         }
         Ok(Some(names))
     }
@@ -147,7 +156,7 @@ impl<S: ArraySource> Arrays<'_, S> {
     /// file has it; `what` it is, for the error.
     fn record<T: serde::de::DeserializeOwned>(&mut self, key: &str, what: &str) -> Result<Option<T>> {
         let path = self.path;
-        let parse = |line: &String| serde_json::from_str(line).map_err(|e| data_error(path, format!("array `{key}` is not {what} ({e})")));
+        let parse = |line: &String| serde_json::from_str(line).map_err(|e| Error::data(path, format!("array `{key}` is not {what} ({e})")));
         self.lines(key, Some(1))?.as_ref().map(|t| parse(&t[0])).transpose()
     }
 }
@@ -232,7 +241,7 @@ fn read_frames(a: &mut Arrays<'_, impl ArraySource>) -> Result<(Frames, Vec<usiz
     let x: Vec<f32> = x.iter().map(|v| *v as f32).collect();
     let sample_len = x.len() / shape.first().copied().unwrap_or(1).max(1);
     if let Some(i) = x.iter().position(|v| !v.is_finite()) {
-        return Err(data_error(path, format!("`x` holds a NaN or infinite value in sample {}", i / sample_len)));
+        return Err(Error::data(path, format!("`x` holds a NaN or infinite value in sample {}", i / sample_len)));
     }
     Ok((Frames::F32(x), shape))
 }
@@ -240,11 +249,11 @@ fn read_frames(a: &mut Arrays<'_, impl ArraySource>) -> Result<(Frames, Vec<usiz
 /// A background is a frame of each touch: `x`'s shape (`[N, H, W, C, T]`) without its frame axis.
 fn check_background(path: &Path, x: &[usize], background: &[usize]) -> Result<()> {
     if x.len() < 2 {
-        return Err(data_error(path, format!("`x` has shape {x:?}; a background needs touches of frames")));
+        return Err(Error::data(path, format!("`x` has shape {x:?}; a background needs touches of frames")));
     }
     let frame = &x[..x.len() - 1];
     if background != frame {
-        return Err(data_error(path, format!("`background` has shape {background:?}; expected {frame:?}, `x`'s without its frame axis")));
+        return Err(Error::data(path, format!("`background` has shape {background:?}; expected {frame:?}, `x`'s without its frame axis")));
     }
     Ok(())
 }
@@ -261,7 +270,7 @@ fn flat<T: Clone>(a: ArrayD<T>) -> Vec<T> {
 /// Converts a numeric array of `n` whole, non-negative values to u32.
 fn integers(path: &Path, key: &str, a: &ArrayD<f64>, n: usize) -> Result<Vec<u32>> {
     if a.shape() != [n] {
-        return Err(data_error(path, format!("`{key}` has shape {:?}; expected [{n}], one per sample", a.shape())));
+        return Err(Error::data(path, format!("`{key}` has shape {:?}; expected [{n}], one per sample", a.shape())));
     }
     a.iter()
         .enumerate()
@@ -269,7 +278,7 @@ fn integers(path: &Path, key: &str, a: &ArrayD<f64>, n: usize) -> Result<Vec<u32
             if v.fract() == 0.0 && *v >= 0.0 && *v <= u32::MAX as f64 {
                 Ok(*v as u32)
             } else {
-                Err(data_error(path, format!("`{key}`[{i}] = {v} is not a whole number ≥ 0")))
+                Err(Error::data(path, format!("`{key}`[{i}] = {v} is not a whole number ≥ 0")))
             }
         })
         .collect()

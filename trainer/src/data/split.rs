@@ -3,9 +3,12 @@
 //! rule, distillation, resume) takes the folds from there and refuses data that are not the
 //! touches the run trained on, so that no test touch is ever read as a training or validation one.
 
-use sha2::{Digest, Sha256};
+use pvt3_models::Rng;
 
-use super::{Dataset, TEST_FOLD};
+/// The fold that holds the test set in the published protocol.
+pub const TEST_FOLD: usize = 4;
+/// Folds 0..FOLDS (the test fold included).
+pub const FOLDS: usize = 5;
 
 /// Which samples train, validate and test.
 #[derive(Clone, Debug, PartialEq)]
@@ -20,7 +23,7 @@ pub struct Split {
 /// train).
 #[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TrainedOn {
-    /// [`Dataset::digest`] of the touches.
+    /// `Dataset::digest` of the touches.
     pub digest: String,
     /// The seed that drew the folds (stratified, or around the held-out levels); `None`: the
     /// file's own `fold` array.
@@ -61,63 +64,23 @@ fn drawn(seed: Option<u64>) -> String {
 }
 
 /// The first 12 hex digits of a digest, enough to tell two apart in a message.
-fn short(digest: &str) -> &str {
+pub(super) fn short(digest: &str) -> &str {
     &digest[..digest.len().min("sha256:".len() + 12)]
 }
 
-impl Dataset {
-    /// SHA-256 of the touches as read (their layout, lengths, labels and every value as f32),
-    /// whatever file or dtype holds them; computed once.
-    pub fn digest(&self) -> &str {
-        self.digest.get_or_init(|| {
-            let mut sha = Sha256::new();
-            let words = |v: &[usize]| v.iter().flat_map(|d| (*d as u64).to_le_bytes()).collect::<Vec<u8>>();
-            sha.update(words(&self.sample_shape));
-            sha.update(words(&self.lengths));
-            sha.update(self.labels.iter().flat_map(|l| l.to_le_bytes()).collect::<Vec<u8>>());
-            for i in 0..self.len() {
-                for chunk in self.sample(i).chunks(1 << 16) {
-                    sha.update(chunk.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>());
-                }
-            }
-            let hex: String = sha.finalize().iter().map(|b| format!("{b:02x}")).collect();
-            format!("sha256:{hex}")
-        })
-    }
-
-    /// The split this data set gives, as a run records it.
-    pub fn trained_on(&self) -> TrainedOn {
-        TrainedOn {
-            digest: self.digest().to_string(),
-            fold_seed: self.fold_seed,
-            folds: self.folds.iter().map(|f| char::from_digit(*f as u32, 10).expect("a fold below 10")).collect(),
+/// Deals each class's samples, shuffled by `seed`, round-robin into folds 0..folds_count.
+pub(super) fn stratified_folds(labels: &[u32], folds_count: usize, seed: u64) -> Vec<usize> {
+    let mut rng = Rng::new(seed);
+    let mut folds = vec![0; labels.len()];
+    let classes = labels.iter().max().map_or(0, |m| *m + 1);
+    for c in 0..classes {
+        let mut members: Vec<usize> = (0..labels.len()).filter(|&i| labels[i] == c).collect();
+        rng.shuffle(&mut members);
+        for (k, i) in members.into_iter().enumerate() {
+            folds[i] = k % folds_count;
         }
     }
-
-    /// Takes the folds a run recorded, refusing touches that are not the ones it trained on.
-    pub fn take_split(&mut self, recorded: &TrainedOn) -> crate::Result<()> {
-        let refuse = |reason: String| super::data_error(&self.path, reason);
-        if self.digest() != recorded.digest {
-            return Err(refuse(format!(
-                "not the data the run trained on: its touches hash to {}, the run's to {}",
-                short(self.digest()),
-                short(&recorded.digest)
-            )));
-        }
-        let folds = recorded.fold_numbers().filter(|f| f.len() == self.len());
-        self.folds = folds.ok_or_else(|| refuse(format!("the run's record of its folds is damaged: {:?}", recorded.folds)))?;
-        self.fold_seed = recorded.fold_seed;
-        Ok(())
-    }
-
-    /// Refuses when this data set's split is not `recorded` (a run's), naming what differs;
-    /// `whose` names the run or option whose split is meant.
-    pub fn check_split(&self, recorded: &TrainedOn, whose: &str) -> crate::Result<()> {
-        match recorded.differs(&self.trained_on()) {
-            Some(why) => Err(super::data_error(&self.path, format!("{whose} trained on another split: {why}"))),
-            None => Ok(()),
-        }
-    }
+    folds
 }
 
 #[cfg(test)]

@@ -111,7 +111,7 @@ impl<'a> Samples<'a> {
                 let len = data.lengths[i];
                 raw.resize(data.sample_len() / data.max_frames() * frames, 0.0);
                 for (row, out) in data.sample(i).chunks(data.max_frames()).zip(raw.chunks_mut(frames)) {
-                    pvt3_runtime::resample::resample_into(&row[..len], start, r, out);
+                    pvt3_format::resample::resample_into(&row[..len], start, r, out);
                 }
             }
         }

@@ -4,8 +4,11 @@
 use std::path::PathBuf;
 
 use anyhow::{bail, Context, Result};
-use pvt3_trainer::data::import::camera::{read_camera_folder, CameraOptions, CameraSet, Crop, FrameSpan};
-use pvt3_trainer::data::import::{holds_camera_touches, read_folder, ImportOptions, NamePattern};
+use pvt3_format::span::FrameSpan;
+use pvt3_format::Crop;
+use pvt3_trainer::data::import::camera::{read_camera_folder, CameraOptions, CameraSet};
+use pvt3_trainer::data::import::csv::{read_folder, ImportOptions};
+use pvt3_trainer::data::import::folder::{holds_camera_touches, NamePattern};
 use pvt3_trainer::data::Condition;
 
 use crate::progress;
@@ -173,10 +176,15 @@ pub fn run(a: ImportArgs) -> Result<()> {
 
 /// `pvt3 import` of a camera's touches.
 fn run_camera(a: ImportArgs) -> Result<()> {
-    let given: Vec<&str> = [(!a.columns.is_empty(), "--columns"), (a.grid.is_some(), "--grid"), (a.per_distance.is_some(), "--per-distance"), (a.per_force.is_some(), "--per-force")]
-        .into_iter()
-        .filter_map(|(g, name)| g.then_some(name))
-        .collect();
+    let given: Vec<&str> = [
+        (!a.columns.is_empty(), "--columns"),
+        (a.grid.is_some(), "--grid"),
+        (a.per_distance.is_some(), "--per-distance"),
+        (a.per_force.is_some(), "--per-force"),
+    ]
+    .into_iter()
+    .filter_map(|(g, name)| g.then_some(name))
+    .collect();
     if let Some(option) = given.first() {
         bail!("{option} is for CSV touches, and {} holds a camera's (videos or frame folders)", a.dir.display());
     }

@@ -5,8 +5,8 @@
 //! set is a few gigabytes as u8 and four times that as f32.
 //!
 //! Each touch gives `T` frames taken evenly over the recording or over the span in which the gel
-//! moves (where the PhysiCLeAR authors cut their videos, found by a rule of its own: its gel moves
-//! by a grey level or two a frame), each cropped and shrunk by area averaging.
+//! moves ([`pvt3_format::span`]), each cropped and shrunk by area averaging
+//! ([`Picture::read_as`]): the reading contract a robot's runtime holds to as well.
 //! With `subtract_first`, each touch's first frame (the gel before contact) is kept as its
 //! `background` `[N, H, W, C]`, and a reader takes the frames minus it, the PVT³ report's GelSight
 //! preprocessing ([`crate::data::Dataset::load`]).
@@ -18,22 +18,12 @@ use ndarray_npy::NpzWriter;
 use rayon::prelude::*;
 
 use super::decode;
-use super::{add_json, add_records, conditions, import_error, list_touches, NamePattern, Recording};
+use super::folder::{conditions, import_error, list_touches, per_class, NamePattern, Recording};
+use super::npz::{add_json, add_records};
 use crate::data::{key, Condition};
 use crate::{Error, Result};
-use pvt3_runtime::picture::Picture;
-pub use pvt3_runtime::picture::{Camera, Crop};
-
-/// Which frames of a recording a touch takes.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
-pub enum FrameSpan {
-    /// Evenly over the whole recording.
-    Whole,
-    /// Evenly over the span in which the gel moves ([`moving_span`]), widened to the frames asked
-    /// where it is shorter; the whole recording where nothing moves.
-    #[default]
-    Moving,
-}
+use pvt3_format::span::FrameSpan;
+use pvt3_format::{Camera, Crop, Picture};
 
 /// What to import and how.
 #[derive(Clone, Debug)]
@@ -72,14 +62,6 @@ impl Default for CameraOptions {
         }
     }
 }
-
-/// How far between a recording's stillest and busiest frame a frame must change to count as
-/// moving: GelSight's gel moves by a grey level or two a frame, its codec's key frames jump.
-pub const MOVING_FRACTION: f32 = 0.25;
-/// Frames over which each frame's change is smoothed (a median: a key frame's jump is one frame).
-pub const SMOOTHING: usize = 5;
-/// Still frames within a moving span that do not end it.
-pub const PAUSE: usize = 5;
 
 /// The imported set, before it is written.
 #[derive(Debug)]
@@ -185,10 +167,7 @@ fn read_touch(path: &Path, opts: &CameraOptions) -> std::result::Result<ReadTouc
         let repeat = if recorded.is_empty() { "" } else { "; --allow-short repeats its frames" };
         return Err(format!("{} frames, fewer than the {} a touch takes (--frames{repeat})", recorded.len(), opts.frames));
     }
-    let (start, end) = match opts.span {
-        FrameSpan::Whole => (0, recorded.len() - 1),
-        FrameSpan::Moving => widened(moving_span(&recorded), opts.frames, recorded.len()),
-    };
+    let taken = opts.span.take(&recorded, opts.frames);
     let camera = Camera {
         recorded: recorded[0].shape(),
         crop: opts.crop,
@@ -197,61 +176,9 @@ fn read_touch(path: &Path, opts: &CameraOptions) -> std::result::Result<ReadTouc
         subtract_first: opts.subtract_first,
     };
     let prepare = |p: &Picture| p.clone().read_as(&camera);
-    let chosen = evenly(start, end, opts.frames).into_iter().map(|i| prepare(&recorded[i])).collect::<std::result::Result<Vec<_>, _>>()?;
+    let chosen = taken.frames.iter().map(|&i| prepare(&recorded[i])).collect::<std::result::Result<Vec<_>, _>>()?;
     let background = if opts.subtract_first { Some(prepare(&recorded[0])?) } else { None };
-    Ok(ReadTouch { frames: chosen, background, span: (recorded.len(), start, end), camera })
-}
-
-/// `count` frame indices spread evenly over `start..=end` (each the middle of its share).
-fn evenly(start: usize, end: usize, count: usize) -> Vec<usize> {
-    let len = end + 1 - start;
-    (0..count).map(|k| start + (2 * k + 1) * len / (2 * count)).collect()
-}
-
-/// The span in which the gel moves: each frame's change from the one before (the mean absolute
-/// difference of their grey levels), smoothed by a median over [`SMOOTHING`] frames; a frame
-/// moves where that exceeds [`MOVING_FRACTION`] of the way from the recording's stillest to its
-/// busiest frame; the span is the longest run of moving frames, pauses of up to [`PAUSE`]
-/// frames bridged. `None` for a recording that never changes.
-pub fn moving_span(frames: &[Picture]) -> Option<(usize, usize)> {
-    let greys: Vec<Picture> = frames.iter().map(Picture::grey).collect();
-    let change: Vec<f32> = greys
-        .windows(2)
-        .map(|w| w[0].data.iter().zip(&w[1].data).map(|(a, b)| f32::from(a.abs_diff(*b))).sum::<f32>() / w[0].data.len() as f32)
-        .collect();
-    let smooth: Vec<f32> = (0..change.len())
-        .map(|i| {
-            let mut near = change[i.saturating_sub(SMOOTHING / 2)..(i + SMOOTHING / 2 + 1).min(change.len())].to_vec();
-            near.sort_by(f32::total_cmp);
-            near[(near.len() - 1) / 2]
-        })
-        .collect();
-    let (still, busy) = smooth.iter().fold((f32::MAX, 0f32), |(lo, hi), v| (lo.min(*v), hi.max(*v)));
-    if smooth.is_empty() || busy <= still {
-        return None;
-    }
-    let threshold = still + MOVING_FRACTION * (busy - still);
-    // Runs of moving frames (frame i + 1 is change i's), pauses of up to PAUSE frames bridged.
-    let mut runs: Vec<(usize, usize)> = Vec::new();
-    for i in (0..smooth.len()).filter(|&i| smooth[i] > threshold).map(|i| i + 1) {
-        match runs.last_mut() {
-            Some((_, end)) if i - *end <= PAUSE + 1 => *end = i,
-            _ => runs.push((i, i)),
-        }
-    }
-    runs.into_iter().max_by_key(|(start, end)| (end - start, std::cmp::Reverse(*start)))
-}
-
-/// `span` widened about its middle to `frames` frames within `0..len` where it is shorter; the
-/// whole recording where nothing moves.
-fn widened(span: Option<(usize, usize)>, frames: usize, len: usize) -> (usize, usize) {
-    let Some((start, end)) = span else { return (0, len - 1) };
-    if end + 1 - start >= frames {
-        return (start, end);
-    }
-    let width = frames.min(len);
-    let start = (start + end).div_ceil(2).saturating_sub(width / 2).min(len - width);
-    (start, start + width - 1)
+    Ok(ReadTouch { frames: chosen, background, span: (recorded.len(), taken.first, taken.last), camera })
 }
 
 impl CameraSet {
@@ -272,7 +199,7 @@ impl CameraSet {
 
     /// Touches per class, in class order.
     pub fn per_class(&self) -> Vec<usize> {
-        super::per_class(&self.labels, self.classes.len())
+        per_class(&self.labels, self.classes.len())
     }
 
     /// Writes the set as `.npz`: `x` (uint8 `[N, H, W, C, T]`, grey `[N, H, W, T]`, the layouts

@@ -5,7 +5,7 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 
-use pvt3_runtime::picture::Picture;
+use pvt3_format::Picture;
 
 /// The video files `pvt3 import` reads (by extension, any case).
 pub const VIDEO_EXTENSIONS: [&str; 7] = ["mov", "mp4", "avi", "mkv", "webm", "m4v", "mpg"];

@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use super::*;
-use crate::data::import::holds_camera_touches;
+use crate::data::import::folder::holds_camera_touches;
 use crate::data::Dataset;
 
 const H: usize = 8;
@@ -162,7 +162,7 @@ fn a_touch_that_cannot_be_read_is_an_error_naming_its_file() {
     assert_eq!((short.short().len(), short.short()[0]), (10, ("felt/touch_0", 12)));
     assert_eq!((taken(&short, 0, 0), taken(&short, 0, 1)), (taken(&short, 0, 1), frame(0, 0, 0).resize(4, 5)), "frame 0 twice");
     let msg = err(&dir, &CameraOptions { size: Some((9, 5)), ..options(4, FrameSpan::Whole) });
-    assert!(msg.contains("the size 9x5 is larger than its frames (8 × 10)"), "{msg}");
+    assert!(msg.contains("the size 9 × 5 is not a shrinking of 8 × 10"), "{msg}");
     let msg = err(&dir, &CameraOptions { crop: Some("8x8+1+0".parse().unwrap()), ..options(4, FrameSpan::Whole) });
     assert!(msg.contains("the crop 8x8+1+0 does not fit in a frame of 8 × 10"), "{msg}");
     write_png(&dir.join("felt/touch_2/frame_005.png"), &frame(0, 2, 5).resize(4, 5));
@@ -197,17 +197,4 @@ fn a_touch_that_cannot_be_read_is_an_error_naming_its_file() {
         [8, 10, 1]
     );
     std::fs::remove_dir_all(dir).unwrap();
-}
-
-#[test]
-fn frames_are_spread_evenly_and_a_short_moving_span_is_widened() {
-    assert_eq!(evenly(0, 11, 4), [1, 4, 7, 10]);
-    assert_eq!(evenly(4, 9, 6), [4, 5, 6, 7, 8, 9]);
-    assert_eq!(widened(Some((4, 9)), 4, 12), (4, 9));
-    assert_eq!(widened(Some((5, 6)), 4, 12), (4, 7));
-    assert_eq!(widened(Some((0, 1)), 5, 12), (0, 4));
-    assert_eq!(widened(Some((10, 11)), 5, 12), (7, 11));
-    assert_eq!(widened(None, 5, 12), (0, 11));
-    let still: Vec<Picture> = (0..6).map(|_| frame(0, 0, 0)).collect();
-    assert_eq!(moving_span(&still), None);
 }

@@ -5,9 +5,22 @@
 //! trainer's import calls the same function, so a robot reads a touch as the training did.
 
 use crate::resample::{span_mean, span_reads_up_to};
-use crate::{Error, Result};
+use crate::Reading;
 
-pub use pvt3_format::Reading;
+/// Why a touch cannot be read as a model reads touches (the runtime reports each as its own
+/// error, with these words).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ReadError {
+    /// The touch does not fit the reading: its layout, or a speed or force the reading needs.
+    #[error("reading the touch: {0}")]
+    Touch(String),
+    #[error("input value {index} is {value}: only finite values can be classified")]
+    NonFinite { index: usize, value: f32 },
+    #[error("a frame has {got} values; expected {expected} (height × width × channels)")]
+    FrameLength { got: usize, expected: usize },
+}
+
+type Result<T> = std::result::Result<T, ReadError>;
 
 /// What the robot knows of one touch: its sliding speed (in the units the training's speeds had,
 /// its sign the direction) and its pressing force.
@@ -25,10 +38,10 @@ pub struct Touch {
 /// a whole touch are read alike, bit for bit.
 pub fn read_touch(frames: &[f32], rows: usize, reading: &Reading, touch: Touch) -> Result<Vec<f32>> {
     if rows == 0 || frames.is_empty() || !frames.len().is_multiple_of(rows) {
-        return Err(Error::Touch(format!("{} values are not {rows} rows of one or more frames", frames.len())));
+        return Err(ReadError::Touch(format!("{} values are not {rows} rows of one or more frames", frames.len())));
     }
     if let Some(index) = frames.iter().position(|v| !v.is_finite()) {
-        return Err(Error::NonFinite { index, value: frames[index] });
+        return Err(ReadError::NonFinite { index, value: frames[index] });
     }
     let n = frames.len() / rows;
     let mut reader = TouchReader::new(rows, reading, touch)?;
@@ -45,8 +58,8 @@ pub fn read_touch(frames: &[f32], rows: usize, reading: &Reading, touch: Touch) 
 /// A touch read as [`read_touch`] reads it, frame by frame as the robot records it: a frame read
 /// by distance is given out as soon as the recorded frames it spans (and the one after, which
 /// the straight line between frames reads) have arrived, and the frames after the last recorded
-/// one when the touch ends ([`TouchReader::finish`]). A session made for a touch
-/// ([`crate::Classifier::session_for`]) reads its frames through one.
+/// one when the touch ends ([`TouchReader::finish`]). A session made for a touch (the runtime's
+/// `Classifier::session_for`) reads its frames through one.
 #[derive(Clone, Debug)]
 pub struct TouchReader {
     /// Values in one frame.
@@ -65,7 +78,7 @@ impl TouchReader {
     /// A reader of frames of `frame_len` values, recorded at `touch`, read as `reading` reads
     /// touches; refused where the reading needs a speed or a force `touch` does not give.
     pub fn new(frame_len: usize, reading: &Reading, touch: Touch) -> Result<Self> {
-        let refuse = |reason: String| Err(Error::Touch(reason));
+        let refuse = |reason: String| Err(ReadError::Touch(reason));
         let speeds = match reading.speed {
             None => None,
             Some(to) => match touch.speed.filter(|v| v.is_finite() && *v != 0.0) {
@@ -97,10 +110,10 @@ impl TouchReader {
     /// `frame_len` values); returns how many.
     pub fn push(&mut self, frame: &[f32], out: &mut Vec<f32>) -> Result<usize> {
         if frame.len() != self.frame_len {
-            return Err(Error::FrameLength { got: frame.len(), expected: self.frame_len });
+            return Err(ReadError::FrameLength { got: frame.len(), expected: self.frame_len });
         }
         if let Some((index, value)) = frame.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(Error::NonFinite { index, value: *value });
+            return Err(ReadError::NonFinite { index, value: *value });
         }
         let Some((speed, to)) = self.speeds else {
             out.extend(frame.iter().map(|v| self.scaled(*v)));
@@ -221,6 +234,6 @@ mod tests {
         assert!(read_touch(&frames, 3, &force, Touch { speed: None, force: Some(1.0) }).unwrap_err().to_string().contains("not 3 rows"));
         let mut bad = frames;
         bad[5] = f32::INFINITY;
-        assert!(matches!(read_touch(&bad, 2, &force, Touch { speed: None, force: Some(1.0) }), Err(Error::NonFinite { index: 5, .. })));
+        assert!(matches!(read_touch(&bad, 2, &force, Touch { speed: None, force: Some(1.0) }), Err(ReadError::NonFinite { index: 5, .. })));
     }
 }

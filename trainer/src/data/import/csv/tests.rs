@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use super::*;
 use crate::data::{Dataset, HoldOut};
 
-#[path = "../../../../tests/support/csv_tree.rs"]
+#[path = "../../../../../tests/support/csv_tree.rs"]
 mod csv_tree;
 
 fn tree(tag: &str) -> PathBuf {

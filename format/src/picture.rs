@@ -1,10 +1,11 @@
 //! A camera frame as the camera gives it (8-bit, rows × columns × RGB), and what `pvt3 import`
 //! does to one: crop, shrink by area averaging, grey ([`Picture::read_as`] a [`Camera`] says).
 //! Kept in u8 from file to data set: a GelSight data set is a few gigabytes as u8 and four times
-//! that as f32. The import and a robot's session ([`crate::Session::push_camera_frame`]) read
-//! frames with this one code.
+//! that as f32. The import and a robot's session (the runtime's `Session::push_camera_frame`)
+//! read frames with this one code.
 
-pub use pvt3_format::{Camera, Crop};
+use crate::camera::shrinking;
+use crate::{Camera, Crop};
 
 /// One frame: `height × width × channels` bytes, row-major, channels innermost (1: grey, 3: RGB).
 #[derive(Clone, Debug, PartialEq)]
@@ -34,10 +35,10 @@ impl Picture {
             None => self,
         };
         let p = match camera.size {
-            Some([h, w]) if h > p.height || w > p.width => {
-                return Err(format!("the size {h}x{w} is larger than its frames ({} × {}): area averaging only shrinks", p.height, p.width))
+            Some(size) => {
+                let [h, w] = shrinking(size, p.height, p.width)?;
+                p.resize(h, w)
             }
-            Some([h, w]) => p.resize(h, w),
             None => p,
         };
         Ok(if camera.grey { p.grey() } else { p })
@@ -45,9 +46,7 @@ impl Picture {
 
     /// The rectangle `c`, or why it does not fit in this frame.
     pub fn crop(&self, c: Crop) -> Result<Self, String> {
-        if c.top.saturating_add(c.height) > self.height || c.left.saturating_add(c.width) > self.width {
-            return Err(format!("the crop {c} does not fit in a frame of {} × {}", self.height, self.width));
-        }
+        c.fits(self.height, self.width)?;
         let row = self.width * self.channels;
         let data = (c.top..c.top + c.height)
             .flat_map(|y| &self.data[y * row + c.left * self.channels..y * row + (c.left + c.width) * self.channels])
@@ -170,6 +169,6 @@ mod tests {
         let camera = Camera { recorded: [8, 12, 3], crop: Some(crop), size: Some([3, 4]), grey: true, subtract_first: false };
         assert_eq!(p.clone().read_as(&camera).unwrap(), p.crop(crop).unwrap().resize(3, 4).grey());
         let larger = Camera { size: Some([7, 4]), ..camera };
-        assert!(p.read_as(&larger).unwrap_err().contains("larger than its frames (6 × 8)"));
+        assert!(p.read_as(&larger).unwrap_err().contains("the size 7 × 4 is not a shrinking of 6 × 8"));
     }
 }

@@ -1,0 +1,55 @@
+//! The kind of sensor a data set's frames come from, decided once from the data ([`Sensor::of`])
+//! and read by every choice that differs between kinds: the layout derived for a sensor no preset
+//! fits ([`crate::Config::for_sensor`]), whether `--robust` adds a spectral head over each
+//! channel's frames, and what the trainer says of the layout. A new kind is a variant here with
+//! its rule, its layout in `for_sensor`, and its import (docs/architecture.md, "Adding a sensor
+//! kind").
+
+/// The kind of sensor whose frames a data set holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sensor {
+    /// A tactile array's taxels or electrodes: a few values a frame on a small grid, or none
+    /// (iCub skin, BioTac, a CSV folder's channels).
+    Array,
+    /// A camera-based sensor's images (GelSight, DIGIT, TacTip).
+    Camera,
+}
+
+/// The least height and width, in values, of a frame that is an image (a camera's): smaller grids
+/// are a tactile array's taxels or electrodes.
+pub const IMAGE_SIDE: usize = 16;
+
+impl Sensor {
+    /// The kind of sensor whose samples are `[height, width, (channels,) frames]`: a camera's
+    /// where a frame is an image, at least [`IMAGE_SIDE`] values each way; an array's otherwise.
+    pub fn of(sample_shape: &[usize]) -> Self {
+        match *sample_shape {
+            [height, width, ..] if height >= IMAGE_SIDE && width >= IMAGE_SIDE => Self::Camera,
+            _ => Self::Array,
+        }
+    }
+}
+
+impl std::fmt::Display for Sensor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::Array => "a tactile array",
+            Self::Camera => "a camera",
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_frame_is_a_camera_s_image_from_sixteen_values_each_way() {
+        assert_eq!(Sensor::of(&[6, 10, 75]), Sensor::Array);
+        assert_eq!(Sensor::of(&[19, 1, 400]), Sensor::Array);
+        assert_eq!(Sensor::of(&[15, 40, 3, 25]), Sensor::Array);
+        assert_eq!(Sensor::of(&[16, 16, 1]), Sensor::Camera);
+        assert_eq!(Sensor::of(&[30, 40, 3, 25]), Sensor::Camera);
+        assert_eq!(Sensor::of(&[10]), Sensor::Array);
+    }
+}

@@ -1,0 +1,62 @@
+//! A data set's identity and the split it records: the digest of its touches as read, the
+//! [`TrainedOn`] a run writes into its provenance, and the checks every reload makes against it.
+
+use sha2::{Digest, Sha256};
+
+use super::split::short;
+use super::{Dataset, TrainedOn};
+
+impl Dataset {
+    /// SHA-256 of the touches as read (their layout, lengths, labels and every value as f32),
+    /// whatever file or dtype holds them; computed once.
+    pub fn digest(&self) -> &str {
+        self.digest.get_or_init(|| {
+            let mut sha = Sha256::new();
+            let words = |v: &[usize]| v.iter().flat_map(|d| (*d as u64).to_le_bytes()).collect::<Vec<u8>>();
+            sha.update(words(&self.sample_shape));
+            sha.update(words(&self.lengths));
+            sha.update(self.labels.iter().flat_map(|l| l.to_le_bytes()).collect::<Vec<u8>>());
+            for i in 0..self.len() {
+                for chunk in self.sample(i).chunks(1 << 16) {
+                    sha.update(chunk.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>());
+                }
+            }
+            let hex: String = sha.finalize().iter().map(|b| format!("{b:02x}")).collect();
+            format!("sha256:{hex}")
+        })
+    }
+
+    /// The split this data set gives, as a run records it.
+    pub fn trained_on(&self) -> TrainedOn {
+        TrainedOn {
+            digest: self.digest().to_string(),
+            fold_seed: self.fold_seed,
+            folds: self.folds.iter().map(|f| char::from_digit(*f as u32, 10).expect("a fold below 10")).collect(),
+        }
+    }
+
+    /// Takes the folds a run recorded, refusing touches that are not the ones it trained on.
+    pub fn take_split(&mut self, recorded: &TrainedOn) -> crate::Result<()> {
+        let refuse = |reason: String| crate::Error::data(&self.path, reason);
+        if self.digest() != recorded.digest {
+            return Err(refuse(format!(
+                "not the data the run trained on: its touches hash to {}, the run's to {}",
+                short(self.digest()),
+                short(&recorded.digest)
+            )));
+        }
+        let folds = recorded.fold_numbers().filter(|f| f.len() == self.len());
+        self.folds = folds.ok_or_else(|| refuse(format!("the run's record of its folds is damaged: {:?}", recorded.folds)))?;
+        self.fold_seed = recorded.fold_seed;
+        Ok(())
+    }
+
+    /// Refuses when this data set's split is not `recorded` (a run's), naming what differs;
+    /// `whose` names the run or option whose split is meant.
+    pub fn check_split(&self, recorded: &TrainedOn, whose: &str) -> crate::Result<()> {
+        match recorded.differs(&self.trained_on()) {
+            Some(why) => Err(crate::Error::data(&self.path, format!("{whose} trained on another split: {why}"))),
+            None => Ok(()),
+        }
+    }
+}

@@ -1,0 +1,323 @@
+//! A folder of CSV touches → a data set: one CSV file a touch, a header row, then one row per
+//! frame. Which columns are sensor channels is chosen by name or pattern, or by default every
+//! numeric column that varies, time-stamp-like columns left out (and said so). Touches may
+//! differ in length; with `--per-distance` or `--per-force` each is read as the robot will read
+//! its touches (the runtime's `read_touch`).
+
+use std::path::{Path, PathBuf};
+
+use ndarray::{Array1, ArrayD, IxDyn};
+use ndarray_npy::NpzWriter;
+
+use pvt3_format::{read_touch, Reading, Touch};
+
+use super::folder::{conditions, import_error, list_touches, per_class, Listed, NamePattern, Recording};
+use super::npz::{add_json, add_records, lines};
+use crate::data::{key, Condition};
+use crate::{Error, Result};
+
+/// What to import and how.
+#[derive(Clone, Debug, Default)]
+pub struct ImportOptions {
+    /// Column names or patterns (`*` any run of characters, `?` one), in the order given; empty:
+    /// every numeric column that varies, time-stamp-like ones left out.
+    pub columns: Vec<String>,
+    /// The sensor's grid, rows × columns of the chosen channels (row-major); `None`: one column of
+    /// channels (`[N, channels, frames]`, read as a channels × 1 grid).
+    pub grid: Option<(usize, usize)>,
+    /// What each file's name says: its class and the conditions of the touch.
+    pub name: Option<NamePattern>,
+    /// Each touch read by distance travelled rather than by time: the condition that holds its
+    /// sliding speed, and the speed every touch is resampled to (a touch of `n` frames at speed
+    /// `v` becomes `n · |v| / speed` frames, [`pvt3_format::read_touch`]), so that a texture's ridges lie
+    /// as many frames apart at every speed.
+    pub per_distance: Option<(String, f64)>,
+    /// Each touch's readings scaled to one pressing force: the condition that holds its force,
+    /// and the force every touch is scaled to (readings times `force / f`, for a touch pressed
+    /// at `f`): a capacitive sensor's readings grow about in proportion to the force.
+    pub per_force: Option<(String, f64)>,
+}
+
+/// One touch as its file holds it: its class, its file, its frames `[frames][columns]` (every column of the
+/// header; non-numeric cells are `None`).
+struct TouchFile {
+    class: usize,
+    path: PathBuf,
+    rows: Vec<Vec<Option<f64>>>,
+    /// The file line of each row, for errors.
+    lines: Vec<u64>,
+}
+
+/// The imported set, before it is written.
+#[derive(Debug)]
+pub struct Imported {
+    /// `[touches][channel][frame]`, each touch its own length.
+    pub touches: Vec<Vec<Vec<f32>>>,
+    pub labels: Vec<u32>,
+    pub classes: Vec<String>,
+    pub sources: Vec<String>,
+    /// The chosen columns, in channel order.
+    pub channels: Vec<String>,
+    /// Columns left out, each with why.
+    pub left_out: LeftOut,
+    pub grid: Option<(usize, usize)>,
+    /// The conditions the file name pattern read, each with its value for every touch.
+    pub conditions: Vec<Condition>,
+    /// How the touches were read, if they were brought to one speed or force.
+    pub reading: Option<Reading>,
+}
+
+/// Columns left out of an import, each with why.
+pub type LeftOut = Vec<(String, &'static str)>;
+
+/// Whether `name` matches `pattern` (`*`: any run of characters, `?`: one).
+pub fn matches(pattern: &str, name: &str) -> bool {
+    fn go(p: &[char], n: &[char]) -> bool {
+        match p.split_first() {
+            None => n.is_empty(),
+            Some(('*', rest)) => (0..=n.len()).any(|k| go(rest, &n[k..])),
+            Some(('?', rest)) => !n.is_empty() && go(rest, &n[1..]),
+            Some((c, rest)) => n.first() == Some(c) && go(rest, &n[1..]),
+        }
+    }
+    go(&pattern.chars().collect::<Vec<_>>(), &name.chars().collect::<Vec<_>>())
+}
+
+/// A column whose name says it is a time (`time`, `stamp`, `secs`, `date`, `t`).
+fn time_like(name: &str) -> bool {
+    let n = name.to_ascii_lowercase();
+    n == "t" || ["time", "stamp", "secs", "date"].iter().any(|w| n.contains(w))
+}
+
+/// Reads `dir` as one folder per class of CSV touches.
+pub fn read_folder(dir: &Path, opts: &ImportOptions) -> Result<Imported> {
+    let (files, classes) = list_touches(dir, opts.name.as_ref(), Recording::Csv)?;
+    let (names, touches, condition_values) = read_touches(files, &classes)?;
+    let conditions = conditions(opts.name.as_ref(), &condition_values);
+    let (chosen, left_out) = choose_columns(&names, &touches, opts)?;
+    let channels: Vec<String> = chosen.iter().map(|&c| names[c].clone()).collect();
+    if let Some((h, w)) = opts.grid {
+        if h * w != channels.len() {
+            return Err(Error::Usage(format!(
+                "--grid {h}x{w} holds {} channels, and {} columns were chosen: {channels:?}",
+                h * w,
+                channels.len()
+            )));
+        }
+    }
+    let reading = (opts.per_distance.is_some() || opts.per_force.is_some())
+        .then(|| Reading { speed: opts.per_distance.as_ref().map(|p| p.1), force: opts.per_force.as_ref().map(|p| p.1) });
+    if let Some(problem) = reading.and_then(|r| r.problem()) {
+        return Err(Error::Usage(format!("--per-distance/--per-force: {problem}")));
+    }
+    let speeds = known_values("--per-distance", &opts.per_distance, &conditions, &touches)?;
+    let forces = known_values("--per-force", &opts.per_force, &conditions, &touches)?;
+    let mut out = Imported {
+        touches: Vec::new(),
+        labels: Vec::new(),
+        classes,
+        sources: Vec::new(),
+        channels,
+        left_out,
+        grid: opts.grid,
+        conditions,
+        reading,
+    };
+    for (n, t) in touches.into_iter().enumerate() {
+        let touch = Touch { speed: speeds[n], force: forces[n] };
+        out.touches.push(chosen_frames(&t, (&chosen, &names), reading.as_ref().map(|r| (r, touch)))?);
+        out.labels.push(t.class as u32);
+        out.sources.push(t.path.strip_prefix(dir).unwrap_or(&t.path).display().to_string());
+    }
+    Ok(out)
+}
+
+/// Every listed touch read, in order: the columns' names (one header for all), the touches and
+/// their condition values.
+fn read_touches(files: Vec<Listed>, classes: &[String]) -> Result<(Vec<String>, Vec<TouchFile>, Vec<Vec<String>>)> {
+    let mut header: Option<(PathBuf, Vec<String>)> = None;
+    let mut touches = Vec::new();
+    let mut condition_values = Vec::new();
+    for Listed { path, class, values } in files {
+        let (names, touch) = read_file(&path, classes.binary_search(&class).expect("a known class"))?;
+        match &header {
+            None => header = Some((path.clone(), names)),
+            Some((first, h)) if *h != names => {
+                return Err(import_error(
+                    &path,
+                    Some(1),
+                    format!("its header differs from {}'s: {:?} against {:?}", first.display(), names, h),
+                ));
+            }
+            Some(_) => {}
+        }
+        touches.push(touch);
+        condition_values.push(values);
+    }
+    let (_, names) = header.expect("at least one touch was read");
+    Ok((names, touches, condition_values))
+}
+
+/// Each touch's value of the condition `given` names (`option` its flag), as a number: what the
+/// robot would know of the touch. `None` for every touch when no condition is given.
+fn known_values(option: &str, given: &Option<(String, f64)>, conditions: &[Condition], touches: &[TouchFile]) -> Result<Vec<Option<f64>>> {
+    let Some((name, _)) = given else { return Ok(vec![None; touches.len()]) };
+    let condition = conditions.iter().find(|c| c.name == *name).ok_or_else(|| {
+        let known: Vec<&String> = conditions.iter().map(|c| &c.name).collect();
+        Error::Usage(format!("{option} {name}: no such condition; --name records {known:?}"))
+    })?;
+    condition
+        .levels
+        .iter()
+        .zip(touches)
+        .map(|(v, t)| {
+            v.parse::<f64>()
+                .map(Some)
+                .map_err(|_| import_error(&t.path, None, format!("{option} {name}: its {name} `{v}` is not a number")))
+        })
+        .collect()
+}
+
+/// A touch's chosen columns (`chosen` of the columns `names`) as channels of frames; with a
+/// reading, read as the robot will read its touches (the runtime's own function).
+fn chosen_frames(t: &TouchFile, (chosen, names): (&[usize], &[String]), reading: Option<(&Reading, Touch)>) -> Result<Vec<Vec<f32>>> {
+    let mut frames = vec![Vec::with_capacity(t.rows.len()); chosen.len()];
+    for (row, line) in t.rows.iter().zip(&t.lines) {
+        for (k, &c) in chosen.iter().enumerate() {
+            let v = row[c].ok_or_else(|| import_error(&t.path, Some(*line), format!("column `{}` is not a number here", names[c])))?;
+            frames[k].push(v as f32);
+        }
+    }
+    if let Some((reading, touch)) = reading {
+        let read = read_touch(&frames.concat(), frames.len(), reading, touch).map_err(|e| import_error(&t.path, None, e.to_string()))?;
+        let len = read.len() / frames.len();
+        frames = read.chunks(len).map(<[f32]>::to_vec).collect();
+    }
+    Ok(frames)
+}
+
+/// One CSV touch: its header and rows; a ragged row is an error naming its line.
+fn read_file(path: &Path, class: usize) -> Result<(Vec<String>, TouchFile)> {
+    let mut reader = ::csv::ReaderBuilder::new()
+        .flexible(true)
+        .trim(::csv::Trim::All)
+        .from_path(path)
+        .map_err(|e| import_error(path, None, e.to_string()))?;
+    let names: Vec<String> = reader.headers().map_err(|e| import_error(path, Some(1), e.to_string()))?.iter().map(String::from).collect();
+    let (mut rows, mut lines) = (Vec::new(), Vec::new());
+    for record in reader.records() {
+        let record = record.map_err(|e| import_error(path, e.position().map(|p| p.line()), e.to_string()))?;
+        let line = record.position().map_or(0, |p| p.line());
+        if record.len() != names.len() {
+            return Err(import_error(path, Some(line), format!("a ragged row: {} fields, the header has {}", record.len(), names.len())));
+        }
+        rows.push(record.iter().map(|cell| cell.parse::<f64>().ok().filter(|v| v.is_finite())).collect());
+        lines.push(line);
+    }
+    if rows.is_empty() {
+        return Err(import_error(path, None, "holds a header and no frame"));
+    }
+    Ok((names, TouchFile { class, path: path.to_path_buf(), rows, lines }))
+}
+
+/// The columns to import (indices into the header) and those left out, with why.
+fn choose_columns(names: &[String], touches: &[TouchFile], opts: &ImportOptions) -> Result<(Vec<usize>, LeftOut)> {
+    // The first cell of a column that is not a number, if any.
+    let text_at =
+        |c: usize| touches.iter().find_map(|t| t.rows.iter().zip(&t.lines).find(|(r, _)| r[c].is_none()).map(|(_, l)| (&t.path, *l)));
+    if !opts.columns.is_empty() {
+        let mut chosen = Vec::new();
+        for pattern in &opts.columns {
+            let hits: Vec<usize> = (0..names.len()).filter(|&c| matches(pattern, &names[c]) && !chosen.contains(&c)).collect();
+            if hits.is_empty() {
+                return Err(Error::Usage(format!("--columns {pattern}: no column of the header matches; it has {names:?}")));
+            }
+            chosen.extend(hits);
+        }
+        if let Some((c, (path, line))) = chosen.iter().find_map(|&c| text_at(c).map(|at| (c, at))) {
+            return Err(import_error(path, Some(line), format!("column `{}` holds text, not a number", names[c])));
+        }
+        let left_out = (0..names.len()).filter(|c| !chosen.contains(c)).map(|c| (names[c].clone(), "not chosen")).collect();
+        return Ok((chosen, left_out));
+    }
+    let (mut chosen, mut left_out) = (Vec::new(), Vec::new());
+    for (c, name) in names.iter().enumerate() {
+        let values = || touches.iter().flat_map(|t| t.rows.iter().map(move |r| r[c]));
+        let why = if text_at(c).is_some() {
+            Some("not numeric")
+        } else if time_like(name) {
+            Some("a time stamp by its name")
+        } else if touches.iter().all(|t| t.rows.len() > 1 && t.rows.windows(2).all(|w| w[1][c] > w[0][c])) {
+            Some("a time stamp: it rises in every touch")
+        } else if values().all(|v| v == touches[0].rows[0][c]) {
+            Some("constant")
+        } else {
+            None
+        };
+        match why {
+            Some(why) => left_out.push((name.clone(), why)),
+            None => chosen.push(c),
+        }
+    }
+    if chosen.is_empty() {
+        // Every column is left out, in the header's order.
+        let why: Vec<String> = (0..)
+            .zip(&left_out)
+            .map(|(c, (name, why))| match text_at(c) {
+                Some((path, line)) => format!("`{name}` {why} ({}:{line})", path.display()),
+                None => format!("`{name}` {why}"),
+            })
+            .collect();
+        return Err(Error::Usage(format!("no column is a numeric channel that varies: {} (choose with --columns)", why.join(", "))));
+    }
+    Ok((chosen, left_out))
+}
+
+impl Imported {
+    /// Frames of the shortest and the longest touch.
+    pub fn length_range(&self) -> (usize, usize) {
+        let lengths = self.touches.iter().map(|t| t[0].len());
+        (lengths.clone().min().unwrap_or(0), lengths.max().unwrap_or(0))
+    }
+
+    /// Touches per class, in class order.
+    pub fn per_class(&self) -> Vec<usize> {
+        per_class(&self.labels, self.classes.len())
+    }
+
+    /// Writes the set as `.npz`: `x` (float32, `[N, channels, T]` or `[N, rows, cols, T]`, `T`
+    /// the longest touch, shorter touches zero-padded), `y`, `lengths`, and the names as UTF-8
+    /// lines (`class_names`, `sources`, `channels`, the conditions: [`key`]).
+    pub fn write_npz(&self, path: &Path) -> Result<()> {
+        let (_, longest) = self.length_range();
+        let n = self.touches.len();
+        let channels = self.channels.len();
+        let mut x = vec![0f32; n * channels * longest];
+        for (i, touch) in self.touches.iter().enumerate() {
+            for (c, frames) in touch.iter().enumerate() {
+                let at = (i * channels + c) * longest;
+                x[at..at + frames.len()].copy_from_slice(frames);
+            }
+        }
+        let shape = match self.grid {
+            Some((h, w)) => vec![n, h, w, longest],
+            None => vec![n, channels, longest],
+        };
+        let bad = |e: &dyn std::fmt::Display| Error::Usage(format!("writing {}: {e}", path.display()));
+        let file = std::fs::File::create(path).map_err(Error::io(path))?;
+        let mut npz = NpzWriter::new(std::io::BufWriter::new(file));
+        npz.add_array(key::X, &ArrayD::from_shape_vec(IxDyn(&shape), x).map_err(|e| bad(&e))?).map_err(|e| bad(&e))?;
+        npz.add_array(key::LENGTHS, &Array1::from(self.touches.iter().map(|t| t[0].len() as i64).collect::<Vec<_>>()))
+            .map_err(|e| bad(&e))?;
+        npz.add_array(key::CHANNELS, &lines(&self.channels)).map_err(|e| bad(&e))?;
+        if let Some(reading) = &self.reading {
+            add_json(&mut npz, key::READING, reading).map_err(|e| bad(&e))?;
+        }
+        add_records(&mut npz, &self.labels, &self.classes, &self.sources, &self.conditions).map_err(|e| bad(&e))?;
+        npz.finish().map_err(|e| bad(&e))?;
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests;
