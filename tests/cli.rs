@@ -139,7 +139,7 @@ fn prefix_training_calibrates_a_stopping_rule_that_the_file_carries() {
     let err = fails(&["train", "--data", d, "--out", dir.join("v").to_str().unwrap(), "--model", "vit", "--prefix-training", "0.5"]);
     assert!(err.contains("--prefix-training: PVT³ models only"), "{err}");
     let err = fails(&["train", "--data", d, "--out", dir.join("v").to_str().unwrap(), "--prefix-training", "1.5"]);
-    assert!(err.contains("a probability, from 0 to 1"), "{err}");
+    assert!(err.contains("--prefix-training 1.5: expected a number in [0, 1]"), "{err}");
     assert!(!dir.join("v").exists(), "refused before training");
     std::fs::remove_dir_all(dir).unwrap();
 }
@@ -321,7 +321,13 @@ fn bad_input_gets_a_clear_error() {
     let err = fails(&["train", "--set", "patch_width=3", "--out", dir.join("r").to_str().unwrap()]);
     assert!(err.contains("patch_width = 3 does not divide width = 10"), "{err}");
     let err = fails(&["train", "--lr-floor", "2", "--out", dir.join("r").to_str().unwrap()]);
-    assert!(err.contains("--lr-floor 2: a share of the peak learning rate"), "{err}");
+    assert!(err.contains("--lr-floor 2: expected a number in [0, 1]"), "{err}");
+    for (option, value, range) in [("--lr", "NaN", "(0, 10]"), ("--aug-reverse", "2", "[0, 1]"), ("--ema", "1", "[0, 1)")] {
+        let err = fails(&["train", option, value, "--out", dir.join("r").to_str().unwrap()]);
+        assert!(err.contains(&format!("{option} {value}: expected a number in {range}")), "{err}");
+    }
+    let err = fails(&["train", "--batch-size", "0", "--out", dir.join("r").to_str().unwrap()]);
+    assert!(err.contains("--batch-size 0: expected 1 to 1000000"), "{err}");
     let err = fails(&["eval", dir.to_str().unwrap()]);
     assert!(err.contains("not a checkpoint directory"), "{err}");
     assert!(!dir.join("r").exists(), "nothing written on failure");
@@ -447,6 +453,7 @@ fn csv_touches_of_any_length_import_cross_validate_and_export() {
     }
     assert!(out.join("cv-curves.svg").exists());
     the_final_model_trains_on_every_touch_as_the_cv_chose(&out, &summary, 30);
+    a_final_model_is_tested_on_new_touches_alone(&dir, &csvs, &out.join("final"));
     let run = out.join("seed0/fold0");
     let eval = ok(&["eval", run.to_str().unwrap()]);
     assert!(eval.contains("material_2") && eval.contains("confusion matrix") && run.join("confusion-fold4.svg").exists(), "{eval}");
@@ -503,7 +510,30 @@ fn the_final_model_trains_on_every_touch_as_the_cv_chose(cv: &Path, summary: &se
     let file = String::from_utf8_lossy(&std::fs::read(&onnx).unwrap()).to_string();
     assert!(file.contains(&format!("\"selected_epochs\":{}", done["expected"]["selected_epochs"])), "the file states what it expects");
     let refused = fails(&["eval", cv.join("final").to_str().unwrap()]);
-    assert!(refused.contains("none is left to test it") && refused.contains(&format!("{:.4}", summary["mean_test_accuracy"].as_f64().unwrap())), "{refused}");
+    assert!(
+        refused.contains("none is left to test it") && refused.contains(&format!("{:.4}", summary["mean_test_accuracy"].as_f64().unwrap())),
+        "{refused}"
+    );
+}
+
+/// A final model (`last`, trained on the touches of `csvs`) evaluated on other data: its own
+/// touches imported again without one class, or in another file, are refused with their count;
+/// touches it never read are tested.
+fn a_final_model_is_tested_on_new_touches_alone(dir: &Path, csvs: &Path, last: &Path) {
+    let (subset, other) = (dir.join("subset"), dir.join("other"));
+    std::fs::create_dir_all(&subset).unwrap();
+    for class in ["material_0", "material_1"] {
+        copy_dir(&csvs.join(class), &subset.join(class));
+    }
+    let (s, o) = (dir.join("subset.npz"), dir.join("other.npz"));
+    ok(&["import", subset.to_str().unwrap(), "--out", s.to_str().unwrap()]);
+    let refused = fails(&["eval", last.to_str().unwrap(), "--data", s.to_str().unwrap(), "--fold", "all"]);
+    assert!(refused.contains("20 of the 20 touches to test") && refused.contains("trained it"), "{refused}");
+    // Touches of other lengths, so other values: none trained the model.
+    csv_tree::write(&other, 3, 10, 41, 60);
+    ok(&["import", other.to_str().unwrap(), "--out", o.to_str().unwrap()]);
+    let tested = ok(&["eval", last.to_str().unwrap(), "--data", o.to_str().unwrap(), "--fold", "all"]);
+    assert!(tested.contains("30 samples (fold all"), "{tested}");
 }
 
 /// A scratch folder holding `flat/`: CSV touches of 3 classes, `touches` each, side by side and
@@ -538,11 +568,20 @@ fn a_camera_s_videos_import_and_train() {
     let (v, d, r) = (videos.to_str().unwrap(), data.to_str().unwrap(), run.to_str().unwrap());
     let args = ["import", v, "--name", "{class}_*", "--size", "12x16", "--grey", "--frames", "8", "--subtract-first", "--out", d];
     let imported = ok(&args);
-    assert!(imported.contains("10 touches of 2 classes (5 to 5 touches a class): 8 frames of 12 × 16 grey each, stored as 8-bit"), "{imported}");
+    assert!(
+        imported.contains("10 touches of 2 classes (5 to 5 touches a class): 8 frames of 12 × 16 grey each, stored as 8-bit"),
+        "{imported}"
+    );
     assert!(imported.contains("first frame kept as its background"), "{imported}");
     let set = Dataset::load(&data, 0).unwrap();
-    assert_eq!((set.sample_shape.clone(), set.class_names.clone().unwrap()), (vec![12, 16, 8], vec!["smooth_tile".to_string(), "striped_cloth".to_string()]));
-    assert!((0..set.len()).any(|i| set.sample(i).iter().any(|v| *v < 0.0)), "frames minus the first: some pixels darker than before contact");
+    assert_eq!(
+        (set.sample_shape.clone(), set.class_names.clone().unwrap()),
+        (vec![12, 16, 8], vec!["smooth_tile".to_string(), "striped_cloth".to_string()])
+    );
+    assert!(
+        (0..set.len()).any(|i| set.sample(i).iter().any(|v| *v < 0.0)),
+        "frames minus the first: some pixels darker than before contact"
+    );
     let onnx = dir.join("model.onnx");
     let mut args = vec!["train", "--data", d, "--out", r, "--epochs", "1", "--export", onnx.to_str().unwrap()];
     args.extend(SMALL);
@@ -552,7 +591,12 @@ fn a_camera_s_videos_import_and_train() {
     let c = pvt3_runtime::Classifier::load(&onnx).unwrap();
     let camera = pvt3_runtime::Camera { recorded: [48, 64, 3], crop: None, size: Some([12, 16]), grey: true, subtract_first: true };
     assert_eq!(c.camera(), Some(camera));
-    let raw = Command::new("ffmpeg").args(["-v", "error", "-i"]).arg(videos.join("smooth_tile_0.mov")).args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"]).output().unwrap();
+    let raw = Command::new("ffmpeg")
+        .args(["-v", "error", "-i"])
+        .arg(videos.join("smooth_tile_0.mov"))
+        .args(["-f", "rawvideo", "-pix_fmt", "rgb24", "-"])
+        .output()
+        .unwrap();
     let mut session = c.session().unwrap();
     raw.stdout.chunks(48 * 64 * 3).take(9).for_each(|frame| session.push_camera_frame(frame).unwrap());
     assert_eq!(session.finish().unwrap().probabilities.len(), 2);

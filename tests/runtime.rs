@@ -1,7 +1,7 @@
 //! The robot runtime (tract) on exported files: the golden model against the golden logits and
 //! the baked f64 reference, batch 1 and 8, and the typed errors bad input and bad files get.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use ndarray::{Array2, Array4};
 use ndarray_npy::read_npy;
@@ -17,6 +17,8 @@ use pvt3_spec::weights::read_tensors;
 mod onnx_check;
 #[path = "support/spectral_case.rs"]
 mod spectral_case;
+#[path = "support/tract_check.rs"]
+mod tract_check;
 #[path = "support/workspace.rs"]
 mod workspace;
 
@@ -35,25 +37,6 @@ fn golden_onnx() -> (PathBuf, Vec<f32>, pvt3_spec::baked::BakedPvt3) {
     let baked = bake(&Config::icub20(), &read_tensors(&golden("weights.safetensors")).unwrap()).unwrap();
     let input: Array4<f32> = read_npy(golden("input.npy")).unwrap();
     (golden("model.onnx"), input.iter().copied().collect(), baked)
-}
-
-/// The runtime's own reader (`runtime/src/wire.rs`, tract-core operators wired from the nodes)
-/// held to tract-onnx's ONNX loader on the same file: the same logits at batch `batch`.
-fn tract_onnx_agrees(path: &Path, c: &Classifier, x: &[f32], batch: usize) {
-    use tract_onnx::prelude::*;
-    let shape: Vec<usize> = std::iter::once(batch).chain(c.sample_shape().iter().copied()).collect();
-    let plan = tract_onnx::onnx()
-        .model_for_path(path)
-        .and_then(|m| m.with_input_fact(0, f32::fact(&shape).into()))
-        .and_then(|m| m.into_optimized())
-        .and_then(|m| m.into_runnable())
-        .unwrap_or_else(|e| panic!("tract-onnx cannot load {}: {e:#}", path.display()));
-    let out = plan.run(tvec!(Tensor::from_shape(&shape, x).unwrap().into())).unwrap();
-    let theirs: Vec<f32> = out[0].to_plain_array_view::<f32>().unwrap().iter().copied().collect();
-    let (ours, _) = c.run(x, batch).unwrap();
-    assert_eq!(theirs.len(), ours.len(), "{}: logits", path.display());
-    let worst = ours.iter().zip(&theirs).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
-    assert!(worst <= 1e-5, "{}: the runtime's reader against tract-onnx's: {worst:e}", path.display());
 }
 
 /// A file exported before configurations were split by network (09687eb: its `pvt3.config`
@@ -85,7 +68,7 @@ fn golden_logits_from_tract_match_the_golden_and_the_f64_reference() {
             assert!((p.iter().sum::<f32>() - 1.0).abs() < 1e-5);
         }
     }
-    tract_onnx_agrees(&path, &c, &x, 8);
+    tract_check::tract_onnx_agrees(&path, &c, &x, 8);
     let p = c.classify(&x[..4500]).unwrap();
     let best = expected.row(0).iter().enumerate().max_by(|a, b| a.1.total_cmp(b.1)).unwrap().0;
     assert_eq!((p.class, p.label.as_str()), (best, format!("material_{}", best + 1).as_str()));
@@ -135,7 +118,7 @@ fn streaming_equals_the_whole_window_with_heads_tubelets_and_pruned_tokens() {
     pvt3_export::write(&pvt3_export::export(&baked, &norm, &meta).unwrap(), &path).unwrap();
     let (_, x, _) = golden_onnx();
     let c = Classifier::load(&path).unwrap();
-    tract_onnx_agrees(&path, &c, &x, 8);
+    tract_check::tract_onnx_agrees(&path, &c, &x, 8);
     let whole = c.classify_batch(&x, 8).unwrap();
     let (logits, _) = c.run(&x, 8).unwrap();
     let normalised: Vec<f32> = x
@@ -267,7 +250,7 @@ fn a_spectral_head_runs_in_tract_as_the_reference_and_streams() {
     pvt3_export::write(&pvt3_export::export(&no_levels.baked, &no_levels.norm, &meta).unwrap(), &no_levels_path).unwrap();
     let expected = reference::forward(&no_levels.baked, &no_levels.normalised, 3).unwrap();
     as_reference(&Classifier::load(&no_levels_path).unwrap(), &no_levels.raw, &expected, 3);
-    tract_onnx_agrees(&path, &c, &x, 3);
+    tract_check::tract_onnx_agrees(&path, &c, &x, 3);
     assert!(c.streams());
     c.prepare(&[1, 3], true).unwrap();
     let whole = c.classify_batch(&x, 3).unwrap();
@@ -391,7 +374,7 @@ fn camera_forms(log_frames: bool) {
     let elsewhere: Vec<f32> = raw.iter().enumerate().map(|(i, v)| if kept[i % (pixels * 25) / 75] { *v } else { 255.0 - *v }).collect();
     assert_ne!(elsewhere, raw);
     assert_eq!(c.run(&elsewhere, 2).unwrap().0, logits, "a pruned patch's pixels changed an answer");
-    tract_onnx_agrees(&path, &c, &raw, 2);
+    tract_check::tract_onnx_agrees(&path, &c, &raw, 2);
     let expected: Vec<f32> = reference.iter().flatten().map(|v| *v as f32).collect();
     let msg = onnx_check::assert_onnxruntime_matches(&path, (&[2, 30, 40, 3, 25], &raw), &expected, 1e-5, None);
     assert!(msg.starts_with("ok"), "{msg}");
@@ -422,8 +405,7 @@ fn camera_forms(log_frames: bool) {
 #[test]
 fn a_camera_s_frames_are_read_as_the_import_read_them() {
     let (_, baked, norm, meta) = camera_model(true);
-    let camera =
-        pvt3_runtime::Camera { recorded: [60, 80, 3], crop: None, size: Some([30, 40]), grey: false, subtract_first: true };
+    let camera = pvt3_runtime::Camera { recorded: [60, 80, 3], crop: None, size: Some([30, 40]), grey: false, subtract_first: true };
     let dir = scratch("camera-frames");
     let path = dir.join("camera.onnx");
     pvt3_export::write(&pvt3_export::export(&baked, &norm, &pvt3_export::Metadata { camera: Some(camera), ..meta }).unwrap(), &path)
@@ -434,8 +416,7 @@ fn a_camera_s_frames_are_read_as_the_import_read_them() {
     // The gel before contact, then the touch's 25 frames.
     let touch: Vec<Vec<u8>> =
         (0..26).map(|_| (0..60 * 80 * 3).map(|_| (128.0 + 60.0 * rng.normal()).clamp(0.0, 255.0) as u8).collect()).collect();
-    let read =
-        |f: &[u8]| pvt3_runtime::Picture { height: 60, width: 80, channels: 3, data: f.to_vec() }.read_as(&camera).unwrap().data;
+    let read = |f: &[u8]| pvt3_runtime::Picture { height: 60, width: 80, channels: 3, data: f.to_vec() }.read_as(&camera).unwrap().data;
     let background = read(&touch[0]);
     let pixels = 30 * 40 * 3;
     let mut sample = vec![0f32; pixels * 25];

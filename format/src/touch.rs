@@ -22,6 +22,11 @@ pub enum ReadError {
 
 type Result<T> = std::result::Result<T, ReadError>;
 
+/// How much faster or slower than it was recorded a touch is read by distance, at most: a touch
+/// read 1000 times slower is 1000 times as many frames, each read frame 1000 times faster
+/// averages 1000 recorded ones.
+pub const MAX_SPEED_RATIO: f64 = 1000.0;
+
 /// What the robot knows of one touch: its sliding speed (in the units the training's speeds had,
 /// its sign the direction) and its pressing force.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -82,6 +87,14 @@ impl TouchReader {
         let speeds = match reading.speed {
             None => None,
             Some(to) => match touch.speed.filter(|v| v.is_finite() && *v != 0.0) {
+                // Each frame read averages about `to / speed` recorded ones, and a recorded frame
+                // gives `speed / to` read ones: past a bound, no touch could be read in time.
+                Some(speed) if !(1.0 / MAX_SPEED_RATIO..=MAX_SPEED_RATIO).contains(&(speed.abs() / to)) => {
+                    return refuse(format!(
+                        "a touch at speed {speed} read as at speed {to}: {} times as fast, where a touch is read at 1/{MAX_SPEED_RATIO} to {MAX_SPEED_RATIO} times its speed",
+                        speed.abs() / to
+                    ))
+                }
                 Some(speed) => Some((speed.abs(), to)),
                 None => {
                     return refuse(format!(
@@ -221,6 +234,10 @@ mod tests {
         }
     }
 
+    fn speed_reading() -> Reading {
+        Reading { speed: Some(150.0), force: None }
+    }
+
     #[test]
     fn what_the_reading_needs_is_asked_for() {
         let frames = [1.0; 8];
@@ -231,6 +248,12 @@ mod tests {
         assert!(msg(&speed, Touch { speed: Some(0.0), force: None }).contains("give the touch's speed"));
         assert!(msg(&force, Touch { speed: Some(10.0), force: Some(-1.0) }).contains("give the touch's force"));
         assert!(msg(&force, Touch { speed: None, force: Some(f64::NAN) }).contains("give the touch's force"));
+        // A reading that would take no end of time or memory: refused, naming the bound.
+        for speed in [1e300, 1e-300, 150.0 * 1001.0] {
+            let why = msg(&speed_reading(), Touch { speed: Some(speed), force: None });
+            assert!(why.contains("where a touch is read at 1/1000 to 1000 times its speed"), "{speed}: {why}");
+        }
+        assert!(read_touch(&frames, 2, &speed_reading(), Touch { speed: Some(150.0 * 999.0), force: None }).is_ok());
         assert!(read_touch(&frames, 3, &force, Touch { speed: None, force: Some(1.0) }).unwrap_err().to_string().contains("not 3 rows"));
         let mut bad = frames;
         bad[5] = f32::INFINITY;

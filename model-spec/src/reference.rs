@@ -104,7 +104,6 @@ fn patches(m: &BakedPvt3, sample: &[f32], k: usize) -> Vec<Vec<f64>> {
 fn spectral_logits(m: &BakedPvt3, s: &BakedSpectrum, sample: &[f32], tokens: usize) -> Vec<f64> {
     let c = &m.config;
     let (frames, bands) = (c.frames, c.spectral_bands());
-    let (k, dft, band) = (spectrum::bins(frames), spectrum::dft_matrix(frames), spectrum::band_matrix(frames, bands));
     let weights = spectrum::frame_weights(frames, c.tubelet, tokens, |t| m.kept_tokens.contains(&t));
     let weighed = spectrum::weighed_frames(&weights);
     if c.spectral_space() {
@@ -115,6 +114,8 @@ fn spectral_logits(m: &BakedPvt3, s: &BakedSpectrum, sample: &[f32], tokens: usi
             .collect();
         return dense(&s.linear, &standard);
     }
+    // Over each channel's frames (a head over an image's space reads no frequencies of frames).
+    let (k, dft, band) = (spectrum::bins(frames), spectrum::dft_matrix(frames), spectrum::band_matrix(frames, bands));
     let mut features = Vec::with_capacity(s.scale.len());
     for row in sample.chunks(frames) {
         let level = row.iter().zip(&weights).map(|(v, w)| *v as f64 * w).sum::<f64>() / weighed;

@@ -26,10 +26,8 @@ use crate::Config;
 
 #[derive(Clone, Debug)]
 pub struct Spectrum {
-    /// [`dft_matrix`], a constant.
-    dft: Tensor,
-    /// [`band_matrix`], a constant.
-    bands: Tensor,
+    /// What it transforms, and the constants of the transform.
+    over: Over,
     /// `[features]` each: the standardisation, `feature · scale + shift`.
     scale: Tensor,
     shift: Tensor,
@@ -38,8 +36,19 @@ pub struct Spectrum {
     frames: usize,
     /// `Config::spectral_levels`.
     levels: bool,
-    /// For a head over the image's space, its transform.
-    space: Option<Space>,
+}
+
+/// What a spectral head transforms: each channel's frames, or each frame's image (`spectral_space`),
+/// whose bands are rings of the image's frequencies and need no frequencies of the frames (a touch
+/// of one frame has one).
+#[derive(Clone, Debug)]
+enum Over {
+    /// [`dft_matrix`] and [`band_matrix`], constants.
+    Frames {
+        dft: Tensor,
+        bands: Tensor,
+    },
+    Space(Space),
 }
 
 /// The constants of a head over the image's space: the width's and the height's `[cos | sin]`
@@ -155,16 +164,20 @@ impl Spectrum {
         let (t, b, f) = (cfg.frames, cfg.spectral_bands(), cfg.spectral_features());
         let constant = |v: Vec<f64>, shape: (usize, usize)| Tensor::from_vec(v, shape, &Device::Cpu)?.to_dtype(DType::F32);
         let vb = vb.pp(names::SPECTRAL);
+        let over = match cfg.spectral_space() {
+            true => Over::Space(Space::new(cfg)?),
+            false => {
+                Over::Frames { dft: constant(dft_matrix(t), (t, 2 * bins(t)))?, bands: constant(band_matrix(t, b), (2 * bins(t), b))? }
+            }
+        };
         Ok(Self {
-            dft: constant(dft_matrix(t), (t, 2 * bins(t)))?,
-            bands: constant(band_matrix(t, b), (2 * bins(t), b))?,
+            over,
             scale: vb.get_with_hints(f, names::SCALE, Init::Const(1.0))?,
             shift: vb.get_with_hints(f, names::SHIFT, Init::Const(0.0))?,
             linear: linear(f, cfg.classes, vb.pp(names::LINEAR))?,
             channels: cfg.sensor_channels(),
             frames: t,
             levels: cfg.spectral_levels(),
-            space: if cfg.spectral_space() { Some(Space::new(cfg)?) } else { None },
         })
     }
 
@@ -176,20 +189,23 @@ impl Spectrum {
         let b = x.dim(0)?;
         let weighed = weighed_frames(weights);
         let w = Tensor::from_iter(weights.iter().map(|v| *v as f32), x.device())?.reshape((1, self.frames))?;
-        if let Some(space) = &self.space {
-            let f = space.per_frame(x)?;
-            let mean = |v: &Tensor| v.broadcast_mul(&w.reshape((1, self.frames, 1))?)?.sum(1)? / weighed;
-            let histogram = f.histogram.as_ref().map(mean).transpose()?;
-            let log_power = match space.log_frames {
-                true => mean(&log(&f.power)?)?,
-                false => log(&mean(&f.power)?)?,
-            };
-            return self.space_features(space, &mean(&f.level)?, &log_power, histogram.as_ref(), b);
-        }
+        let (dft, bands) = match &self.over {
+            Over::Frames { dft, bands } => (dft, bands),
+            Over::Space(space) => {
+                let f = space.per_frame(x)?;
+                let mean = |v: &Tensor| v.broadcast_mul(&w.reshape((1, self.frames, 1))?)?.sum(1)? / weighed;
+                let histogram = f.histogram.as_ref().map(mean).transpose()?;
+                let log_power = match space.log_frames {
+                    true => mean(&log(&f.power)?)?,
+                    false => log(&mean(&f.power)?)?,
+                };
+                return self.space_features(space, &mean(&f.level)?, &log_power, histogram.as_ref(), b);
+            }
+        };
         let rows = x.reshape((b * self.channels, self.frames))?;
         let level = (rows.broadcast_mul(&w)?.sum_keepdim(D::Minus1)? / weighed)?;
-        let transform = rows.broadcast_sub(&level)?.broadcast_mul(&w)?.matmul(&self.dft)?;
-        let power = (transform.sqr()?.matmul(&self.bands)? * (self.frames as f64 / weighed))?;
+        let transform = rows.broadcast_sub(&level)?.broadcast_mul(&w)?.matmul(dft)?;
+        let power = (transform.sqr()?.matmul(bands)? * (self.frames as f64 / weighed))?;
         let log_power = log(&power)?;
         let features = if self.levels { Tensor::cat(&[&level, &log_power], 1)? } else { log_power };
         features.reshape((b, ()))
@@ -200,8 +216,9 @@ impl Spectrum {
     /// window whose one received frame it is): the rows a head over the image's space is fitted
     /// to (`pvt3_trainer`'s `spectrum_fit`), 25 a touch where a touch alone is one.
     pub fn frame_features(&self, x: &Tensor, weights: &[f64]) -> candle_core::Result<Tensor> {
-        let space =
-            self.space.as_ref().ok_or_else(|| candle_core::Error::Msg("features by frame: a head over an image's space only".into()))?;
+        let Over::Space(space) = &self.over else {
+            return Err(candle_core::Error::Msg("features by frame: a head over an image's space only".into()));
+        };
         let kept: Vec<u32> = (0..self.frames).filter(|n| weights[*n] > 0.0).map(|n| n as u32).collect();
         let kept = Tensor::new(kept.as_slice(), x.device())?;
         let f = space.per_frame(x)?;

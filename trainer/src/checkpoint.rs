@@ -103,12 +103,14 @@ pub fn replace_dir(target: &Path, fill: impl FnOnce(&Path) -> Result<()>) -> Res
     }
     std::fs::create_dir_all(&tmp).map_err(Error::io(&tmp))?;
     fill(&tmp)?;
+    crate::crash::point("filled");
     if target.exists() {
         if old.exists() {
             std::fs::remove_dir_all(&old).map_err(Error::io(&old))?;
         }
         std::fs::rename(target, &old).map_err(Error::io(target))?;
     }
+    crate::crash::point("swapping");
     std::fs::rename(&tmp, target).map_err(Error::io(&tmp))?;
     if old.exists() {
         std::fs::remove_dir_all(&old).map_err(Error::io(&old))?;

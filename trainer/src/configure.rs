@@ -247,16 +247,9 @@ fn shape(window: &[usize]) -> String {
 
 /// The options that only some models or values allow.
 fn check_options(cfg: &Config, options: &TrainOptions) -> Result<()> {
-    let prefix = options.prefix_training;
-    if !(0.0..=1.0).contains(&prefix) {
-        return Err(Error::Usage(format!("--prefix-training {prefix}: a probability, from 0 to 1")));
-    }
-    if prefix > 0.0 {
+    options.check()?;
+    if options.prefix_training > 0.0 {
         cfg.require_pvt3("--prefix-training")?;
-    }
-    let floor = options.optimization.lr_floor;
-    if !(0.0..=1.0).contains(&floor) {
-        return Err(Error::Usage(format!("--lr-floor {floor}: a share of the peak learning rate, from 0 to 1")));
     }
     Ok(())
 }

@@ -10,8 +10,8 @@ use std::path::Path;
 use candle_core::{Tensor, D};
 use pvt3_models::Model;
 
-use crate::data::TrainedOn;
 use crate::data::normalization::Normalization;
+use crate::data::TrainedOn;
 use crate::run_dir::{CrossValidation, Run};
 use crate::{Error, Result};
 

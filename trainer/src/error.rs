@@ -27,6 +27,15 @@ pub enum Error {
 pub type Result<T> = std::result::Result<T, Error>;
 
 impl Error {
+    /// An import's error at `path` (and `line`, where one is known), naming them.
+    pub fn import(path: &std::path::Path, line: Option<u64>, reason: impl Into<String>) -> Error {
+        let place = match line {
+            Some(l) => format!("{}:{l}", path.display()),
+            None => path.display().to_string(),
+        };
+        Error::Usage(format!("{place}: {}", reason.into()))
+    }
+
     /// A data set's error: the file `path` and what is wrong with it.
     pub fn data(path: &std::path::Path, reason: impl Into<String>) -> Error {
         Error::Data { path: path.to_path_buf(), reason: reason.into() }

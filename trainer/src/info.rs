@@ -3,7 +3,7 @@
 
 use std::fmt::Write;
 
-use pvt3_models::{Model, Config, Network};
+use pvt3_models::{Config, Model, Network};
 
 use crate::Result;
 

@@ -6,6 +6,7 @@ pub mod average;
 pub mod bench;
 pub mod checkpoint;
 pub mod configure;
+pub mod crash;
 pub mod cv;
 pub mod cv_stopping;
 pub mod data;

@@ -286,6 +286,71 @@ fn hundredth() -> f64 {
     0.01
 }
 
+/// A numeric option's range: from `low` (inclusive, or not) to `high` (inclusive, or not).
+struct Range {
+    low: f64,
+    high: f64,
+    low_in: bool,
+    high_in: bool,
+}
+
+/// `[0, 1]`: a probability or a share.
+const SHARE: Range = Range { low: 0.0, high: 1.0, low_in: true, high_in: true };
+/// `[0, 1)`: a share that may not be all.
+const PART: Range = Range { low: 0.0, high: 1.0, low_in: true, high_in: false };
+/// `[0, 1000]`: a size, a weight or a spread, 0 turning it off.
+const AMOUNT: Range = Range { low: 0.0, high: 1000.0, low_in: true, high_in: true };
+/// `(0, 10]`: a learning rate.
+const RATE: Range = Range { low: 0.0, high: 10.0, low_in: false, high_in: true };
+/// Epochs and batch sizes at most: a million (far beyond what any data set here trains with).
+pub const MAX_COUNT: usize = 1_000_000;
+
+impl TrainOptions {
+    /// Refuses a numeric option that is not finite or lies outside its range, naming the option
+    /// and the range: a learning rate of `nan`, a probability of 2, a batch of 0 would train on
+    /// garbage or not at all.
+    pub fn check(&self) -> crate::Result<()> {
+        let (o, a, p) = (&self.optimization, &self.augmentation, &self.pruning);
+        let floats = [
+            ("--lr", o.lr, RATE),
+            ("--lr-floor", o.lr_floor, SHARE),
+            ("--weight-decay", o.weight_decay, AMOUNT),
+            ("--label-smoothing", o.label_smoothing, PART),
+            ("--clip-grad", o.clip_grad, AMOUNT),
+            ("--ema", self.ema, PART),
+            ("--prefix-training", self.prefix_training, SHARE),
+            ("--aug-gain", a.gain, SHARE),
+            ("--aug-noise", a.noise, AMOUNT),
+            ("--aug-scale", a.scale, AMOUNT),
+            ("--aug-channel-scale", a.channel_scale, AMOUNT),
+            ("--aug-vibration", a.vibration, AMOUNT),
+            ("--aug-stretch", a.stretch, AMOUNT),
+            ("--aug-reverse", a.reverse, SHARE),
+            ("--aug-flip", a.flip, SHARE),
+            ("--mixup", a.mixup, AMOUNT),
+            ("--extrapolate", a.extrapolate, AMOUNT),
+            ("--l1", p.l1, AMOUNT),
+            ("--mask-lr", p.mask_lr, AMOUNT),
+            ("--random-prune", p.random_prune, PART),
+            ("--distill-weight", self.distillation.weight, AMOUNT),
+        ];
+        for (option, value, r) in floats.iter().chain(self.joint.as_ref().map(|j| ("--joint-weight", j.weight, AMOUNT)).iter()) {
+            let above = if r.low_in { *value >= r.low } else { *value > r.low };
+            let below = if r.high_in { *value <= r.high } else { *value < r.high };
+            if !(value.is_finite() && above && below) {
+                let (open, close) = (if r.low_in { '[' } else { '(' }, if r.high_in { ']' } else { ')' });
+                return Err(crate::Error::Usage(format!("{option} {value}: expected a number in {open}{}, {}{close}", r.low, r.high)));
+            }
+        }
+        for (option, value) in [("--epochs", o.epochs), ("--batch-size", o.batch_size)] {
+            if !(1..=MAX_COUNT).contains(&value) {
+                return Err(crate::Error::Usage(format!("{option} {value}: expected 1 to {MAX_COUNT}")));
+            }
+        }
+        Ok(())
+    }
+}
+
 impl Default for TrainOptions {
     /// The command line's defaults.
     fn default() -> Self {

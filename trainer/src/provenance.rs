@@ -58,23 +58,40 @@ pub struct Provenance {
 
 impl Provenance {
     /// The data set the run trained on (`data`, by default its own), split as the run recorded
-    /// it; refused when its touches are not the run's.
+    /// it; refused when its touches are not the run's. A final model's other data is read as it
+    /// is: every touch of its own trained it, so no split of it applies, and
+    /// [`Provenance::check_testable_on`] refuses the touches that trained it wherever they lie.
     pub fn dataset(&self, data: Option<&Path>) -> Result<crate::data::Dataset> {
         let own = PathBuf::from(&self.data);
-        crate::data::Dataset::load_as_trained(data.unwrap_or(&own), self.seed, self.held_out.as_ref(), self.trained_on.as_ref())
+        match (self.val_fold, data) {
+            (None, Some(other)) if *other != own => crate::data::Dataset::load(other, self.seed),
+            _ => crate::data::Dataset::load_as_trained(data.unwrap_or(&own), self.seed, self.held_out.as_ref(), self.trained_on.as_ref()),
+        }
     }
 
-    /// Refuses to test a final model on the touches that trained it (every one of its data
-    /// set's), naming the accuracy its cross-validation measured instead.
-    pub fn check_testable_on(&self, data: &crate::data::Dataset) -> Result<()> {
-        let own = self.trained_on.as_ref().is_some_and(|t| t.digest == data.digest());
-        match (self.val_fold, own) {
-            (None, true) => Err(Error::Usage(format!(
-                "a final model: every touch of {} trained it, so none is left to test it (give --data with other touches){}",
-                self.data,
-                self.expected.as_ref().map_or(String::new(), |e| format!("; expected: {e}"))
+    /// Refuses to test a final model on touches that trained it: every one of its data set's,
+    /// or any of `testing` (touches of `data`) whose own digest is among those it trained on
+    /// (a subset of its data, or the same touches imported again), saying how many, and naming
+    /// the accuracy its cross-validation measured instead.
+    pub fn check_testable_on(&self, data: &crate::data::Dataset, testing: &[usize]) -> Result<()> {
+        let (None, Some(trained)) = (self.val_fold, &self.trained_on) else { return Ok(()) };
+        let expected = self.expected.as_ref().map_or(String::new(), |e| format!("; expected: {e}"));
+        if trained.digest == data.digest() {
+            return Err(Error::Usage(format!(
+                "a final model: every touch of {} trained it, so none is left to test it (give --data with other touches){expected}",
+                self.data
+            )));
+        }
+        let seen: std::collections::HashSet<&String> = trained.touches.iter().collect();
+        let found = testing.iter().filter(|&&i| seen.contains(&data.touch_digest(i))).count();
+        match found {
+            0 => Ok(()),
+            _ => Err(Error::Usage(format!(
+                "a final model: {found} of the {} touches to test in {} trained it (their digests are in its record of {}), and a touch that trained a model cannot test it: give touches it never read{expected}",
+                testing.len(),
+                data.path.display(),
+                self.data
             ))),
-            _ => Ok(()),
         }
     }
 
@@ -164,21 +181,17 @@ impl std::fmt::Display for Expected {
     }
 }
 
+/// A provenance for the tests: a run of no data, its every record empty.
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::options::TrainOptions;
-
-    /// A run of an earlier pvt3 (its stopping rule in another form) still loads, without a rule.
-    #[test]
-    fn a_stopping_rule_of_another_form_reads_as_none() {
-        let p = Provenance {
+impl Provenance {
+    pub(crate) fn example() -> Self {
+        Self {
             pvt3_version: "test".into(),
-            data: "d".into(),
+            data: String::new(),
             val_fold: Some(0),
             seed: 0,
-            epoch: 1,
-            val_accuracy: 0.5,
+            epoch: 0,
+            val_accuracy: 0.0,
             test_accuracy: None,
             options: TrainOptions::default(),
             pruning: None,
@@ -188,7 +201,18 @@ mod tests {
             camera: None,
             stopping: None,
             expected: None,
-        };
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A run of an earlier pvt3 (its stopping rule in another form) still loads, without a rule.
+    #[test]
+    fn a_stopping_rule_of_another_form_reads_as_none() {
+        let p = Provenance { data: "d".into(), epoch: 1, val_accuracy: 0.5, ..Provenance::example() };
         let mut json = serde_json::to_value(&p).unwrap();
         json["stopping"] = serde_json::json!({"threshold": 0.9, "full_accuracy": 0.9, "accuracy": 0.9, "mean_share": 0.5});
         assert_eq!(serde_json::from_value::<Provenance>(json.clone()).unwrap().stopping, None);

@@ -24,6 +24,14 @@ pub mod logistic;
 /// those it reads best.
 const PENALTIES: [f64; 6] = [1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 3e-4];
 
+/// The least spread a feature is standardised by: a feature that varies less over the training
+/// rows (a histogram's tail bin on a few touches, a constant one) is read at most a thousand times
+/// its size. Every form computes a feature (a log power, a level, a bin's share: of order one) to
+/// about 1e-7 of its size in f32, so that its rounding stays below 1e-4 once standardised, and
+/// the forms agree with the f64 reference; 1/σ of a feature that hardly varies multiplied it by
+/// up to 10⁶ (tests/shapes.rs). PhysiCLeAR's features vary by 1.7e-3 at least, unchanged.
+const STD_FLOOR: f64 = 1e-3;
+
 /// The penalty without a validation fold (a final model's): the one most of PhysiCLeAR's
 /// validation folds chose for the fit to every frame, 8 of the headline's 12 (docs/camera.md,
 /// "Every frame a row").
@@ -42,7 +50,7 @@ pub fn fit(model: &Model, varmap: &VarMap, train: &Samples, val: &Samples) -> Re
         false => features_of(train, |x| Ok(spectrum.features(x, &whole)?))?,
     };
     let mean = features.mean(0)?;
-    let std = features.broadcast_sub(&mean)?.sqr()?.mean(0)?.sqrt()?;
+    let std = features.broadcast_sub(&mean)?.sqr()?.mean(0)?.sqrt()?.maximum(STD_FLOOR)?;
     let scale = (std + 1e-6)?.recip()?;
     let shift = (mean.neg()? * &scale)?;
     let mut fitted = vec![(names::spectral(names::SCALE), scale.clone()), (names::spectral(names::SHIFT), shift.clone())];

@@ -103,19 +103,26 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
         }
         let started = Instant::now();
         let trained = epoch::train(&mut sensors, epoch, &schedule, &opts, &mut run, bar)?;
+        crate::crash::point("stepped");
         // With weight averaging, the average is what is evaluated, selected and checkpointed.
         let validated = (sensors.iter_mut().enumerate())
             .map(|(i, s)| s.validate(epoch, run.best_of(i), (spec.val_fold, &spec.pruning)))
             .collect::<Result<Vec<_>>>()?;
+        crate::crash::point("validated");
         let seconds = started.elapsed().as_secs_f64();
         run.wall_seconds += seconds;
         run.epochs_done = epoch;
-        run_state::save_last(&sensors, &Run(out).last(), &run, (spec.val_fold, &spec.pruning), (epoch, &validated))?;
-        for ((sensor, log), (tally, val)) in sensors.iter().zip(&mut logs).zip(trained.tallies.iter().zip(&validated)) {
+        // The epoch's metrics line before its resume state: a run killed between the two resumes
+        // from the epoch before, whose log it cuts back to (a line after a saved state would be
+        // lost).
+        for (i, ((sensor, log), (tally, val))) in sensors.iter().zip(&mut logs).zip(trained.tallies.iter().zip(&validated)).enumerate() {
             let line = trained.line(epoch, seconds, tally, val);
             writeln!(log, "{}", serde_json::to_string(&line).expect("plain data")).map_err(Error::io(&sensor.dir))?;
-            crate::plot::curves::write_run(&sensor.dir)?;
+            crate::plot::curves::write_run(&sensor.dir, run.best_of(i).as_ref().map(|b| b.epoch))?;
         }
+        crate::crash::point("logged");
+        run_state::save_last(&sensors, &Run(out).last(), &run, (spec.val_fold, &spec.pruning), (epoch, &validated))?;
+        crate::crash::point("saved");
         let (tally, best) = (&trained.tallies[0], run.best.as_ref().expect("set after the first epoch"));
         bar.set_message(format!(
             "epoch {epoch}/{} loss {:.3} train {:.3} val {:.3} (best {:.3} @ {})",

@@ -26,13 +26,31 @@ impl Dataset {
         })
     }
 
-    /// The split this data set gives, as a run records it.
-    pub fn trained_on(&self) -> TrainedOn {
+    /// The split this data set gives, as a run records it; with `every_touch` (a final model's,
+    /// which every touch trains), each touch's own digest too.
+    pub fn trained_on(&self, every_touch: bool) -> TrainedOn {
         TrainedOn {
             digest: self.digest().to_string(),
             fold_seed: self.fold_seed,
             folds: self.folds.iter().map(|f| char::from_digit(*f as u32, 10).expect("a fold below 10")).collect(),
+            touches: if every_touch { (0..self.len()).map(|i| self.touch_digest(i)).collect() } else { Vec::new() },
         }
+    }
+
+    /// Touch `i`'s own digest: the first 64 bits of the SHA-256 of its frame's layout, its length
+    /// and its values as read (as f32), whatever file holds it and whatever other touches pad it
+    /// to; its label is not in it, so a touch relabelled is still the touch.
+    pub fn touch_digest(&self, i: usize) -> String {
+        let (frame, frames) = self.sample_shape.split_at(self.sample_shape.len() - 1);
+        let mut sha = Sha256::new();
+        sha.update(frame.iter().chain([&self.lengths[i]]).flat_map(|d| (*d as u64).to_le_bytes()).collect::<Vec<u8>>());
+        let sample = self.sample(i);
+        let frames = frames[0];
+        // The touch's own frames, not the padding after its end.
+        for row in sample.chunks(frames) {
+            sha.update(row[..self.lengths[i]].iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>());
+        }
+        sha.finalize()[..8].iter().map(|b| format!("{b:02x}")).collect()
     }
 
     /// Takes the folds a run recorded, refusing touches that are not the ones it trained on.
@@ -54,7 +72,7 @@ impl Dataset {
     /// Refuses when this data set's split is not `recorded` (a run's), naming what differs;
     /// `whose` names the run or option whose split is meant.
     pub fn check_split(&self, recorded: &TrainedOn, whose: &str) -> crate::Result<()> {
-        match recorded.differs(&self.trained_on()) {
+        match recorded.differs(&self.trained_on(false)) {
             Some(why) => Err(crate::Error::data(&self.path, format!("{whose} trained on another split: {why}"))),
             None => Ok(()),
         }

@@ -14,4 +14,5 @@ pub mod camera;
 pub mod csv;
 mod decode;
 pub mod folder;
+pub mod labels;
 mod npz;

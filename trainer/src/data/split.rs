@@ -30,6 +30,11 @@ pub struct TrainedOn {
     pub fold_seed: Option<u64>,
     /// Touch `i`'s fold is the `i`-th digit.
     pub folds: String,
+    /// A final model's (which every touch trains): each touch's own digest
+    /// (`Dataset::touch_digest`), so that no touch that trained it is taken for a test touch,
+    /// alone or in another file. Empty for a run whose test fold is its test.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub touches: Vec<String>,
 }
 
 impl TrainedOn {
@@ -88,7 +93,7 @@ mod tests {
     use super::*;
 
     fn record(digest: &str, seed: Option<u64>, folds: &str) -> TrainedOn {
-        TrainedOn { digest: digest.into(), fold_seed: seed, folds: folds.into() }
+        TrainedOn { digest: digest.into(), fold_seed: seed, folds: folds.into(), touches: Vec::new() }
     }
 
     #[test]

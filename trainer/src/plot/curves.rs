@@ -50,16 +50,16 @@ pub fn run_figure(title: &str, m: &[EpochMetrics], selected: Option<usize>) -> S
     figure(title, &[loss, accuracy, lr])
 }
 
-/// The run in `dir`: its epochs (`metrics.jsonl`) and, once it has one, the epoch its `model/`
-/// checkpoint holds.
-fn read_run(dir: &Path) -> Result<(Vec<EpochMetrics>, Option<usize>)> {
-    let selected = crate::checkpoint::load_meta(&Run(dir).model()).ok().map(|(_, meta)| meta.provenance.epoch);
-    Ok((metrics::read(&Run(dir).metrics())?, selected))
+/// The epoch the `model/` checkpoint of the run in `dir` holds, once it has one.
+pub fn selected_epoch(dir: &Path) -> Option<usize> {
+    crate::checkpoint::load_meta(&Run(dir).model()).ok().map(|(_, meta)| meta.provenance.epoch)
 }
 
-/// Writes `dir`'s training curves ([`run_figure`] of [`read_run`]); the path written.
-pub fn write_run(dir: &Path) -> Result<std::path::PathBuf> {
-    let (m, selected) = read_run(dir)?;
+/// Writes the training curves of the run in `dir` ([`run_figure`] of its `metrics.jsonl`), the
+/// `selected` epoch marked (a training run's best so far, or [`selected_epoch`]); the path
+/// written.
+pub fn write_run(dir: &Path, selected: Option<usize>) -> Result<std::path::PathBuf> {
+    let m = metrics::read(&Run(dir).metrics())?;
     let title = format!("{} · {} epochs", dir.display(), m.len());
     let path = Run(dir).curves();
     super::write(&path, &run_figure(&title, &m, selected))?;
@@ -91,8 +91,7 @@ pub fn write_cv(out: &Path, dirs: &[std::path::PathBuf], title: &str, figure: &s
     let mut runs = Vec::new();
     for dir in dirs {
         let name = dir.strip_prefix(out).unwrap_or(dir).display().to_string();
-        let (m, selected) = read_run(dir)?;
-        runs.push((name, m, selected));
+        runs.push((name, metrics::read(&Run(dir).metrics())?, selected_epoch(dir)));
     }
     let path = out.join(figure);
     super::write(&path, &cv_figure(title, &runs))?;

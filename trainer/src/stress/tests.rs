@@ -18,23 +18,7 @@ fn the_runtime_stays_finite_and_close_to_the_f64_reference_on_extreme_inputs() {
         baked: bake(&cfg, &read_tensors(&golden).unwrap()).unwrap(),
         normalization: Normalization { mean: vec![0.0; 60], std: vec![1.0; 60], frames: 75 },
         classes: (0..20).map(|k| format!("c{k}")).collect(),
-        provenance: Provenance {
-            pvt3_version: "test".into(),
-            data: "tests/golden/icub20".into(),
-            val_fold: Some(0),
-            seed: 0,
-            epoch: 0,
-            val_accuracy: 0.0,
-            test_accuracy: None,
-            options: crate::options::TrainOptions::default(),
-            pruning: None,
-            held_out: None,
-            trained_on: None,
-            reading: None,
-            camera: None,
-            stopping: None,
-            expected: None,
-        },
+        provenance: Provenance { data: "tests/golden/icub20".into(), ..Provenance::example() },
     };
     let scratch = std::env::temp_dir().join(format!("pvt3-stress-test-{}", std::process::id()));
     std::fs::create_dir_all(&scratch).unwrap();

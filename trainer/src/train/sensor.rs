@@ -141,7 +141,7 @@ impl<'a> Sensor<'a> {
                 options: self.options.clone(),
                 pruning: pruning.clone(),
                 held_out: self.data.held_out.clone(),
-                trained_on: Some(self.data.trained_on()),
+                trained_on: Some(self.data.trained_on(val_fold.is_none())),
                 reading: self.data.reading,
                 camera: self.data.camera,
                 stopping: None,
@@ -196,7 +196,7 @@ pub(super) fn of_run<'a>(spec: &RunSpec<'a>, config: Config, opts: &TrainOptions
         sensors.push(Sensor::new(p.data, p.config.clone(), p.classes.clone(), (spec.val_fold, &options), &dir, (None, share))?);
     }
     if let Some(teachers) = &opts.distillation.teachers {
-        let trained_on = (spec.val_fold, &main.data.trained_on());
+        let trained_on = (spec.val_fold, &main.data.trained_on(false));
         let teachers = crate::distill::Teachers::load(Path::new(teachers), trained_on, &main.normalization, &main.classes, out)?;
         main.net.learner.teachers = Some(teachers);
     }

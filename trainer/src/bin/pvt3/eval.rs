@@ -128,11 +128,11 @@ impl Loaded {
         }
         let data = meta.provenance.dataset(data).with_context(|| format!("loading {} for {}", data_path.display(), path.display()))?;
         data.check_fits(&meta.config)?;
-        meta.provenance.check_testable_on(&data)?;
         let indices: Vec<usize> = match fold {
             Folds::All => (0..data.len()).collect(),
             Folds::One(k) => (0..data.len()).filter(|&i| data.folds[i] == k).collect(),
         };
+        meta.provenance.check_testable_on(&data, &indices)?;
         if indices.is_empty() {
             bail!("fold {fold} of {} holds no samples", data_path.display());
         }

@@ -8,7 +8,8 @@ use pvt3_format::span::FrameSpan;
 use pvt3_format::Crop;
 use pvt3_trainer::data::import::camera::{read_camera_folder, CameraOptions, CameraSet};
 use pvt3_trainer::data::import::csv::{read_folder, ImportOptions};
-use pvt3_trainer::data::import::folder::{holds_camera_touches, NamePattern};
+use pvt3_trainer::data::import::folder::{holds_camera_touches, NamePattern, Naming};
+use pvt3_trainer::data::import::labels::Labels;
 use pvt3_trainer::data::Condition;
 
 use crate::progress;
@@ -26,7 +27,8 @@ use crate::progress;
 pub struct ImportArgs {
     /// The folder: DIR/<class>/<touch>, class names the folder names; or, with --name naming the
     /// class, DIR/<touch>. A touch is a .csv file, or a camera's video (.mov, .mp4, .avi, .mkv,
-    /// .webm, .m4v, .mpg) or folder of frame images (.png, .jpg, in name order).
+    /// .webm, .m4v, .mpg), folder of frame images (.png, .jpg, in name order) or still image (one
+    /// .png or .jpg, a touch of one frame).
     pub dir: PathBuf,
     /// The data set to write (`x`, `y`, `lengths`, class names, channels, the files read).
     #[arg(short, long, default_value = "data.npz")]
@@ -47,6 +49,13 @@ pub struct ImportArgs {
     /// `{class}_F{force}_V{speed}mmps_*`, or `{class}_*` for `aluminium_foil_3.mov`.
     #[arg(long, value_name = "PATTERN")]
     pub name: Option<NamePattern>,
+    /// Each touch's class, and its conditions, from a CSV file instead of names: its header names
+    /// `path` (the touch's path relative to DIR: a .csv file, a video, a frame folder or an
+    /// image) and `class`, and every other column is a condition recorded for `--hold-out`
+    /// (e.g. `path,class,object` with `grasp_3/camera_0.avi,slip,mug`). Touches DIR holds that
+    /// the file does not list are not read.
+    #[arg(long, value_name = "FILE.csv", conflicts_with = "name")]
+    pub labels: Option<PathBuf>,
     /// Read every touch by distance travelled, not by time: CONDITION=SPEED names the condition
     /// of --name that holds each touch's sliding speed, and the speed all touches are resampled
     /// to (a touch of n frames at speed v becomes n·|v|/SPEED frames). A texture's ridges then lie
@@ -62,9 +71,9 @@ pub struct ImportArgs {
     pub camera: CameraArgs,
 }
 
-/// How a camera's frames are read (videos or frame folders only).
+/// How a camera's frames are read (videos, frame folders or still images only).
 #[derive(clap::Args)]
-#[command(next_help_heading = "Camera touches (videos or frame folders)")]
+#[command(next_help_heading = "Camera touches (videos, frame folders or still images)")]
 pub struct CameraArgs {
     /// The rectangle of each frame to keep, HEIGHTxWIDTH+TOP+LEFT in pixels (e.g. 200x280+20+20
     /// to drop a 20-pixel border of 240 × 320 frames). Default: the whole frame.
@@ -77,9 +86,10 @@ pub struct CameraArgs {
     /// One grey channel instead of RGB.
     #[arg(long)]
     pub grey: bool,
-    /// Frames a touch, spread evenly over the frames chosen by --frames-from.
-    #[arg(long, default_value_t = CameraOptions::default().frames)]
-    pub frames: usize,
+    /// Frames a touch, spread evenly over the frames chosen by --frames-from. Default: 25, or 1
+    /// where every touch is a still image (one image file, read once).
+    #[arg(long)]
+    pub frames: Option<usize>,
     /// Where the frames are taken: `moving`, the span in which the gel moves (the longest run of
     /// frames that change more than the recording's stillest; the whole recording where nothing
     /// moves), or `whole`.
@@ -96,9 +106,9 @@ pub struct CameraArgs {
 }
 
 impl CameraArgs {
-    fn options(&self, name: Option<NamePattern>) -> CameraOptions {
+    fn options(&self, naming: Naming) -> CameraOptions {
         let (crop, size, grey, frames, span) = (self.crop, self.size, self.grey, self.frames, self.frames_from);
-        CameraOptions { name, crop, size, grey, frames, span, subtract_first: self.subtract_first, allow_short: self.allow_short }
+        CameraOptions { naming, crop, size, grey, frames, span, subtract_first: self.subtract_first, allow_short: self.allow_short }
     }
 
     /// The camera options given on the command line (those left at their defaults not named).
@@ -108,7 +118,7 @@ impl CameraArgs {
             (self.crop.is_some(), "--crop"),
             (self.size.is_some(), "--size"),
             (self.grey, "--grey"),
-            (self.frames != defaults.frames, "--frames"),
+            (self.frames.is_some(), "--frames"),
             (self.frames_from != defaults.span, "--frames-from"),
             (self.subtract_first, "--subtract-first"),
             (self.allow_short, "--allow-short"),
@@ -144,13 +154,18 @@ pub fn run(a: ImportArgs) -> Result<()> {
     if !a.dir.is_dir() {
         bail!("{} is not a folder (expected one folder per class of touches)", a.dir.display());
     }
-    if holds_camera_touches(&a.dir) {
-        return run_camera(a);
+    let naming = match (&a.labels, &a.name) {
+        (Some(file), _) => Naming::Labels(Labels::read(file)?),
+        (None, Some(pattern)) => Naming::Pattern(pattern.clone()),
+        (None, None) => Naming::Folders,
+    };
+    if holds_camera_touches(&a.dir, &naming) {
+        return run_camera(a, naming);
     }
     if let Some(option) = a.camera.given().first() {
         bail!("{option} is for a camera's touches (videos or frame folders), and {} holds none", a.dir.display());
     }
-    let opts = ImportOptions { columns: a.columns, grid: a.grid, name: a.name, per_distance: a.per_distance, per_force: a.per_force };
+    let opts = ImportOptions { columns: a.columns, grid: a.grid, naming, per_distance: a.per_distance, per_force: a.per_force };
     let set = read_folder(&a.dir, &opts)?;
     set.write_npz(&a.out).with_context(|| format!("writing {}", a.out.display()))?;
     let (shortest, longest) = set.length_range();
@@ -175,7 +190,7 @@ pub fn run(a: ImportArgs) -> Result<()> {
 }
 
 /// `pvt3 import` of a camera's touches.
-fn run_camera(a: ImportArgs) -> Result<()> {
+fn run_camera(a: ImportArgs, naming: Naming) -> Result<()> {
     let given: Vec<&str> = [
         (!a.columns.is_empty(), "--columns"),
         (a.grid.is_some(), "--grid"),
@@ -188,7 +203,7 @@ fn run_camera(a: ImportArgs) -> Result<()> {
     if let Some(option) = given.first() {
         bail!("{option} is for CSV touches, and {} holds a camera's (videos or frame folders)", a.dir.display());
     }
-    let opts = a.camera.options(a.name);
+    let opts = a.camera.options(naming);
     let bar = progress::bar("decoding");
     let set = read_camera_folder(&a.dir, &opts, |done, all| {
         bar.set_length(all as u64);
@@ -216,6 +231,11 @@ fn print_conditions(conditions: &[Condition]) {
 fn describe_camera(set: &CameraSet, opts: &CameraOptions) {
     let [h, w, c] = set.frame_shape;
     let colour = if c == 1 { "grey" } else { "RGB" };
+    if set.spans.iter().all(|s| s.0 == 1) && set.frames == 1 {
+        println!("{}: each one still image of {h} × {w} {colour}, read as one frame, stored as 8-bit", touches(&set.per_class()));
+        print_conditions(&set.conditions);
+        return;
+    }
     println!("{}: {} frames of {h} × {w} {colour} each, stored as 8-bit", touches(&set.per_class()), set.frames);
     let recorded = set.spans.iter().map(|s| s.0);
     let taken = set.spans.iter().map(|s| s.2 + 1 - s.1);

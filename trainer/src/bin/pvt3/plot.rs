@@ -25,7 +25,7 @@ fn cv_runs(out: &Path) -> Result<Vec<PathBuf>> {
 pub fn run(a: PlotArgs) -> Result<()> {
     let dir = &a.dir;
     if Run(dir).metrics().exists() {
-        println!("drew {}", curves::write_run(dir)?.display());
+        println!("drew {}", curves::write_run(dir, curves::selected_epoch(dir))?.display());
         return Ok(());
     }
     if !dir.join(CV_SUMMARY).exists() {
@@ -36,7 +36,7 @@ pub fn run(a: PlotArgs) -> Result<()> {
     // A joint cross-validation's other sensor: its runs inside each run, its own figure.
     let partners: Vec<PathBuf> = dirs.iter().map(|d| Run(d).partner()).filter(|p| Run(p).metrics().exists()).collect();
     for run in dirs.iter().chain(&partners) {
-        curves::write_run(run)?;
+        curves::write_run(run, curves::selected_epoch(run))?;
     }
     cv::write_figure(dir, &summary, &dirs, CV_CURVES)?;
     println!("drew the curves of {} runs and {}", dirs.len(), dir.join(CV_CURVES).display());

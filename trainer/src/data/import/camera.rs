@@ -18,7 +18,7 @@ use ndarray_npy::NpzWriter;
 use rayon::prelude::*;
 
 use super::decode;
-use super::folder::{conditions, import_error, list_touches, per_class, NamePattern, Recording};
+use super::folder::{conditions, list_touches, per_class, Naming, Recording};
 use super::npz::{add_json, add_records};
 use crate::data::{key, Condition};
 use crate::{Error, Result};
@@ -28,16 +28,16 @@ use pvt3_format::{Camera, Crop, Picture};
 /// What to import and how.
 #[derive(Clone, Debug)]
 pub struct CameraOptions {
-    /// What each file's (or frame folder's) name says: its class and the touch's conditions.
-    pub name: Option<NamePattern>,
+    /// Where each touch's class and conditions come from (folders, names or a labels file).
+    pub naming: Naming,
     /// The rectangle of each frame to keep (before shrinking); `None`: the whole frame.
     pub crop: Option<Crop>,
     /// The size every frame is shrunk to (height, width), by area averaging; `None`: as recorded.
     pub size: Option<(usize, usize)>,
     /// One grey channel instead of RGB.
     pub grey: bool,
-    /// Frames a touch.
-    pub frames: usize,
+    /// Frames a touch; `None`: [`DEFAULT_FRAMES`], or one where every touch is a still image.
+    pub frames: Option<usize>,
     /// Which frames.
     pub span: FrameSpan,
     /// Each touch's first frame kept as its background, which a reader subtracts.
@@ -51,17 +51,24 @@ impl Default for CameraOptions {
     /// The PVT³ report's GelSight touch: 25 RGB frames as recorded, where the gel moves.
     fn default() -> Self {
         Self {
-            name: None,
+            naming: Naming::Folders,
             crop: None,
             size: None,
             grey: false,
-            frames: 25,
+            frames: None,
             span: FrameSpan::Moving,
             subtract_first: false,
             allow_short: false,
         }
     }
 }
+
+/// Frames a touch takes unless asked otherwise: the PVT³ report's GelSight touch.
+pub const DEFAULT_FRAMES: usize = 25;
+
+/// Frames a touch takes at most (`--frames`): 2.3 GB a touch at 240 × 320 RGB, where a repeated
+/// short recording (`--allow-short`) would otherwise grow without bound.
+pub const MAX_FRAMES: usize = 10_000;
 
 /// The imported set, before it is written.
 #[derive(Debug)]
@@ -93,22 +100,25 @@ impl CameraSet {
 }
 
 /// Reads `dir` as camera touches (videos or frame folders), one folder per class or side by side
-/// with `opts.name` naming the class.
+/// with `opts.naming` naming the class.
 pub fn read_camera_folder(dir: &Path, opts: &CameraOptions, mut progress: impl FnMut(usize, usize)) -> Result<CameraSet> {
-    if opts.frames == 0 {
-        return Err(Error::Usage("--frames must be at least 1".into()));
+    let (files, classes) = list_touches(dir, &opts.naming, Recording::Camera)?;
+    // A still image is one frame, read once: a set of them takes one frame a touch.
+    let stills = files.iter().all(|f| decode::is_still(&f.path));
+    let frames = opts.frames.unwrap_or(if stills { 1 } else { DEFAULT_FRAMES });
+    if !(1..=MAX_FRAMES).contains(&frames) {
+        return Err(Error::Usage(format!("--frames {frames}: a touch takes 1 to {MAX_FRAMES} frames")));
     }
-    let (files, classes) = list_touches(dir, opts.name.as_ref(), Recording::Camera)?;
     let values: Vec<Vec<String>> = files.iter().map(|f| f.values.clone()).collect();
     let mut set = CameraSet {
         x: Vec::new(),
         background: opts.subtract_first.then(Vec::new),
         frame_shape: [0; 3],
-        frames: opts.frames,
+        frames,
         labels: Vec::new(),
         classes,
         sources: Vec::new(),
-        conditions: conditions(opts.name.as_ref(), &values),
+        conditions: conditions(&opts.naming, &values),
         spans: Vec::new(),
         camera: None,
     };
@@ -118,14 +128,14 @@ pub fn read_camera_folder(dir: &Path, opts: &CameraOptions, mut progress: impl F
     // Touches decoded a few at a time on every core, appended in order.
     let mut done = 0;
     let decoded = files.chunks(4 * rayon::current_num_threads()).flat_map(|chunk| {
-        let read: Vec<_> = chunk.par_iter().map(|f| (f, read_touch(&f.path, opts))).collect();
+        let read: Vec<_> = chunk.par_iter().map(|f| (f, read_touch(&f.path, opts, frames))).collect();
         done += chunk.len();
         progress(done, files.len());
         read
     });
     for (file, touch) in decoded {
         let path = file.path.as_path();
-        let ReadTouch { frames, background, span, camera } = touch.map_err(|e| import_error(path, None, e))?;
+        let ReadTouch { frames, background, span, camera } = touch.map_err(|e| Error::import(path, None, e))?;
         recorded.push(camera);
         match &first {
             Some((p, f)) if f.shape() != frames[0].shape() => {
@@ -135,7 +145,7 @@ pub fn read_camera_folder(dir: &Path, opts: &CameraOptions, mut progress: impl F
                     p.display(),
                     f.describe()
                 );
-                return Err(import_error(path, None, why));
+                return Err(Error::import(path, None, why));
             }
             Some(_) => {}
             None => {
@@ -161,13 +171,14 @@ struct ReadTouch {
     camera: Camera,
 }
 
-fn read_touch(path: &Path, opts: &CameraOptions) -> std::result::Result<ReadTouch, String> {
+/// The touch at `path` read as `opts` say, `frames` frames of it.
+fn read_touch(path: &Path, opts: &CameraOptions, frames: usize) -> std::result::Result<ReadTouch, String> {
     let recorded = decode::frames(path)?;
-    if recorded.is_empty() || (recorded.len() < opts.frames && !opts.allow_short) {
+    if recorded.is_empty() || (recorded.len() < frames && !opts.allow_short) {
         let repeat = if recorded.is_empty() { "" } else { "; --allow-short repeats its frames" };
-        return Err(format!("{} frames, fewer than the {} a touch takes (--frames{repeat})", recorded.len(), opts.frames));
+        return Err(format!("{} frames, fewer than the {frames} a touch takes (--frames{repeat})", recorded.len()));
     }
-    let taken = opts.span.take(&recorded, opts.frames);
+    let taken = opts.span.take(&recorded, frames);
     let camera = Camera {
         recorded: recorded[0].shape(),
         crop: opts.crop,

@@ -11,7 +11,7 @@ use ndarray_npy::NpzWriter;
 
 use pvt3_format::{read_touch, Reading, Touch};
 
-use super::folder::{conditions, import_error, list_touches, per_class, Listed, NamePattern, Recording};
+use super::folder::{conditions, list_touches, per_class, Listed, Naming, Recording};
 use super::npz::{add_json, add_records, lines};
 use crate::data::{key, Condition};
 use crate::{Error, Result};
@@ -25,8 +25,8 @@ pub struct ImportOptions {
     /// The sensor's grid, rows × columns of the chosen channels (row-major); `None`: one column of
     /// channels (`[N, channels, frames]`, read as a channels × 1 grid).
     pub grid: Option<(usize, usize)>,
-    /// What each file's name says: its class and the conditions of the touch.
-    pub name: Option<NamePattern>,
+    /// Where each touch's class and conditions come from.
+    pub naming: Naming,
     /// Each touch read by distance travelled rather than by time: the condition that holds its
     /// sliding speed, and the speed every touch is resampled to (a touch of `n` frames at speed
     /// `v` becomes `n · |v| / speed` frames, [`pvt3_format::read_touch`]), so that a texture's ridges lie
@@ -70,17 +70,29 @@ pub struct Imported {
 /// Columns left out of an import, each with why.
 pub type LeftOut = Vec<(String, &'static str)>;
 
-/// Whether `name` matches `pattern` (`*`: any run of characters, `?`: one).
+/// Whether `name` matches `pattern` (`*`: any run of characters, `?`: one). Greedy, going back
+/// only to the last `*`: at most the name's length times the pattern's steps, where trying every
+/// split at every `*` took exponential time (`*a*a*a*a*b` against a long name ran for minutes).
 pub fn matches(pattern: &str, name: &str) -> bool {
-    fn go(p: &[char], n: &[char]) -> bool {
-        match p.split_first() {
-            None => n.is_empty(),
-            Some(('*', rest)) => (0..=n.len()).any(|k| go(rest, &n[k..])),
-            Some(('?', rest)) => !n.is_empty() && go(rest, &n[1..]),
-            Some((c, rest)) => n.first() == Some(c) && go(rest, &n[1..]),
+    let (p, n): (Vec<char>, Vec<char>) = (pattern.chars().collect(), name.chars().collect());
+    let (mut i, mut j) = (0, 0);
+    // The pattern just after the last `*` seen, and where in the name that `*`'s run now ends.
+    let mut star: Option<(usize, usize)> = None;
+    while j < n.len() {
+        if i < p.len() && (p[i] == '?' || (p[i] != '*' && p[i] == n[j])) {
+            (i, j) = (i + 1, j + 1);
+        } else if i < p.len() && p[i] == '*' {
+            star = Some((i + 1, j));
+            i += 1;
+        } else if let Some((after, end)) = star {
+            // The last `*` takes one character more.
+            star = Some((after, end + 1));
+            (i, j) = (after, end + 1);
+        } else {
+            return false;
         }
     }
-    go(&pattern.chars().collect::<Vec<_>>(), &name.chars().collect::<Vec<_>>())
+    p[i..].iter().all(|c| *c == '*')
 }
 
 /// A column whose name says it is a time (`time`, `stamp`, `secs`, `date`, `t`).
@@ -91,9 +103,9 @@ fn time_like(name: &str) -> bool {
 
 /// Reads `dir` as one folder per class of CSV touches.
 pub fn read_folder(dir: &Path, opts: &ImportOptions) -> Result<Imported> {
-    let (files, classes) = list_touches(dir, opts.name.as_ref(), Recording::Csv)?;
+    let (files, classes) = list_touches(dir, &opts.naming, Recording::Csv)?;
     let (names, touches, condition_values) = read_touches(files, &classes)?;
-    let conditions = conditions(opts.name.as_ref(), &condition_values);
+    let conditions = conditions(&opts.naming, &condition_values);
     let (chosen, left_out) = choose_columns(&names, &touches, opts)?;
     let channels: Vec<String> = chosen.iter().map(|&c| names[c].clone()).collect();
     if let Some((h, w)) = opts.grid {
@@ -143,7 +155,7 @@ fn read_touches(files: Vec<Listed>, classes: &[String]) -> Result<(Vec<String>, 
         match &header {
             None => header = Some((path.clone(), names)),
             Some((first, h)) if *h != names => {
-                return Err(import_error(
+                return Err(Error::import(
                     &path,
                     Some(1),
                     format!("its header differs from {}'s: {:?} against {:?}", first.display(), names, h),
@@ -173,7 +185,7 @@ fn known_values(option: &str, given: &Option<(String, f64)>, conditions: &[Condi
         .map(|(v, t)| {
             v.parse::<f64>()
                 .map(Some)
-                .map_err(|_| import_error(&t.path, None, format!("{option} {name}: its {name} `{v}` is not a number")))
+                .map_err(|_| Error::import(&t.path, None, format!("{option} {name}: its {name} `{v}` is not a number")))
         })
         .collect()
 }
@@ -184,12 +196,24 @@ fn chosen_frames(t: &TouchFile, (chosen, names): (&[usize], &[String]), reading:
     let mut frames = vec![Vec::with_capacity(t.rows.len()); chosen.len()];
     for (row, line) in t.rows.iter().zip(&t.lines) {
         for (k, &c) in chosen.iter().enumerate() {
-            let v = row[c].ok_or_else(|| import_error(&t.path, Some(*line), format!("column `{}` is not a number here", names[c])))?;
+            let v = row[c].ok_or_else(|| Error::import(&t.path, Some(*line), format!("column `{}` is not a number here", names[c])))?;
+            // A data set holds 32-bit floats: a reading beyond their range would be stored as ±inf.
+            if !(v as f32).is_finite() {
+                let why = format!("column `{}` holds {v:e}, beyond the range of the 32-bit floats a data set holds (±3.4e38)", names[c]);
+                return Err(Error::import(&t.path, Some(*line), why));
+            }
             frames[k].push(v as f32);
         }
     }
     if let Some((reading, touch)) = reading {
-        let read = read_touch(&frames.concat(), frames.len(), reading, touch).map_err(|e| import_error(&t.path, None, e.to_string()))?;
+        let read = read_touch(&frames.concat(), frames.len(), reading, touch).map_err(|e| Error::import(&t.path, None, e.to_string()))?;
+        if read.iter().any(|v| !v.is_finite()) {
+            return Err(Error::import(
+                &t.path,
+                None,
+                "its readings scaled to the --per-force force pass the range of 32-bit floats (±3.4e38)",
+            ));
+        }
         let len = read.len() / frames.len();
         frames = read.chunks(len).map(<[f32]>::to_vec).collect();
     }
@@ -202,20 +226,20 @@ fn read_file(path: &Path, class: usize) -> Result<(Vec<String>, TouchFile)> {
         .flexible(true)
         .trim(::csv::Trim::All)
         .from_path(path)
-        .map_err(|e| import_error(path, None, e.to_string()))?;
-    let names: Vec<String> = reader.headers().map_err(|e| import_error(path, Some(1), e.to_string()))?.iter().map(String::from).collect();
+        .map_err(|e| Error::import(path, None, e.to_string()))?;
+    let names: Vec<String> = reader.headers().map_err(|e| Error::import(path, Some(1), e.to_string()))?.iter().map(String::from).collect();
     let (mut rows, mut lines) = (Vec::new(), Vec::new());
     for record in reader.records() {
-        let record = record.map_err(|e| import_error(path, e.position().map(|p| p.line()), e.to_string()))?;
+        let record = record.map_err(|e| Error::import(path, e.position().map(|p| p.line()), e.to_string()))?;
         let line = record.position().map_or(0, |p| p.line());
         if record.len() != names.len() {
-            return Err(import_error(path, Some(line), format!("a ragged row: {} fields, the header has {}", record.len(), names.len())));
+            return Err(Error::import(path, Some(line), format!("a ragged row: {} fields, the header has {}", record.len(), names.len())));
         }
         rows.push(record.iter().map(|cell| cell.parse::<f64>().ok().filter(|v| v.is_finite())).collect());
         lines.push(line);
     }
     if rows.is_empty() {
-        return Err(import_error(path, None, "holds a header and no frame"));
+        return Err(Error::import(path, None, "holds a header and no frame"));
     }
     Ok((names, TouchFile { class, path: path.to_path_buf(), rows, lines }))
 }
@@ -235,7 +259,7 @@ fn choose_columns(names: &[String], touches: &[TouchFile], opts: &ImportOptions)
             chosen.extend(hits);
         }
         if let Some((c, (path, line))) = chosen.iter().find_map(|&c| text_at(c).map(|at| (c, at))) {
-            return Err(import_error(path, Some(line), format!("column `{}` holds text, not a number", names[c])));
+            return Err(Error::import(path, Some(line), format!("column `{}` holds text, not a number", names[c])));
         }
         let left_out = (0..names.len()).filter(|c| !chosen.contains(c)).map(|c| (names[c].clone(), "not chosen")).collect();
         return Ok((chosen, left_out));

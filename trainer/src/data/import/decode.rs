@@ -1,6 +1,7 @@
 //! A camera touch's frames from its file: a video through `ffmpeg` (any format it reads: the
-//! MPEG-4 of PhysiCLeAR's GelSight videos, H.264, …), or a folder of PNG or JPEG frames read in
-//! name order (pure Rust). Every frame comes out as 8-bit RGB or grey, as recorded.
+//! MPEG-4 of PhysiCLeAR's GelSight videos, H.264, …), a folder of PNG or JPEG frames read in
+//! name order, or one PNG or JPEG image, a still touch of one frame (pure Rust). Every frame
+//! comes out as 8-bit RGB or grey, as recorded.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
@@ -16,13 +17,25 @@ fn has_extension(path: &Path, extensions: &[&str]) -> bool {
     path.extension().and_then(|e| e.to_str()).is_some_and(|e| extensions.iter().any(|x| x.eq_ignore_ascii_case(e)))
 }
 
-/// Whether `path` is a camera touch: a video file, or a folder holding frame images.
+/// Whether `path` is a camera touch: a video file, a folder holding frame images, or a still
+/// image ([`is_still`]).
 pub fn is_camera_touch(path: &Path) -> bool {
-    (path.is_file() && has_extension(path, &VIDEO_EXTENSIONS)) || (path.is_dir() && !frame_files(path).unwrap_or_default().is_empty())
+    (path.is_file() && has_extension(path, &VIDEO_EXTENSIONS))
+        || is_still(path)
+        || (path.is_dir() && !frame_files(path).unwrap_or_default().is_empty())
 }
 
-/// Every frame of a touch, in order: a video's, or a folder's images by name.
+/// Whether `path` is a still touch: one image file, its one frame (as still-image sets lay out
+/// their touches: a class folder of images).
+pub fn is_still(path: &Path) -> bool {
+    path.is_file() && has_extension(path, &IMAGE_EXTENSIONS)
+}
+
+/// Every frame of a touch, in order: a video's, a folder's images by name, or a still image.
 pub fn frames(path: &Path) -> Result<Vec<Picture>, String> {
+    if is_still(path) {
+        return Ok(vec![image(path)?]);
+    }
     if path.is_dir() {
         let files = frame_files(path).map_err(|e| e.to_string())?;
         let pictures = files.iter().map(|f| image(f).map_err(|e| format!("{}: {e}", f.file_name().unwrap_or_default().to_string_lossy())));

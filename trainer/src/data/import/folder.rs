@@ -5,17 +5,10 @@
 use std::path::{Path, PathBuf};
 
 use super::decode;
+use super::labels::Labels;
+use super::npz::check_line;
 use crate::data::{Condition, FOLDS};
 use crate::{Error, Result};
-
-/// An import's error at `path` (and `line`, where one is known), naming them.
-pub(super) fn import_error(path: &Path, line: Option<u64>, reason: impl Into<String>) -> Error {
-    let place = match line {
-        Some(l) => format!("{}:{l}", path.display()),
-        None => path.display().to_string(),
-    };
-    Error::Usage(format!("{place}: {}", reason.into()))
-}
 
 /// A file name pattern (the name without its extension, or a folder's name): `{field}` reads the
 /// longest non-empty run of characters that lets the rest match as that field's value, `*`
@@ -85,25 +78,47 @@ impl NamePattern {
     }
 
     /// Each field's value in `name`, in the pattern's order, or `None` where it does not match.
+    /// A field takes the longest value that lets the rest match (`{class}_*` reads
+    /// `aluminium_foil` from `aluminium_foil_3`), a `*` the shortest. In time proportional to the
+    /// pattern's parts times the name's length: which parts can match which end of the name is
+    /// worked out once, where trying every split took exponential time.
     pub fn read(&self, name: &str) -> Option<Vec<String>> {
-        fn go(parts: &[Part], name: &[char], values: &mut Vec<String>) -> bool {
-            match parts.split_first() {
-                None => name.is_empty(),
-                Some((Part::Char(c), rest)) => name.first() == Some(c) && go(rest, &name[1..], values),
-                Some((Part::Any, rest)) => (0..=name.len()).any(|k| go(rest, &name[k..], values)),
-                // The longest value that lets the rest match: `{class}_*` reads `aluminium_foil`
-                // from `aluminium_foil_3`.
-                Some((Part::Field(_), rest)) => (1..=name.len()).rev().any(|k| {
-                    values.push(name[..k].iter().collect());
-                    go(rest, &name[k..], values) || {
-                        values.pop();
-                        false
-                    }
-                }),
+        let n: Vec<char> = name.chars().collect();
+        let (parts, len) = (self.parts.len(), n.len());
+        // rest[i][j]: parts i.. match name[j..]; from_on[i][j]: rest[i][k] for some k ≥ j.
+        let mut rest = vec![vec![false; len + 1]; parts + 1];
+        let mut from_on = vec![vec![false; len + 2]; parts + 1];
+        rest[parts][len] = true;
+        for i in (0..=parts).rev() {
+            if i < parts {
+                for j in (0..=len).rev() {
+                    rest[i][j] = match &self.parts[i] {
+                        Part::Char(c) => j < len && n[j] == *c && rest[i + 1][j + 1],
+                        Part::Any => from_on[i + 1][j],
+                        Part::Field(_) => from_on[i + 1][j + 1],
+                    };
+                }
+            }
+            for j in (0..=len).rev() {
+                from_on[i][j] = rest[i][j] || from_on[i][j + 1];
             }
         }
-        let mut values = Vec::new();
-        go(&self.parts, &name.chars().collect::<Vec<_>>(), &mut values).then_some(values)
+        if !rest[0][0] {
+            return None;
+        }
+        let (mut j, mut values) = (0, Vec::new());
+        for (i, part) in self.parts.iter().enumerate() {
+            j = match part {
+                Part::Char(_) => j + 1,
+                Part::Any => (j..=len).find(|k| rest[i + 1][*k]).expect("a way on"),
+                Part::Field(_) => {
+                    let k = (j + 1..=len).rev().find(|k| rest[i + 1][*k]).expect("a way on");
+                    values.push(n[j..k].iter().collect());
+                    k
+                }
+            };
+        }
+        Some(values)
     }
 }
 
@@ -113,13 +128,38 @@ impl std::fmt::Display for NamePattern {
     }
 }
 
-/// The conditions `pattern` reads from the touches' names, each touch's values in `values`.
-pub(super) fn conditions(pattern: Option<&NamePattern>, values: &[Vec<String>]) -> Vec<Condition> {
-    let names = pattern.map(NamePattern::conditions).unwrap_or_default();
+/// Where each touch's class and conditions come from.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub enum Naming {
+    /// Its class folder's name (`DIR/<class>/<touch>`).
+    #[default]
+    Folders,
+    /// Its file's name (`--name`): the class where the pattern has `{class}` (the touches then
+    /// side by side in the folder), else its class folder's; the pattern's other fields the
+    /// conditions.
+    Pattern(NamePattern),
+    /// A labels file (`--labels`): a row a touch, its path relative to the folder.
+    Labels(Labels),
+}
+
+impl Naming {
+    /// The names of the conditions each touch records.
+    fn conditions(&self) -> Vec<String> {
+        match self {
+            Self::Folders => Vec::new(),
+            Self::Pattern(p) => p.conditions().into_iter().map(String::from).collect(),
+            Self::Labels(l) => l.conditions.clone(),
+        }
+    }
+}
+
+/// The conditions `naming` gives the touches, each touch's values in `values`.
+pub(super) fn conditions(naming: &Naming, values: &[Vec<String>]) -> Vec<Condition> {
+    let names = naming.conditions();
     names
         .iter()
         .enumerate()
-        .map(|(k, name)| Condition { name: name.to_string(), levels: values.iter().map(|v| v[k].clone()).collect() })
+        .map(|(k, name)| Condition { name: name.clone(), levels: values.iter().map(|v| v[k].clone()).collect() })
         .collect()
 }
 
@@ -156,65 +196,109 @@ pub(super) struct Listed {
     pub(super) values: Vec<String>,
 }
 
-/// The touches of `dir`, sorted, and the classes, sorted: one folder per class, or side by side
-/// when the `--name` pattern names the class. Refuses a class of fewer touches than folds.
-pub(super) fn list_touches(dir: &Path, name: Option<&NamePattern>, kind: Recording) -> Result<(Vec<Listed>, Vec<String>)> {
-    let mut files = Vec::new();
-    let read_name = |path: &Path, pattern: &NamePattern| -> Result<Vec<String>> {
-        // A file's name without its extension; a folder's whole name.
-        let stem = if path.is_dir() { path.file_name() } else { path.file_stem() };
-        let stem = stem.map(|s| s.to_string_lossy().into_owned()).unwrap_or_default();
-        pattern.read(&stem).ok_or_else(|| import_error(path, None, format!("its name `{stem}` does not match --name {pattern}")))
+/// The touches of `dir` and the classes, sorted: one folder per class, side by side when the
+/// `--name` pattern names the class (both sorted), or as a labels file lists them (in its order).
+/// Refuses a class of fewer touches than folds.
+pub(super) fn list_touches(dir: &Path, naming: &Naming, kind: Recording) -> Result<(Vec<Listed>, Vec<String>)> {
+    let (files, flat) = match naming {
+        Naming::Labels(labels) => return labelled_touches(dir, labels, kind),
+        Naming::Pattern(p) if p.fields().contains(&CLASS_FIELD) => (side_by_side(dir, p, kind)?, true),
+        Naming::Pattern(p) => (in_class_folders(dir, Some(p), kind)?, false),
+        Naming::Folders => (in_class_folders(dir, None, kind)?, false),
     };
-    // Whether the names give the class, the touches then side by side in `dir`.
-    let flat = name.is_some_and(|p| p.fields().contains(&CLASS_FIELD));
-    match name {
-        Some(pattern) if flat => {
-            let found = touches_in(dir, kind)?;
-            if found.is_empty() {
-                return Err(import_error(
-                    dir,
-                    None,
-                    format!("holds no {} (--name {pattern} names the class, so the touches lie side by side in this folder)", kind.what()),
-                ));
-            }
-            for path in found {
-                let mut values = read_name(&path, pattern)?;
-                let class = values.remove(pattern.fields().iter().position(|f| *f == CLASS_FIELD).expect("the class field"));
-                files.push(Listed { path, class, values });
-            }
-        }
-        _ => {
-            let class_dirs: Vec<PathBuf> = sorted_entries(dir)?.into_iter().filter(|p| p.is_dir()).collect();
-            if class_dirs.is_empty() {
-                return Err(import_error(
-                    dir,
-                    None,
-                    format!(
-                        "holds no class folder (expected one folder per class, each with one {} per touch, or --name with a {{class}} field)",
-                        kind.what()
-                    ),
-                ));
-            }
-            for class_dir in class_dirs {
-                let found = touches_in(&class_dir, kind)?;
-                if found.is_empty() {
-                    return Err(import_error(&class_dir, None, format!("an empty class: this folder holds no {}", kind.what())));
-                }
-                let class = class_dir.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-                for path in found {
-                    let values = match name {
-                        Some(pattern) => read_name(&path, pattern)?,
-                        None => Vec::new(),
-                    };
-                    files.push(Listed { path, class: class.clone(), values });
-                }
-            }
-        }
+    for f in &files {
+        storable(&f.path, f.path.strip_prefix(dir).unwrap_or(&f.path).as_os_str())?;
     }
-    let classes: Vec<String> = files.iter().map(|f| f.class.clone()).collect::<std::collections::BTreeSet<_>>().into_iter().collect();
+    let classes = classes_of(&files);
     check_enough_touches(dir, &files, &classes, flat)?;
     Ok((files, classes))
+}
+
+/// The touches side by side in `dir`, their class and conditions read from their names.
+fn side_by_side(dir: &Path, pattern: &NamePattern, kind: Recording) -> Result<Vec<Listed>> {
+    let found = touches_in(dir, kind)?;
+    if found.is_empty() {
+        let why = format!("holds no {} (--name {pattern} names the class, so the touches lie side by side in this folder)", kind.what());
+        return Err(Error::import(dir, None, why));
+    }
+    let class_at = pattern.fields().iter().position(|f| *f == CLASS_FIELD).expect("the class field");
+    let mut files = Vec::with_capacity(found.len());
+    for path in found {
+        let mut values = read_name(&path, pattern)?;
+        let class = values.remove(class_at);
+        files.push(Listed { path, class, values });
+    }
+    Ok(files)
+}
+
+/// The touches of `dir`'s class folders (a class its folder's name), their conditions read from
+/// their names where a pattern is given.
+fn in_class_folders(dir: &Path, name: Option<&NamePattern>, kind: Recording) -> Result<Vec<Listed>> {
+    let class_dirs: Vec<PathBuf> = sorted_entries(dir)?.into_iter().filter(|p| p.is_dir()).collect();
+    if class_dirs.is_empty() {
+        let why = format!(
+            "holds no class folder (expected one folder per class, each with one {} per touch, or --name with a {{class}} field)",
+            kind.what()
+        );
+        return Err(Error::import(dir, None, why));
+    }
+    let mut files = Vec::new();
+    for class_dir in class_dirs {
+        let found = touches_in(&class_dir, kind)?;
+        if found.is_empty() {
+            return Err(Error::import(&class_dir, None, format!("an empty class: this folder holds no {}", kind.what())));
+        }
+        let class = storable(&class_dir, class_dir.file_name().unwrap_or_default())?;
+        for path in found {
+            let values = match name {
+                Some(pattern) => read_name(&path, pattern)?,
+                None => Vec::new(),
+            };
+            files.push(Listed { path, class: class.clone(), values });
+        }
+    }
+    Ok(files)
+}
+
+/// The fields `pattern` reads from the name of the touch at `path`: a file's name without its
+/// extension, a folder's whole name.
+fn read_name(path: &Path, pattern: &NamePattern) -> Result<Vec<String>> {
+    let stem = if path.is_dir() { path.file_name() } else { path.file_stem() };
+    let stem = storable(path, stem.unwrap_or_default())?;
+    pattern.read(&stem).ok_or_else(|| Error::import(path, None, format!("its name `{stem}` does not match --name {pattern}")))
+}
+
+/// `name` (of the file or folder `path`) as a data set stores its names, or why it cannot be:
+/// they are UTF-8, one a line, so a name that is not UTF-8 (which a lossy reading would merge
+/// with another) or holds a line break (which would split it in two) is refused.
+pub(super) fn storable(path: &Path, name: &std::ffi::OsStr) -> Result<String> {
+    let text = name.to_str().ok_or_else(|| Error::import(path, None, "its name is not UTF-8, as a data set's names are: rename it"))?;
+    check_line(text).map_err(|why| Error::import(path, None, format!("its name {why}: rename it")))?;
+    Ok(text.to_string())
+}
+
+/// The touches `labels` lists under `dir`, in its order: each must be a touch of `kind`.
+fn labelled_touches(dir: &Path, labels: &Labels, kind: Recording) -> Result<(Vec<Listed>, Vec<String>)> {
+    let mut files = Vec::with_capacity(labels.rows.len());
+    for row in &labels.rows {
+        let path = dir.join(&row.path);
+        if !kind.is_touch(&path) {
+            return Err(Error::import(
+                &labels.file,
+                Some(row.line),
+                format!("{} is not a {} (in {})", row.path, kind.what(), dir.display()),
+            ));
+        }
+        files.push(Listed { path, class: row.class.clone(), values: row.values.clone() });
+    }
+    let classes = classes_of(&files);
+    check_enough_touches(&labels.file, &files, &classes, true)?;
+    Ok((files, classes))
+}
+
+/// The classes of `files`, sorted.
+fn classes_of(files: &[Listed]) -> Vec<String> {
+    files.iter().map(|f| f.class.clone()).collect::<std::collections::BTreeSet<_>>().into_iter().collect()
 }
 
 /// The entries of folder `d`, sorted.
@@ -225,9 +309,13 @@ fn sorted_entries(d: &Path) -> Result<Vec<PathBuf>> {
     Ok(v)
 }
 
-/// Whether `dir` holds a camera's touches (videos or frame folders), side by side or one folder
-/// per class, and no CSV file: what `pvt3 import` reads it as.
-pub fn holds_camera_touches(dir: &Path) -> bool {
+/// Whether `dir` holds a camera's touches (videos, frame folders or still images), side by side
+/// or one folder per class, or as a labels file lists them, and no CSV file: what `pvt3 import`
+/// reads it as.
+pub fn holds_camera_touches(dir: &Path, naming: &Naming) -> bool {
+    if let Naming::Labels(labels) = naming {
+        return labels.rows.iter().all(|r| Recording::Camera.is_touch(&dir.join(&r.path)));
+    }
     let entries = sorted_entries(dir).unwrap_or_default();
     let holds = |kind: Recording| {
         entries.iter().any(|p| kind.is_touch(p))
@@ -250,9 +338,9 @@ fn check_enough_touches(dir: &Path, files: &[Listed], classes: &[String], flat: 
                 "{count} touches, too few to split: each of the {FOLDS} folds (training, validation, test) needs one of every class"
             );
             return Err(if flat {
-                import_error(dir, None, format!("class `{class}`: {too_few}"))
+                Error::import(dir, None, format!("class `{class}`: {too_few}"))
             } else {
-                import_error(&dir.join(class), None, too_few)
+                Error::import(&dir.join(class), None, too_few)
             });
         }
     }

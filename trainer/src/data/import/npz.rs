@@ -6,6 +6,14 @@ use ndarray_npy::NpzWriter;
 
 use crate::data::{key, Condition};
 
+/// Refuses a name that holds a line break: a data set keeps its names one a line.
+pub(super) fn check_line(name: &str) -> std::result::Result<(), String> {
+    match name.contains(['\n', '\r']) {
+        true => Err(format!("{name:?} holds a line break, and a data set keeps its names one a line")),
+        false => Ok(()),
+    }
+}
+
 /// A data set being written ([`super::csv::Imported::write_npz`], [`super::camera::CameraSet::write_npz`]).
 pub(super) type Npz = NpzWriter<std::io::BufWriter<std::fs::File>>;
 

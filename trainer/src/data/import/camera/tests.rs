@@ -82,7 +82,7 @@ fn videos(tag: &str) -> PathBuf {
 }
 
 fn options(frames: usize, span: FrameSpan) -> CameraOptions {
-    CameraOptions { size: Some((4, 5)), frames, span, ..CameraOptions::default() }
+    CameraOptions { size: Some((4, 5)), frames: Some(frames), span, ..CameraOptions::default() }
 }
 
 /// Frame `f` of `x` `[N, H, W, C, T]` for touch `n`, as a picture.
@@ -96,7 +96,7 @@ fn taken(set: &CameraSet, n: usize, f: usize) -> Picture {
 #[test]
 fn frame_folders_import_as_shrunk_8_bit_frames_evenly_over_the_touch() {
     let dir = frame_folders("folders");
-    assert!(holds_camera_touches(&dir));
+    assert!(holds_camera_touches(&dir, &Naming::Folders));
     let set = read_camera_folder(&dir, &options(4, FrameSpan::Whole), |_, _| {}).unwrap();
     assert_eq!((set.frame_shape, set.frames, set.per_class()), ([4, 5, 3], 4, vec![5, 5]));
     assert_eq!(set.sources[6], "rough_cloth/touch_1");
@@ -120,7 +120,7 @@ fn videos_import_as_their_frames_do_from_where_the_gel_moves_minus_the_first() {
     let (folders, videos) = (frame_folders("same-a"), videos("same-b"));
     let grey = CameraOptions { grey: true, ..options(4, FrameSpan::Moving) };
     let a = read_camera_folder(&folders, &grey, |_, _| {}).unwrap();
-    let named = CameraOptions { name: Some("{class}_t{take}".parse().unwrap()), subtract_first: true, ..grey.clone() };
+    let named = CameraOptions { naming: Naming::Pattern("{class}_t{take}".parse().unwrap()), subtract_first: true, ..grey.clone() };
     let b = read_camera_folder(&videos, &named, |_, _| {}).unwrap();
     // The square appears at frame 4 and is gone at frame 9: frames 4, 6, 7 and 9 of that span.
     assert_eq!(a.spans[3], (RECORDED, 4, 9));
@@ -196,5 +196,25 @@ fn a_touch_that_cannot_be_read_is_an_error_naming_its_file() {
         read_camera_folder(&dir, &CameraOptions { size: None, grey: true, ..options(4, FrameSpan::Whole) }, |_, _| {}).unwrap().frame_shape,
         [8, 10, 1]
     );
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// Still images listed by a labels file, wherever they lie: a camera's touches of one frame each.
+#[test]
+fn still_images_a_labels_file_lists_import_as_one_frame_each() {
+    let dir = scratch("labelled-stills");
+    let mut text = String::from("path,class\n");
+    for touch in 0..10 {
+        let at = format!("grasp_{touch}/camera_0.png");
+        std::fs::create_dir_all(dir.join(format!("grasp_{touch}"))).unwrap();
+        write_png(&dir.join(&at), &frame(touch % 2, touch, 6));
+        text.push_str(&format!("{at},{}\n", ["held", "slipped"][touch % 2]));
+    }
+    std::fs::write(dir.join("slip.csv"), text).unwrap();
+    let naming = Naming::Labels(crate::data::import::labels::Labels::read(&dir.join("slip.csv")).unwrap());
+    assert!(holds_camera_touches(&dir, &naming) && !holds_camera_touches(&dir, &Naming::Folders));
+    let set = read_camera_folder(&dir, &CameraOptions { naming, ..CameraOptions::default() }, |_, _| {}).unwrap();
+    assert_eq!((set.frames, set.classes.as_slice(), set.per_class()), (1, &["held".to_string(), "slipped".to_string()][..], vec![5, 5]));
+    assert!(set.spans.iter().all(|s| *s == (1, 0, 0)), "{:?}", set.spans);
     std::fs::remove_dir_all(dir).unwrap();
 }

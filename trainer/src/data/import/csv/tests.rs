@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 use super::*;
+use crate::data::import::folder::NamePattern;
 use crate::data::{Dataset, HoldOut};
 
 #[path = "../../../../../tests/support/csv_tree.rs"]
@@ -109,6 +110,21 @@ fn with_no_column_to_take_each_is_named_with_why() {
 fn patterns_match_whole_names() {
     assert!(matches("ff_e*", "ff_e12") && matches("e?", "e1") && matches("*", ""));
     assert!(!matches("e?", "e12") && !matches("ff_e*", "ff_pdc") && !matches("e1", "e12"));
+    assert!(matches("*a*b", "xaybzb") && matches("a*?c", "abbc") && !matches("a*?c", "ac") && matches("**", "x"));
+}
+
+/// A pattern that made backtracking try every split (exponential in its stars or fields) against
+/// a long name answers at once.
+#[test]
+fn patterns_take_no_exponential_time() {
+    let long = "a".repeat(5_000);
+    let started = std::time::Instant::now();
+    assert!(!matches("*a*a*a*a*a*a*a*b", &long));
+    let p: NamePattern = "{a}_{b}_{c}_{d}_{e}_z".parse().unwrap();
+    assert_eq!(p.read(&"_".repeat(3_000)), None);
+    let fields = "x_".repeat(10) + "z";
+    assert_eq!(p.read(&fields).unwrap(), ["x_x_x_x_x_x", "x", "x", "x", "x"]);
+    assert!(started.elapsed().as_secs() < 10, "{:?}", started.elapsed());
 }
 
 #[test]
@@ -149,8 +165,8 @@ fn flat_tree(tag: &str) -> PathBuf {
 #[test]
 fn a_flat_folder_imports_classes_and_conditions_from_names() {
     let flat = flat_tree("flat");
-    let name = Some("{class}_F{force}_V{speed}mmps_*".parse().unwrap());
-    let set = read_folder(&flat, &ImportOptions { name, ..Default::default() }).unwrap();
+    let naming = Naming::Pattern("{class}_F{force}_V{speed}mmps_*".parse().unwrap());
+    let set = read_folder(&flat, &ImportOptions { naming, ..Default::default() }).unwrap();
     assert_eq!(set.classes, ["Fabric0", "Fabric1", "Fabric2"]);
     assert_eq!(set.per_class(), [6, 6, 6]);
     let names: Vec<&str> = set.conditions.iter().map(|c| c.name.as_str()).collect();
@@ -174,7 +190,7 @@ fn a_flat_folder_imports_classes_and_conditions_from_names() {
     assert_eq!(data.held_out.as_ref().unwrap().to_string(), "force=210");
     let again = Dataset::load_as_trained(&out, 0, data.held_out.as_ref(), None).unwrap();
     assert_eq!(again.folds, data.folds, "a run that recorded no split has its folds drawn again as it was trained");
-    let recorded = Dataset::load_as_trained(&out, 5, None, Some(&data.trained_on())).unwrap();
+    let recorded = Dataset::load_as_trained(&out, 5, None, Some(&data.trained_on(false))).unwrap();
     assert_eq!((&recorded.folds, recorded.fold_seed), (&data.folds, Some(3)), "a recorded split is taken as it is");
     let split = data.split(0).unwrap();
     assert_eq!((split.test.len(), split.val.len() + split.train.len()), (6, 12));
@@ -203,30 +219,80 @@ fn a_flat_folder_imports_classes_and_conditions_from_names() {
     assert!(silk.contains("no class is named Silk; the set's classes are Fabric0, Fabric1, Fabric2"), "{silk}");
 
     // Read by distance: a touch at -10 mm/s resampled to speed 50 keeps a fifth of its frames.
-    let name = Some("{class}_F{force}_V{speed}mmps_*".parse().unwrap());
+    let naming = Naming::Pattern("{class}_F{force}_V{speed}mmps_*".parse().unwrap());
     let by_distance =
-        read_folder(&flat, &ImportOptions { name, per_distance: Some(("speed".into(), 50.0)), ..Default::default() }).unwrap();
+        read_folder(&flat, &ImportOptions { naming, per_distance: Some(("speed".into(), 50.0)), ..Default::default() }).unwrap();
     for (k, touch) in by_distance.touches.iter().enumerate() {
         let slow = set.conditions[1].levels[k] == "-10";
         let expected = if slow { (set.touches[k][0].len() as f64 / 5.0).round() as usize } else { set.touches[k][0].len() };
         assert_eq!(touch[0].len(), expected, "touch {k}");
     }
     // Scaled to one force: a touch pressed at 210 reads 150/210 of its values.
-    let name = Some("{class}_F{force}_V{speed}mmps_*".parse().unwrap());
-    let per_force = read_folder(&flat, &ImportOptions { name, per_force: Some(("force".into(), 150.0)), ..Default::default() }).unwrap();
+    let naming = Naming::Pattern("{class}_F{force}_V{speed}mmps_*".parse().unwrap());
+    let per_force = read_folder(&flat, &ImportOptions { naming, per_force: Some(("force".into(), 150.0)), ..Default::default() }).unwrap();
     for (k, touch) in per_force.touches.iter().enumerate() {
         let f: f32 = set.conditions[0].levels[k].parse().unwrap();
         let expected = set.touches[k][2][7] * (150.0 / f);
         assert!((touch[2][7] - expected).abs() <= 1e-5 * expected.abs(), "touch {k}: {} against {expected}", touch[2][7]);
     }
-    let name = Some("{class}_F{force}_V{speed}mmps_*".parse().unwrap());
-    let err = read_folder(&flat, &ImportOptions { name, per_distance: Some(("pace".into(), 50.0)), ..Default::default() }).unwrap_err();
+    let naming = Naming::Pattern("{class}_F{force}_V{speed}mmps_*".parse().unwrap());
+    let err = read_folder(&flat, &ImportOptions { naming, per_distance: Some(("pace".into(), 50.0)), ..Default::default() }).unwrap_err();
     assert!(err.to_string().contains("--per-distance pace: no such condition"), "{err}");
 
     // A name the pattern does not fit is named.
     std::fs::write(flat.join("stray.csv"), "time,e1\n1,2\n").unwrap();
-    let name = Some("{class}_F{force}_V{speed}mmps_*".parse().unwrap());
-    let err = read_folder(&flat, &ImportOptions { name, ..Default::default() }).unwrap_err().to_string();
+    let naming = Naming::Pattern("{class}_F{force}_V{speed}mmps_*".parse().unwrap());
+    let err = read_folder(&flat, &ImportOptions { naming, ..Default::default() }).unwrap_err().to_string();
     assert!(err.contains("stray.csv: its name `stray` does not match --name {class}_F{force}_V{speed}mmps_*"), "{err}");
     std::fs::remove_dir_all(flat.parent().unwrap()).unwrap();
+}
+
+/// A labels file names each touch's class and conditions, whatever folders the touches lie in;
+/// a listed file that is no touch is refused naming the labels file's line.
+#[test]
+fn a_labels_file_names_each_touch_s_class_and_conditions() {
+    let dir = tree("labels");
+    let mut text = String::from("path,grip,class\n");
+    for k in 0..3 {
+        for n in 0..6 {
+            let class = if k == 2 { "smooth" } else { "rough" };
+            text.push_str(&format!("material_{k}/touch_{n:02}.csv,{},{class}\n", n % 2));
+        }
+    }
+    let file = dir.join("labels.csv");
+    std::fs::write(&file, &text).unwrap();
+    let naming = Naming::Labels(crate::data::import::labels::Labels::read(&file).unwrap());
+    let set = read_folder(&dir, &ImportOptions { naming, ..Default::default() }).unwrap();
+    assert_eq!((set.classes.as_slice(), set.per_class()), (&["rough".to_string(), "smooth".to_string()][..], vec![12, 6]));
+    assert_eq!(set.sources[6], "material_1/touch_00.csv");
+    assert_eq!(
+        (set.conditions[0].name.as_str(), set.conditions[0].levels[..3].to_vec()),
+        ("grip", vec!["0".to_string(), "1".into(), "0".into()])
+    );
+    std::fs::write(&file, text.replace("material_2/touch_05.csv", "material_2/gone.csv")).unwrap();
+    let naming = Naming::Labels(crate::data::import::labels::Labels::read(&file).unwrap());
+    let msg = read_folder(&dir, &ImportOptions { naming, ..Default::default() }).unwrap_err().to_string();
+    assert!(msg.contains("labels.csv:19: material_2/gone.csv is not a .csv file"), "{msg}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+/// A reading beyond a 32-bit float's range is refused naming its file, line and column, where it
+/// was stored as ±inf without a word; a name with a line break is refused naming its folder.
+#[test]
+fn readings_and_names_a_set_cannot_hold_are_refused_by_name() {
+    let dir = tree("range");
+    let touch = dir.join("material_1/touch_02.csv");
+    let text = std::fs::read_to_string(&touch).unwrap();
+    let mut lines: Vec<String> = text.lines().map(String::from).collect();
+    let mut cells: Vec<String> = lines[3].split(',').map(String::from).collect();
+    cells[2] = "-1e39".into();
+    lines[3] = cells.join(",");
+    std::fs::write(&touch, lines.join("\n") + "\n").unwrap();
+    let msg = read_folder(&dir, &ImportOptions::default()).unwrap_err().to_string();
+    assert!(msg.contains("touch_02.csv:4: column `e2` holds -1e39, beyond the range of the 32-bit floats"), "{msg}");
+    std::fs::write(&touch, text).unwrap();
+    std::fs::rename(dir.join("material_2"), dir.join("material\n2")).unwrap();
+    let msg = read_folder(&dir, &ImportOptions::default()).unwrap_err().to_string();
+    assert!(msg.contains("holds a line break, and a data set keeps its names one a line"), "{msg}");
+    std::fs::remove_dir_all(dir).unwrap();
 }
