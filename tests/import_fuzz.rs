@@ -159,8 +159,11 @@ fn hostile_recordings_are_imported_sanely_or_refused_by_name() {
         let dir = root.join(format!("m{m}"));
         copy(&bases[&tree], &dir);
         let mut args: Vec<String> = Vec::new();
-        if tree == Tree::CsvFlat {
-            args.extend(["--name".into(), "{class}_F{force}_V{speed}mmps_*".into()]);
+        match tree {
+            Tree::CsvFlat => args.extend(["--name".into(), "{class}_F{force}_V{speed}mmps_*".into()]),
+            // Their touches hold 4 frames: undamaged, they import.
+            Tree::Frames | Tree::Video => args.extend(["--frames".into(), "4".into()]),
+            _ => {}
         }
         damage_tree(&dir, tree, damage, &mut rng, &mut args);
         let (outcome, said) = run(&dir, &args);

@@ -57,13 +57,13 @@ pub struct ImportArgs {
     #[arg(long, value_name = "FILE.csv", conflicts_with = "name")]
     pub labels: Option<PathBuf>,
     /// Read every touch by distance travelled, not by time: CONDITION=SPEED names the condition
-    /// of --name that holds each touch's sliding speed, and the speed all touches are resampled
+    /// (of --name or --labels) that holds each touch's sliding speed, and the speed all touches are resampled
     /// to (a touch of n frames at speed v becomes n·|v|/SPEED frames). A texture's ridges then lie
     /// as many frames apart at every speed. E.g. `--per-distance speed=150`.
     #[arg(long, value_name = "CONDITION=SPEED", value_parser = parse_condition_value)]
     pub per_distance: Option<(String, f64)>,
     /// Scale every touch's readings to one pressing force: CONDITION=FORCE names the condition
-    /// of --name that holds each touch's force, and the force all touches are scaled to
+    /// (of --name or --labels) that holds each touch's force, and the force all touches are scaled to
     /// (readings times FORCE/f for a touch pressed at f). E.g. `--per-force force=150`.
     #[arg(long, value_name = "CONDITION=FORCE", value_parser = parse_condition_value)]
     pub per_force: Option<(String, f64)>,

@@ -176,7 +176,7 @@ fn known_values(option: &str, given: &Option<(String, f64)>, conditions: &[Condi
     let Some((name, _)) = given else { return Ok(vec![None; touches.len()]) };
     let condition = conditions.iter().find(|c| c.name == *name).ok_or_else(|| {
         let known: Vec<&String> = conditions.iter().map(|c| &c.name).collect();
-        Error::Usage(format!("{option} {name}: no such condition; --name records {known:?}"))
+        Error::Usage(format!("{option} {name}: no such condition; the names (--name) or labels (--labels) record {known:?}"))
     })?;
     condition
         .levels
