@@ -195,6 +195,12 @@ pub fn cross_validate(
     let spec_of = |seed: u64| {
         specs.iter().find(|s| s.options.seed == seed).ok_or_else(|| Error::Usage(format!("no run specification for seed {seed}")))
     };
+    if jobs == 0 {
+        return Err(Error::Usage("--jobs 0: expected 1 or more runs side by side".into()));
+    }
+    if let Some((seed, fold)) = work.iter().enumerate().find_map(|(i, w)| work[..i].contains(w).then_some(*w)) {
+        return Err(Error::Usage(format!("seed {seed}'s fold {fold} is asked twice (--seeds names a seed once)")));
+    }
     let spec = spec_of(work.first().map_or(0, |w| w.0))?;
     for &(seed, _) in work {
         spec_of(seed)?;
@@ -202,7 +208,7 @@ pub fn cross_validate(
     let next = AtomicUsize::new(0);
     let results: Mutex<Vec<Option<Result<Option<FoldResult>>>>> = Mutex::new(work.iter().map(|_| None).collect());
     std::thread::scope(|scope| {
-        for _ in 0..jobs.clamp(1, work.len().max(1)) {
+        for _ in 0..jobs.min(work.len().max(1)) {
             scope.spawn(|| loop {
                 let i = next.fetch_add(1, Ordering::SeqCst);
                 let Some(&(seed, fold)) = work.get(i) else {
@@ -430,6 +436,24 @@ fn finished_run(dir: &Path, unfinished: &mut Vec<String>) -> Result<Option<(Fold
 mod tests {
     use super::*;
     use crate::train::tests::{out_dir, spec, tiny_data};
+
+    /// No job count of 0 (nothing would train), and no seed asked twice (its runs would meet in
+    /// one directory): refused before anything trains, naming the option.
+    #[test]
+    fn no_jobs_and_a_seed_twice_are_refused() {
+        let (data, out) = (tiny_data(), out_dir("cv-refused"));
+        let specs = [spec(&data, 1, None)];
+        let seed = specs[0].options.seed;
+        let cv = |work: &[(u64, usize)], jobs| {
+            let hidden = MultiProgress::with_draw_target(indicatif::ProgressDrawTarget::hidden());
+            cross_validate(&specs, None, work, &out, false, jobs, &hidden, &indicatif::ProgressStyle::default_bar())
+                .unwrap_err()
+                .to_string()
+        };
+        assert!(cv(&protocol(&[seed]), 0).contains("--jobs 0: expected 1 or more"));
+        assert!(cv(&protocol(&[seed, seed]), 2).contains(&format!("seed {seed}'s fold 0 is asked twice")));
+        assert!(!out.exists() || std::fs::read_dir(&out).unwrap().next().is_none(), "nothing trained");
+    }
 
     /// A pruning run's `pruned/` exists while its dense half trains, so a report in that window
     /// lists the run as unfinished rather than as trained without pruning.
