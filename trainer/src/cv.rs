@@ -177,6 +177,18 @@ pub fn protocol(seeds: &[u64]) -> Vec<(u64, usize)> {
     seeds.iter().flat_map(|&s| (0..TEST_FOLD).map(move |k| (s, k))).collect()
 }
 
+/// Refuses `jobs` of 0 (nothing would train) and a run of `work` asked twice (its two would
+/// meet in one directory), naming the option.
+fn check_work(work: &[(u64, usize)], jobs: usize) -> Result<()> {
+    if jobs == 0 {
+        return Err(Error::Usage("--jobs 0: expected 1 or more runs side by side".into()));
+    }
+    match work.iter().enumerate().find_map(|(i, w)| work[..i].contains(w).then_some(*w)) {
+        Some((seed, fold)) => Err(Error::Usage(format!("seed {seed}'s fold {fold} is asked twice (--seeds names a seed once)"))),
+        None => Ok(()),
+    }
+}
+
 /// Trains the (seed, validation fold) runs of `work` ([`protocol`], or one run of it) under
 /// `out`, `jobs` at a time, each from the spec of its seed in `specs` (`options.seed`: each seed
 /// may split the data its own way), and summarises them. `None`: the runs paused (see
@@ -195,12 +207,7 @@ pub fn cross_validate(
     let spec_of = |seed: u64| {
         specs.iter().find(|s| s.options.seed == seed).ok_or_else(|| Error::Usage(format!("no run specification for seed {seed}")))
     };
-    if jobs == 0 {
-        return Err(Error::Usage("--jobs 0: expected 1 or more runs side by side".into()));
-    }
-    if let Some((seed, fold)) = work.iter().enumerate().find_map(|(i, w)| work[..i].contains(w).then_some(*w)) {
-        return Err(Error::Usage(format!("seed {seed}'s fold {fold} is asked twice (--seeds names a seed once)")));
-    }
+    check_work(work, jobs)?;
     let spec = spec_of(work.first().map_or(0, |w| w.0))?;
     for &(seed, _) in work {
         spec_of(seed)?;
