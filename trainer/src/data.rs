@@ -3,7 +3,7 @@
 //! grid) or `[N, H, W, C, T]`, integer labels `[N]` and an optional fold per sample. Any integer
 //! or float dtype is accepted and converted to f32.
 //!
-//! A camera's touches (`pvt3 import` of videos or frame folders) hold 8-bit frames
+//! A camera's touches (`pvt3 import` of videos, frame folders or still images) hold 8-bit frames
 //! `[N, H, W, C, T]` (grey: `[N, H, W, T]`) and, where each touch's frame before contact is
 //! subtracted, that frame as `background` `[N, H, W, (C)]`.
 //!

@@ -42,8 +42,7 @@ pub trait NetworkFields: Sized {
 }
 
 /// A field's value read from a file, or its default where the file lacks it.
-#[doc(hidden)]
-pub fn read_field<T: serde::de::DeserializeOwned>(name: &str, value: Option<Value>, default: T) -> Result<T> {
+fn read_field<T: serde::de::DeserializeOwned>(name: &str, value: Option<Value>, default: T) -> Result<T> {
     match value {
         None => Ok(default),
         Some(v) => serde_json::from_value(v.clone()).map_err(|e| Error::Config(format!("{name} = {v}: {e}"))),

@@ -21,8 +21,7 @@ impl Dataset {
                     sha.update(chunk.iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>());
                 }
             }
-            let hex: String = sha.finalize().iter().map(|b| format!("{b:02x}")).collect();
-            format!("sha256:{hex}")
+            format!("sha256:{}", hex(&sha.finalize()))
         })
     }
 
@@ -44,13 +43,11 @@ impl Dataset {
         let (frame, frames) = self.sample_shape.split_at(self.sample_shape.len() - 1);
         let mut sha = Sha256::new();
         sha.update(frame.iter().chain([&self.lengths[i]]).flat_map(|d| (*d as u64).to_le_bytes()).collect::<Vec<u8>>());
-        let sample = self.sample(i);
-        let frames = frames[0];
         // The touch's own frames, not the padding after its end.
-        for row in sample.chunks(frames) {
+        for row in self.sample(i).chunks(frames[0]) {
             sha.update(row[..self.lengths[i]].iter().flat_map(|v| v.to_le_bytes()).collect::<Vec<u8>>());
         }
-        sha.finalize()[..8].iter().map(|b| format!("{b:02x}")).collect()
+        hex(&sha.finalize()[..8])
     }
 
     /// Takes the folds a run recorded, refusing touches that are not the ones it trained on.
@@ -77,4 +74,9 @@ impl Dataset {
             None => Ok(()),
         }
     }
+}
+
+/// `bytes` as lower-case hex digits, two a byte.
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
 }

@@ -15,7 +15,7 @@ use super::{Learner, RunSpec};
 use crate::average::WeightAverage;
 use crate::checkpoint::{self, Meta};
 use crate::data::normalization::Normalization;
-use crate::data::{Dataset, Split};
+use crate::data::{Dataset, Split, TrainedOn};
 use crate::joint::Partner;
 use crate::optim::is_weight_matrix;
 use crate::options::TrainOptions;
@@ -37,6 +37,9 @@ pub(super) struct Sensor<'a> {
     pub(super) classes: Vec<String>,
     pub(super) normalization: Normalization,
     pub(super) split: Split,
+    /// The split as its checkpoints record it (a final model's with each touch's digest), read
+    /// once: it holds for the whole run.
+    trained_on: TrainedOn,
     /// Every training touch read as its evaluation windows: what fits the spectral head's
     /// standardisation, and each epoch's batches when every touch is one window long.
     pub(super) train_set: Samples<'a>,
@@ -87,7 +90,9 @@ impl<'a> Sensor<'a> {
         // With weight averaging, the average of the weights as they start.
         let average = if opts.ema > 0.0 { Some(WeightAverage::new(&learner.varmap, opts.ema)?) } else { None };
         let (options, dir) = (opts.clone(), dir.to_path_buf());
+        let trained_on = data.trained_on(val_fold.is_none());
         Ok(Self {
+            trained_on,
             data,
             options,
             dir,
@@ -141,7 +146,7 @@ impl<'a> Sensor<'a> {
                 options: self.options.clone(),
                 pruning: pruning.clone(),
                 held_out: self.data.held_out.clone(),
-                trained_on: Some(self.data.trained_on(val_fold.is_none())),
+                trained_on: Some(self.trained_on.clone()),
                 reading: self.data.reading,
                 camera: self.data.camera,
                 stopping: None,

@@ -1,5 +1,5 @@
-//! `pvt3 import`: a folder of CSV touches, or of a camera's videos or frame folders → an `.npz`
-//! data set for `train`, `cv` and `eval`.
+//! `pvt3 import`: a folder of CSV touches, or of a camera's videos, frame folders or still
+//! images → an `.npz` data set for `train`, `cv` and `eval`.
 
 use std::path::PathBuf;
 

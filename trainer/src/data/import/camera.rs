@@ -14,12 +14,11 @@
 use std::path::Path;
 
 use ndarray::{ArrayViewD, IxDyn};
-use ndarray_npy::NpzWriter;
 use rayon::prelude::*;
 
 use super::decode;
 use super::folder::{conditions, list_touches, per_class, Naming, Recording};
-use super::npz::{add_json, add_records};
+use super::npz::{self, add_json, Records};
 use crate::data::{key, Condition};
 use crate::{Error, Result};
 use pvt3_format::span::FrameSpan;
@@ -99,7 +98,7 @@ impl CameraSet {
     }
 }
 
-/// Reads `dir` as camera touches (videos or frame folders), one folder per class or side by side
+/// Reads `dir` as camera touches (videos, frame folders or still images), one folder per class or side by side
 /// with `opts.naming` naming the class.
 pub fn read_camera_folder(dir: &Path, opts: &CameraOptions, mut progress: impl FnMut(usize, usize)) -> Result<CameraSet> {
     let (files, classes) = list_touches(dir, &opts.naming, Recording::Camera)?;
@@ -220,22 +219,18 @@ impl CameraSet {
     pub fn write_npz(&self, path: &Path) -> Result<()> {
         let [h, w, c] = self.frame_shape;
         let n = self.labels.len();
-        let bad = |e: &dyn std::fmt::Display| Error::Usage(format!("writing {}: {e}", path.display()));
-        let file = std::fs::File::create(path).map_err(Error::io(path))?;
-        let mut npz = NpzWriter::new(std::io::BufWriter::new(file));
         let frame: Vec<usize> = if c == 1 { vec![n, h, w] } else { vec![n, h, w, c] };
-        let x = ArrayViewD::from_shape(IxDyn(&[&frame[..], &[self.frames]].concat()), &self.x).map_err(|e| bad(&e))?;
-        npz.add_array(key::X, &x).map_err(|e| bad(&e))?;
-        if let Some(b) = &self.background {
-            let b = ArrayViewD::from_shape(IxDyn(&frame), b).map_err(|e| bad(&e))?;
-            npz.add_array(key::BACKGROUND, &b).map_err(|e| bad(&e))?;
-        }
-        if let Some(camera) = &self.camera {
-            add_json(&mut npz, key::CAMERA, camera).map_err(|e| bad(&e))?;
-        }
-        add_records(&mut npz, &self.labels, &self.classes, &self.sources, &self.conditions).map_err(|e| bad(&e))?;
-        npz.finish().map_err(|e| bad(&e))?;
-        Ok(())
+        let records = Records { labels: &self.labels, classes: &self.classes, sources: &self.sources, conditions: &self.conditions };
+        npz::write(path, records, |npz| {
+            npz.add_array(key::X, &ArrayViewD::from_shape(IxDyn(&[&frame[..], &[self.frames]].concat()), &self.x)?)?;
+            if let Some(b) = &self.background {
+                npz.add_array(key::BACKGROUND, &ArrayViewD::from_shape(IxDyn(&frame), b)?)?;
+            }
+            if let Some(camera) = &self.camera {
+                add_json(npz, key::CAMERA, camera)?;
+            }
+            Ok(())
+        })
     }
 }
 

@@ -7,12 +7,11 @@
 use std::path::{Path, PathBuf};
 
 use ndarray::{Array1, ArrayD, IxDyn};
-use ndarray_npy::NpzWriter;
 
 use pvt3_format::{read_touch, Reading, Touch};
 
 use super::folder::{conditions, list_touches, per_class, Listed, Naming, Recording};
-use super::npz::{add_json, add_records, lines};
+use super::npz::{self, add_json, lines, Records};
 use crate::data::{key, Condition};
 use crate::{Error, Result};
 
@@ -327,19 +326,16 @@ impl Imported {
             Some((h, w)) => vec![n, h, w, longest],
             None => vec![n, channels, longest],
         };
-        let bad = |e: &dyn std::fmt::Display| Error::Usage(format!("writing {}: {e}", path.display()));
-        let file = std::fs::File::create(path).map_err(Error::io(path))?;
-        let mut npz = NpzWriter::new(std::io::BufWriter::new(file));
-        npz.add_array(key::X, &ArrayD::from_shape_vec(IxDyn(&shape), x).map_err(|e| bad(&e))?).map_err(|e| bad(&e))?;
-        npz.add_array(key::LENGTHS, &Array1::from(self.touches.iter().map(|t| t[0].len() as i64).collect::<Vec<_>>()))
-            .map_err(|e| bad(&e))?;
-        npz.add_array(key::CHANNELS, &lines(&self.channels)).map_err(|e| bad(&e))?;
-        if let Some(reading) = &self.reading {
-            add_json(&mut npz, key::READING, reading).map_err(|e| bad(&e))?;
-        }
-        add_records(&mut npz, &self.labels, &self.classes, &self.sources, &self.conditions).map_err(|e| bad(&e))?;
-        npz.finish().map_err(|e| bad(&e))?;
-        Ok(())
+        let records = Records { labels: &self.labels, classes: &self.classes, sources: &self.sources, conditions: &self.conditions };
+        npz::write(path, records, |npz| {
+            npz.add_array(key::X, &ArrayD::from_shape_vec(IxDyn(&shape), x)?)?;
+            npz.add_array(key::LENGTHS, &Array1::from(self.touches.iter().map(|t| t[0].len() as i64).collect::<Vec<_>>()))?;
+            npz.add_array(key::CHANNELS, &lines(&self.channels))?;
+            if let Some(reading) = &self.reading {
+                add_json(npz, key::READING, reading)?;
+            }
+            Ok(())
+        })
     }
 }
 

@@ -1,6 +1,6 @@
-//! A folder of touches, as `pvt3 import` finds them: one folder per class, or side by side with
-//! a `--name` pattern that reads each file's class and conditions; each class counted against
-//! the folds. Shared by the CSV ([`super::csv`]) and the camera ([`super::camera`]) import.
+//! A folder of touches, as `pvt3 import` finds them: one folder per class, side by side with a
+//! `--name` pattern that reads each file's class and conditions, or wherever a labels file
+//! (`--labels`) lists them; each class counted against the folds. Shared by the CSV ([`super::csv`]) and the camera ([`super::camera`]) import.
 
 use std::path::{Path, PathBuf};
 
@@ -168,7 +168,7 @@ pub(super) fn conditions(naming: &Naming, values: &[Vec<String>]) -> Vec<Conditi
 pub(super) enum Recording {
     /// A CSV file: a header row, then a row a frame.
     Csv,
-    /// A camera's: a video file, or a folder of frame images ([`super::camera`]).
+    /// A camera's: a video file, a folder of frame images or a still image ([`super::camera`]).
     Camera,
 }
 
@@ -184,7 +184,7 @@ impl Recording {
     fn what(self) -> &'static str {
         match self {
             Self::Csv => ".csv file",
-            Self::Camera => "video or folder of frame images",
+            Self::Camera => "video, folder of frame images or still image",
         }
     }
 }
@@ -200,17 +200,19 @@ pub(super) struct Listed {
 /// `--name` pattern names the class (both sorted), or as a labels file lists them (in its order).
 /// Refuses a class of fewer touches than folds.
 pub(super) fn list_touches(dir: &Path, naming: &Naming, kind: Recording) -> Result<(Vec<Listed>, Vec<String>)> {
-    let (files, flat) = match naming {
-        Naming::Labels(labels) => return labelled_touches(dir, labels, kind),
-        Naming::Pattern(p) if p.fields().contains(&CLASS_FIELD) => (side_by_side(dir, p, kind)?, true),
-        Naming::Pattern(p) => (in_class_folders(dir, Some(p), kind)?, false),
-        Naming::Folders => (in_class_folders(dir, None, kind)?, false),
+    // The touches, and where a class too small is told: its folder, or the folder or labels file
+    // that lists the touches side by side.
+    let (files, flat_in) = match naming {
+        Naming::Labels(labels) => (labelled_touches(dir, labels, kind)?, Some(labels.file.as_path())),
+        Naming::Pattern(p) if p.fields().contains(&CLASS_FIELD) => (side_by_side(dir, p, kind)?, Some(dir)),
+        Naming::Pattern(p) => (in_class_folders(dir, Some(p), kind)?, None),
+        Naming::Folders => (in_class_folders(dir, None, kind)?, None),
     };
     for f in &files {
         storable(&f.path, f.path.strip_prefix(dir).unwrap_or(&f.path).as_os_str())?;
     }
-    let classes = classes_of(&files);
-    check_enough_touches(dir, &files, &classes, flat)?;
+    let classes: Vec<String> = files.iter().map(|f| f.class.clone()).collect::<std::collections::BTreeSet<_>>().into_iter().collect();
+    check_enough_touches(dir, &files, &classes, flat_in)?;
     Ok((files, classes))
 }
 
@@ -278,7 +280,7 @@ pub(super) fn storable(path: &Path, name: &std::ffi::OsStr) -> Result<String> {
 }
 
 /// The touches `labels` lists under `dir`, in its order: each must be a touch of `kind`.
-fn labelled_touches(dir: &Path, labels: &Labels, kind: Recording) -> Result<(Vec<Listed>, Vec<String>)> {
+fn labelled_touches(dir: &Path, labels: &Labels, kind: Recording) -> Result<Vec<Listed>> {
     let mut files = Vec::with_capacity(labels.rows.len());
     for row in &labels.rows {
         let path = dir.join(&row.path);
@@ -291,14 +293,7 @@ fn labelled_touches(dir: &Path, labels: &Labels, kind: Recording) -> Result<(Vec
         }
         files.push(Listed { path, class: row.class.clone(), values: row.values.clone() });
     }
-    let classes = classes_of(&files);
-    check_enough_touches(&labels.file, &files, &classes, true)?;
-    Ok((files, classes))
-}
-
-/// The classes of `files`, sorted.
-fn classes_of(files: &[Listed]) -> Vec<String> {
-    files.iter().map(|f| f.class.clone()).collect::<std::collections::BTreeSet<_>>().into_iter().collect()
+    Ok(files)
 }
 
 /// The entries of folder `d`, sorted.
@@ -329,18 +324,18 @@ fn touches_in(d: &Path, kind: Recording) -> Result<Vec<PathBuf>> {
     Ok(sorted_entries(d)?.into_iter().filter(|p| kind.is_touch(p)).collect())
 }
 
-/// Refuses a class with fewer touches than folds, naming its folder (or `dir`, when `flat`).
-fn check_enough_touches(dir: &Path, files: &[Listed], classes: &[String], flat: bool) -> Result<()> {
+/// Refuses a class with fewer touches than folds, naming its folder in `dir`, or `flat_in`: the
+/// folder or labels file that lists the touches side by side.
+fn check_enough_touches(dir: &Path, files: &[Listed], classes: &[String], flat_in: Option<&Path>) -> Result<()> {
     for class in classes {
         let count = files.iter().filter(|f| f.class == *class).count();
         if count < FOLDS {
             let too_few = format!(
                 "{count} touches, too few to split: each of the {FOLDS} folds (training, validation, test) needs one of every class"
             );
-            return Err(if flat {
-                Error::import(dir, None, format!("class `{class}`: {too_few}"))
-            } else {
-                Error::import(&dir.join(class), None, too_few)
+            return Err(match flat_in {
+                Some(place) => Error::import(place, None, format!("class `{class}`: {too_few}")),
+                None => Error::import(&dir.join(class), None, too_few),
             });
         }
     }

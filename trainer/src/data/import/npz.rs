@@ -1,10 +1,13 @@
 //! What every imported set writes beside its frames ([`crate::data::key`]): the labels, the
 //! class names, each touch's file and conditions, names as UTF-8 lines and records as JSON.
 
+use std::path::Path;
+
 use ndarray::Array1;
 use ndarray_npy::NpzWriter;
 
 use crate::data::{key, Condition};
+use crate::Error;
 
 /// Refuses a name that holds a line break: a data set keeps its names one a line.
 pub(super) fn check_line(name: &str) -> std::result::Result<(), String> {
@@ -14,16 +17,37 @@ pub(super) fn check_line(name: &str) -> std::result::Result<(), String> {
     }
 }
 
-/// A data set being written ([`super::csv::Imported::write_npz`], [`super::camera::CameraSet::write_npz`]).
+/// A data set being written ([`write`]).
 pub(super) type Npz = NpzWriter<std::io::BufWriter<std::fs::File>>;
+
+/// What every imported set records beside its frames: the labels `y`, the class names, each
+/// touch's file and its conditions ([`key`]).
+pub(super) struct Records<'a> {
+    pub(super) labels: &'a [u32],
+    pub(super) classes: &'a [String],
+    pub(super) sources: &'a [String],
+    pub(super) conditions: &'a [Condition],
+}
+
+/// Writes a data set to `path`: `fill` adds its frames and what else it holds, then come the
+/// `records` every set holds ([`super::csv::Imported::write_npz`],
+/// [`super::camera::CameraSet::write_npz`]). An error names the file.
+pub(super) fn write(
+    path: &Path,
+    records: Records,
+    fill: impl FnOnce(&mut Npz) -> Result<(), Box<dyn std::error::Error>>,
+) -> crate::Result<()> {
+    let file = std::fs::File::create(path).map_err(Error::io(path))?;
+    let mut npz = NpzWriter::new(std::io::BufWriter::new(file));
+    let written = fill(&mut npz).and_then(|()| Ok(add_records(&mut npz, records)?)).and_then(|()| Ok(npz.finish().map(drop)?));
+    written.map_err(|e| Error::Usage(format!("writing {}: {e}", path.display())))
+}
 
 /// The lines of `v` as one UTF-8 array, as the data set holds names ([`key`]).
 pub(super) fn lines(v: &[String]) -> Array1<u8> {
     Array1::from(v.join("\n").into_bytes())
 }
 
-/// What every imported set records beside its frames: the labels `y`, the class names, each
-/// touch's file and its conditions ([`key`]).
 /// `value` as one line of JSON, UTF-8 bytes under `name` (what [`crate::data::Dataset::load`]
 /// reads as a line).
 pub(super) fn add_json(npz: &mut Npz, name: &str, value: &impl serde::Serialize) -> std::result::Result<(), ndarray_npy::WriteNpzError> {
@@ -31,12 +55,10 @@ pub(super) fn add_json(npz: &mut Npz, name: &str, value: &impl serde::Serialize)
     npz.add_array(name, &Array1::from(text.into_bytes()))
 }
 
-pub(super) fn add_records(
+/// Adds `records` ([`Records`]) to `npz`.
+fn add_records(
     npz: &mut Npz,
-    labels: &[u32],
-    classes: &[String],
-    sources: &[String],
-    conditions: &[Condition],
+    Records { labels, classes, sources, conditions }: Records,
 ) -> std::result::Result<(), ndarray_npy::WriteNpzError> {
     npz.add_array(key::Y, &Array1::from(labels.iter().map(|l| *l as i64).collect::<Vec<_>>()))?;
     npz.add_array(key::CLASS_NAMES, &lines(classes))?;
