@@ -42,7 +42,9 @@ def features(touch, background, grid):
     if background is not None:
         frames -= background.astype(np.float32)[..., None]
     mean = shrink(frames.mean(-1), grid).ravel()
-    motion = shrink(np.abs(np.diff(frames, axis=-1)).mean(-1), grid).ravel()
+    # A still image (one frame) has no motion: zeros, which the standardisation leaves at 0.
+    change = np.abs(np.diff(frames, axis=-1)).mean(-1) if frames.shape[-1] > 1 else np.zeros(frames.shape[:-1])
+    motion = shrink(change, grid).ravel()
     per_colour = frames.reshape(-1, frames.shape[2], frames.shape[3]).transpose(1, 0, 2).reshape(frames.shape[2], -1)
     colour = np.concatenate([per_colour.mean(1), per_colour.std(1), *np.percentile(per_colour, [10, 50, 90], axis=1)])
     return np.concatenate([mean, motion, colour])

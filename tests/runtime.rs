@@ -303,11 +303,14 @@ fn camera_model(log_frames: bool) -> (Pvt3, pvt3_spec::baked::BakedPvt3, Normali
     varmap.data().lock().unwrap()["frame_mask"].set(&candle_core::Tensor::new(scales, &candle_core::Device::Cpu).unwrap()).unwrap();
     let patches: Vec<f32> = (0..12).map(|p| if p % 2 == 1 { 0.0 } else { 0.5 + p as f32 / 10.0 }).collect();
     varmap.data().lock().unwrap()["patch_mask"].set(&candle_core::Tensor::new(patches, &candle_core::Device::Cpu).unwrap()).unwrap();
-    // A spectral standardisation that magnifies the features, so that the head's term is large
-    // (about 14 on a logit; errors of f32 grow with it).
-    let features = cfg.spectral_features();
-    let scale =
-        candle_core::Tensor::new((0..features).map(|i| 10.0 + i as f32 / 20.0).collect::<Vec<_>>(), &candle_core::Device::Cpu).unwrap();
+    // A spectral standardisation that magnifies the texture's features, so that the head's term
+    // is large (errors of f32 grow with it); the pixels, normalised already, at their own scale,
+    // as a fit leaves them (3,600 of them magnified would be a term no fit makes).
+    let (features, per, pixels) = (cfg.spectral_features(), cfg.spectral_features_per_channel(), cfg.spectral_pixel_count());
+    assert_eq!(pixels, 30 * 40, "a camera's layout reads the pixels");
+    let texture = per - pixels;
+    let magnified = |i: usize| if i % per < texture { 10.0 + (i / per * texture + i % per) as f32 / 20.0 } else { 1.0 };
+    let scale = candle_core::Tensor::new((0..features).map(magnified).collect::<Vec<_>>(), &candle_core::Device::Cpu).unwrap();
     varmap.data().lock().unwrap()["spectral.scale"].set(&scale).unwrap();
     let baked = bake(&cfg, &varmap_tensors(&varmap).unwrap()).unwrap();
     assert_eq!((baked.kept_tokens.len(), baked.kept_patches.len()), (19, 6));

@@ -81,22 +81,22 @@ pub(crate) fn spectral_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, n
     let power = g.op(Op::Div, &[&power, &variance]);
     let power = g.op(Op::Div, &[&power, &weighed]);
     let log_power = log(g, &power);
-    let logits = logits_of(g, m, s, &level, &log_power, None);
+    let logits = logits_of(g, m, s, &level, &log_power, &[]);
     g.node(Op::Identity, &[&logits], vec![], Some(SPECTRAL_LOGITS))
 }
 
 /// The logits of per-channel `level`s `[b, channels, 1]` and band powers' logarithms
 /// `log_power` `[b, channels, bands]` ([`log`]): the logarithms after the levels unless they are
-/// off, then the `histogram` `[b, channels, bins]` if the head has one, then the linear map with
-/// the standardisation folded in.
-fn logits_of(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, level: &str, log_power: &str, histogram: Option<&str>) -> String {
+/// off, then what a head over the image's space reads `after` them (`[b, channels, …]`: its
+/// histograms and pixels), then the linear map with the standardisation folded in.
+fn logits_of(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, level: &str, log_power: &str, after: &[String]) -> String {
     let c = &m.config;
-    let mut parts: Vec<&str> = Vec::with_capacity(3);
+    let mut parts: Vec<&str> = Vec::with_capacity(2 + after.len());
     if c.spectral_levels() {
         parts.push(level);
     }
     parts.push(log_power);
-    parts.extend(histogram);
+    parts.extend(after.iter().map(String::as_str));
     let features = match parts.len() {
         1 => log_power.to_string(),
         _ => g.node(Op::Concat, &parts, vec![int("axis", 2)], None),

@@ -129,6 +129,12 @@ impl Config {
         matches!(&self.network, Network::Pvt3(p) if p.spectral_log_frames && self.spectral_space())
     }
 
+    /// Whether a head over the image's space reads each colour's pixels
+    /// (`Pvt3Config::spectral_pixels`).
+    pub fn spectral_pixels(&self) -> bool {
+        matches!(&self.network, Network::Pvt3(p) if p.spectral_pixels && self.spectral_space())
+    }
+
     /// The histograms a head over the image's space reads of each colour, each of
     /// `spectral_histogram` bins (`spectrum::space::Histogram`): the values' and, with
     /// gradients, the differences across and down; none without a histogram.
@@ -250,6 +256,13 @@ impl Config {
         if p.spectral_log_frames && !self.spectral_space() {
             return Err(Error::Config(
                 "spectral_log_frames = true: only a spectral head over an image's space (spectral_space) reads frames apart; set spectral_log_frames=false too".into(),
+            ));
+        }
+        // Without a head (no bands), nothing reads the pixels, and `--set spectral_bands=0` alone
+        // takes a camera's head away; a head over the frames cannot read them.
+        if p.spectral_pixels && p.spectral_bands > 0 && !p.spectral_space {
+            return Err(Error::Config(
+                "spectral_pixels = true: only a spectral head over an image's space (spectral_space) reads pixels; set spectral_pixels=false too".into(),
             ));
         }
         if p.spectral_histogram == 1 {

@@ -138,7 +138,8 @@ fn spectral_logits(m: &BakedPvt3, s: &BakedSpectrum, sample: &[f32], tokens: usi
 /// per colour, its weighted mean level (unless off), then the log of each ring's weighted mean
 /// power (with `spectral_log_frames`, the weighted mean of each frame's log), the transform
 /// summed term by term, then each bin's weighted mean share of the pixels (and of the gradients
-/// across and down, with `spectral_gradients`); a pruned patch's pixels read as 0
+/// across and down, with `spectral_gradients`), then (with `spectral_pixels`) each pixel's
+/// weighted mean; a pruned patch's pixels read as 0
 /// (`spectrum::space::kept_pixels`).
 fn space_features(m: &BakedPvt3, sample: &[f32], weights: &[f64], weighed: f64) -> Vec<f64> {
     let c = &m.config;
@@ -161,10 +162,14 @@ fn space_features(m: &BakedPvt3, sample: &[f32], weights: &[f64], weighed: f64) 
     for ci in 0..colours {
         let kinds = c.spectral_histograms();
         let (mut level, mut power, mut histogram) = (0.0, vec![0.0; bands], vec![0.0; kinds.len() * bins]);
+        let mut pixel_sums = vec![0.0; c.spectral_pixel_count()];
         for (t, wt) in weights.iter().enumerate().filter(|(_, wt)| **wt != 0.0) {
             let v = |y: usize, x: usize| if kept[y * w + x] { sample[((y * w + x) * colours + ci) * frames + t] as f64 } else { 0.0 };
             let pixels = || (0..h).flat_map(|y| (0..w).map(move |x| (y, x))).map(|(y, x)| v(y, x));
             level += wt * pixels().sum::<f64>() / (h * w) as f64;
+            for (sum, p) in pixel_sums.iter_mut().zip(pixels()) {
+                *sum += wt * p;
+            }
             for (kind, of_kind) in kinds.iter().zip(histogram.chunks_mut(bins.max(1))) {
                 let (rows, columns) = kind.shape(h, w);
                 let values = || (0..rows).flat_map(|y| (0..columns).map(move |x| (y, x))).map(|(y, x)| kind.at(v, y, x));
@@ -196,6 +201,7 @@ fn space_features(m: &BakedPvt3, sample: &[f32], weights: &[f64], weighed: f64) 
         }
         features.extend(power.iter().map(|p| if log_frames { p / weighed } else { (p / weighed + spectrum::POWER_FLOOR).ln() }));
         features.extend(histogram.iter().map(|b| b / weighed));
+        features.extend(pixel_sums.iter().map(|p| p / weighed));
     }
     features
 }

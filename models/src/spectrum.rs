@@ -11,7 +11,8 @@
 //!
 //! Over an image's space (`spectral_space`), the features are each colour's level, ring
 //! powers and histogram (`spectral_histogram`) of every frame (`pvt3_spec::spectrum::space`),
-//! averaged over the same frames: a camera's texture and press wherever the imprint lies.
+//! averaged over the same frames: a camera's texture and press wherever the imprint lies; and
+//! with `spectral_pixels` its pixels so averaged: where the gel is pressed.
 //!
 //! The transform is a plain product with `[cos | sin]` columns here (the trainer's candle graph),
 //! and a Fourier transform op in the exported graph; the f64 reference computes it from the same
@@ -66,14 +67,18 @@ struct Space {
     dims: (usize, usize, usize, usize),
     /// `Config::spectral_log_frames`: a window's log ring powers are its frames' mean.
     log_frames: bool,
+    /// `Config::spectral_pixels`: each colour's pixels are features.
+    pixels: bool,
 }
 
 /// A head over the image's space's quantities of each frame of a batch: `[b, frames, colours]`
-/// levels, `[b, frames, colours · bands]` ring powers and `[b, frames, colours · bins]` histograms.
+/// levels, `[b, frames, colours · bands]` ring powers, `[b, frames, colours · bins]` histograms
+/// and `[b, frames, colours · h · w]` pixels.
 struct PerFrame {
     level: Tensor,
     power: Tensor,
     histogram: Option<Tensor>,
+    pixels: Option<Tensor>,
 }
 
 impl Space {
@@ -97,6 +102,7 @@ impl Space {
             histograms: cfg.spectral_histograms(),
             dims: (h, w, cfg.channels, bands),
             log_frames: cfg.spectral_log_frames(),
+            pixels: cfg.spectral_pixels(),
         })
     }
 
@@ -142,6 +148,7 @@ impl Space {
         let pixels = frames.reshape((b * t * c, h * w))?;
         let level = pixels.mean(D::Minus1)?.reshape((b, t, c))?;
         let histogram = self.histograms(&frames)?.map(|h| h.reshape((b, t, ()))).transpose()?;
+        let pixel_values = self.pixels.then(|| frames.reshape((b, t, c * h * w))).transpose()?;
         let rows = frames.reshape((b * t * c * h, w))?.matmul(&self.width)?.reshape((b * t * c, h, 2 * k))?;
         let columns = rows.transpose(1, 2)?.contiguous()?.reshape((b * t * c * 2 * k, h))?.matmul(&self.height)?;
         let z = columns.reshape((b * t * c, 2 * k, 2 * h))?;
@@ -149,8 +156,18 @@ impl Space {
         let real = (block(0, 0)? - block(1, 1)?)?;
         let imaginary = (block(0, 1)? + block(1, 0)?)?;
         let power = (real.sqr()? + imaginary.sqr()?)?.reshape((b * t * c, k * h))?.matmul(&self.rings)?;
-        Ok(PerFrame { level, power: power.reshape((b, t, c * bands))?, histogram })
+        Ok(PerFrame { level, power: power.reshape((b, t, c * bands))?, histogram, pixels: pixel_values })
     }
+}
+
+/// What a head over the image's space reads of each row (a window, or one frame of it):
+/// `[rows, colours]` levels, `[rows, colours · bands]` log ring powers, `[rows, colours · bins]`
+/// histograms and `[rows, colours · h · w]` pixels.
+struct Read {
+    level: Tensor,
+    log_power: Tensor,
+    histogram: Option<Tensor>,
+    pixels: Option<Tensor>,
 }
 
 /// The logarithm of powers, `POWER_FLOOR` added so that a silent band is finite.
@@ -195,11 +212,13 @@ impl Spectrum {
                 let f = space.per_frame(x)?;
                 let mean = |v: &Tensor| v.broadcast_mul(&w.reshape((1, self.frames, 1))?)?.sum(1)? / weighed;
                 let histogram = f.histogram.as_ref().map(mean).transpose()?;
+                let pixels = f.pixels.as_ref().map(mean).transpose()?;
                 let log_power = match space.log_frames {
                     true => mean(&log(&f.power)?)?,
                     false => log(&mean(&f.power)?)?,
                 };
-                return self.space_features(space, &mean(&f.level)?, &log_power, histogram.as_ref(), b);
+                let read = Read { level: mean(&f.level)?, log_power, histogram, pixels };
+                return self.space_features(space, &read, b);
             }
         };
         let rows = x.reshape((b * self.channels, self.frames))?;
@@ -224,29 +243,26 @@ impl Spectrum {
         let f = space.per_frame(x)?;
         let (b, n) = (x.dim(0)?, kept.dim(0)?);
         let frames = |v: &Tensor| v.index_select(&kept, 1)?.reshape((b * n, ()));
-        let histogram = f.histogram.as_ref().map(frames).transpose()?;
-        self.space_features(space, &frames(&f.level)?, &log(&frames(&f.power)?)?, histogram.as_ref(), b * n)
+        let read = Read {
+            level: frames(&f.level)?,
+            log_power: log(&frames(&f.power)?)?,
+            histogram: f.histogram.as_ref().map(frames).transpose()?,
+            pixels: f.pixels.as_ref().map(frames).transpose()?,
+        };
+        self.space_features(space, &read, b * n)
     }
 
-    /// `[rows, features]`: per colour its level (unless the levels are off), log ring powers and
-    /// histogram, from `level` `[rows, colours]`, `log_power` `[rows, colours · bands]` and
-    /// `histogram` `[rows, colours · bins]`.
-    fn space_features(
-        &self,
-        space: &Space,
-        level: &Tensor,
-        log_power: &Tensor,
-        histogram: Option<&Tensor>,
-        rows: usize,
-    ) -> candle_core::Result<Tensor> {
+    /// `[rows, features]`: per colour its level (unless the levels are off), log ring powers,
+    /// histogram and pixels, from what `read` holds of each row.
+    fn space_features(&self, space: &Space, read: &Read, rows: usize) -> candle_core::Result<Tensor> {
         let (c, bands) = (space.dims.2, space.dims.3);
-        let mut parts = Vec::with_capacity(3);
+        let mut parts = Vec::with_capacity(4);
         if self.levels {
-            parts.push(level.reshape((rows, c, 1))?);
+            parts.push(read.level.reshape((rows, c, 1))?);
         }
-        parts.push(log_power.reshape((rows, c, bands))?);
-        if let Some(histogram) = histogram {
-            parts.push(histogram.reshape((rows, c, ()))?);
+        parts.push(read.log_power.reshape((rows, c, bands))?);
+        for part in [&read.histogram, &read.pixels].into_iter().flatten() {
+            parts.push(part.reshape((rows, c, ()))?);
         }
         Tensor::cat(&parts, 2)?.reshape((rows, ()))
     }

@@ -222,10 +222,11 @@ fn derived_layout(cfg: &Config, sensor: Sensor, window: &[usize]) -> String {
         let grid = format!("{} × {}", cfg.height / ph, cfg.width / pw);
         let head = match cfg.spectral_space() {
             true => format!(
-                ", a spectral head over the image's space ({} rings, a histogram of {} bins{})",
+                ", a spectral head over the image's space ({} rings, a histogram of {} bins{}{})",
                 cfg.spectral_bands(),
                 cfg.spectral_histogram(),
-                if cfg.spectral_gradients() { " of the values and of their gradients across and down" } else { "" }
+                if cfg.spectral_gradients() { " of the values and of their gradients across and down" } else { "" },
+                if cfg.spectral_pixels() { " and the pixels, the form chosen on validation" } else { "" }
             ),
             false => String::new(),
         };

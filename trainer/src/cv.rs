@@ -503,6 +503,7 @@ mod tests {
             test_accuracy,
             epochs: 1,
             wall_seconds: 1.0,
+            head: None,
         };
         let dense = vec![run(0, 0, 0.9), run(0, 1, 1.0), run(1, 0, 0.8), run(1, 1, 0.9)];
         let pruned = vec![run(0, 0, 0.8), run(0, 1, 0.8), run(1, 0, 0.7), run(1, 1, 0.7)];

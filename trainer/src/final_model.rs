@@ -17,6 +17,7 @@ use crate::data::Dataset;
 use crate::provenance::{Expected, Stopping};
 use crate::prune::{prune_and_fine_tune, PruneStage};
 use crate::run_dir::{Checkpoint, CrossValidation, Run, CV_SUMMARY};
+use crate::spectrum_fit::{form::Form, Choice, Chosen};
 use crate::train::{train, RunResult, RunSpec};
 use crate::{Error, Result};
 
@@ -30,6 +31,9 @@ pub struct Plan {
     pub expected: Expected,
     /// The stopping rule the cross-validation wrote into its runs.
     pub stopping: Option<Stopping>,
+    /// The form of camera head the runs chose most often on their validation folds
+    /// ([`camera_head`]); `None` without a camera head.
+    pub camera_head: Option<Choice>,
     /// With pruning: the stage, its fine-tuning the median the pruned runs selected, and theirs.
     pub pruned: Option<(PruneStage, Expected, Option<Stopping>)>,
 }
@@ -88,7 +92,9 @@ impl Plan {
             }
             None => None,
         };
-        Ok(Self { epochs: median(&dense.selected_epochs), stopping: meta.provenance.stopping.clone(), expected: dense, meta, pruned })
+        let camera_head = camera_head(cv, &summary.runs)?;
+        let epochs = median(&dense.selected_epochs);
+        Ok(Self { epochs, camera_head, stopping: meta.provenance.stopping.clone(), expected: dense, meta, pruned })
     }
 
     /// The data set the cross-validation trained on (`data`, by default its own), every touch
@@ -134,6 +140,7 @@ impl Plan {
             val_fold: None,
             options: crate::options::TrainOptions {
                 optimization: crate::options::Optimization { epochs: self.epochs, ..meta.provenance.options.optimization.clone() },
+                camera_head: self.camera_head,
                 ..meta.provenance.options.clone()
             },
             classes: meta.classes.clone(),
@@ -151,6 +158,34 @@ impl Plan {
         stamp(&Run(&pruned).model(), stopping, expected)?;
         Ok(Run(&pruned).model())
     }
+}
+
+/// The camera head a final model takes, which has no validation fold to choose by: what the
+/// cross-validation's runs chose (`head.json`), as [`most_chosen`] reads them. `None` where no
+/// run has a camera head.
+fn camera_head(cv: &Path, runs: &[RunResult]) -> Result<Option<Choice>> {
+    let mut chosen = Vec::new();
+    for r in runs {
+        let fold = r.val_fold.expect("a cross-validation's run validates");
+        let head = Run(&CrossValidation(cv).run(r.seed, fold)).head();
+        if head.exists() {
+            chosen.push(read_json::<Chosen>(&head)?.choice);
+        }
+    }
+    Ok(most_chosen(&chosen))
+}
+
+/// The form most of `chosen` took (ties to the earlier of [`Form::ALL`]), with the median
+/// strength and scale of those that took it (the upper of two middle ones, as [`median`]).
+fn most_chosen(chosen: &[Choice]) -> Option<Choice> {
+    let count = |form: Form| chosen.iter().filter(|c| c.form == form).count();
+    let form = Form::ALL.into_iter().rev().max_by_key(|f| count(*f)).filter(|f| count(*f) > 0)?;
+    let of = |value: fn(&Choice) -> Option<f64>| -> Option<f64> {
+        let mut values: Vec<f64> = chosen.iter().filter(|c| c.form == form).filter_map(value).collect();
+        values.sort_by(f64::total_cmp);
+        values.get(values.len() / 2).copied()
+    };
+    Some(Choice { form, strength: of(|c| c.strength), scale: of(|c| c.scale) })
 }
 
 /// The patches a final model keeps where its cross-validation chose them by validation, which a
@@ -202,6 +237,23 @@ mod tests {
         assert_eq!(super::most_kept(&masks), vec![true, false, true, false], "votes 2, 1, 2, 1");
         let tied = [vec![1.0, 0.0, 0.0], vec![0.0, 0.0, 1.0]];
         assert_eq!(super::most_kept(&tied), vec![true, false, false], "a tie to the lower patch");
+    }
+
+    /// The form most runs chose, the median strength and scale among them; none without a head.
+    #[test]
+    fn a_final_model_takes_the_camera_head_most_runs_chose() {
+        use crate::spectrum_fit::{form::Form, Choice};
+        let pick = |form, strength: f64, scale: f64| Choice { form, strength: Some(strength), scale: Some(scale) };
+        let runs = [
+            pick(Form::Both, 0.1, 4.0),
+            Choice::TEXTURE,
+            pick(Form::Both, 1.0, 1.0),
+            pick(Form::Pixels, 1.0, 8.0),
+            pick(Form::Both, 0.01, 2.0),
+        ];
+        assert_eq!(super::most_chosen(&runs), Some(pick(Form::Both, 0.1, 2.0)));
+        assert_eq!(super::most_chosen(&[Choice::TEXTURE, pick(Form::Pixels, 1.0, 8.0)]), Some(Choice::TEXTURE), "a tie to the texture");
+        assert_eq!(super::most_chosen(&[]), None);
     }
 
     #[test]

@@ -49,6 +49,11 @@ pub struct TrainOptions {
     #[arg(skip)]
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub joint: Option<Joint>,
+    /// A final model's camera head: the form its cross-validation's runs chose on their
+    /// validation folds (`crate::final_model`), which a run without one cannot choose.
+    #[arg(skip)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub camera_head: Option<crate::spectrum_fit::Choice>,
     /// What fine-tuning after pruning holds at zero.
     #[arg(skip)]
     #[serde(flatten)]

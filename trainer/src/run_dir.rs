@@ -96,6 +96,11 @@ impl Run<'_> {
         self.0.join("curves.svg")
     }
 
+    /// What a camera head's fit chose (`crate::spectrum_fit::Chosen`), written once it is fitted.
+    pub fn head(self) -> PathBuf {
+        self.0.join("head.json")
+    }
+
     /// Written when the run has finished: a finished run is one with this file.
     pub fn result(self) -> PathBuf {
         self.0.join("result.json")

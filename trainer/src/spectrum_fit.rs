@@ -7,30 +7,39 @@
 //! its standardisation, are every frame of the training windows alone, as a touch is read when
 //! its first frame arrives: 25 rows a touch where PhysiCLeAR gives 3 or 4 touches an object
 //! (docs/camera.md, "Every frame a row"); the penalty is chosen on whole validation windows.
+//! With `spectral_pixels`, the pixels' map is a ridge on the training windows ([`ridge`]), and
+//! the validation fold chooses whether the head reads the texture, the pixels or both ([`form`]).
 //! Such a head reads a pruned patch's pixels as 0 (`Pvt3::head_frames`), so a run that prunes
 //! patches fits it again, to what it then reads (`train`).
 
 use candle_core::{Device, Tensor};
 use candle_nn::VarMap;
+use ndarray::{Array2, Axis};
 use pvt3_models::Model;
 use pvt3_spec::names;
 
 use crate::data::windows::Samples;
 use crate::Result;
 
+pub mod form;
 pub mod logistic;
+mod ridge;
+
+pub use form::{Choice, Chosen};
 
 /// The logistic regression's penalties, strongest first: the validation fold takes the first of
 /// those it reads best.
 const PENALTIES: [f64; 6] = [1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 3e-4];
 
 /// The least spread a feature is standardised by: a feature that varies less over the training
-/// rows (a histogram's tail bin on a few touches, a constant one) is read at most a thousand times
+/// rows (a histogram's tail bin on a few touches, a constant one) is read at most a hundred times
 /// its size. Every form computes a feature (a log power, a level, a bin's share: of order one) to
-/// about 1e-7 of its size in f32, so that its rounding stays below 1e-4 once standardised, and
-/// the forms agree with the f64 reference; 1/σ of a feature that hardly varies multiplied it by
-/// up to 10⁶ (tests/shapes.rs). PhysiCLeAR's features vary by 1.7e-3 at least, unchanged.
-const STD_FLOOR: f64 = 1e-3;
+/// about 1e-7 of its size in f32, so that its rounding stays near 1e-5 once standardised and
+/// weighed, and the forms agree with the f64 reference; 1/σ of a feature that hardly varies
+/// multiplied it by up to 10⁶, and a floor of 1e-3 left a head with the pixels beside its
+/// texture 1.4e-5 from the reference (tests/shapes.rs). PhysiCLeAR's features vary by 1.7e-3 at
+/// least: its few least varying ones are read a little less than they were.
+const STD_FLOOR: f64 = 1e-2;
 
 /// The penalty without a validation fold (a final model's): the one most of PhysiCLeAR's
 /// validation folds chose for the fit to every frame, 8 of the headline's 12 (docs/camera.md,
@@ -38,11 +47,14 @@ const STD_FLOOR: f64 = 1e-3;
 const PENALTY: f64 = 3e-3;
 
 /// Sets `spectral.scale` and `spectral.shift` of a PVT³ model with a spectral head from the
-/// features of `train`, and for a head over an image's space its linear map, the penalty chosen
-/// on `val` (when not empty); does nothing for other models.
-pub fn fit(model: &Model, varmap: &VarMap, train: &Samples, val: &Samples) -> Result<()> {
+/// features of `train`, and for a head over an image's space its linear map: the texture's
+/// logistic regression, its penalty chosen on `val` (when not empty), and with
+/// `spectral_pixels` the pixels' ridge and the form ([`form`]) that `val` reads best, or without
+/// `val` the one `given` (a final model's, from its cross-validation; else the texture's).
+/// Returns the form a head over an image's space took; does nothing for other models.
+pub fn fit(model: &Model, varmap: &VarMap, train: &Samples, val: &Samples, given: Option<Choice>) -> Result<Option<Chosen>> {
     let Some((pvt3, spectrum)) = model.pvt3("the spectral head").ok().and_then(|m| Some((m, m.spectrum()?))) else {
-        return Ok(());
+        return Ok(None);
     };
     let whole = pvt3.frame_weights(pvt3.config().time_tokens())?;
     let (features, labels) = match pvt3.config().spectral_space() {
@@ -54,28 +66,93 @@ pub fn fit(model: &Model, varmap: &VarMap, train: &Samples, val: &Samples) -> Re
     let scale = (std + 1e-6)?.recip()?;
     let shift = (mean.neg()? * &scale)?;
     let mut fitted = vec![(names::spectral(names::SCALE), scale.clone()), (names::spectral(names::SHIFT), shift.clone())];
+    let mut chosen = None;
     if pvt3.config().spectral_space() {
-        let standard = |f: &Tensor| -> Result<Vec<Vec<f64>>> { Ok(f.broadcast_mul(&scale)?.broadcast_add(&shift)?.to_vec2::<f64>()?) };
-        let rows = standard(&features)?;
-        let validation = match val.is_empty() {
-            true => None,
-            false => features_of(val, |x| Ok(spectrum.features(&pvt3.head_frames(x)?, &whole)?))
-                .and_then(|(f, labels)| Ok((standard(&f)?, labels)))
-                .map(Some)?,
+        let standard = |f: &Tensor| -> Result<Array2<f64>> {
+            let f = f.broadcast_mul(&scale)?.broadcast_add(&shift)?;
+            Ok(Array2::from_shape_vec(f.dims2()?, f.flatten_all()?.to_vec1::<f64>()?).expect("a matrix's values"))
         };
+        let windows = |set: &Samples| -> Result<(Array2<f64>, Vec<usize>)> {
+            let (f, labels) = features_of(set, |x| Ok(spectrum.features(&pvt3.head_frames(x)?, &whole)?))?;
+            Ok((standard(&f)?, labels))
+        };
+        let columns = Columns::of(pvt3.config());
+        let validation = if val.is_empty() { None } else { Some(windows(val)?) };
+        let texture = regression(
+            &rows_of(&standard(&features)?.select(Axis(1), &columns.texture)),
+            &labels,
+            pvt3.config().classes,
+            validation.as_ref().map(|(v, labels)| (rows_of(&v.select(Axis(1), &columns.texture)), labels.clone())),
+        );
+        let (choice, ridge) = match columns.pixels.is_empty() {
+            true => (Chosen { choice: Choice::TEXTURE, validation: Vec::new() }, None),
+            false => pixels(&texture, windows(train)?, validation, &columns, pvt3.config().classes, given),
+        };
+        let (weight, bias) = form::linear_map(
+            choice.choice,
+            (&texture.weight, &texture.bias),
+            ridge.as_ref(),
+            (&columns.texture, &columns.pixels),
+            columns.all,
+        );
         let classes = pvt3.config().classes;
-        let regression = regression(&rows, &labels, classes, validation);
-        let f = rows.first().map_or(0, Vec::len);
         let linear = |leaf: &str| names::spectral(&names::join(&[names::LINEAR, leaf]));
-        fitted.push((linear(names::WEIGHT), Tensor::from_vec(regression.weight, (classes, f), &Device::Cpu)?));
-        fitted.push((linear(names::BIAS), Tensor::from_vec(regression.bias, classes, &Device::Cpu)?));
+        fitted.push((linear(names::WEIGHT), Tensor::from_vec(weight, (classes, columns.all), &Device::Cpu)?));
+        fitted.push((linear(names::BIAS), Tensor::from_vec(bias, classes, &Device::Cpu)?));
+        chosen = (!columns.pixels.is_empty()).then_some(choice);
     }
     let vars = varmap.data().lock().expect("the variable map's lock");
     for (name, value) in fitted {
         let var = vars.get(&name).ok_or(pvt3_spec::Error::MissingTensor { task: "fit the spectral head", name })?;
         var.set(&value.to_dtype(candle_core::DType::F32)?.to_device(&Device::Cpu)?)?;
     }
-    Ok(())
+    Ok(chosen)
+}
+
+/// The columns of a head over an image's space's features: the texture's (each colour's level,
+/// rings and histograms) and the pixels' (the last `h · w` of each colour's), of `all`.
+struct Columns {
+    texture: Vec<usize>,
+    pixels: Vec<usize>,
+    all: usize,
+}
+
+impl Columns {
+    fn of(cfg: &pvt3_models::Config) -> Self {
+        let (per, pixels) = (cfg.spectral_features_per_channel(), cfg.spectral_pixel_count());
+        let (texture, pixels) = (0..cfg.spectral_features()).partition(|c| c % per < per - pixels);
+        Self { texture, pixels, all: cfg.spectral_features() }
+    }
+}
+
+/// The pixels' ridge on the training windows `train` and the form (with its strength and scale)
+/// that the validation windows read best beside the `texture`'s fit, or without them the one
+/// `given` (else the texture's).
+fn pixels(
+    texture: &logistic::Fit,
+    train: (Array2<f64>, Vec<usize>),
+    validation: Option<(Array2<f64>, Vec<usize>)>,
+    columns: &Columns,
+    classes: usize,
+    given: Option<Choice>,
+) -> (Chosen, Option<ridge::Ridge>) {
+    let rows = train.0.select(Axis(1), &columns.pixels);
+    let Some((val, val_labels)) = validation else {
+        let choice = given.unwrap_or(Choice::TEXTURE);
+        let ridge = choice.strength.filter(|_| choice.form.reads_pixels()).map(|s| ridge::fits(&rows, &train.1, classes, &[s]).remove(0));
+        return (Chosen { choice, validation: Vec::new() }, ridge);
+    };
+    let mut ridges = ridge::fits(&rows, &train.1, classes, &form::STRENGTHS);
+    let val_pixels = val.select(Axis(1), &columns.pixels);
+    let scores: Vec<(f64, Array2<f64>)> = form::STRENGTHS.iter().zip(&ridges).map(|(s, r)| (*s, r.scores(&val_pixels))).collect();
+    let chosen = form::choose(&texture.logits(&rows_of(&val.select(Axis(1), &columns.texture))), &scores, &val_labels);
+    let ridge = chosen.choice.strength.and_then(|s| form::STRENGTHS.iter().position(|v| *v == s)).map(|i| ridges.swap_remove(i));
+    (chosen, ridge)
+}
+
+/// A matrix's rows as the logistic regression takes them.
+fn rows_of(m: &Array2<f64>) -> Vec<Vec<f64>> {
+    m.rows().into_iter().map(|r| r.to_vec()).collect()
 }
 
 /// The unstandardised features `[rows, features]` (f64) that `read` gives of `set`'s windows
@@ -127,8 +204,8 @@ mod tests {
         let x: Vec<f32> = (0..n * l).map(|i| 5.0 * ((i / 75) % 60) as f32 + (1.0 + (i / 75 % 7) as f32) * rng.normal()).collect();
         let data = Dataset::in_memory(x, cfg.sample_shape(), vec![0; n]);
         let train = Samples::unnormalised(&data);
-        super::fit(&model, &varmap, &train, &Samples::unnormalised(&Dataset::in_memory(Vec::new(), cfg.sample_shape(), Vec::new())))
-            .unwrap();
+        let empty = Dataset::in_memory(Vec::new(), cfg.sample_shape(), Vec::new());
+        super::fit(&model, &varmap, &train, &Samples::unnormalised(&empty), None).unwrap();
         let spectrum = model.pvt3("test").unwrap().spectrum().unwrap();
         let (x, _) = train.batch(&(0..n).collect::<Vec<_>>(), |_| {}).unwrap();
         let data = varmap.data().lock().unwrap();

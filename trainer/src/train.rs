@@ -48,6 +48,9 @@ pub struct RunResult {
     /// The epochs trained: the options' `epochs`, or fewer where `patience` stopped the run.
     pub epochs: usize,
     pub wall_seconds: f64,
+    /// What a camera head read, as its fit chose (`Run::head`); `None` without one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub head: Option<crate::spectrum_fit::form::Form>,
 }
 
 /// Everything a run needs besides its output directory.
@@ -86,7 +89,9 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
     let mut sensors = sensor::of_run(spec, config, &opts, out)?;
     let mut run = run_state::begin(&mut sensors, &opts, last)?;
     for sensor in &mut sensors {
-        sensor.ready(fit_heads, &opts)?;
+        if let Some(chosen) = sensor.ready(fit_heads, &opts)? {
+            bar.println(format!("{}: {chosen}", sensor.dir.display()));
+        }
     }
     let steps_per_epoch = sensors[0].split.train.len().div_ceil(opts.optimization.batch_size);
     let schedule = Schedule::new(&opts.optimization, steps_per_epoch);
@@ -151,12 +156,22 @@ fn finish(sensors: &[Sensor], spec: &RunSpec, opts: &TrainOptions, run: &mut Run
             test_accuracy: best.test_accuracy,
             epochs: run.epochs_done,
             wall_seconds: run.wall_seconds,
+            head: head_form(&sensor.dir)?,
         };
         calibrate_stopping(&Run(&sensor.dir).model(), &sensor.val_set)?;
         write_json(&Run(&sensor.dir).result(), &done)?;
         result = Some(done);
     }
     Ok(result.expect("a run has its own sensor"))
+}
+
+/// The form a run's camera head took, where it has one (`Run::head`).
+fn head_form(dir: &Path) -> Result<Option<crate::spectrum_fit::form::Form>> {
+    let head = Run(dir).head();
+    Ok(match head.exists() {
+        true => Some(checkpoint::read_json::<crate::spectrum_fit::Chosen>(&head)?.choice.form),
+        false => None,
+    })
 }
 
 fn open_log(path: &Path) -> Result<File> {

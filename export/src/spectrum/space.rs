@@ -6,6 +6,7 @@
 //! values and, with `spectral_gradients`, of the differences between neighbours across and down
 //! (`Slice`s and a `Sub`): each value's share above each interior edge, a clamp built of `Max`es,
 //! then the bins' differences;
+//! each colour's normalised pixels after them with `spectral_pixels`;
 //! all weighed over the frames received ([`FRAME_WEIGHTS`]) as the temporal head weighs them, the
 //! logarithms of the powers (each frame's, before the weighing, with `spectral_log_frames`), and
 //! the linear map with the standardisation folded in. Where the patch mask pruned patches, the
@@ -26,11 +27,12 @@ use crate::graph::Graph;
 /// The head's logits `[batch, classes]`; `weighed` is the frames weighed, `[1]`.
 pub(super) fn logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, norm: &Normalization, weighed: &str) -> String {
     let c = &m.config;
-    let (colours, frames, bands, bins) = (c.channels, c.frames, c.spectral_bands(), c.spectral_histogram_bins());
+    let (colours, frames, bands, bins, pixels) =
+        (c.channels, c.frames, c.spectral_bands(), c.spectral_histogram_bins(), c.spectral_pixel_count());
     let per_frame = per_frame(g, m, norm);
-    // Levels, rings and histograms [b, frames, colours · (1 + bands + bins)], weighed over the frames
-    // (`bins` those of every histogram).
-    let each = 1 + bands + bins;
+    // Levels, rings, histograms and pixels [b, frames, colours · (1 + bands + bins + pixels)],
+    // weighed over the frames (`bins` those of every histogram).
+    let each = 1 + bands + bins + pixels;
     let shape = g.i64s("space_per_frame", &[3], vec![-1, frames as i64, (colours * each) as i64]);
     let joined = g.op(Op::Reshape, &[&per_frame, &shape]);
     let joined = g.node(Op::Transpose, &[&joined], vec![ints("perm", &[0, 2, 1])], None);
@@ -45,13 +47,17 @@ pub(super) fn logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, norm: &Nor
         (g.i64s("space_zero", &[1], vec![0]), g.i64s("space_one", &[1], vec![1]), g.i64s("space_end", &[1], vec![1 + bands as i64]));
     let level = g.op(Op::Slice, &[&weighted, &zero, &one, &axis]);
     let power = g.op(Op::Slice, &[&weighted, &one, &end, &axis]);
-    let histogram = (bins > 0).then(|| {
-        let last = g.i64s("space_histogram_end", &[1], vec![each as i64]);
-        g.op(Op::Slice, &[&weighted, &end, &last, &axis])
-    });
+    // The histograms' bins, then the pixels, where the head has them.
+    let (mut after, mut start, mut offset) = (Vec::with_capacity(2), end, 1 + bands);
+    for (name, n) in [("space_histogram_end", bins), ("space_pixels_end", pixels)].into_iter().filter(|(_, n)| *n > 0) {
+        offset += n;
+        let last = g.i64s(name, &[1], vec![offset as i64]);
+        after.push(g.op(Op::Slice, &[&weighted, &start, &last, &axis]));
+        start = last;
+    }
     // With `spectral_log_frames`, each frame's powers were taken the logarithm of already.
     let log_power = if c.spectral_log_frames() { power } else { super::log(g, &power) };
-    super::logits_of(g, m, s, &level, &log_power, histogram.as_deref())
+    super::logits_of(g, m, s, &level, &log_power, &after)
 }
 
 /// The frames [`HEAD_FRAMES`] `[n, h, w, colours]` normalised pixel by pixel, a pruned patch's
@@ -153,8 +159,9 @@ fn histogram(g: &mut Graph, c: &Config, pixels: &str, n: usize) -> String {
     g.op(Op::Add, &[&histogram, &first])
 }
 
-/// Each colour's level, ring powers (their logarithms, with `spectral_log_frames`) and
-/// histograms of every frame, [`HEAD_FEATURES`] `[b · frames, colours, 1 + bands + bins]`, from
+/// Each colour's level, ring powers (their logarithms, with `spectral_log_frames`), histograms
+/// and pixels (with `spectral_pixels`) of every frame, [`HEAD_FEATURES`] `[b · frames, colours,
+/// 1 + bands + bins + pixels]`, from
 /// the file's input cut into frames ([`HEAD_FRAMES`]), [`normalised`]: every op after the cut
 /// reads one frame's row alone, so that a streaming runtime runs them on each frame as it
 /// arrives.
@@ -202,6 +209,9 @@ fn per_frame(g: &mut Graph, m: &BakedPvt3, norm: &Normalization) -> String {
     let mut parts = vec![level, power];
     if c.spectral_histogram() > 0 {
         parts.push(histograms(g, c, &x, &flat));
+    }
+    if c.spectral_pixels() {
+        parts.push(flat);
     }
     g.node(Op::Concat, &parts.iter().map(String::as_str).collect::<Vec<_>>(), vec![int("axis", 2)], Some(HEAD_FEATURES))
 }

@@ -50,7 +50,7 @@ impl Config {
 
     /// PVT³: the spectral head's features, per channel (per colour, for a head over the image's
     /// space) a level (unless `spectral_levels` is off), `spectral_bands` log powers and, over
-    /// the image's space, the histogram's bins (0 without the head).
+    /// the image's space, the histogram's bins and the pixels (0 without the head).
     pub fn spectral_features(&self) -> usize {
         let read = if self.spectral_space() { self.channels } else { self.sensor_channels() };
         if self.spectral_bands() == 0 {
@@ -62,7 +62,16 @@ impl Config {
 
     /// The spectral head's features of one channel (of one colour over the image's space).
     pub fn spectral_features_per_channel(&self) -> usize {
-        usize::from(self.spectral_levels()) + self.spectral_bands() + self.spectral_histogram_bins()
+        usize::from(self.spectral_levels()) + self.spectral_bands() + self.spectral_histogram_bins() + self.spectral_pixel_count()
+    }
+
+    /// The pixels of one colour a head over the image's space reads (0 unless `spectral_pixels`).
+    pub fn spectral_pixel_count(&self) -> usize {
+        if self.spectral_pixels() {
+            self.height * self.width
+        } else {
+            0
+        }
     }
 
     /// The bins of every histogram of one colour of a head over the image's space (0 without one).

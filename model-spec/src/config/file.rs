@@ -208,12 +208,13 @@ mod tests {
     fn a_histogram_is_written_only_when_there_is_one() {
         let layout = Config::for_sensor(crate::Sensor::Camera, &[30, 40, 3, 25]).unwrap();
         assert_eq!((layout.spectral_histogram(), layout.spectral_gradients()), (24, false));
-        assert_eq!(layout.spectral_features(), 3 * (1 + 12 + 24));
+        assert!(layout.spectral_pixels());
+        assert_eq!(layout.spectral_features(), 3 * (1 + 12 + 24 + 30 * 40));
         let layout_file = serde_json::to_value(&layout).unwrap();
         assert!(layout_file.get("spectral_gradients").is_none());
         let Network::Pvt3(p) = layout.network else { unreachable!() };
         let camera = Config { network: Pvt3Config { spectral_gradients: true, ..p }.into(), ..layout };
-        assert_eq!(camera.spectral_features(), 3 * (1 + 12 + 3 * 24));
+        assert_eq!(camera.spectral_features(), 3 * (1 + 12 + 3 * 24 + 30 * 40));
         let written = serde_json::to_value(&camera).unwrap();
         assert_eq!((&written["spectral_histogram"], &written["spectral_gradients"]), (&24.into(), &true.into()));
         assert_eq!(serde_json::from_value::<Config>(written).unwrap(), camera);
@@ -223,6 +224,8 @@ mod tests {
         let frames = Config { network: Pvt3Config { spectral_bands: 4, spectral_histogram: 8, ..Default::default() }.into(), ..icub };
         let msg = frames.validate().unwrap_err().to_string();
         assert!(msg.contains("spectral_histogram = 8") && msg.contains("spectral_space"), "{msg}");
+        let pixels = Config { network: Pvt3Config { spectral_bands: 4, spectral_pixels: true, ..Default::default() }.into(), ..icub };
+        assert!(pixels.validate().unwrap_err().to_string().contains("set spectral_pixels=false too"));
         let Network::Pvt3(p) = camera.network else { unreachable!() };
         let flat = Config { network: Pvt3Config { spectral_histogram: 0, ..p }.into(), ..camera };
         assert!(flat.validate().unwrap_err().to_string().contains("set spectral_gradients=false too"));

@@ -227,6 +227,12 @@ network_fields! {
         /// touch is then read in the units it was fitted in. The levels and histograms are means
         /// either way.
         spectral_log_frames: bool = false, changed;
+        /// Whether a head over the image's space also reads each colour's pixels, averaged over the
+        /// frames as the levels are: where on the gel a touch presses, the imprint of a shape or of
+        /// a still material, which rings and histograms discard. The fit chooses on the validation
+        /// fold whether the head reads the texture's features, the pixels or both
+        /// (`pvt3_trainer`'s `spectrum_fit`; docs/camera.md, "Where the gel is pressed").
+        spectral_pixels: bool = false, changed;
         /// A patch-selection mask (`patch_mask`, one entry per patch of the grid, starting at one)
         /// scales each patch's embeddings, as the frame mask scales a temporal token's; a patch whose
         /// entry is zero is dropped from the spatial sequence, so pruning it removes its token and

@@ -69,8 +69,8 @@ impl Config {
     /// divisor of `frames` nearest (in ratio) to `frames / 40`, so that about 40 temporal tokens
     /// remain, as in the BioTac preset. A camera's images ([`Sensor::Camera`]) are cut into about 12
     /// square patches (sides the divisors of height and width nearest `√(height · width / 12)`:
-    /// 10 × 10 pixels of 30 × 40), with a spectral head over the image's space (rings and a
-    /// histogram), the rest the
+    /// 10 × 10 pixels of 30 × 40), with a spectral head over the image's space (rings, a
+    /// histogram and the pixels), the rest the
     /// GelSight preset's. Any other sensor gets the BioTac
     /// layout, which assumes no grid: all channels of a tubelet form one token (one patch covering
     /// the frame), the rest the BioTac preset's. `None` for a shape that is not 3 or 4 axes of
@@ -90,9 +90,14 @@ impl Config {
             let (patch_height, patch_width) = (nearest_divisor(height, side), nearest_divisor(width, side));
             let bands = (1..=IMAGE_BANDS).rev().find(|b| crate::spectrum::space::band_of(height, width, *b).is_ok()).unwrap_or(0);
             let histogram = if bands > 0 { IMAGE_HISTOGRAM } else { 0 };
-            let network =
-                Pvt3Config { spectral_bands: bands, spectral_space: bands > 0, spectral_histogram: histogram, ..Pvt3Config::default() }
-                    .into();
+            let network = Pvt3Config {
+                spectral_bands: bands,
+                spectral_space: bands > 0,
+                spectral_histogram: histogram,
+                spectral_pixels: bands > 0,
+                ..Pvt3Config::default()
+            }
+            .into();
             return Some(Self { height, width, channels, frames, patch_height, patch_width, tubelet, network, ..Self::gelsight() });
         }
         Some(Self { height, width, channels, frames, patch_height: height, patch_width: width, tubelet, ..Self::biotac20() })

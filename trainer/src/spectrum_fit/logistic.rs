@@ -18,10 +18,14 @@ pub struct Fit {
 impl Fit {
     /// The class each row scores highest.
     pub fn predict(&self, rows: &[Vec<f64>]) -> Vec<usize> {
+        self.logits(rows).rows().into_iter().map(|r| argmax(r.as_slice().expect("a standard layout"))).collect()
+    }
+
+    /// The logits `[rows, classes]` of `rows`.
+    pub fn logits(&self, rows: &[Vec<f64>]) -> Array2<f64> {
         let (classes, f) = (self.bias.len(), rows.first().map_or(0, Vec::len));
         let weight = Array2::from_shape_vec((classes, f), self.weight.clone()).expect("weights of the rows' width");
-        let scores = matrix(rows).dot(&weight.t()) + &Array1::from_vec(self.bias.clone());
-        scores.rows().into_iter().map(|r| argmax(r.as_slice().expect("a standard layout"))).collect()
+        matrix(rows).dot(&weight.t()) + &Array1::from_vec(self.bias.clone())
     }
 }
 

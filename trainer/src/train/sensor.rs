@@ -22,6 +22,7 @@ use crate::options::TrainOptions;
 use crate::provenance::nan_from_null;
 use crate::provenance::Provenance;
 use crate::run_dir::Run;
+use crate::spectrum_fit::Chosen;
 use crate::{data::windows::Samples, evaluate::evaluate};
 use crate::{Error, Result};
 
@@ -115,11 +116,16 @@ impl<'a> Sensor<'a> {
     }
 
     /// Readies the network for the epochs of this call: its spectral heads fitted to its
-    /// training windows (`fit_heads`: a fresh run's), then the zeros fine-tuning holds.
-    pub(super) fn ready(&mut self, fit_heads: bool, opts: &TrainOptions) -> Result<()> {
+    /// training windows (`fit_heads`: a fresh run's), then the zeros fine-tuning holds. Returns
+    /// what a camera head's fit chose, which it records in the run directory.
+    pub(super) fn ready(&mut self, fit_heads: bool, opts: &TrainOptions) -> Result<Option<Chosen>> {
         let learner = &mut self.net.learner;
+        let mut chosen = None;
         if fit_heads {
-            crate::spectrum_fit::fit(&learner.model, &learner.varmap, &self.train_set, &self.val_set)?;
+            chosen = crate::spectrum_fit::fit(&learner.model, &learner.varmap, &self.train_set, &self.val_set, opts.camera_head)?;
+            if let Some(chosen) = &chosen {
+                checkpoint::write_json_atomically(&Run(&self.dir).head(), chosen)?;
+            }
         }
         if opts.held.pruned {
             learner.hold_zeros(is_mask)?;
@@ -127,7 +133,7 @@ impl<'a> Sensor<'a> {
         if opts.held.zero_weights {
             learner.hold_zeros(is_weight_matrix)?;
         }
-        Ok(())
+        Ok(chosen)
     }
 
     pub(super) fn meta(&self, val_fold: Option<usize>, pruning: &Option<PruneSpec>, epoch: usize, val: f64, test: Option<f64>) -> Meta {

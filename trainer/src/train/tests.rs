@@ -87,6 +87,7 @@ fn options(epochs: usize) -> TrainOptions {
         prefix_training: 0.0,
         distillation: Distillation { teachers: None, weight: 1.0 },
         joint: None,
+        camera_head: None,
         held: HeldZeros::default(),
     }
 }

@@ -120,14 +120,26 @@ fn print_runs(s: &CvSummary, wall: f64, summary: &std::path::Path) {
     for dir in &s.unfinished {
         println!("not finished, not counted: {dir}");
     }
-    println!("{:>6} {:>5} {:>6} {:>8} {:>8} {:>8} {:>12}", "seed", "fold", "epoch", "val", "test", "seconds", "pruned test");
+    // A camera head's form, as each run's validation fold chose it (docs/camera.md).
+    let heads = s.runs.iter().any(|r| r.head.is_some());
+    let head = |r: &pvt3_trainer::train::RunResult| match (heads, r.head) {
+        (false, _) => String::new(),
+        (true, form) => format!(" {:>8}", form.map_or("-".into(), |f| format!("{f:?}").to_lowercase())),
+    };
+    let head_title = if heads { format!(" {:>8}", "head") } else { String::new() };
+    println!("{:>6} {:>5} {:>6} {:>8} {:>8} {:>8} {:>12}{head_title}", "seed", "fold", "epoch", "val", "test", "seconds", "pruned test");
     for (i, r) in s.runs.iter().enumerate() {
         let pruned = s.pruned_runs.get(i).map_or(String::new(), |p| format!("{:.4}", p.test_accuracy));
         println!(
-            "{:>6} {:>5} {:>6} {:>8.4} {:>8.4} {:>8.0} {:>12}",
+            "{:>6} {:>5} {:>6} {:>8.4} {:>8.4} {:>8.0} {:>12}{}",
             r.seed,
             r.val_fold.map_or("-".into(), |k| k.to_string()),
-            r.best_epoch, r.val_accuracy, r.test_accuracy, r.wall_seconds, pruned
+            r.best_epoch,
+            r.val_accuracy,
+            r.test_accuracy,
+            r.wall_seconds,
+            pruned,
+            head(r)
         );
     }
     if let (Some(m), Some(sd)) = (s.pruned_mean_test_accuracy, s.pruned_std_test_accuracy) {
