@@ -147,25 +147,30 @@ need_pid=$!
 background+=("$need_pid")
 
 # A static binary of pvt3-run (run through the emulator named after it, if any) answers the
-# golden windows as the host build does (target/golden-host.jsonl, written after the host build).
+# golden windows and the shipped BioTac touch (its spectral head's transform, the small build's
+# own FFT) as the host build does (target/{golden,spectral}-host.jsonl, written after the host
+# build).
 same_as_host() {
-  local bin=$1 out=target/golden-$(basename "$(dirname "$(dirname "$1")")").jsonl
+  local bin=$1 name=$(basename "$(dirname "$(dirname "$1")")")
   shift
   if readelf -l "$bin" | grep -q INTERP; then
     echo "tests/run.sh: $bin asks for a dynamic loader: not a static binary" >&2
     return 1
   fi
-  "$@" "$bin" --json "${golden[@]}" >"$out"
-  python3 - "$out" target/golden-host.jsonl <<'EOF'
+  "$@" "$bin" --json "${golden[@]}" >target/golden-$name.jsonl
+  "$@" "$bin" --json "${spectral[@]}" >target/spectral-$name.jsonl
+  python3 - target/golden-$name.jsonl target/golden-host.jsonl target/spectral-$name.jsonl target/spectral-host.jsonl <<'EOF'
 import json, sys
-static, host = ([json.loads(line) for line in open(path)] for path in sys.argv[1:])
-assert len(static) == len(host) == 8, (len(static), len(host))
-worst = max(abs(a - b) for s, h in zip(static, host) for a, b in zip(s["probabilities"], h["probabilities"]))
-assert worst <= 1e-6 and all(s["class"] == h["class"] for s, h in zip(static, host)), worst
-print(f"{sys.argv[1]}: the golden windows' probabilities within {worst:.1e} of the host build's, every class the same")
+for built, host_path in zip(sys.argv[1::2], sys.argv[2::2]):
+    static, host = ([json.loads(line) for line in open(path)] for path in (built, host_path))
+    assert len(static) == len(host) >= 1, (built, len(static), len(host))
+    worst = max(abs(a - b) for s, h in zip(static, host) for a, b in zip(s["probabilities"], h["probabilities"]))
+    assert worst <= 1e-6 and all(s["class"] == h["class"] for s, h in zip(static, host)), (built, worst)
+    print(f"{built}: {len(static)} windows' probabilities within {worst:.1e} of the host build's, every class the same")
 EOF
 }
 golden=(tests/golden/icub20/model.onnx tests/golden/icub20/input.npy)
+spectral=(shipped/biotac20.onnx shipped/biotac20-touch.npy)
 
 # Step 4, run in the background once the host build is done (see the top), in one target
 # directory and one profile, so that the build scripts and procedural macros, built for this
@@ -186,7 +191,7 @@ other_platforms() {
   cargo clippy "${platforms[@]}" --target x86_64-pc-windows-gnu -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings
   # The runtime and pvt3-run built to show that they link statically and compute what the host
   # build computes, never timed: as the small robot build (docs/deploy.md) without default
-  # features (one thread a plan, no spectral head: a static robot binary is a small one). The
+  # features (one thread a plan, its own FFT: a static robot binary is a small one). The
   # aarch64 one is the aarch64 tests' own build (step 3).
   cargo build "${platforms[@]}" --target x86_64-unknown-linux-musl -p pvt3-runtime --no-default-features --lib --bin pvt3-run
   same_as_host target/platforms/x86_64-unknown-linux-musl/debug/pvt3-run
@@ -195,6 +200,7 @@ other_platforms() {
 step "host: cargo test --profile ci --workspace (built, then run)"
 cargo test --profile ci --workspace --no-run
 target/ci/pvt3-run --json "${golden[@]}" >target/golden-host.jsonl
+target/ci/pvt3-run --json "${spectral[@]}" >target/spectral-host.jsonl
 
 step "what the tests need (installed beside the host build)"
 joined "$need_pid" "$need_log" "what the tests need could not be installed"

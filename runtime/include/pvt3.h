@@ -51,8 +51,7 @@ typedef struct Pvt3Continuous pvt3_continuous;
 
 /* Loads an .onnx written by `pvt3 export`; *out owns a handle to free with pvt3_classifier_free.
  * The file's integrity digest is checked first: a file altered or damaged after export is
- * refused with PVT3_ERR_MODEL, and so is a file with a spectral head where the library was built
- * without the `spectral` feature (the small robot build). */
+ * refused with PVT3_ERR_MODEL. */
 int pvt3_classifier_load(const char *path, pvt3_classifier **out);
 /* Loads a model from the `len` bytes of an .onnx file in memory (flash, a download), checked as
  * pvt3_classifier_load checks a file; `name` (NULL: "(memory)") names it in errors. The bytes

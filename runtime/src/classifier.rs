@@ -73,11 +73,7 @@ impl Classifier {
         let plans = Mutex::new(HashMap::new());
         let stages = Mutex::new(None);
         let kernels = Kernels::default();
-        let classifier = Self { graph, header, sample_shape, plans, stages, threads: 1, kernels, path: name };
-        if cfg!(not(feature = "spectral")) && !classifier.streams() {
-            return Err(Error::NoSpectral { path: classifier.path });
-        }
-        Ok(classifier)
+        Ok(Self { graph, header, sample_shape, plans, stages, threads: 1, kernels, path: name })
     }
 
     /// Runs on `threads` threads from now on (default 1; small models rarely gain from more).

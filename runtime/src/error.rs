@@ -38,8 +38,6 @@ pub enum Error {
     BatchTooLarge { batch: usize },
     #[error("{asked} threads asked for, but this build runs one thread per plan (built without the `threads` feature)")]
     NoThreads { asked: usize },
-    #[error("{path} has a spectral head, and this runtime was built without the `spectral` feature (build it with `--features spectral`)")]
-    NoSpectral { path: String },
     /// A touch could not be brought to how the model reads touches ([`crate::read_touch`]).
     #[error("reading the touch: {0}")]
     Touch(String),

@@ -26,8 +26,9 @@ mod kernels;
 mod npy;
 mod onnx;
 mod plan;
-#[cfg(feature = "spectral")]
 mod real_dft;
+#[cfg(not(feature = "spectral"))]
+mod small_fft;
 #[cfg(target_arch = "x86_64")]
 mod small_products;
 mod stages;

@@ -1,29 +1,62 @@
 //! [`RealDft`]: the spectral head's transform (the ONNX `DFT` op as the exporter writes it: a
 //! forward, two-sided transform of a real signal `[…, n, 1]` along its next-to-last axis, to
-//! `[…, n, 2]`), with its FFT planned once, when the plan is built.
+//! `[…, n, 2]`), with its FFT planned once, when the plan is built: rustfft's with the `spectral`
+//! feature (the default build), else the runtime's own (`small_fft`, the small robot build), so
+//! that every build runs every file.
 //!
 //! tract-core's own `Fft` plans the transform again at every run and walks the tensor through
 //! per-element slices: 112 µs of a BioTac window's 339 (19 transforms of 400 frames,
 //! `cargo run --release -p pvt3-bench-tools --bin profile`). Planned once over contiguous rows,
 //! the same rustfft transform takes 7.7 µs for all 19 (docs/benchmarks.md).
 
+#[cfg(feature = "spectral")]
 use std::sync::Arc;
 
-use rustfft::num_complex::Complex;
-use rustfft::{Fft, FftPlanner};
+#[cfg(feature = "spectral")]
+use rustfft::{num_complex::Complex, Fft, FftPlanner};
 use tract_core::internal::*;
 
 /// The transform of every row of `n` real values of the input.
 #[derive(Clone)]
 pub(crate) struct RealDft {
     n: usize,
+    #[cfg(feature = "spectral")]
     fft: Arc<dyn Fft<f32>>,
+    #[cfg(not(feature = "spectral"))]
+    fft: crate::small_fft::RealFft,
 }
 
 impl RealDft {
     /// The transform of rows of `n` values.
     pub(crate) fn new(n: usize) -> Self {
-        Self { n, fft: FftPlanner::new().plan_fft_forward(n) }
+        #[cfg(feature = "spectral")]
+        let fft = FftPlanner::new().plan_fft_forward(n);
+        #[cfg(not(feature = "spectral"))]
+        let fft = crate::small_fft::RealFft::new(n);
+        Self { n, fft }
+    }
+
+    /// The transform of each row of `real` into `out`, real and imaginary parts in turn.
+    #[cfg(feature = "spectral")]
+    fn transform(&self, real: &[f32], out: &mut Vec<f32>) {
+        let mut row = vec![Complex::new(0.0, 0.0); self.n];
+        let mut scratch = vec![Complex::new(0.0, 0.0); self.fft.get_inplace_scratch_len()];
+        for values in real.chunks_exact(self.n) {
+            row.iter_mut().zip(values).for_each(|(c, v)| *c = Complex::new(*v, 0.0));
+            self.fft.process_with_scratch(&mut row, &mut scratch);
+            out.extend(row.iter().flat_map(|c| [c.re, c.im]));
+        }
+    }
+
+    /// The transform of each row of `real` into `out`, real and imaginary parts in turn.
+    #[cfg(not(feature = "spectral"))]
+    fn transform(&self, real: &[f32], out: &mut Vec<f32>) {
+        let mut row = vec![crate::small_fft::Complex::default(); self.n];
+        let mut scratch = Vec::new();
+        for values in real.chunks_exact(self.n) {
+            self.fft.transform(values, &mut row, &mut scratch);
+            out.extend(row.iter().flat_map(|c| [c.re, c.im]));
+        }
     }
 }
 
@@ -66,13 +99,7 @@ impl EvalOp for RealDft {
         let mut shape: TVec<usize> = x.shape().into();
         *shape.last_mut().context("a signal of rank 2 or more")? = 2;
         let mut out = Vec::with_capacity(2 * real.len());
-        let mut row = vec![Complex::new(0.0, 0.0); self.n];
-        let mut scratch = vec![Complex::new(0.0, 0.0); self.fft.get_inplace_scratch_len()];
-        for values in real.chunks_exact(self.n) {
-            row.iter_mut().zip(values).for_each(|(c, v)| *c = Complex::new(*v, 0.0));
-            self.fft.process_with_scratch(&mut row, &mut scratch);
-            out.extend(row.iter().flat_map(|c| [c.re, c.im]));
-        }
+        self.transform(real, &mut out);
         Ok(tvec!(Tensor::from_shape(&shape, &out)?.into_tvalue()))
     }
 }

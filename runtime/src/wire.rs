@@ -145,7 +145,6 @@ impl Builder<'_> {
                 };
                 self.wire(name, op, &inputs)
             }
-            #[cfg(feature = "spectral")]
             Op::Dft => {
                 // Opset 17, as the exporter writes it (the spectral head): a forward, two-sided
                 // transform of a real signal `[…, n, 1]` along its frames `n`, to `[…, n, 2]`.
@@ -157,9 +156,6 @@ impl Builder<'_> {
                 ensure!(axis + 2 == rank, "a transform along another axis than the next-to-last");
                 self.wire(name, crate::real_dft::RealDft::new(shape[axis]), &[x])
             }
-            // `Classifier::from_bytes` refuses a spectral file first (`Error::NoSpectral`).
-            #[cfg(not(feature = "spectral"))]
-            Op::Dft => bail!("the DFT op: this runtime was built without the `spectral` feature"),
             Op::MatMul => {
                 arity(2..=2)?;
                 self.matmul(name, &inputs, rank)
