@@ -80,6 +80,22 @@ def t_975(df):
     return t(df)
 
 
+def summary(results, what):
+    """The line of a script's runs `results` ((seed, test accuracy) each, of `what`): the mean
+    ± std and, over several seeds, their means and the 95 % interval (Student's t over them)."""
+    accuracies = [a for _, a in results]
+    line = f"{len(results)} runs ({what}): test {statistics.mean(accuracies):.4f}"
+    if len(accuracies) > 1:
+        line += f" ± {statistics.stdev(accuracies):.4f}"
+    seeds = sorted({s for s, _ in results})
+    if len(seeds) > 1:
+        means = [statistics.mean(a for s, a in results if s == seed) for seed in seeds]
+        half = t_975(len(means) - 1) * statistics.stdev(means) / len(means) ** 0.5
+        m = statistics.mean(means)
+        line += f"; seed means {', '.join(f'{v:.4f}' for v in means)}, 95 % interval [{m - half:.4f}, {m + half:.4f}]"
+    return line
+
+
 def runs(cv_dir):
     """(seed, validation fold, folds) of each run of a `pvt3 cv` directory, from what it recorded."""
     found = []
@@ -110,17 +126,7 @@ def main():
         accuracy = (ridge(table[train], labels[train], table[test], classes, best) == labels[test]).mean()
         results.append((seed, accuracy))
         print(f"seed {seed} fold {k}: validation {max(scores):.4f} (strength {best}), test {accuracy:.4f}")
-    accuracies = [a for _, a in results]
-    line = f"{len(results)} runs ({table.shape[1]} features): test {statistics.mean(accuracies):.4f}"
-    if len(accuracies) > 1:
-        line += f" ± {statistics.stdev(accuracies):.4f}"
-    seeds = sorted({s for s, _ in results})
-    if len(seeds) > 1:
-        means = [statistics.mean(a for s, a in results if s == seed) for seed in seeds]
-        half = t_975(len(means) - 1) * statistics.stdev(means) / len(means) ** 0.5
-        m = statistics.mean(means)
-        line += f"; seed means {', '.join(f'{v:.4f}' for v in means)}, 95 % interval [{m - half:.4f}, {m + half:.4f}]"
-    print(line)
+    print(summary(results, f"{table.shape[1]} features"))
 
 
 if __name__ == "__main__":

@@ -11,14 +11,13 @@ strength, 4 tests; no test touch reaches the standardisation or the choice. Targ
 for a touch's class), rows and targets centred; the system solved is the rows' (the dual), as
 touches are far fewer than values.
 """
-import statistics
 import sys
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from camera_linear import TEST_FOLD, runs, t_975  # noqa: E402
+from camera_linear import TEST_FOLD, runs, summary  # noqa: E402
 
 STRENGTHS = [1e-4, 1e-3, 1e-2, 1e-1, 1.0, 10.0, 100.0, 1000.0]
 
@@ -56,17 +55,7 @@ def main():
         accuracy = (predict(table[test], best) == labels[test]).mean()
         results.append((seed, accuracy))
         print(f"seed {seed} fold {k}: validation {max(scores):.4f} (strength {STRENGTHS[best]}), test {accuracy:.4f}")
-    accuracies = [a for _, a in results]
-    line = f"{len(results)} runs ({table.shape[1]} values a touch): test {statistics.mean(accuracies):.4f}"
-    if len(accuracies) > 1:
-        line += f" ± {statistics.stdev(accuracies):.4f}"
-    seeds = sorted({s for s, _ in results})
-    if len(seeds) > 1:
-        means = [statistics.mean(a for s, a in results if s == seed) for seed in seeds]
-        half = t_975(len(means) - 1) * statistics.stdev(means) / len(means) ** 0.5
-        m = statistics.mean(means)
-        line += f"; seed means {', '.join(f'{v:.4f}' for v in means)}, 95 % interval [{m - half:.4f}, {m + half:.4f}]"
-    print(line)
+    print(summary(results, f"{table.shape[1]} values a touch"))
 
 
 if __name__ == "__main__":

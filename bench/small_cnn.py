@@ -17,7 +17,6 @@ risen for `--patience` epochs), and 4 tests it. No test touch reaches training, 
 standardisation or the choice. Each run is seeded by its cross-validation's seed and fold.
 """
 import argparse
-import statistics
 import sys
 import time
 from pathlib import Path
@@ -27,7 +26,7 @@ import torch
 from torch import nn
 
 sys.path.insert(0, str(Path(__file__).parent))
-from camera_linear import TEST_FOLD, runs, t_975  # noqa: E402
+from camera_linear import TEST_FOLD, runs, summary  # noqa: E402
 
 
 def network(inputs, classes):
@@ -104,17 +103,7 @@ def main():
         a, v, epoch = run(x, y, torch.tensor(train), torch.tensor(val), torch.tensor(test), classes, seed * 10 + k, args)
         results.append((seed, a))
         print(f"seed {seed} fold {k}: validation {v:.4f} (epoch {epoch}), test {a:.4f}, {time.time() - started:.0f} s", flush=True)
-    accuracies = [a for _, a in results]
-    line = f"{len(results)} runs: test {statistics.mean(accuracies):.4f}"
-    if len(accuracies) > 1:
-        line += f" ± {statistics.stdev(accuracies):.4f}"
-    seeds = sorted({s for s, _ in results})
-    if len(seeds) > 1:
-        means = [statistics.mean(a for s, a in results if s == seed) for seed in seeds]
-        half = t_975(len(means) - 1) * statistics.stdev(means) / len(means) ** 0.5
-        m = statistics.mean(means)
-        line += f"; seed means {', '.join(f'{v:.4f}' for v in means)}, 95 % interval [{m - half:.4f}, {m + half:.4f}]"
-    print(line)
+    print(summary(results, "a small CNN"))
 
 
 if __name__ == "__main__":
