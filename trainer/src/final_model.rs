@@ -17,7 +17,7 @@ use crate::data::Dataset;
 use crate::provenance::{Expected, Stopping};
 use crate::prune::{prune_and_fine_tune, PruneStage};
 use crate::run_dir::{Checkpoint, CrossValidation, Run, CV_SUMMARY};
-use crate::spectrum_fit::{form::Form, Choice, Chosen};
+use crate::spectrum_fit::{form::Form, Choice};
 use crate::train::{train, RunResult, RunSpec};
 use crate::{Error, Result};
 
@@ -161,16 +161,13 @@ impl Plan {
 }
 
 /// The camera head a final model takes, which has no validation fold to choose by: what the
-/// cross-validation's runs chose (`head.json`), as [`most_chosen`] reads them. `None` where no
-/// run has a camera head.
+/// cross-validation's runs chose (`crate::spectrum_fit::recorded`), as [`most_chosen`] reads
+/// them. `None` where no run has a camera head.
 fn camera_head(cv: &Path, runs: &[RunResult]) -> Result<Option<Choice>> {
     let mut chosen = Vec::new();
     for r in runs {
         let fold = r.val_fold.expect("a cross-validation's run validates");
-        let head = Run(&CrossValidation(cv).run(r.seed, fold)).head();
-        if head.exists() {
-            chosen.push(read_json::<Chosen>(&head)?.choice);
-        }
+        chosen.extend(crate::spectrum_fit::recorded(&CrossValidation(cv).run(r.seed, fold))?.map(|c| c.choice));
     }
     Ok(most_chosen(&chosen))
 }
@@ -180,11 +177,8 @@ fn camera_head(cv: &Path, runs: &[RunResult]) -> Result<Option<Choice>> {
 fn most_chosen(chosen: &[Choice]) -> Option<Choice> {
     let count = |form: Form| chosen.iter().filter(|c| c.form == form).count();
     let form = Form::ALL.into_iter().rev().max_by_key(|f| count(*f)).filter(|f| count(*f) > 0)?;
-    let of = |value: fn(&Choice) -> Option<f64>| -> Option<f64> {
-        let mut values: Vec<f64> = chosen.iter().filter(|c| c.form == form).filter_map(value).collect();
-        values.sort_by(f64::total_cmp);
-        values.get(values.len() / 2).copied()
-    };
+    let of =
+        |value: fn(&Choice) -> Option<f64>| middle(chosen.iter().filter(|c| c.form == form).filter_map(value).collect(), f64::total_cmp);
     Some(Choice { form, strength: of(|c| c.strength), scale: of(|c| c.scale) })
 }
 
@@ -216,9 +210,13 @@ fn most_kept(masks: &[Vec<f32>]) -> Vec<bool> {
 
 /// The median of `epochs`, the upper of the middle two of an even count.
 fn median(epochs: &[usize]) -> usize {
-    let mut sorted = epochs.to_vec();
-    sorted.sort_unstable();
-    sorted.get(sorted.len() / 2).copied().unwrap_or(0)
+    middle(epochs.to_vec(), Ord::cmp).unwrap_or(0)
+}
+
+/// The middle of `values` in `order` (the upper of two middle ones); `None` without any.
+fn middle<T: Copy>(mut values: Vec<T>, order: impl FnMut(&T, &T) -> std::cmp::Ordering) -> Option<T> {
+    values.sort_by(order);
+    values.get(values.len() / 2).copied()
 }
 
 /// Writes the stopping rule and the expected accuracy into the checkpoint `dir`'s provenance.

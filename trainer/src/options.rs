@@ -53,7 +53,7 @@ pub struct TrainOptions {
     /// validation folds (`crate::final_model`), which a run without one cannot choose.
     #[arg(skip)]
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub camera_head: Option<crate::spectrum_fit::Choice>,
+    pub camera_head: Option<crate::spectrum_fit::form::Choice>,
     /// What fine-tuning after pruning holds at zero.
     #[arg(skip)]
     #[serde(flatten)]

@@ -12,13 +12,17 @@
 //! Such a head reads a pruned patch's pixels as 0 (`Pvt3::head_frames`), so a run that prunes
 //! patches fits it again, to what it then reads (`train`).
 
+use std::path::Path;
+
 use candle_core::{Device, Tensor};
 use candle_nn::VarMap;
 use ndarray::{Array2, Axis};
 use pvt3_models::Model;
 use pvt3_spec::names;
 
+use crate::checkpoint::{read_json, write_json_atomically};
 use crate::data::windows::Samples;
+use crate::run_dir::Run;
 use crate::Result;
 
 pub mod form;
@@ -107,6 +111,17 @@ pub fn fit(model: &Model, varmap: &VarMap, train: &Samples, val: &Samples, given
         var.set(&value.to_dtype(candle_core::DType::F32)?.to_device(&Device::Cpu)?)?;
     }
     Ok(chosen)
+}
+
+/// Records in the run directory `dir` what its camera head's fit chose (`Run::head`).
+pub fn record(dir: &Path, chosen: &Chosen) -> Result<()> {
+    write_json_atomically(&Run(dir).head(), chosen)
+}
+
+/// What the run directory `dir`'s camera head's fit chose ([`record`]); `None` without one.
+pub fn recorded(dir: &Path) -> Result<Option<Chosen>> {
+    let head = Run(dir).head();
+    head.exists().then(|| read_json(&head)).transpose()
 }
 
 /// The columns of a head over an image's space's features: the texture's (each colour's level,

@@ -156,22 +156,13 @@ fn finish(sensors: &[Sensor], spec: &RunSpec, opts: &TrainOptions, run: &mut Run
             test_accuracy: best.test_accuracy,
             epochs: run.epochs_done,
             wall_seconds: run.wall_seconds,
-            head: head_form(&sensor.dir)?,
+            head: crate::spectrum_fit::recorded(&sensor.dir)?.map(|c| c.choice.form),
         };
         calibrate_stopping(&Run(&sensor.dir).model(), &sensor.val_set)?;
         write_json(&Run(&sensor.dir).result(), &done)?;
         result = Some(done);
     }
     Ok(result.expect("a run has its own sensor"))
-}
-
-/// The form a run's camera head took, where it has one (`Run::head`).
-fn head_form(dir: &Path) -> Result<Option<crate::spectrum_fit::form::Form>> {
-    let head = Run(dir).head();
-    Ok(match head.exists() {
-        true => Some(checkpoint::read_json::<crate::spectrum_fit::Chosen>(&head)?.choice.form),
-        false => None,
-    })
 }
 
 fn open_log(path: &Path) -> Result<File> {

@@ -29,10 +29,11 @@ pub enum Form {
 }
 
 impl std::fmt::Display for Form {
+    /// Its name, as `head.json` and `pvt3 cv`'s table write it.
     fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
         f.write_str(match self {
-            Form::Texture => "the texture",
-            Form::Pixels => "the pixels",
+            Form::Texture => "texture",
+            Form::Pixels => "pixels",
             Form::Both => "both",
         })
     }
@@ -76,7 +77,7 @@ pub struct Chosen {
 
 impl std::fmt::Display for Chosen {
     fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-        write!(f, "the camera head reads {}", self.choice.form)?;
+        write!(f, "the camera head's form: {}", self.choice.form)?;
         if let (Some(strength), Some(scale)) = (self.choice.strength, self.choice.scale) {
             write!(f, " (ridge strength {strength}, scale {scale})")?;
         }

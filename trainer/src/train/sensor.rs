@@ -124,7 +124,7 @@ impl<'a> Sensor<'a> {
         if fit_heads {
             chosen = crate::spectrum_fit::fit(&learner.model, &learner.varmap, &self.train_set, &self.val_set, opts.camera_head)?;
             if let Some(chosen) = &chosen {
-                checkpoint::write_json_atomically(&Run(&self.dir).head(), chosen)?;
+                crate::spectrum_fit::record(&self.dir, chosen)?;
             }
         }
         if opts.held.pruned {

@@ -124,7 +124,7 @@ fn print_runs(s: &CvSummary, wall: f64, summary: &std::path::Path) {
     let heads = s.runs.iter().any(|r| r.head.is_some());
     let head = |r: &pvt3_trainer::train::RunResult| match (heads, r.head) {
         (false, _) => String::new(),
-        (true, form) => format!(" {:>8}", form.map_or("-".into(), |f| format!("{f:?}").to_lowercase())),
+        (true, form) => format!(" {:>8}", form.map_or("-".into(), |f| f.to_string())),
     };
     let head_title = if heads { format!(" {:>8}", "head") } else { String::new() };
     println!("{:>6} {:>5} {:>6} {:>8} {:>8} {:>8} {:>12}{head_title}", "seed", "fold", "epoch", "val", "test", "seconds", "pruned test");
