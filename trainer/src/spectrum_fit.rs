@@ -41,8 +41,8 @@ const PENALTIES: [f64; 6] = [1e-1, 3e-2, 1e-2, 3e-3, 1e-3, 3e-4];
 /// about 1e-7 of its size in f32, so that its rounding stays below 1e-4 once standardised, and
 /// the forms agree with the f64 reference; 1/σ of a feature that hardly varies multiplied it by
 /// up to 10⁶ (tests/shapes.rs). PhysiCLeAR's features vary by 1.7e-3 at least, unchanged: a floor
-/// of 1e-2 read its least varying ones less, and its seed 0 lost 3 points (docs/camera.md,
-/// "Where the gel is pressed").
+/// of 1e-2 read its least varying ones less, and its seed 0 lost 3 points (docs/results.md,
+/// "Camera sets beside their anchors").
 const STD_FLOOR: f64 = 1e-3;
 
 /// The penalty without a validation fold (a final model's): the one most of PhysiCLeAR's
