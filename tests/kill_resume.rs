@@ -43,24 +43,35 @@ fn a_run_killed_anywhere_resumes_to_the_same_bytes() {
     std::fs::rename(&killed, &whole).unwrap();
 
     let mut rng = pvt3_spec::Rng::new(11);
+    let logged = || std::fs::read_to_string(killed.join("metrics.jsonl")).map_or(0, |m| m.lines().count());
+    let epoch = took.div_f64(EPOCHS as f64);
     // The epochs the run had logged at each kill that caught it training (between its first
     // and its last epoch).
     let mut caught = std::collections::BTreeSet::new();
     for k in 0..KILLS {
-        // Each call lives a tenth to a third of a whole run's time (its start-up included), so
-        // the run advances an epoch or a few between kills, caught at a different moment of one
-        // each time: stepping, validating, writing its checkpoint or its resume state.
-        let share = 0.1 + 0.23 * rng.uniform() as f64;
+        let before = logged();
+        if before >= EPOCHS {
+            break;
+        }
         let mut run = args(&killed);
         if k > 0 {
             run.push("--resume".into());
         }
         let mut child = quiet(&run).spawn().unwrap();
-        std::thread::sleep(took.mul_f64(share));
+        // Each call is let log an epoch more, then lives a random share of an epoch's time, so
+        // that the run advances between kills however busy the machine is, and is caught at a
+        // different moment of an epoch each time: stepping, validating, writing its checkpoint
+        // or its resume state. (A share of the whole run's time caught it at the same epoch
+        // again and again when a load beside slowed its start-up.)
+        let deadline = Instant::now() + 3 * took;
+        while logged() <= before && child.try_wait().unwrap().is_none() && Instant::now() < deadline {
+            std::thread::sleep(std::time::Duration::from_millis(2));
+        }
+        std::thread::sleep(epoch.mul_f64(rng.uniform() as f64));
         // SIGKILL: what a power cut or the out-of-memory killer does.
         let _ = child.kill();
         child.wait().unwrap();
-        let done = std::fs::read_to_string(killed.join("metrics.jsonl")).map_or(0, |m| m.lines().count());
+        let done = logged();
         if (1..EPOCHS).contains(&done) {
             caught.insert(done);
         }
