@@ -83,6 +83,21 @@ pub fn write_json_atomically<T: Serialize>(path: &Path, value: &T) -> Result<()>
     std::fs::rename(&tmp, path).map_err(Error::io(path))
 }
 
+/// Removes the temporary files (`*.tmp`) under `dir`: a process killed between writing one and
+/// renaming it leaves it behind. Only for a directory one process writes, such as a run's.
+pub fn remove_temporaries(dir: &Path) -> Result<()> {
+    let Ok(entries) = std::fs::read_dir(dir) else { return Ok(()) };
+    for entry in entries {
+        let path = entry.map_err(Error::io(dir))?.path();
+        if path.is_dir() {
+            remove_temporaries(&path)?;
+        } else if path.extension().is_some_and(|e| e == "tmp") {
+            std::fs::remove_file(&path).map_err(Error::io(&path))?;
+        }
+    }
+    Ok(())
+}
+
 pub fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T> {
     let text = std::fs::read_to_string(path).map_err(Error::io(path))?;
     serde_json::from_str(&text).map_err(|e| checkpoint_error(path, format!("malformed JSON ({e})")))
@@ -185,4 +200,25 @@ fn resolve(path: &Path) -> Result<PathBuf> {
         .filter_map(|c| existing_dir(c))
         .find(|d| Checkpoint(d).config().exists())
         .ok_or_else(|| checkpoint_error(path, "not a checkpoint directory (no config.json in it or in its model/)"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_killed_writes_temporaries_are_removed_and_nothing_else() {
+        let dir = std::env::temp_dir().join(format!("pvt3-temporaries-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(dir.join("model")).unwrap();
+        let names = ["curves.svg", "curves.svg.41.tmp", "model/provenance.json", "model/provenance.json.7.tmp", "metrics.jsonl"];
+        for name in names {
+            std::fs::write(dir.join(name), "x").unwrap();
+        }
+        remove_temporaries(&dir).unwrap();
+        let left: Vec<bool> = names.iter().map(|n| dir.join(n).exists()).collect();
+        assert_eq!(left, [true, false, true, false, true]);
+        remove_temporaries(&dir.join("absent")).unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

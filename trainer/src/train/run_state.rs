@@ -91,8 +91,12 @@ pub(super) fn find(spec: &RunSpec, out: &Path, resume: bool) -> Result<Found> {
 }
 
 /// The run's state at its first epoch: restored with every sensor's network from `last` when
-/// resuming (each metrics log cut to the epochs done), otherwise fresh (the logs removed).
+/// resuming (each metrics log cut to the epochs done), otherwise fresh (the logs removed). Either
+/// way, the temporary files a killed run left half-written are removed.
 pub(super) fn begin(sensors: &mut [Sensor], opts: &TrainOptions, last: Option<(PathBuf, RunState)>) -> Result<RunState> {
+    for sensor in sensors.iter() {
+        checkpoint::remove_temporaries(&sensor.dir)?;
+    }
     let Some((dir, state)) = last else {
         for sensor in sensors.iter() {
             let _ = std::fs::remove_file(Run(&sensor.dir).metrics());
