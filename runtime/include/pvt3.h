@@ -18,6 +18,7 @@
 #define PVT3_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 #ifdef __cplusplus
 extern "C" {
@@ -85,6 +86,34 @@ int pvt3_classifier_num_classes(const pvt3_classifier *c, size_t *out);
 int pvt3_classifier_camera_frame_len(const pvt3_classifier *c, size_t *out);
 /* Frames per temporal token: sessions answer, and continuous streams count `every`, in tokens. */
 int pvt3_classifier_tubelet(const pvt3_classifier *c, size_t *out);
+/* The axes of one window, [height, width, (channels,) frames]: *rank of them (3, or 4 with a
+ * channel axis) written to `shape` (room for shape_len values); *rank is written also when shape
+ * is too small (PVT3_ERR_INPUT): ask again with room enough. */
+int pvt3_classifier_input_shape(const pvt3_classifier *c, size_t *shape, size_t shape_len, size_t *rank);
+/* One of the camera's frames as pvt3_session_push_camera_frame takes it: for a model of camera
+ * frames, the frame as the camera gives it (the file's pvt3.camera says how it is read); otherwise
+ * one model frame (channels 1 for a window without a channel axis). */
+int pvt3_classifier_camera_shape(const pvt3_classifier *c, size_t *height, size_t *width, size_t *channels);
+/* The frames of a window the model reads, ascending, into `frames` (room for frames_len values);
+ * the others were pruned and are dropped on arrival. *count is written also when frames is too
+ * small (PVT3_ERR_INPUT). */
+int pvt3_classifier_kept_frames(const pvt3_classifier *c, size_t *frames, size_t frames_len, size_t *count);
+/* Whether the file can be streamed (sessions and provisional answers): *out = 1, else 0 (a file
+ * whose spectral head reads the whole window, exported before the head streamed). */
+int pvt3_classifier_streams(const pvt3_classifier *c, int *out);
+/* The file's metadata, key and value strings (docs/deploy.md lists the keys): pvt3.classes,
+ * pvt3.format (the format version), pvt3.input_layout, pvt3.kept_frames, pvt3.config,
+ * pvt3.provenance (JSON: how the model was trained and, for a `pvt3 final` file, the accuracy
+ * its cross-validation expects, under "expected"), pvt3.stop_rule, pvt3.reading, pvt3.camera,
+ * pvt3.digest. *out gets the value of `key`, NUL-terminated, valid as long as the handle, and
+ * unless len is NULL *len its length in bytes; a key the file does not have is no error: *out is
+ * then NULL and *len 0. */
+int pvt3_classifier_metadata(const pvt3_classifier *c, const char *key, const char **out, size_t *len);
+/* How many metadata entries the file has. */
+int pvt3_classifier_metadata_count(const pvt3_classifier *c, size_t *out);
+/* The key of metadata entry `index` (0 to count - 1, in the file's order), as
+ * pvt3_classifier_class_name gives a name. */
+int pvt3_classifier_metadata_key(const pvt3_classifier *c, size_t index, const char **out, size_t *len);
 /* Name of class `index`, NUL-terminated, valid as long as the handle; unless len is NULL, its
  * length in bytes (without the NUL) is written to *len. */
 int pvt3_classifier_class_name(const pvt3_classifier *c, size_t index, const char **out, size_t *len);
@@ -92,6 +121,16 @@ int pvt3_classifier_class_name(const pvt3_classifier *c, size_t index, const cha
  * probabilities, and the most probable class of each window unless classes_out is NULL. */
 int pvt3_classify(const pvt3_classifier *c, const float *frames, size_t frames_len, size_t batch,
                   float *probabilities, size_t probabilities_len, size_t *classes_out);
+/* The logits of `batch` windows (the scores the probabilities are the softmax of), taking what
+ * pvt3_classify takes: batch x classes values into `logits` (room for logits_len values). */
+int pvt3_classify_logits(const pvt3_classifier *c, const float *frames, size_t frames_len, size_t batch, float *logits,
+                         size_t logits_len);
+/* Classifies `touches` whole touches of the camera's 8-bit frames as it gives them: frames_len
+ * bytes, each touch [height, width, channels, frames] (frames innermost, any whole number of
+ * frames, the same for every touch), each read as a session reads the frames pushed one by one
+ * with pvt3_session_push_camera_frame. Writes what pvt3_classify writes. */
+int pvt3_classify_camera_touches(const pvt3_classifier *c, const unsigned char *frames, size_t frames_len, size_t touches,
+                                 float *probabilities, size_t probabilities_len, size_t *classes_out);
 /* A touch as the robot recorded it (frames_len raw values in the window's layout, with any
  * number of frames), slid at `speed` and pressed at `force` (0: not known), brought to the frames
  * the model reads: for a model trained on touches read by distance and scaled to one force
@@ -115,6 +154,8 @@ int pvt3_session_new(const pvt3_classifier *c, pvt3_session **out);
 int pvt3_session_new_touch(const pvt3_classifier *c, double speed, double force, pvt3_session **out);
 /* Frees a session (NULL is ignored); it may outlive its classifier. */
 void pvt3_session_free(pvt3_session *s);
+/* Takes the touch's next frame (frame_len = height x width x channels raw values). PVT3_ERR_INPUT
+ * for a frame of another length, a non-finite value, or a frame beyond the window. */
 int pvt3_session_push_frame(pvt3_session *s, const float *frame, size_t frame_len);
 /* Takes the camera's next frame, 8-bit as the camera gives it, row-major, channels innermost
  * (frame_len = pvt3_classifier_camera_frame_len): cropped, shrunk, greyed as the training's
@@ -136,6 +177,10 @@ int pvt3_session_peek(pvt3_session *s, float *probabilities, size_t probabilitie
 /* Forgets the touch in progress: the session takes a new touch from its first frame. What a robot
  * calls when it ends a touch early on a peek (pvt3_session_finish resets the session itself). */
 int pvt3_session_reset(pvt3_session *s);
+/* The frames of the touch's window the session has taken so far, as the model reads them (of
+ * pvt3_classifier_frames; a session for a touch counts the frames it has read, not those
+ * recorded). */
+int pvt3_session_received(const pvt3_session *s, size_t *out);
 /* Continuous classification of a stream longer than the window (a robot that keeps sliding):
  * frames go in one by one, without end; once a whole window is in, and then after every `every`
  * temporal tokens, the answer for the window ending at the latest frame comes out. Each answer
@@ -151,6 +196,8 @@ int pvt3_continuous_push_frame(pvt3_continuous *s, const float *frame, size_t fr
                                size_t probabilities_len, size_t *class_out, int *answered_out);
 /* Forgets the stream: the next answer comes after a whole new window. */
 int pvt3_continuous_reset(pvt3_continuous *s);
+/* The frames the stream has taken since it started or was last reset. */
+int pvt3_continuous_received(const pvt3_continuous *s, uint64_t *out);
 /* The library's version and the file format it reads, e.g. "0.1.0 (format 1.1)"; a static string.
  * The runtime reads every file of its format's major version and refuses others (PVT3_ERR_MODEL). */
 const char *pvt3_version(void);

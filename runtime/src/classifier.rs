@@ -34,6 +34,8 @@ pub struct Prediction {
 pub struct Classifier {
     graph: GraphProto,
     header: Header,
+    /// The file's metadata, key and value, in the file's order.
+    metadata: Vec<(String, String)>,
     sample_shape: Vec<usize>,
     plans: Mutex<HashMap<usize, Arc<Plan>>>,
     stages: Mutex<Option<Arc<Stages>>>,
@@ -66,14 +68,15 @@ impl Classifier {
         let name = name.to_string();
         pvt3_format::verify(bytes).map_err(|reason| Error::Corrupted { path: name.clone(), reason })?;
         let model = crate::onnx::decode(bytes).map_err(|reason| Error::NotOnnx { path: name.clone(), reason })?;
-        let entries = model.metadata_props.iter().map(|e| (e.key.as_str(), e.value.as_str()));
+        let metadata: Vec<(String, String)> = model.metadata_props.into_iter().map(|e| (e.key, e.value)).collect();
+        let entries = metadata.iter().map(|(k, v)| (k.as_str(), v.as_str()));
         let header = Header::parse(entries).map_err(|reason| Error::NotPvt3 { path: name.clone(), reason })?;
         let graph = model.graph.unwrap_or_default();
         let sample_shape = header.sample_shape();
         let plans = Mutex::new(HashMap::new());
         let stages = Mutex::new(None);
         let kernels = Kernels::default();
-        Ok(Self { graph, header, sample_shape, plans, stages, threads: 1, kernels, path: name })
+        Ok(Self { graph, header, metadata, sample_shape, plans, stages, threads: 1, kernels, path: name })
     }
 
     /// Runs on `threads` threads from now on (default 1; small models rarely gain from more).
@@ -113,6 +116,18 @@ impl Classifier {
         &self.header.classes
     }
 
+    /// The file's metadata, key and value, in the file's order: the `pvt3.` keys
+    /// ([`pvt3_format::keys`]; `pvt3.provenance` holds how the model was trained and, for a
+    /// `pvt3 final` file, the accuracy its cross-validation expects) and any other the file has.
+    pub fn metadata(&self) -> &[(String, String)] {
+        &self.metadata
+    }
+
+    /// The value of the metadata `key`, if the file has it.
+    pub fn metadata_value(&self, key: &str) -> Option<&str> {
+        self.metadata.iter().find(|(k, _)| k == key).map(|(_, v)| v.as_str())
+    }
+
     /// One window: `[height, width, (channels,) frames]`.
     pub fn sample_shape(&self) -> &[usize] {
         &self.sample_shape
@@ -147,13 +162,17 @@ impl Classifier {
         self.header.camera
     }
 
-    /// Bytes in one of the camera's frames as [`crate::Session::push_camera_frame`] takes it: the
-    /// recorded frame's for a model with a [`Self::camera`], one model frame's otherwise.
+    /// One of the camera's frames as [`crate::Session::push_camera_frame`] takes it, `[height,
+    /// width, channels]`: the recorded frame for a model with a [`Self::camera`], one model frame
+    /// otherwise.
+    pub fn camera_frame_shape(&self) -> [usize; 3] {
+        let d = &self.header.dims;
+        self.header.camera.map_or([d.height, d.width, d.channels], |camera| camera.recorded)
+    }
+
+    /// Bytes in one of the camera's frames: [`Self::camera_frame_shape`]'s product.
     pub fn camera_frame_len(&self) -> usize {
-        match self.header.camera {
-            Some(camera) => camera.recorded.iter().product(),
-            None => self.frame_len(),
-        }
+        self.camera_frame_shape().iter().product()
     }
 
     /// A touch as the robot recorded it, in the sample layout (`[height, width, (channels,) n]`,

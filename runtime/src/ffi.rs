@@ -36,10 +36,11 @@ const STATUS_TEXT: [&CStr; 6] = [
     c"PVT3_ERR_INTERNAL: a fault inside the library (please report it, with pvt3_last_error())",
 ];
 
-/// What C holds: the classifier and its class names as C strings.
+/// What C holds: the classifier, and its class names and metadata as C strings.
 pub struct Pvt3Classifier {
     classifier: Classifier,
     names: Vec<CString>,
+    metadata: Vec<(CString, CString)>,
 }
 
 /// What C holds for a touch in progress.
@@ -59,8 +60,7 @@ thread_local! {
 }
 
 fn set_last_error(msg: String) {
-    let c = CString::new(msg.replace('\0', " ")).expect("NULs replaced");
-    LAST_ERROR.with(|e| *e.borrow_mut() = c);
+    LAST_ERROR.with(|e| *e.borrow_mut() = c_string(&msg));
 }
 
 fn status(e: &Error) -> c_int {
@@ -166,8 +166,14 @@ pub unsafe extern "C" fn pvt3_classifier_load(path: *const c_char, out: *mut *mu
 
 /// A classifier as C holds it.
 fn handle(classifier: Classifier) -> *mut Pvt3Classifier {
-    let names = classifier.classes().iter().map(|n| CString::new(n.replace('\0', " ")).expect("NULs replaced")).collect();
-    Box::into_raw(Box::new(Pvt3Classifier { classifier, names }))
+    let names = classifier.classes().iter().map(|n| c_string(n)).collect();
+    let metadata = classifier.metadata().iter().map(|(k, v)| (c_string(k), c_string(v))).collect();
+    Box::into_raw(Box::new(Pvt3Classifier { classifier, names, metadata }))
+}
+
+/// `text` as a C string, a NUL in it (which no file of ours writes) read as a space.
+fn c_string(text: &str) -> CString {
+    CString::new(text.replace('\0', " ")).expect("NULs replaced")
 }
 
 /// Loads a model from the `len` bytes of an `.onnx` file in memory (flash, a download), named
@@ -321,13 +327,169 @@ pub unsafe extern "C" fn pvt3_classifier_class_name(
 ) -> c_int {
     guard(|| {
         let c = c.as_ref().ok_or_else(|| null("classifier"))?;
-        let out = out.as_mut().ok_or_else(|| null("out"))?;
-        let name = c.names.get(index).ok_or_else(|| (PVT3_ERR_INPUT, format!("class {index} of {}", c.names.len())))?;
-        *out = name.as_ptr();
-        if let Some(len) = len.as_mut() {
-            *len = name.as_bytes().len();
+        let name = c.names.get(index).ok_or_else(|| (PVT3_ERR_INPUT, format!("class {index} of {}", c.names.len())));
+        write_text(name?, out, len)
+    })
+}
+
+/// Points `*out` at `text` and, unless `len` is null, writes its length in bytes to `*len`.
+///
+/// # Safety
+/// `out` and `len` are writable or null; `text` outlives what C does with `*out`.
+unsafe fn write_text(text: &CStr, out: *mut *const c_char, len: *mut usize) -> std::result::Result<(), (c_int, String)> {
+    *out.as_mut().ok_or_else(|| null("out"))? = text.as_ptr();
+    if let Some(len) = len.as_mut() {
+        *len = text.to_bytes().len();
+    }
+    Ok(())
+}
+
+/// Writes `values` to `out` (room for `out_len`) and their count to `*count`, also when `out` is
+/// too small (then PVT3_ERR_INPUT), so that the caller can ask again with room enough.
+///
+/// # Safety
+/// `out` has room for `out_len` values or is null; `count` is writable or null.
+unsafe fn write_values<T: Copy>(
+    values: &[T],
+    (out, out_len): (*mut T, usize),
+    (count, count_name): (*mut usize, &str),
+) -> std::result::Result<(), (c_int, String)> {
+    if out.is_null() {
+        return Err(null("out"));
+    }
+    *count.as_mut().ok_or_else(|| null(count_name))? = values.len();
+    if out_len < values.len() {
+        return Err((PVT3_ERR_INPUT, format!("out has room for {out_len} values; {} needed", values.len())));
+    }
+    std::slice::from_raw_parts_mut(out, values.len()).copy_from_slice(values);
+    Ok(())
+}
+
+/// The axes of one window, `[height, width, (channels,) frames]` (`*rank` of them, 3 or 4), into
+/// `shape` (room for `shape_len`); `*rank` is written also when `shape` is too small.
+///
+/// # Safety
+/// `c` is a live handle or null; `shape` has room for `shape_len` values or is null; `rank` is
+/// writable or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_classifier_input_shape(
+    c: *const Pvt3Classifier,
+    shape: *mut usize,
+    shape_len: usize,
+    rank: *mut usize,
+) -> c_int {
+    guard(|| {
+        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
+        write_values(c.classifier.sample_shape(), (shape, shape_len), (rank, "rank"))
+    })
+}
+
+/// One of the camera's frames as `pvt3_session_push_camera_frame` takes it: its height, width and
+/// channels (`Classifier::camera_frame_shape`).
+///
+/// # Safety
+/// `c` is a live handle or null; the other pointers are writable or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_classifier_camera_shape(
+    c: *const Pvt3Classifier,
+    height: *mut usize,
+    width: *mut usize,
+    channels: *mut usize,
+) -> c_int {
+    guard(|| {
+        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
+        let [h, w, ch] = c.classifier.camera_frame_shape();
+        for (out, value, what) in [(height, h, "height"), (width, w, "width"), (channels, ch, "channels")] {
+            *out.as_mut().ok_or_else(|| null(what))? = value;
         }
         Ok(())
+    })
+}
+
+/// The frames of a window the model reads, ascending (the others were pruned), into `frames`
+/// (room for `frames_len`); `*count` is written also when `frames` is too small.
+///
+/// # Safety
+/// `c` is a live handle or null; `frames` has room for `frames_len` values or is null; `count`
+/// is writable or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_classifier_kept_frames(
+    c: *const Pvt3Classifier,
+    frames: *mut usize,
+    frames_len: usize,
+    count: *mut usize,
+) -> c_int {
+    guard(|| {
+        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
+        write_values(c.classifier.kept_frames(), (frames, frames_len), (count, "count"))
+    })
+}
+
+/// Whether the file can be streamed (sessions, provisional answers): 1, else 0.
+///
+/// # Safety
+/// `c` is a live handle or null; `out` is writable or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_classifier_streams(c: *const Pvt3Classifier, out: *mut c_int) -> c_int {
+    guard(|| {
+        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
+        *out.as_mut().ok_or_else(|| null("out"))? = c_int::from(c.classifier.streams());
+        Ok(())
+    })
+}
+
+/// How many metadata entries the file has.
+///
+/// # Safety
+/// `c` is a live handle or null; `out` is writable or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_classifier_metadata_count(c: *const Pvt3Classifier, out: *mut usize) -> c_int {
+    write_size(c, out, |c| c.metadata.len())
+}
+
+/// The key of metadata entry `index` (in the file's order), as `pvt3_classifier_class_name`
+/// gives a name.
+///
+/// # Safety
+/// `c` is a live handle or null; `out` is writable or null; `len` is writable or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_classifier_metadata_key(
+    c: *const Pvt3Classifier,
+    index: usize,
+    out: *mut *const c_char,
+    len: *mut usize,
+) -> c_int {
+    guard(|| {
+        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
+        let entry = c.metadata.get(index).ok_or_else(|| (PVT3_ERR_INPUT, format!("metadata entry {index} of {}", c.metadata.len())));
+        write_text(&entry?.0, out, len)
+    })
+}
+
+/// The value of the metadata `key`, NUL-terminated, valid as long as the handle, and unless
+/// `len` is null its length; a key the file does not have is no error: `*out` is then NULL and
+/// `*len` 0.
+///
+/// # Safety
+/// `c` is a live handle or null; `key` is a NUL-terminated string or null; `out` and `len` are
+/// writable or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_classifier_metadata(
+    c: *const Pvt3Classifier,
+    key: *const c_char,
+    out: *mut *const c_char,
+    len: *mut usize,
+) -> c_int {
+    guard(|| {
+        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
+        if key.is_null() {
+            return Err(null("key"));
+        }
+        let key = CStr::from_ptr(key);
+        match c.metadata.iter().find(|(k, _)| k.as_c_str() == key) {
+            Some((_, value)) => write_text(value, out, len),
+            None => write_text(c"", out, len).map(|()| *out = std::ptr::null()),
+        }
     })
 }
 
@@ -350,23 +512,94 @@ pub unsafe extern "C" fn pvt3_classify(
     guard(|| {
         let c = c.as_ref().ok_or_else(|| null("classifier"))?;
         let input = values_in(frames, frames_len, "frames")?;
-        if probabilities.is_null() {
-            return Err(null("probabilities"));
-        }
-        let needed = batch.checked_mul(c.names.len()).ok_or_else(|| fail(Error::BatchTooLarge { batch }))?;
-        if probabilities_len < needed {
-            return Err((PVT3_ERR_INPUT, format!("probabilities has room for {probabilities_len} values; {needed} needed")));
-        }
-        let predictions = c.classifier.classify_batch(input, batch).map_err(fail)?;
-        let probs = std::slice::from_raw_parts_mut(probabilities, needed);
-        for (i, p) in predictions.iter().enumerate() {
-            probs[i * c.names.len()..(i + 1) * c.names.len()].copy_from_slice(&p.probabilities);
-            if !classes_out.is_null() {
-                *classes_out.add(i) = p.class;
-            }
-        }
+        let probabilities = batch_room(c, batch, probabilities, probabilities_len, "probabilities")?;
+        write_predictions(&c.classifier.classify_batch(input, batch).map_err(fail)?, probabilities, classes_out);
         Ok(())
     })
+}
+
+/// The logits (the scores before the softmax) of `batch` windows, as `pvt3_classify` takes them:
+/// `batch × classes` values into `logits` (room for `logits_len`).
+///
+/// # Safety
+/// Pointers are null or valid for the lengths given.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_classify_logits(
+    c: *const Pvt3Classifier,
+    frames: *const f32,
+    frames_len: usize,
+    batch: usize,
+    logits: *mut f32,
+    logits_len: usize,
+) -> c_int {
+    guard(|| {
+        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
+        let input = values_in(frames, frames_len, "frames")?;
+        let out = batch_room(c, batch, logits, logits_len, "logits")?;
+        out.copy_from_slice(&c.classifier.run(input, batch).map_err(fail)?.0);
+        Ok(())
+    })
+}
+
+/// Classifies `touches` touches of the camera's 8-bit frames as it gives them (`frames_len`
+/// bytes: each touch `[height, width, channels, frames]`, any whole number of frames), each read
+/// as the training's import read its videos (`Classifier::classify_camera_touches`); writes
+/// what `pvt3_classify` writes.
+///
+/// # Safety
+/// Pointers are null or valid for the lengths given.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_classify_camera_touches(
+    c: *const Pvt3Classifier,
+    frames: *const u8,
+    frames_len: usize,
+    touches: usize,
+    probabilities: *mut f32,
+    probabilities_len: usize,
+    classes_out: *mut usize,
+) -> c_int {
+    guard(|| {
+        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
+        let input = values_in(frames, frames_len, "frames")?;
+        let probabilities = batch_room(c, touches, probabilities, probabilities_len, "probabilities")?;
+        write_predictions(&c.classifier.classify_camera_touches(input, touches).map_err(fail)?, probabilities, classes_out);
+        Ok(())
+    })
+}
+
+/// The `batch × classes` values at `out`, once checked that `out` has room for them.
+///
+/// # Safety
+/// `out` is null or valid for `out_len` values.
+unsafe fn batch_room<'a>(
+    c: &Pvt3Classifier,
+    batch: usize,
+    out: *mut f32,
+    out_len: usize,
+    what: &str,
+) -> std::result::Result<&'a mut [f32], (c_int, String)> {
+    if out.is_null() {
+        return Err(null(what));
+    }
+    let needed = batch.checked_mul(c.names.len()).ok_or_else(|| fail(Error::BatchTooLarge { batch }))?;
+    if out_len < needed {
+        return Err((PVT3_ERR_INPUT, format!("{what} has room for {out_len} values; {needed} needed")));
+    }
+    Ok(std::slice::from_raw_parts_mut(out, needed))
+}
+
+/// Each prediction's probabilities, one after the other, and unless `classes_out` is null its
+/// class.
+///
+/// # Safety
+/// `probabilities` has room for the predictions' probabilities; `classes_out` is null or has room
+/// for a class per prediction.
+unsafe fn write_predictions(predictions: &[Prediction], probabilities: &mut [f32], classes_out: *mut usize) {
+    let mut rows = probabilities.chunks_mut(probabilities.len() / predictions.len().max(1));
+    for (i, (p, row)) in predictions.iter().zip(&mut rows).enumerate() {
+        let class_out = if classes_out.is_null() { classes_out } else { classes_out.add(i) };
+        write_prediction(p, row.as_mut_ptr(), class_out);
+    }
 }
 
 /// A touch as the robot recorded it (`frames_len` raw values in the sample layout, any number
@@ -393,17 +626,11 @@ pub unsafe extern "C" fn pvt3_read_touch(
     guard(|| {
         let c = c.as_ref().ok_or_else(|| null("classifier"))?;
         let frames = values_in(frames, frames_len, "frames")?;
-        if out.is_null() {
-            return Err(null("out"));
+        if out.is_null() || written.is_null() {
+            return Err(null(if out.is_null() { "out" } else { "written" }));
         }
-        let written = written.as_mut().ok_or_else(|| null("written"))?;
         let read = c.classifier.read_touch(frames, touch(speed, force)).map_err(fail)?;
-        *written = read.len();
-        if out_len < read.len() {
-            return Err((PVT3_ERR_INPUT, format!("out has room for {out_len} values; the touch reads as {}", read.len())));
-        }
-        std::slice::from_raw_parts_mut(out, read.len()).copy_from_slice(&read);
-        Ok(())
+        write_values(&read, (out, out_len), (written, "written"))
     })
 }
 
@@ -637,6 +864,33 @@ pub unsafe extern "C" fn pvt3_continuous_reset(s: *mut Pvt3Continuous) -> c_int 
 pub unsafe extern "C" fn pvt3_session_reset(s: *mut Pvt3Session) -> c_int {
     guard(|| {
         s.as_mut().ok_or_else(|| null("session"))?.session.reset();
+        Ok(())
+    })
+}
+
+/// The frames of this touch's window the session has taken so far, as the model reads them (of
+/// `pvt3_classifier_frames`; a frame read by distance counts once it is read).
+///
+/// # Safety
+/// `s` is a live session or null; `out` is writable or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_session_received(s: *const Pvt3Session, out: *mut usize) -> c_int {
+    guard(|| {
+        let s = s.as_ref().ok_or_else(|| null("session"))?;
+        *out.as_mut().ok_or_else(|| null("out"))? = s.session.received();
+        Ok(())
+    })
+}
+
+/// The frames the stream has taken since it started or was last reset.
+///
+/// # Safety
+/// `s` is a live stream or null; `out` is writable or null.
+#[no_mangle]
+pub unsafe extern "C" fn pvt3_continuous_received(s: *const Pvt3Continuous, out: *mut u64) -> c_int {
+    guard(|| {
+        let s = s.as_ref().ok_or_else(|| null("stream"))?;
+        *out.as_mut().ok_or_else(|| null("out"))? = s.continuous.received();
         Ok(())
     })
 }

@@ -45,6 +45,7 @@ fn c_type(rust: &str) -> String {
         "f32" => "float",
         "f64" => "double",
         "u8" => "unsigned char",
+        "u64" => "uint64_t",
         "c_char" => "char",
         "Pvt3Classifier" => "pvt3_classifier",
         "Pvt3Session" => "pvt3_session",
@@ -91,7 +92,7 @@ fn the_header_declares_exactly_what_the_code_exports() {
         .collect();
     let code_fns: BTreeMap<_, _> = code.split("extern \"C\" fn ").skip(1).filter_map(rust_signature).collect();
     assert_eq!(header_fns, code_fns, "functions, their return and parameter types");
-    assert_eq!(code_fns.len(), 29);
+    assert_eq!(code_fns.len(), 40);
     assert_eq!(code_fns["pvt3_classify"].1[6], "size_t *", "the types are read");
     let mut header_consts: Vec<(String, String)> = header
         .split("#define ")
@@ -120,6 +121,26 @@ fn the_header_declares_exactly_what_the_code_exports() {
     assert_eq!(header_consts.iter().filter(|(n, _)| n.starts_with("PVT3_ERR_") || n == "PVT3_OK").count(), 6);
 }
 
+/// Each function the header declares follows a comment that says what it does.
+#[test]
+fn every_function_in_the_header_is_documented() {
+    let header = std::fs::read_to_string(root().join("include/pvt3.h")).unwrap();
+    let code = std::fs::read_to_string(root().join("src/ffi.rs")).unwrap();
+    let lines: Vec<&str> = header.lines().collect();
+    let undocumented: Vec<String> = code
+        .split("extern \"C\" fn ")
+        .skip(1)
+        .filter_map(|def| def.split_once('(').map(|(name, _)| name.trim().to_string()))
+        .filter(|name| {
+            let in_comment = |l: &str| l.trim_start().starts_with("/*") || l.trim_start().starts_with('*');
+            let declared = |l: &&str| l.contains(&format!("{name}(")) && !in_comment(l);
+            let at = lines.iter().position(declared).unwrap_or_else(|| panic!("{name} is not declared"));
+            !lines[..at].iter().rev().find(|l| !l.trim().is_empty()).is_some_and(|l| l.trim_end().ends_with("*/"))
+        })
+        .collect();
+    assert!(undocumented.is_empty(), "declared without a comment before them: {undocumented:?}");
+}
+
 /// The version macros are the crate's version and the format's, as `pvt3_version()` says them.
 #[test]
 fn the_version_macros_are_the_crate_s_and_the_format_s() {
@@ -145,14 +166,13 @@ fn camera_example_answers_as_a_session(exe: &std::path::Path, dir: &std::path::P
     touch.chunks(60).for_each(|frame| session.push_camera_frame(frame).unwrap());
     let expected = session.finish().unwrap();
     let stdout = String::from_utf8(out.stdout).unwrap();
-    let fields: Vec<&str> = stdout.trim_end().split('\t').collect();
-    assert_eq!(
-        (fields[0], fields[1].parse::<usize>().unwrap(), fields[2]),
-        ("camera", expected.class, expected.label.as_str()),
-        "{stdout}"
-    );
-    let probs: Vec<f32> = fields[4..].iter().map(|v| v.parse().unwrap()).collect();
-    assert!(probs.iter().zip(&expected.probabilities).all(|(a, b)| (a - b).abs() < 1e-6), "{stdout}");
+    assert_eq!(stdout.lines().count(), 2, "{stdout}");
+    for (line, way) in stdout.lines().zip(["camera", "whole"]) {
+        let fields: Vec<&str> = line.split('\t').collect();
+        assert_eq!((fields[0], fields[1].parse::<usize>().unwrap(), fields[2]), (way, expected.class, expected.label.as_str()), "{line}");
+        let probs: Vec<f32> = fields[4..].iter().map(|v| v.parse().unwrap()).collect();
+        assert!(probs.iter().zip(&expected.probabilities).all(|(a, b)| (a - b).abs() < 1e-6), "{line}");
+    }
 }
 
 #[test]
@@ -212,7 +232,17 @@ fn the_c_example_gives_the_rust_result() {
         })
         .collect();
     let stdout = String::from_utf8(out.stdout).unwrap();
-    assert_eq!(stdout.lines().count(), 4 * windows);
+    assert_eq!(stdout.lines().count(), 1 + 5 * windows);
+    let input = stdout.lines().next().unwrap();
+    let shape = c.sample_shape().iter().map(|v| v.to_string()).collect::<Vec<_>>().join("x");
+    let format = c.metadata_value(pvt3_format::keys::FORMAT).unwrap();
+    let (entries, last) = (c.metadata().len(), &c.metadata().last().unwrap().0);
+    assert_eq!(input, format!("input\t{shape}\t{}\t{}\t{format}\t{entries} {last}", c.kept_frames().len(), u8::from(c.streams())));
+    let (logits, _) = c.run(x, windows).unwrap();
+    for (line, expected) in stdout.lines().filter(|l| l.starts_with("logits")).zip(logits.chunks(c.classes().len())) {
+        let values: Vec<f32> = line.split('\t').skip(2).map(|v| v.parse().unwrap()).collect();
+        assert!(values.iter().zip(expected).all(|(a, b)| (a - b).abs() < 1e-5) && values.len() == expected.len(), "{line}");
+    }
     // Sliding on over the windows back to back, answering once a window: the windows' own.
     for (way, expected) in [("batch", &rust), ("stream", &rust), ("peek", &halfway), ("slide", &rust)] {
         assert_eq!(stdout.lines().filter(|l| l.starts_with(way)).count(), windows, "{way}");
@@ -247,6 +277,15 @@ fn the_c_example_gives_the_rust_result() {
             assert_ne!(out.status.code(), Some(99), "valgrind: {} {}:\n{stderr}", model.display(), input.display());
             assert_eq!(out.status.success(), succeeds, "{stderr}");
         }
+        let touch = dir.join("touch.u8");
+        let out = std::process::Command::new("valgrind")
+            .args(["-q", "--error-exitcode=99", "--leak-check=full", "--errors-for-leak-kinds=definite,indirect"])
+            .arg(dir.join("camera"))
+            .arg(golden("model.onnx"))
+            .arg(&touch)
+            .output()
+            .expect("valgrind runs");
+        assert!(out.status.success(), "valgrind: the camera example:\n{}", String::from_utf8_lossy(&out.stderr));
     }
     std::fs::remove_dir_all(dir).unwrap();
 }
@@ -301,6 +340,19 @@ fn every_entry_point_reports_instead_of_crashing() {
             assert!(said.starts_with(text), "{status}: {said}");
         }
         assert_eq!(pvt3_classifier_prepare(null(), 1, 1), PVT3_ERR_NULL);
+        let mut flag = 0;
+        let mut counted = 0u64;
+        assert_eq!(pvt3_classifier_input_shape(null(), &mut n, 1, &mut n), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classifier_camera_shape(null(), &mut n, &mut n, &mut n), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classifier_kept_frames(null(), &mut n, 1, &mut n), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classifier_streams(null(), &mut flag), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classifier_metadata_count(null(), &mut n), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classifier_metadata_key(null(), 0, &mut name, null_mut()), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classifier_metadata(null(), c"pvt3.format".as_ptr(), &mut name, null_mut()), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classify_logits(null(), probs.as_ptr(), 1, 1, probs.as_mut_ptr(), 40), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classify_camera_touches(null(), b"x".as_ptr(), 1, 1, probs.as_mut_ptr(), 40, null_mut()), PVT3_ERR_NULL);
+        assert_eq!(pvt3_session_received(null(), &mut n), PVT3_ERR_NULL);
+        assert_eq!(pvt3_continuous_received(null(), &mut counted), PVT3_ERR_NULL);
         let mut written = 0usize;
         assert_eq!(pvt3_read_touch(null(), probs.as_ptr(), 40, 1.0, 1.0, probs.as_mut_ptr(), 40, &mut written), PVT3_ERR_NULL);
 
@@ -333,6 +385,19 @@ fn every_entry_point_reports_instead_of_crashing() {
         assert_eq!(pvt3_classifier_prepare(c, 0, 0), PVT3_ERR_INPUT);
         assert_eq!(pvt3_classifier_prepare(c, 2, 1), PVT3_OK);
         assert_eq!(pvt3_classifier_sample_len(c, null_mut()), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classifier_input_shape(c, null_mut(), 4, &mut n), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classifier_input_shape(c, [0usize; 4].as_mut_ptr(), 4, null_mut()), PVT3_ERR_NULL);
+        assert!(last_error().contains("rank is a null pointer"), "{}", last_error());
+        assert_eq!(pvt3_classifier_camera_shape(c, &mut n, null_mut(), &mut n), PVT3_ERR_NULL);
+        assert!(last_error().contains("width is a null pointer"), "{}", last_error());
+        assert_eq!(pvt3_classifier_kept_frames(c, null_mut(), 4, &mut n), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classifier_streams(c, null_mut()), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classifier_metadata_count(c, null_mut()), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classifier_metadata_key(c, 0, null_mut(), null_mut()), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classifier_metadata(c, null(), &mut name, null_mut()), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classifier_metadata(c, c"pvt3.format".as_ptr(), null_mut(), null_mut()), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classify_logits(c, [0f32; 4500].as_ptr(), 4500, 1, null_mut(), 20), PVT3_ERR_NULL);
+        assert_eq!(pvt3_classify_camera_touches(c, null(), 4500, 1, probs.as_mut_ptr(), 20, null_mut()), PVT3_ERR_NULL);
         assert_eq!(pvt3_classifier_num_classes(c, null_mut()), PVT3_ERR_NULL);
         assert_eq!(pvt3_classifier_class_name(c, 0, null_mut(), null_mut()), PVT3_ERR_NULL);
         assert_eq!(pvt3_classifier_class_name(c, 20, &mut name, null_mut()), PVT3_ERR_INPUT);
@@ -510,5 +575,119 @@ fn camera_frames_go_in_as_bytes() {
         assert!(last_error().contains("a frame has 59 values; expected 60"), "{}", last_error());
         pvt3_session_free(s);
         pvt3_classifier_free(c);
+    }
+}
+
+/// A C string the library gave, as Rust text (None for NULL).
+unsafe fn text(p: *const std::ffi::c_char, len: usize) -> Option<String> {
+    (!p.is_null()).then(|| {
+        let s = CStr::from_ptr(p).to_str().unwrap().to_string();
+        assert_eq!(s.len(), len, "the length given is the string's");
+        s
+    })
+}
+
+/// What the C ABI says of a file, and answers, is what the Rust API says: the window's layout,
+/// the kept frames, whether it streams, every metadata entry, the logits, a camera's touches
+/// whole, and the sessions' counters; on the golden file and the shipped ones (a `pvt3 final`
+/// iCub file, a BioTac file with a spectral head).
+#[test]
+fn c_sees_what_rust_sees() {
+    let shipped = |name: &str| root().join("../shipped").join(name);
+    for path in [golden("model.onnx"), shipped("icub20.onnx"), shipped("biotac20.onnx")] {
+        let rust = Classifier::load(&path).unwrap();
+        let model = CString::new(path.to_str().unwrap()).unwrap();
+        unsafe {
+            let mut c = null_mut();
+            assert_eq!(pvt3_classifier_load(model.as_ptr(), &mut c), PVT3_OK);
+            let (mut shape, mut rank) = ([0usize; 4], 0usize);
+            assert_eq!(pvt3_classifier_input_shape(c, shape.as_mut_ptr(), 2, &mut rank), PVT3_ERR_INPUT);
+            assert_eq!(rank, rust.sample_shape().len(), "the rank, also when the room is short");
+            assert_eq!(pvt3_classifier_input_shape(c, shape.as_mut_ptr(), 4, &mut rank), PVT3_OK);
+            assert_eq!(&shape[..rank], rust.sample_shape());
+            let (mut h, mut w, mut ch) = (0usize, 0usize, 0usize);
+            assert_eq!(pvt3_classifier_camera_shape(c, &mut h, &mut w, &mut ch), PVT3_OK);
+            assert_eq!([h, w, ch], rust.camera_frame_shape());
+            assert_eq!(h * w * ch, rust.camera_frame_len());
+            let (mut kept, mut count) = (vec![0usize; 400], 0usize);
+            assert_eq!(pvt3_classifier_kept_frames(c, kept.as_mut_ptr(), kept.len(), &mut count), PVT3_OK);
+            assert_eq!(&kept[..count], rust.kept_frames());
+            let mut streams = 7;
+            assert_eq!(pvt3_classifier_streams(c, &mut streams), PVT3_OK);
+            assert_eq!(streams, c_int::from(rust.streams()));
+
+            // Every metadata entry, by index and by key.
+            let mut entries = 0usize;
+            assert_eq!(pvt3_classifier_metadata_count(c, &mut entries), PVT3_OK);
+            assert_eq!(entries, rust.metadata().len());
+            for (i, (key, value)) in rust.metadata().iter().enumerate() {
+                let (mut p, mut len) = (null(), 0usize);
+                assert_eq!(pvt3_classifier_metadata_key(c, i, &mut p, &mut len), PVT3_OK);
+                assert_eq!(text(p, len).as_ref(), Some(key));
+                let k = CString::new(key.as_str()).unwrap();
+                assert_eq!(pvt3_classifier_metadata(c, k.as_ptr(), &mut p, &mut len), PVT3_OK);
+                assert_eq!(text(p, len).as_ref(), Some(value));
+            }
+            let (mut p, mut len) = (null(), 5usize);
+            assert_eq!(pvt3_classifier_metadata_key(c, entries, &mut p, &mut len), PVT3_ERR_INPUT);
+            assert_eq!(pvt3_classifier_metadata(c, c"pvt3.absent".as_ptr(), &mut p, &mut len), PVT3_OK);
+            assert_eq!((p, len), (null(), 0), "a key the file lacks: NULL, 0");
+            let format = rust.metadata_value(pvt3_format::keys::FORMAT).expect("every file states its format");
+            assert_eq!(format, format!("{}.{}", pvt3_format::FORMAT_VERSION.0, pvt3_format::FORMAT_VERSION.1));
+
+            // Logits: Rust's, and their softmax is what pvt3_classify answers.
+            let sample: usize = rust.sample_shape().iter().product();
+            let classes = rust.classes().len();
+            let x: Vec<f32> = (0..2 * sample).map(|i| ((i * 37) % 101) as f32 / 50.0 - 1.0).collect();
+            let (mut logits, mut probs) = (vec![0f32; 2 * classes], vec![0f32; 2 * classes]);
+            assert_eq!(pvt3_classify_logits(c, x.as_ptr(), x.len(), 2, logits.as_mut_ptr(), logits.len() - 1), PVT3_ERR_INPUT);
+            assert_eq!(pvt3_classify_logits(c, x.as_ptr(), x.len(), 2, logits.as_mut_ptr(), logits.len()), PVT3_OK);
+            let (rust_logits, rust_probs) = rust.run(&x, 2).unwrap();
+            assert_eq!(logits, rust_logits);
+            assert_eq!(pvt3_classify(c, x.as_ptr(), x.len(), 2, probs.as_mut_ptr(), probs.len(), null_mut()), PVT3_OK);
+            assert_eq!(probs, rust_probs);
+
+            // Camera touches whole, as Rust classifies them; and a session's counter.
+            let frame_len = rust.camera_frame_len();
+            let frames = rust.sample_shape().last().copied().unwrap();
+            let bytes: Vec<u8> = (0..2 * frame_len * frames).map(|i| (i * 29 % 253) as u8).collect();
+            let mut best = [9usize; 2];
+            assert_eq!(
+                pvt3_classify_camera_touches(c, bytes.as_ptr(), bytes.len(), 2, probs.as_mut_ptr(), probs.len(), best.as_mut_ptr()),
+                PVT3_OK
+            );
+            let whole = rust.classify_camera_touches(&bytes, 2).unwrap();
+            assert_eq!(best.to_vec(), whole.iter().map(|p| p.class).collect::<Vec<_>>());
+            assert_eq!(probs, whole.iter().flat_map(|p| p.probabilities.clone()).collect::<Vec<_>>());
+            assert_eq!(
+                pvt3_classify_camera_touches(c, bytes.as_ptr(), bytes.len() - 1, 2, probs.as_mut_ptr(), probs.len(), null_mut()),
+                PVT3_ERR_INPUT
+            );
+            let mut s = null_mut();
+            assert_eq!(pvt3_session_new(c, &mut s), PVT3_OK);
+            let frame = vec![0.25f32; frame_len];
+            let mut received = 9usize;
+            for t in 0..3 {
+                assert_eq!(pvt3_session_received(s, &mut received), PVT3_OK);
+                assert_eq!(received, t);
+                assert_eq!(pvt3_session_push_frame(s, frame.as_ptr(), frame_len), PVT3_OK);
+            }
+            pvt3_session_free(s);
+            let (mut k, mut answered, mut taken) = (null_mut(), 0, 9u64);
+            assert_eq!(pvt3_continuous_new(c, 1, &mut k), PVT3_OK);
+            for _ in 0..5 {
+                assert_eq!(
+                    pvt3_continuous_push_frame(k, frame.as_ptr(), frame_len, probs.as_mut_ptr(), classes, null_mut(), &mut answered),
+                    PVT3_OK
+                );
+            }
+            assert_eq!(pvt3_continuous_received(k, &mut taken), PVT3_OK);
+            assert_eq!(taken, 5);
+            assert_eq!(pvt3_continuous_reset(k), PVT3_OK);
+            assert_eq!(pvt3_continuous_received(k, &mut taken), PVT3_OK);
+            assert_eq!(taken, 0);
+            pvt3_continuous_free(k);
+            pvt3_classifier_free(c);
+        }
     }
 }
