@@ -453,6 +453,14 @@ fn csv_touches_of_any_length_import_cross_validate_and_export() {
     }
     assert!(out.join("cv-curves.svg").exists());
     the_final_model_trains_on_every_touch_as_the_cv_chose(&out, &summary, 30);
+    // A cross-validation taught by this one has no final model, and says what to ship instead.
+    let taught = dir.join("taught");
+    let mut args = vec!["cv", "--data", d, "--out", taught.to_str().unwrap(), "--distill", o, "--epochs", "2", "--jobs", "2"];
+    args.extend(["--set", "frames=32", "--set", "tubelet=4"].into_iter().chain(SMALL));
+    ok(&args);
+    let refused = fails(&["final", taught.to_str().unwrap()]);
+    let instead = format!("pvt3 export {}", taught.join("seed0/fold0").display());
+    assert!(refused.contains(&instead) && refused.contains(&format!("pvt3 final {o}")), "{refused}");
     a_final_model_is_tested_on_new_touches_alone(&dir, &csvs, &out.join("final"));
     let run = out.join("seed0/fold0");
     let eval = ok(&["eval", run.to_str().unwrap()]);

@@ -147,30 +147,38 @@ need_pid=$!
 background+=("$need_pid")
 
 # A static binary of pvt3-run (run through the emulator named after it, if any) answers the
-# golden windows and the shipped BioTac touch (its spectral head's transform, the small build's
-# own FFT) as the host build does (target/{golden,spectral}-host.jsonl, written after the host
-# build).
+# golden windows, the shipped BioTac touch (its spectral head's transform, the small build's own
+# FFT) and the shipped camera touch (a head over the image's space, with the pixels) as the host
+# build does, within the 1e-5 every form of the model keeps to the golden logits (the camera
+# touch, 66 M multiply-adds, sums in another order on aarch64: 1.4e-6 off)
+# (target/{golden,spectral,camera}-host.jsonl, written after the host build).
 same_as_host() {
-  local bin=$1 name=$(basename "$(dirname "$(dirname "$1")")")
+  local bin=$1 name=$(basename "$(dirname "$(dirname "$1")")") compared=()
   shift
   if readelf -l "$bin" | grep -q INTERP; then
     echo "tests/run.sh: $bin asks for a dynamic loader: not a static binary" >&2
     return 1
   fi
-  "$@" "$bin" --json "${golden[@]}" >target/golden-$name.jsonl
-  "$@" "$bin" --json "${spectral[@]}" >target/spectral-$name.jsonl
-  python3 - target/golden-$name.jsonl target/golden-host.jsonl target/spectral-$name.jsonl target/spectral-host.jsonl <<'EOF'
+  for case in "${!answered[@]}"; do
+    "$@" "$bin" --json ${answered[$case]} >target/$case-$name.jsonl
+    compared+=(target/$case-$name.jsonl target/$case-host.jsonl)
+  done
+  python3 - "${compared[@]}" <<'EOF'
 import json, sys
 for built, host_path in zip(sys.argv[1::2], sys.argv[2::2]):
     static, host = ([json.loads(line) for line in open(path)] for path in (built, host_path))
     assert len(static) == len(host) >= 1, (built, len(static), len(host))
     worst = max(abs(a - b) for s, h in zip(static, host) for a, b in zip(s["probabilities"], h["probabilities"]))
-    assert worst <= 1e-6 and all(s["class"] == h["class"] for s, h in zip(static, host)), (built, worst)
+    assert worst <= 1e-5 and all(s["class"] == h["class"] for s, h in zip(static, host)), (built, worst)
     print(f"{built}: {len(static)} windows' probabilities within {worst:.1e} of the host build's, every class the same")
 EOF
 }
-golden=(tests/golden/icub20/model.onnx tests/golden/icub20/input.npy)
-spectral=(shipped/biotac20.onnx shipped/biotac20-touch.npy)
+# Each case: the model and its input.
+declare -A answered=(
+  [golden]="tests/golden/icub20/model.onnx tests/golden/icub20/input.npy"
+  [spectral]="shipped/biotac20.onnx shipped/biotac20-touch.npy"
+  [camera]="shipped/physiclear.onnx shipped/physiclear-touch.npy"
+)
 
 # Step 4, run in the background once the host build is done (see the top), in one target
 # directory and one profile, so that the build scripts and procedural macros, built for this
@@ -199,8 +207,9 @@ other_platforms() {
 
 step "host: cargo test --profile ci --workspace (built, then run)"
 cargo test --profile ci --workspace --no-run
-target/ci/pvt3-run --json "${golden[@]}" >target/golden-host.jsonl
-target/ci/pvt3-run --json "${spectral[@]}" >target/spectral-host.jsonl
+for case in "${!answered[@]}"; do
+  target/ci/pvt3-run --json ${answered[$case]} >target/$case-host.jsonl
+done
 
 step "what the tests need (installed beside the host build)"
 joined "$need_pid" "$need_log" "what the tests need could not be installed"

@@ -41,7 +41,9 @@ pub struct Plan {
 impl Plan {
     /// Reads the cross-validation in `cv` (its `cv.json` and first run), refusing one with runs
     /// still training, or whose runs learnt from other runs (`--distill`) or sensors (`--joint`):
-    /// their teachers and partners would need final models too.
+    /// each run learnt from teachers or a partner trained on its own split, and a final model,
+    /// which has no split, would need final models of them first, which `pvt3 final` does not
+    /// train. The refusal names what to ship instead.
     pub fn read(cv: &Path) -> Result<Self> {
         let summary: CvSummary = read_json(&cv.join(CV_SUMMARY))?;
         let refuse = |why: String| Error::Usage(format!("a final model of {}: {why}", cv.display()));
@@ -53,10 +55,22 @@ impl Plan {
         let run = CrossValidation(cv).run(first.seed, fold);
         let (_, meta) = checkpoint::load_meta(&Run(&run).model())?;
         let options = &meta.provenance.options;
-        if options.distillation.teachers.is_some() || options.joint.is_some() || summary.partner.is_some() {
-            return Err(refuse(
-                "its runs learnt from other runs or another sensor (--distill, --joint), which a final model cannot".into(),
-            ));
+        if let Some(teachers) = &options.distillation.teachers {
+            return Err(refuse(format!(
+                "its runs learnt from the runs of {} (--distill) on their own splits, and a final model has no split: its \
+                 teachers would have to be final models first, which pvt3 final does not train. Ship one of its runs \
+                 (pvt3 export {}), or the teachers' final model (pvt3 final {})",
+                teachers,
+                run.display(),
+                teachers
+            )));
+        }
+        if options.joint.is_some() || summary.partner.is_some() {
+            return Err(refuse(format!(
+                "its runs trained with another sensor's touches of their own split (--joint), and a final model has no \
+                 split. Ship one of its runs (pvt3 export {}), or a final model of a cross-validation of this sensor alone",
+                run.display()
+            )));
         }
         let expected = |pruned: bool| {
             let (runs, mean, std, ci95) = match pruned {
