@@ -197,6 +197,8 @@ other_platforms() {
   # allocator tuning in runtime/src/heap.rs, which only the host build compiles, and which is
   # therefore neither linted nor built with warnings denied; the host's tests run it).
   cargo clippy "${platforms[@]}" --target x86_64-pc-windows-gnu -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings
+  # Their API docs: every public item documented (`#![warn(missing_docs)]`), every link resolved.
+  RUSTDOCFLAGS="-D warnings" cargo doc "${platforms[@]}" --no-deps -p pvt3-runtime -p pvt3-format
   # The runtime and pvt3-run built to show that they link statically and compute what the host
   # build computes, never timed: as the small robot build (docs/deploy.md) without default
   # features (one thread a plan, its own FFT: a static robot binary is a small one). The

@@ -10,9 +10,13 @@ use crate::Dims;
 /// A rectangle of a frame: its top-left pixel and its size.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Crop {
+    /// The first row taken.
     pub top: usize,
+    /// The first column taken.
     pub left: usize,
+    /// Rows taken.
     pub height: usize,
+    /// Columns taken.
     pub width: usize,
 }
 
@@ -68,13 +72,17 @@ impl std::fmt::Display for Crop {
 pub struct Camera {
     /// A frame as the camera gives it: `[height, width, channels]` (3: RGB, 1: grey).
     pub recorded: [usize; 3],
+    /// The part of each frame kept (`pvt3 import --crop`); `None`: the whole frame.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub crop: Option<Crop>,
     /// `[height, width]` after area averaging.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub size: Option<[usize; 2]>,
+    /// Colours averaged to one grey channel (`pvt3 import --grey`).
     #[serde(default)]
     pub grey: bool,
+    /// Each frame read less the touch's first (`pvt3 import --subtract-first`), which is not
+    /// itself one of the model's frames.
     #[serde(default)]
     pub subtract_first: bool,
 }

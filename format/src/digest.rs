@@ -13,14 +13,23 @@ use crate::keys::DIGEST;
 /// Why a file's content is not what was exported.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum Integrity {
+    /// Not a protobuf message: what is wrong with its bytes.
     #[error("its bytes are not a well-formed protobuf message ({0}): truncated or corrupted")]
     Malformed(&'static str),
+    /// No digest: a file from before the digest, or damaged.
     #[error("it has no `{DIGEST}` entry: exported by a pvt3 older than the digest, or damaged; export it again")]
     Missing,
+    /// More than one digest.
     #[error("it has more than one `{DIGEST}` entry")]
     Repeated,
     #[error("its content hashes to {computed}, not to the {claimed} it was exported with: the file was altered or corrupted")]
-    Mismatch { claimed: String, computed: String },
+    /// The content does not hash to the digest it holds.
+    Mismatch {
+        /// The digest the file holds.
+        claimed: String,
+        /// The digest of its content.
+        computed: String,
+    },
 }
 
 /// `ModelProto.metadata_props`.

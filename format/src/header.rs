@@ -16,16 +16,28 @@ pub const FORMAT_VERSION: (u32, u32) = (1, 1);
 /// Why a file's metadata is not one this crate reads.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum HeaderError {
+    /// An entry missing or not of its form.
     #[error("metadata `{key}` {problem}")]
-    Invalid { key: &'static str, problem: String },
+    Invalid {
+        /// The entry's key.
+        key: &'static str,
+        /// What is wrong with it.
+        problem: String,
+    },
     #[error("format {found}, which this runtime (format {}.{}) does not read: use a runtime of the same major version, or export the model again", FORMAT_VERSION.0, FORMAT_VERSION.1)]
-    Version { found: String },
+    /// A format version of another major version.
+    Version {
+        /// The version the file states.
+        found: String,
+    },
 }
 
 /// The shape of the model's input and tokens: the part of `pvt3.config` a runtime reads.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct Dims {
+    /// The window's first axis (taxel rows, electrodes, image rows).
     pub height: usize,
+    /// The window's second axis.
     pub width: usize,
     /// 1 for a sensor without a channel axis.
     pub channels: usize,
@@ -40,9 +52,11 @@ pub struct Dims {
 /// What a runtime reads from a file's metadata.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Header {
+    /// The class names, in the outputs' order ([`keys::CLASSES`]).
     pub classes: Vec<String>,
     /// The frames of a window the model reads, ascending; whole tokens.
     pub kept_frames: Vec<usize>,
+    /// The input's and the tokens' shape ([`keys::CONFIG`]).
     pub dims: Dims,
     /// The stopping rule of provisional answers ([`keys::STOP_RULE`]); `None` when the file has none.
     pub stop_rule: Option<StopRule>,
@@ -80,7 +94,9 @@ impl Reading {
 /// after each of the `agreeing - 1` tokens before it (`agreeing` answers in a row agree).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct StopRule {
+    /// The least top class probability at which an answer may stop the touch.
     pub top_probability: f32,
+    /// How many answers in a row must agree on the top class.
     pub agreeing: usize,
 }
 

@@ -10,6 +10,8 @@
 //! [`TouchReader`], [`resample`]). `pvt3 import` reads its touches with it, and a robot's
 //! runtime reads its own alike.
 
+#![warn(missing_docs)]
+
 mod camera;
 mod digest;
 mod header;

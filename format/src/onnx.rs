@@ -7,24 +7,33 @@
 /// `ModelProto`: the file.
 #[derive(Clone, PartialEq, prost::Message)]
 pub struct ModelProto {
+    /// The ONNX IR version the file is written in.
     #[prost(int64, tag = "1")]
     pub ir_version: i64,
+    /// The operator sets the graph uses (the default domain's opset 17).
     #[prost(message, repeated, tag = "8")]
     pub opset_import: Vec<OperatorSetIdProto>,
+    /// What wrote the file (`pvt3`).
     #[prost(string, tag = "2")]
     pub producer_name: String,
+    /// The version of what wrote it.
     #[prost(string, tag = "3")]
     pub producer_version: String,
+    /// The computation.
     #[prost(message, optional, tag = "7")]
     pub graph: Option<GraphProto>,
+    /// The `pvt3.` metadata ([`crate::keys`]), the digest last.
     #[prost(message, repeated, tag = "14")]
     pub metadata_props: Vec<StringStringEntryProto>,
 }
 
+/// `OperatorSetIdProto`: an operator set the graph uses.
 #[derive(Clone, PartialEq, prost::Message)]
 pub struct OperatorSetIdProto {
+    /// The operator set's domain (`""`: ONNX's default).
     #[prost(string, tag = "1")]
     pub domain: String,
+    /// The operator set's version.
     #[prost(int64, tag = "2")]
     pub version: i64,
 }
@@ -32,39 +41,53 @@ pub struct OperatorSetIdProto {
 /// One metadata property.
 #[derive(Clone, PartialEq, prost::Message)]
 pub struct StringStringEntryProto {
+    /// The property's key.
     #[prost(string, tag = "1")]
     pub key: String,
+    /// The property's value.
     #[prost(string, tag = "2")]
     pub value: String,
 }
 
+/// `GraphProto`: the graph, its nodes, constants, inputs and outputs.
 #[derive(Clone, PartialEq, prost::Message)]
 pub struct GraphProto {
+    /// The nodes, in an order where each reads only what nodes before it wrote.
     #[prost(message, repeated, tag = "1")]
     pub node: Vec<NodeProto>,
+    /// The graph's name.
     #[prost(string, tag = "2")]
     pub name: String,
+    /// The constants: weights and the shapes and indices nodes read.
     #[prost(message, repeated, tag = "5")]
     pub initializer: Vec<TensorProto>,
+    /// The graph's inputs (pvt3's: [`crate::INPUT`]).
     #[prost(message, repeated, tag = "11")]
     pub input: Vec<ValueInfoProto>,
+    /// The graph's outputs (pvt3's: [`crate::LOGITS`], [`crate::PROBABILITIES`]).
     #[prost(message, repeated, tag = "12")]
     pub output: Vec<ValueInfoProto>,
 }
 
+/// `NodeProto`: one operator applied to named tensors.
 #[derive(Clone, PartialEq, prost::Message)]
 pub struct NodeProto {
+    /// The tensors the node reads, by name.
     #[prost(string, repeated, tag = "1")]
     pub input: Vec<String>,
+    /// The tensors the node writes, by name.
     #[prost(string, repeated, tag = "2")]
     pub output: Vec<String>,
+    /// The node's name, unique in the graph.
     #[prost(string, tag = "3")]
     pub name: String,
     /// An [`Op`]'s name.
     #[prost(string, tag = "4")]
     pub op_type: String,
+    /// The operator's attributes.
     #[prost(message, repeated, tag = "5")]
     pub attribute: Vec<AttributeProto>,
+    /// The operator's domain (`""`: ONNX's default).
     #[prost(string, tag = "7")]
     pub domain: String,
 }
@@ -73,22 +96,30 @@ pub struct NodeProto {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(i32)]
 pub enum AttributeType {
+    /// A float (`f`).
     Float = 1,
+    /// An integer (`i`).
     Int = 2,
+    /// Integers (`ints`).
     Ints = 7,
 }
 
+/// `AttributeProto`: one attribute of a node (float, integer or integers).
 #[derive(Clone, PartialEq, prost::Message)]
 pub struct AttributeProto {
+    /// The attribute's name.
     #[prost(string, tag = "1")]
     pub name: String,
     /// An [`AttributeType`].
     #[prost(int32, tag = "20")]
     pub r#type: i32,
+    /// The value of a float attribute.
     #[prost(float, tag = "2")]
     pub f: f32,
+    /// The value of an integer attribute.
     #[prost(int64, tag = "3")]
     pub i: i64,
+    /// The values of an attribute of integers.
     #[prost(int64, repeated, tag = "8")]
     pub ints: Vec<i64>,
 }
@@ -112,23 +143,31 @@ pub fn float(name: &str, v: f32) -> AttributeProto {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[repr(i32)]
 pub enum DataType {
+    /// 32-bit float.
     Float = 1,
+    /// 64-bit integer.
     Int64 = 7,
 }
 
+/// `TensorProto`: a constant tensor (weights, shapes, indices).
 #[derive(Clone, PartialEq, prost::Message)]
 pub struct TensorProto {
+    /// The tensor's shape.
     #[prost(int64, repeated, tag = "1")]
     pub dims: Vec<i64>,
     /// A [`DataType`].
     #[prost(int32, tag = "2")]
     pub data_type: i32,
+    /// Float values, when not in `raw_data`.
     #[prost(float, repeated, tag = "4")]
     pub float_data: Vec<f32>,
+    /// Integer values, when not in `raw_data`.
     #[prost(int64, repeated, tag = "7")]
     pub int64_data: Vec<i64>,
+    /// The tensor's name, by which nodes read it.
     #[prost(string, tag = "8")]
     pub name: String,
+    /// The values as little-endian bytes (how the exporter writes weights).
     #[prost(bytes = "vec", tag = "9")]
     pub raw_data: Vec<u8>,
 }
@@ -136,14 +175,18 @@ pub struct TensorProto {
 /// A graph input or output: its name and a float tensor type.
 #[derive(Clone, PartialEq, prost::Message)]
 pub struct ValueInfoProto {
+    /// The tensor's name.
     #[prost(string, tag = "1")]
     pub name: String,
+    /// Its type: element type and shape.
     #[prost(message, optional, tag = "2")]
     pub r#type: Option<TypeProto>,
 }
 
+/// `TypeProto`: a value's type.
 #[derive(Clone, PartialEq, prost::Message)]
 pub struct TypeProto {
+    /// A tensor's type (the only kind pvt3 writes).
     #[prost(message, optional, tag = "1")]
     pub tensor_type: Option<TensorTypeProto>,
 }
@@ -154,12 +197,15 @@ pub struct TensorTypeProto {
     /// A [`DataType`].
     #[prost(int32, tag = "1")]
     pub elem_type: i32,
+    /// The tensor's shape, fixed or named sizes.
     #[prost(message, optional, tag = "2")]
     pub shape: Option<TensorShapeProto>,
 }
 
+/// `TensorShapeProto`: a tensor's shape.
 #[derive(Clone, PartialEq, prost::Message)]
 pub struct TensorShapeProto {
+    /// Each axis's size.
     #[prost(message, repeated, tag = "1")]
     pub dim: Vec<Dimension>,
 }
@@ -167,14 +213,18 @@ pub struct TensorShapeProto {
 /// `TensorShapeProto.Dimension`: a fixed size or a named one (the batch).
 #[derive(Clone, PartialEq, prost::Message)]
 pub struct Dimension {
+    /// A fixed or a named size.
     #[prost(oneof = "DimensionValue", tags = "1, 2")]
     pub value: Option<DimensionValue>,
 }
 
+/// `TensorShapeProto.Dimension.value`: a fixed or a named size.
 #[derive(Clone, PartialEq, prost::Oneof)]
 pub enum DimensionValue {
+    /// A fixed size.
     #[prost(int64, tag = "1")]
     DimValue(i64),
+    /// A named size, given at run time (the batch).
     #[prost(string, tag = "2")]
     DimParam(String),
 }
@@ -192,6 +242,7 @@ impl ModelProto {
 }
 
 impl NodeProto {
+    /// Attribute `name`, if the node has it.
     pub fn attribute(&self, name: &str) -> Option<&AttributeProto> {
         self.attribute.iter().find(|a| a.name == name)
     }
@@ -211,6 +262,7 @@ impl NodeProto {
         self.attribute(name).map_or(default, |a| a.f)
     }
 
+    /// Integers attribute `name`, if the node has it.
     pub fn ints(&self, name: &str) -> Option<&[i64]> {
         self.attribute(name).map(|a| a.ints.as_slice())
     }
@@ -227,10 +279,11 @@ macro_rules! ops {
         /// nothing else and the runtime wires each of them, matching this enum exhaustively.
         #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
         pub enum Op {
-            $($(#[$doc])* $op,)*
+            $(#[doc = concat!("ONNX's `", $name, "`.")] $(#[$doc])* $op,)*
         }
 
         impl Op {
+            /// Every operator, in the enum's order.
             pub const ALL: &'static [Op] = &[$(Op::$op,)*];
 
             /// The operator's ONNX name (`NodeProto.op_type`).
@@ -240,6 +293,7 @@ macro_rules! ops {
                 }
             }
 
+            /// The operator named `name` (`NodeProto.op_type`), if pvt3 writes it.
             pub fn from_name(name: &str) -> Option<Self> {
                 match name {
                     $($name => Some(Op::$op),)*

@@ -10,9 +10,13 @@ use crate::{Camera, Crop};
 /// One frame: `height × width × channels` bytes, row-major, channels innermost (1: grey, 3: RGB).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Picture {
+    /// Rows.
     pub height: usize,
+    /// Columns.
     pub width: usize,
+    /// Values a pixel (1: grey, 3: RGB).
     pub channels: usize,
+    /// The `height × width × channels` bytes.
     pub data: Vec<u8>,
 }
 

@@ -21,8 +21,9 @@ pub enum FrameSpan {
 /// The frames a touch takes of a recording ([`FrameSpan::take`]).
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Taken {
-    /// The first and the last frame of the span they are spread over.
+    /// The first frame of the span they are spread over.
     pub first: usize,
+    /// The last frame of that span.
     pub last: usize,
     /// The recording's frames taken, in order (a short recording's repeated).
     pub frames: Vec<usize>,

@@ -14,10 +14,22 @@ pub enum ReadError {
     /// The touch does not fit the reading: its layout, or a speed or force the reading needs.
     #[error("reading the touch: {0}")]
     Touch(String),
+    /// A value that is a NaN or an infinity.
     #[error("input value {index} is {value}: only finite values can be classified")]
-    NonFinite { index: usize, value: f32 },
+    NonFinite {
+        /// Where it is in the input.
+        index: usize,
+        /// The value.
+        value: f32,
+    },
+    /// A frame of another length than the model's.
     #[error("a frame has {got} values; expected {expected} (height × width × channels)")]
-    FrameLength { got: usize, expected: usize },
+    FrameLength {
+        /// The frame's values.
+        got: usize,
+        /// The model's frame's values.
+        expected: usize,
+    },
 }
 
 type Result<T> = std::result::Result<T, ReadError>;
@@ -31,7 +43,9 @@ pub const MAX_SPEED_RATIO: f64 = 1000.0;
 /// its sign the direction) and its pressing force.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Touch {
+    /// The sliding speed; `None`: not known.
     pub speed: Option<f64>,
+    /// The pressing force; `None`: not known.
     pub force: Option<f64>,
 }
 

@@ -28,9 +28,20 @@ pub struct Prediction {
     pub class: usize,
     /// Its name, from the model's metadata.
     pub label: String,
+    /// Every class's probability, in the classes' order.
     pub probabilities: Vec<f32>,
 }
 
+/// An exported model, ready to classify: loaded from a file or bytes, its metadata read, its
+/// plans built per batch size on first use (or by [`Classifier::prepare`]).
+///
+/// ```no_run
+/// let classifier = pvt3_runtime::Classifier::load("model.onnx")?;
+/// let window = vec![0.0f32; classifier.sample_shape().iter().product()];
+/// let answer = classifier.classify(&window)?;
+/// println!("{} ({:.3})", answer.label, answer.probabilities[answer.class]);
+/// # Ok::<(), pvt3_runtime::Error>(())
+/// ```
 pub struct Classifier {
     graph: GraphProto,
     header: Header,
@@ -112,6 +123,7 @@ impl Classifier {
         *self.stages.get_mut().unwrap_or_else(|p| p.into_inner()) = None;
     }
 
+    /// The class names, in the outputs' order.
     pub fn classes(&self) -> &[String] {
         &self.header.classes
     }

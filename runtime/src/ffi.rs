@@ -9,21 +9,35 @@ use std::sync::OnceLock;
 
 use crate::{Classifier, Continuous, Error, Kernels, Prediction, Session};
 
+/// Success.
 pub const PVT3_OK: c_int = 0;
+/// A pointer the call needs is null.
 pub const PVT3_ERR_NULL: c_int = 1;
+/// A file could not be read.
 pub const PVT3_ERR_IO: c_int = 2;
+/// Not a model this library runs: damaged, foreign, of another format.
 pub const PVT3_ERR_MODEL: c_int = 3;
+/// An argument or input the model cannot take.
 pub const PVT3_ERR_INPUT: c_int = 4;
+/// A fault inside the library.
 pub const PVT3_ERR_INTERNAL: c_int = 5;
+/// Kernels by a fixed rule: the same outputs, bit for bit, at every load ([`Kernels::Fixed`]).
 pub const PVT3_KERNELS_FIXED: c_int = 0;
+/// tract's own choice of kernels ([`Kernels::Tract`]).
 pub const PVT3_KERNELS_TRACT: c_int = 1;
+/// Kernels timed at each plan's first call ([`Kernels::Measured`]).
 pub const PVT3_KERNELS_MEASURED: c_int = 2;
 // The library's version (the crate's) and the file format it reads, as the header's macros say
 // them (runtime/tests/c_abi.rs checks them against Cargo and `pvt3_format::FORMAT_VERSION`).
+/// The library's major version.
 pub const PVT3_VERSION_MAJOR: c_int = 0;
+/// The library's minor version.
 pub const PVT3_VERSION_MINOR: c_int = 1;
+/// The library's patch version.
 pub const PVT3_VERSION_PATCH: c_int = 0;
+/// The major version of the file format the library reads.
 pub const PVT3_FORMAT_MAJOR: c_int = 1;
+/// The minor version of the file format the library reads.
 pub const PVT3_FORMAT_MINOR: c_int = 1;
 
 /// What each status code means, for `pvt3_status_text`.

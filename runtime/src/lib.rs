@@ -16,6 +16,7 @@
 //! for bit, at every load. No panic reaches the caller: tract's are caught as [`Error::Tract`].
 
 #![deny(clippy::undocumented_unsafe_blocks)]
+#![warn(missing_docs)]
 
 mod classifier;
 mod continuous;

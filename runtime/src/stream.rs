@@ -32,6 +32,7 @@ use crate::{Classifier, Error, Prediction, Result, Touch, TouchReader};
 /// A provisional answer ([`Session::peek`]).
 #[derive(Clone, Debug)]
 pub struct Peek {
+    /// The answer from the frames so far.
     pub prediction: Prediction,
     /// The frames it read: those of the whole temporal tokens received, pruned ones included.
     pub frames: usize,
