@@ -1,4 +1,4 @@
-//! Classify touches with the pvt3 runtime from Rust: the README's snippet as a whole program,
+//! Classify touches with the pvt3 runtime from Rust: the guide's snippet (docs/guide/robot.md) as a whole program,
 //! which `cargo test` builds and runs (`runtime/tests/rust_example.rs`).
 //!
 //!     cargo run --release -p pvt3-runtime --example classify -- WINDOWS.npy
@@ -10,7 +10,7 @@
 
 use pvt3_runtime::{Classifier, Prediction, Result};
 
-// The README's snippet, from here to the end of `slide`.
+// The guide's snippet (docs/guide/robot.md), from here to the end of `slide`.
 /// A window classified whole, and the same touch streamed frame by frame as the sensor delivers it.
 fn classify(classifier: &Classifier, window: &[f32], frames: &[Vec<f32>]) -> Result<(Prediction, Prediction)> {
     classifier.prepare(&[1], true)?; // at start-up: build the plans, so the first touch costs no more
@@ -47,7 +47,7 @@ fn slide(classifier: &Classifier, sensor: impl IntoIterator<Item = Vec<f32>>) ->
     }
     Ok(answers)
 }
-// The end of the README's snippet.
+// The end of the guide's snippet.
 
 /// Frame `t` of each window of `values` (`[windows, …, frames]`, row-major): the frames a sensor
 /// would deliver, window after window.

@@ -101,7 +101,7 @@ int pvt3_classifier_kept_frames(const pvt3_classifier *c, size_t *frames, size_t
 /* Whether the file can be streamed (sessions and provisional answers): *out = 1, else 0 (a file
  * whose spectral head reads the whole window, exported before the head streamed). */
 int pvt3_classifier_streams(const pvt3_classifier *c, int *out);
-/* The file's metadata, key and value strings (docs/deploy.md lists the keys): pvt3.classes,
+/* The file's metadata, key and value strings (docs/guide/file-format.md lists the keys): pvt3.classes,
  * pvt3.format (the format version), pvt3.input_layout, pvt3.kept_frames, pvt3.config,
  * pvt3.provenance (JSON: how the model was trained and, for a `pvt3 final` file, the accuracy
  * its cross-validation expects, under "expected"), pvt3.stop_rule, pvt3.reading, pvt3.camera,

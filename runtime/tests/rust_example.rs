@@ -1,23 +1,23 @@
-//! The Rust example (`runtime/examples/classify.rs`): the README's snippet is the example's code
-//! to the letter, so that what the README shows compiles; run on the golden windows, its answers
-//! are the runtime's.
+//! The Rust example (`runtime/examples/classify.rs`): the guide's snippet (docs/guide/robot.md)
+//! is the example's code to the letter, so that what the guide shows compiles; run on the golden
+//! windows, its answers are the runtime's.
 
 mod support;
 
 use pvt3_runtime::{read_npy, Classifier};
 use support::{golden, root, scratch, target_command};
 
-const BEGIN: &str = "// The README's snippet, from here to the end of `slide`.\n";
-const END: &str = "// The end of the README's snippet.\n";
+const BEGIN: &str = "// The guide's snippet (docs/guide/robot.md), from here to the end of `slide`.\n";
+const END: &str = "// The end of the guide's snippet.\n";
 
 #[test]
-fn the_readme_shows_the_example_s_code() {
+fn the_guide_shows_the_example_s_code() {
     let example = std::fs::read_to_string(root().join("examples/classify.rs")).unwrap();
     let snippet = example.split(BEGIN).nth(1).and_then(|rest| rest.split(END).next()).expect("the snippet's markers");
-    let readme = std::fs::read_to_string(root().join("../README.md")).unwrap();
+    let guide = std::fs::read_to_string(root().join("../docs/guide/robot.md")).unwrap();
     assert!(
-        readme.contains(&format!("```rust\n{snippet}```\n")),
-        "README.md's Rust block is not examples/classify.rs's snippet:\n{snippet}"
+        guide.contains(&format!("```rust\n{snippet}```\n")),
+        "docs/guide/robot.md's Rust block is not examples/classify.rs's snippet:\n{snippet}"
     );
 }
 
