@@ -5,12 +5,8 @@
 //! logistic regression's; the pixels' a ridge's scores times a scale that sets how sure they are.
 //! The form whose validation windows read best wins: the texture's among equals (so that where
 //! validation reads every touch either way, as it can on a small or easy set, the head keeps the
-//! map it had before it read pixels), then the lower cross-entropy. The pixels take part only
-//! where they read the validation windows alone at least as well as the texture: the texture is
-//! one candidate, the pixels' forms the best of a grid of strengths and scales, and where the
-//! pixels alone read worse (PhysiCLeAR's objects, docs/results.md), what the two together gain
-//! is of the size the best of many candidates wins on one fold by chance. A final model takes what its cross-validation's runs chose
-//! (`crate::final_model`).
+//! map it had before it read pixels), then the lower cross-entropy. A final model takes what its
+//! cross-validation's runs chose (`crate::final_model`).
 
 use ndarray::Array2;
 use serde::{Deserialize, Serialize};
@@ -114,13 +110,10 @@ pub fn choose(texture: &Array2<f64>, ridges: &[(f64, Array2<f64>)], labels: &[us
         .iter()
         .map(|form| (*form, scored.iter().filter(|s| s.choice.form == *form).map(|s| s.correct).max().unwrap_or(0) as f64 / n))
         .collect();
-    // The pixels only where they read as well as the texture alone; the texture first among
-    // equals (the head without the pixels, whose map is the smaller); then the lower loss.
-    let read_alone = scored.iter().filter(|s| s.choice.form == Form::Pixels).map(|s| s.correct).max();
-    let pixels_take_part = read_alone.is_some_and(|c| c >= scored[0].correct);
+    // The texture first among equals (the head without the pixels, whose map is the smaller);
+    // then the lower loss.
     let key = |s: &Scored| (s.correct, s.choice == Choice::TEXTURE, -s.loss);
-    let candidates = scored.into_iter().filter(|s| pixels_take_part || s.choice == Choice::TEXTURE);
-    let best = candidates.reduce(|best, s| if key(&s) > key(&best) { s } else { best });
+    let best = scored.into_iter().reduce(|best, s| if key(&s) > key(&best) { s } else { best });
     Chosen { choice: best.expect("the texture's candidate").choice, validation }
 }
 
@@ -180,25 +173,5 @@ mod tests {
         assert_eq!(choose(&(&sure * 100.0), &[(1.0, wrong)], &labels).choice, Choice::TEXTURE);
         // Pixels that read as well, even surer, leave the texture's map as it was.
         assert_eq!(choose(&sure, &[(1.0, &sure * 100.0)], &labels).choice, Choice::TEXTURE);
-    }
-
-    /// Both together read every window where each alone reads three of four: chosen. Where the
-    /// pixels alone read only two, the texture stays, though the two together would read all.
-    #[test]
-    fn the_pixels_take_part_only_where_they_read_as_well_as_the_texture_alone() {
-        let labels = [0, 1, 0, 1];
-        // Rows of scores for class 0 minus class 1 as logits `[d, -d]`.
-        let logits = |d: [f64; 4]| Array2::from_shape_fn((4, 2), |(i, j)| if j == 0 { d[i] } else { -d[i] });
-        // The texture misses window 3 (by a little); these pixels miss window 2 (by a little).
-        let texture = logits([1.0, -1.0, 1.0, 0.2]);
-        let three = logits([1.0, -1.0, -0.2, -1.0]);
-        let chosen = choose(&texture, &[(1.0, three)], &labels);
-        assert_eq!(chosen.choice.form, Form::Both, "{chosen}");
-        assert_eq!(chosen.validation, vec![(Form::Texture, 0.75), (Form::Pixels, 0.75), (Form::Both, 1.0)]);
-        // Pixels that also miss window 0 (by a little) read two of four alone.
-        let two = logits([-0.1, -1.0, -0.2, -1.0]);
-        let chosen = choose(&texture, &[(1.0, two)], &labels);
-        assert_eq!(chosen.choice, Choice::TEXTURE, "{chosen}");
-        assert_eq!(chosen.validation, vec![(Form::Texture, 0.75), (Form::Pixels, 0.5), (Form::Both, 1.0)]);
     }
 }
