@@ -339,10 +339,24 @@ pub unsafe extern "C" fn pvt3_classifier_class_name(
     out: *mut *const c_char,
     len: *mut usize,
 ) -> c_int {
+    write_nth(c, index, (out, len), ("class", |c, i| (c.names.get(i).map(CString::as_c_str), c.names.len())))
+}
+
+/// Points `*out` at the `index`th of the classifier's strings that `nth` gives with their count
+/// (`what` names one in errors), as [`write_text`] does.
+///
+/// # Safety
+/// `c` is a live handle or null; `out` and `len` are writable or null.
+unsafe fn write_nth(
+    c: *const Pvt3Classifier,
+    index: usize,
+    (out, len): (*mut *const c_char, *mut usize),
+    (what, nth): (&str, fn(&Pvt3Classifier, usize) -> (Option<&CStr>, usize)),
+) -> c_int {
     guard(|| {
         let c = c.as_ref().ok_or_else(|| null("classifier"))?;
-        let name = c.names.get(index).ok_or_else(|| (PVT3_ERR_INPUT, format!("class {index} of {}", c.names.len())));
-        write_text(name?, out, len)
+        let (text, count) = nth(c, index);
+        write_text(text.ok_or_else(|| (PVT3_ERR_INPUT, format!("{what} {index} of {count}")))?, out, len)
     })
 }
 
@@ -392,9 +406,23 @@ pub unsafe extern "C" fn pvt3_classifier_input_shape(
     shape_len: usize,
     rank: *mut usize,
 ) -> c_int {
+    write_list(c, (shape, shape_len), (rank, "rank"), Classifier::sample_shape)
+}
+
+/// Writes the classifier's `list` to `out` and its length to `*count`, as [`write_values`] does.
+///
+/// # Safety
+/// `c` is a live handle or null; `out` has room for `out_len` values or is null; `count` is
+/// writable or null.
+unsafe fn write_list(
+    c: *const Pvt3Classifier,
+    (out, out_len): (*mut usize, usize),
+    (count, count_name): (*mut usize, &str),
+    list: fn(&Classifier) -> &[usize],
+) -> c_int {
     guard(|| {
         let c = c.as_ref().ok_or_else(|| null("classifier"))?;
-        write_values(c.classifier.sample_shape(), (shape, shape_len), (rank, "rank"))
+        write_values(list(&c.classifier), (out, out_len), (count, count_name))
     })
 }
 
@@ -433,10 +461,7 @@ pub unsafe extern "C" fn pvt3_classifier_kept_frames(
     frames_len: usize,
     count: *mut usize,
 ) -> c_int {
-    guard(|| {
-        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
-        write_values(c.classifier.kept_frames(), (frames, frames_len), (count, "count"))
-    })
+    write_list(c, (frames, frames_len), (count, "count"), Classifier::kept_frames)
 }
 
 /// Whether the file can be streamed (sessions, provisional answers): 1, else 0.
@@ -473,11 +498,7 @@ pub unsafe extern "C" fn pvt3_classifier_metadata_key(
     out: *mut *const c_char,
     len: *mut usize,
 ) -> c_int {
-    guard(|| {
-        let c = c.as_ref().ok_or_else(|| null("classifier"))?;
-        let entry = c.metadata.get(index).ok_or_else(|| (PVT3_ERR_INPUT, format!("metadata entry {index} of {}", c.metadata.len())));
-        write_text(&entry?.0, out, len)
-    })
+    write_nth(c, index, (out, len), ("metadata entry", |c, i| (c.metadata.get(i).map(|(k, _)| k.as_c_str()), c.metadata.len())))
 }
 
 /// The value of the metadata `key`, NUL-terminated, valid as long as the handle, and unless
