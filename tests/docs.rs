@@ -18,11 +18,8 @@ fn user_pages() -> Vec<PathBuf> {
 }
 
 fn markdown_in(dir: &Path) -> Vec<PathBuf> {
-    let mut pages: Vec<PathBuf> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "md"))
-        .collect();
+    let mut pages: Vec<PathBuf> =
+        std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension().is_some_and(|e| e == "md")).collect();
     pages.sort();
     pages
 }
@@ -32,14 +29,26 @@ fn figures(line: &str) -> Vec<String> {
     let number = |s: &str, from_end: bool| -> String {
         let is_part = |c: char| c.is_ascii_digit() || c == '.';
         let text: String = if from_end {
-            s.chars().rev().skip_while(|c| *c == '*' || *c == ' ').take_while(|c| is_part(*c)).collect::<Vec<_>>().into_iter().rev().collect()
+            s.chars()
+                .rev()
+                .skip_while(|c| *c == '*' || *c == ' ')
+                .take_while(|c| is_part(*c))
+                .collect::<Vec<_>>()
+                .into_iter()
+                .rev()
+                .collect()
         } else {
             s.chars().skip_while(|c| *c == ' ').take_while(|c| is_part(*c)).collect()
         };
         text
     };
     let parts: Vec<&str> = line.split('±').collect();
-    parts.windows(2).map(|w| (number(w[0], true), number(w[1], false))).filter(|(a, b)| a.contains('.') && b.contains('.')).map(|(a, b)| format!("{a} ± {b}")).collect()
+    parts
+        .windows(2)
+        .map(|w| (number(w[0], true), number(w[1], false)))
+        .filter(|(a, b)| a.contains('.') && b.contains('.'))
+        .map(|(a, b)| format!("{a} ± {b}"))
+        .collect()
 }
 
 /// Every `[c, d]` interval in `line`.

@@ -14,6 +14,7 @@ use pvt3_spec::prune::PatchChoice;
 use crate::checkpoint::{self, read_json, write_json_atomically, Meta};
 use crate::cv::CvSummary;
 use crate::data::Dataset;
+use crate::options::TrainOptions;
 use crate::provenance::{Expected, Stopping};
 use crate::prune::{prune_and_fine_tune, PruneStage};
 use crate::run_dir::{Checkpoint, CrossValidation, Run, CV_SUMMARY};
@@ -38,6 +39,25 @@ pub struct Plan {
     pub pruned: Option<(PruneStage, Expected, Option<Stopping>)>,
 }
 
+/// Why a cross-validation whose runs learnt from other runs (`--distill`) or another sensor
+/// (`--joint`) has no final model, and what to ship instead (`run`: one of its runs).
+fn learnt_from_others(options: &TrainOptions, partner: bool, run: &Path) -> Option<String> {
+    let instead = format!("Ship one of its runs (pvt3 export {})", run.display());
+    if let Some(teachers) = &options.distillation.teachers {
+        return Some(format!(
+            "its runs learnt from the runs of {teachers} (--distill) on their own splits, and a final model has no split: its \
+             teachers would have to be final models first, which pvt3 final does not train. {instead}, or the teachers' \
+             final model (pvt3 final {teachers})"
+        ));
+    }
+    (options.joint.is_some() || partner).then(|| {
+        format!(
+            "its runs trained with another sensor's touches of their own split (--joint), and a final model has no split. \
+             {instead}, or a final model of a cross-validation of this sensor alone"
+        )
+    })
+}
+
 impl Plan {
     /// Reads the cross-validation in `cv` (its `cv.json` and first run), refusing one with runs
     /// still training, or whose runs learnt from other runs (`--distill`) or sensors (`--joint`):
@@ -55,22 +75,8 @@ impl Plan {
         let run = CrossValidation(cv).run(first.seed, fold);
         let (_, meta) = checkpoint::load_meta(&Run(&run).model())?;
         let options = &meta.provenance.options;
-        if let Some(teachers) = &options.distillation.teachers {
-            return Err(refuse(format!(
-                "its runs learnt from the runs of {} (--distill) on their own splits, and a final model has no split: its \
-                 teachers would have to be final models first, which pvt3 final does not train. Ship one of its runs \
-                 (pvt3 export {}), or the teachers' final model (pvt3 final {})",
-                teachers,
-                run.display(),
-                teachers
-            )));
-        }
-        if options.joint.is_some() || summary.partner.is_some() {
-            return Err(refuse(format!(
-                "its runs trained with another sensor's touches of their own split (--joint), and a final model has no \
-                 split. Ship one of its runs (pvt3 export {}), or a final model of a cross-validation of this sensor alone",
-                run.display()
-            )));
+        if let Some(why) = learnt_from_others(options, summary.partner.is_some(), &run) {
+            return Err(refuse(why));
         }
         let expected = |pruned: bool| {
             let (runs, mean, std, ci95) = match pruned {
