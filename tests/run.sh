@@ -148,10 +148,13 @@ background+=("$need_pid")
 
 # A static binary of pvt3-run (run through the emulator named after it, if any) answers the
 # golden windows, the shipped BioTac touch (its spectral head's transform, the small build's own
-# FFT) and the shipped camera touch (a head over the image's space, with the pixels) as the host
-# build does, within the 1e-5 every form of the model keeps to the golden logits (the camera
-# touch, 66 M multiply-adds, sums in another order on aarch64: 1.4e-6 off)
-# (target/{golden,spectral,camera}-host.jsonl, written after the host build).
+# FFT), the shipped camera touch (a head over the image's space, with the pixels) and a file the
+# default `--robust auto` trained (its spectral head of 16 bands: `pvt3 import
+# FabricSlide/data/fabric --name '{class}_F{force}_V{speed}mmps_*' --out fabric.npz`, `pvt3
+# --threads 1 train --data fabric.npz --out run --epochs 3 --export robust-auto.onnx`; its
+# touch the first 141 frames of the set's first) as the host build does, within the 1e-5 every
+# form of the model keeps to the golden logits (the camera touch, 66 M multiply-adds, sums in
+# another order on aarch64: 1.4e-6 off) (target/CASE-host.jsonl, written after the host build).
 same_as_host() {
   local bin=$1 name=$(basename "$(dirname "$(dirname "$1")")") compared=()
   shift
@@ -178,6 +181,7 @@ declare -A answered=(
   [golden]="tests/golden/icub20/model.onnx tests/golden/icub20/input.npy"
   [spectral]="shipped/biotac20.onnx shipped/biotac20-touch.npy"
   [camera]="shipped/physiclear.onnx shipped/physiclear-touch.npy"
+  [robust]="tests/fixtures/fabricslide-robust-auto.onnx tests/fixtures/fabricslide-touch.npy"
 )
 
 # Step 4, run in the background once the host build is done (see the top), in one target
