@@ -342,6 +342,9 @@ pub unsafe extern "C" fn pvt3_classifier_class_name(
     write_nth(c, index, (out, len), ("class", |c, i| (c.names.get(i).map(CString::as_c_str), c.names.len())))
 }
 
+/// The `index`th of a classifier's strings, if it has one, and their count.
+type Nth = fn(&Pvt3Classifier, usize) -> (Option<&CStr>, usize);
+
 /// Points `*out` at the `index`th of the classifier's strings that `nth` gives with their count
 /// (`what` names one in errors), as [`write_text`] does.
 ///
@@ -351,7 +354,7 @@ unsafe fn write_nth(
     c: *const Pvt3Classifier,
     index: usize,
     (out, len): (*mut *const c_char, *mut usize),
-    (what, nth): (&str, fn(&Pvt3Classifier, usize) -> (Option<&CStr>, usize)),
+    (what, nth): (&str, Nth),
 ) -> c_int {
     guard(|| {
         let c = c.as_ref().ok_or_else(|| null("classifier"))?;
