@@ -105,7 +105,7 @@ fn the_figure_reader_reads_figures_and_intervals() {
 
 #[test]
 fn every_relative_link_a_user_follows_leads_to_a_file() {
-    let mut broken = Vec::new();
+    let (mut broken, mut followed) = (Vec::new(), 0);
     for page in user_pages() {
         let text = std::fs::read_to_string(&page).unwrap();
         for target in text.split("](").skip(1).filter_map(|s| s.split_once(')').map(|(t, _)| t)) {
@@ -113,11 +113,13 @@ fn every_relative_link_a_user_follows_leads_to_a_file() {
             if path.is_empty() || path.contains("://") {
                 continue;
             }
+            followed += 1;
             if !page.parent().unwrap().join(path).exists() {
                 broken.push(format!("{}: {target}", page.display()));
             }
         }
     }
+    assert!(followed >= 10, "the pages' relative links are read ({followed})");
     assert!(broken.is_empty(), "links to no file:\n{}", broken.join("\n"));
 }
 

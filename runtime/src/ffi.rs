@@ -550,7 +550,7 @@ pub unsafe extern "C" fn pvt3_classify(
     guard(|| {
         let c = c.as_ref().ok_or_else(|| null("classifier"))?;
         let input = values_in(frames, frames_len, "frames")?;
-        let probabilities = batch_room(c, batch, probabilities, probabilities_len, "probabilities")?;
+        let probabilities = room(probabilities, probabilities_len, (batch, c.names.len()), "probabilities")?;
         write_predictions(&c.classifier.classify_batch(input, batch).map_err(fail)?, probabilities, classes_out);
         Ok(())
     })
@@ -573,7 +573,7 @@ pub unsafe extern "C" fn pvt3_classify_logits(
     guard(|| {
         let c = c.as_ref().ok_or_else(|| null("classifier"))?;
         let input = values_in(frames, frames_len, "frames")?;
-        let out = batch_room(c, batch, logits, logits_len, "logits")?;
+        let out = room(logits, logits_len, (batch, c.names.len()), "logits")?;
         out.copy_from_slice(&c.classifier.run(input, batch).map_err(fail)?.0);
         Ok(())
     })
@@ -599,31 +599,10 @@ pub unsafe extern "C" fn pvt3_classify_camera_touches(
     guard(|| {
         let c = c.as_ref().ok_or_else(|| null("classifier"))?;
         let input = values_in(frames, frames_len, "frames")?;
-        let probabilities = batch_room(c, touches, probabilities, probabilities_len, "probabilities")?;
+        let probabilities = room(probabilities, probabilities_len, (touches, c.names.len()), "probabilities")?;
         write_predictions(&c.classifier.classify_camera_touches(input, touches).map_err(fail)?, probabilities, classes_out);
         Ok(())
     })
-}
-
-/// The `batch × classes` values at `out`, once checked that `out` has room for them.
-///
-/// # Safety
-/// `out` is null or valid for `out_len` values.
-unsafe fn batch_room<'a>(
-    c: &Pvt3Classifier,
-    batch: usize,
-    out: *mut f32,
-    out_len: usize,
-    what: &str,
-) -> std::result::Result<&'a mut [f32], (c_int, String)> {
-    if out.is_null() {
-        return Err(null(what));
-    }
-    let needed = batch.checked_mul(c.names.len()).ok_or_else(|| fail(Error::BatchTooLarge { batch }))?;
-    if out_len < needed {
-        return Err((PVT3_ERR_INPUT, format!("{what} has room for {out_len} values; {needed} needed")));
-    }
-    Ok(std::slice::from_raw_parts_mut(out, needed))
 }
 
 /// Each prediction's probabilities, one after the other, and unless `classes_out` is null its
@@ -762,22 +741,31 @@ pub unsafe extern "C" fn pvt3_session_finish(
 ) -> c_int {
     guard(|| {
         let s = s.as_mut().ok_or_else(|| null("session"))?;
-        room(probabilities, probabilities_len, s.names)?;
+        room(probabilities, probabilities_len, (1, s.names), "probabilities")?;
         write_prediction(&s.session.finish().map_err(fail)?, probabilities, class_out);
         Ok(())
     })
 }
 
-/// Whether `probabilities` can take `names` class probabilities, checked before a call that
-/// changes the session.
-fn room(probabilities: *mut f32, probabilities_len: usize, names: usize) -> std::result::Result<(), (c_int, String)> {
-    if probabilities.is_null() {
-        return Err(null("probabilities"));
+/// The `rows × classes` values at `out` (`what` names it in errors), once checked that `out` has
+/// room for them: before a call that runs a plan or changes a session.
+///
+/// # Safety
+/// `out` is null or valid for `out_len` values.
+unsafe fn room<'a>(
+    out: *mut f32,
+    out_len: usize,
+    (rows, classes): (usize, usize),
+    what: &str,
+) -> std::result::Result<&'a mut [f32], (c_int, String)> {
+    if out.is_null() {
+        return Err(null(what));
     }
-    if probabilities_len < names {
-        return Err((PVT3_ERR_INPUT, format!("probabilities has room for {probabilities_len} values; {names} needed")));
+    let needed = rows.checked_mul(classes).ok_or_else(|| fail(Error::BatchTooLarge { batch: rows }))?;
+    if out_len < needed {
+        return Err((PVT3_ERR_INPUT, format!("{what} has room for {out_len} values; {needed} needed")));
     }
-    Ok(())
+    Ok(std::slice::from_raw_parts_mut(out, needed))
 }
 
 /// Writes `p`'s class probabilities and, unless `class_out` is null, its class.
@@ -808,7 +796,7 @@ pub unsafe extern "C" fn pvt3_session_peek(
 ) -> c_int {
     guard(|| {
         let s = s.as_mut().ok_or_else(|| null("session"))?;
-        room(probabilities, probabilities_len, s.names)?;
+        room(probabilities, probabilities_len, (1, s.names), "probabilities")?;
         let p = s.session.peek().map_err(fail)?;
         write_prediction(&p.prediction, probabilities, class_out);
         if let Some(frames) = frames_out.as_mut() {
@@ -868,7 +856,7 @@ pub unsafe extern "C" fn pvt3_continuous_push_frame(
     guard(|| {
         let s = s.as_mut().ok_or_else(|| null("stream"))?;
         let frame = values_in(frame, frame_len, "frame")?;
-        room(probabilities, probabilities_len, s.names)?;
+        room(probabilities, probabilities_len, (1, s.names), "probabilities")?;
         let answer = s.continuous.push_frame(frame).map_err(fail)?;
         if let Some(p) = &answer {
             write_prediction(p, probabilities, class_out);
