@@ -6,25 +6,30 @@
 # share the machine's noise. Prints a markdown table: the median over the rounds, and each
 # variant's ratio to the first.
 #
-#   bash bench/robot_builds.sh [FILE…]     ROUNDS=3 SECONDS_EACH=2; default files: the shipped ones
+#   bash bench/robot_builds.sh [FILE…]     ROUNDS=3 SECONDS_EACH=2; default files: the shipped ones and a
+#                                          `--robust auto` file (tests/fixtures)
 #
-# A variant is a name and the `cargo --config` settings it adds to the robot-small profile:
+# A variant is a name and the cargo settings (`--config`, `--features`) it adds to the
+# robot-small build:
 #   small     the profile as it is (opt-level 2, the inliner held back)
 #   deps-s    every dependency at opt-level s, tract's kernels (tract-linalg) at 2
 #   deps-s-core  the same with tract-core and ndarray at 2 too
+#   rustfft   the profile as it is with the `spectral` feature: rustfft's FFT for the spectral head
+#             in place of the runtime's own (src/small_fft.rs)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 rounds=${ROUNDS:-3}
 seconds=${SECONDS_EACH:-2}
 files=("$@")
-[ ${#files[@]} -gt 0 ] || files=(shipped/icub20.onnx shipped/biotac20.onnx shipped/physiclear.onnx)
+[ ${#files[@]} -gt 0 ] || files=(shipped/icub20.onnx shipped/biotac20.onnx shipped/physiclear.onnx tests/fixtures/fabricslide-robust-auto.onnx)
 pkg='profile.robot-small.package'
 declare -A variants=(
   [small]=""
   [deps-s]="--config $pkg.\"*\".opt-level=\"s\" --config $pkg.tract-linalg.opt-level=2"
   [deps-s-core]="--config $pkg.\"*\".opt-level=\"s\" --config $pkg.tract-linalg.opt-level=2 --config $pkg.tract-core.opt-level=2 --config $pkg.ndarray.opt-level=2"
+  [rustfft]="--features spectral"
 )
-order=(small deps-s deps-s-core)
+order=(small deps-s deps-s-core rustfft)
 for name in "${order[@]}"; do
   for what in "--lib --crate-type cdylib" "--bin pvt3-run"; do
     # shellcheck disable=SC2086 # the settings are words

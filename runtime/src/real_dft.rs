@@ -51,12 +51,8 @@ impl RealDft {
     /// The transform of each row of `real` into `out`, real and imaginary parts in turn.
     #[cfg(not(feature = "spectral"))]
     fn transform(&self, real: &[f32], out: &mut Vec<f32>) {
-        let mut row = vec![crate::small_fft::Complex::default(); self.n];
-        let mut scratch = Vec::new();
-        for values in real.chunks_exact(self.n) {
-            self.fft.transform(values, &mut row, &mut scratch);
-            out.extend(row.iter().flat_map(|c| [c.re, c.im]));
-        }
+        out.resize(2 * real.len(), 0.0);
+        self.fft.transform(real, out);
     }
 }
 
