@@ -18,7 +18,7 @@ use wide::f32x4;
 const LANES: usize = 4;
 
 /// A complex constant: real and imaginary parts.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Debug)]
 struct Complex {
     re: f32,
     im: f32,
@@ -33,7 +33,7 @@ impl Complex {
 }
 
 /// One complex value of [`LANES`] rows: each operation is one vector instruction or two.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Copy, Default)]
 struct Lanes {
     re: f32x4,
     im: f32x4,
@@ -96,14 +96,13 @@ const SIN_FIFTH: [f32; 2] = [0.951_056_5, 0.587_785_24];
 
 impl SmallFft {
     fn new(n: usize) -> Self {
-        let root = Complex::root;
         let mut len = n;
         let levels = factors(n)
             .into_iter()
             .map(|p| {
                 let m = len / p;
-                let twiddles = (0..m * p).map(|i| root((i % p) * (i / p), len)).collect();
-                let roots = (0..p * p).map(|i| root((i % p) * (i / p) % p, p)).collect();
+                let twiddles = (0..m * p).map(|i| Complex::root((i % p) * (i / p), len)).collect();
+                let roots = (0..p * p).map(|i| Complex::root((i % p) * (i / p) % p, p)).collect();
                 len = m;
                 Level { p, m, twiddles, roots }
             })
