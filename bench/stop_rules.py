@@ -22,7 +22,7 @@ target/stop_rules/). The rules:
   `OUT/seedS/foldK/pruned`, given together):
   calibrated once on the validation answers of all its runs (each fold's model on its own
   validation fold; 12 × 200 samples for 3 seeds) and applied to each run's test answers; with no
-  loss allowed and 3 agreeing, and as `pvt3 cv` ships it (trainer/src/cv_stopping.rs): a loss of
+  loss allowed and 3 agreeing, and as `pvt3 cv` ships it (trainer/src/stopping.rs): a loss of
   0.5 points allowed (a dozen samples, not one) and the agreement length chosen too (the one of
   2 … 12 that stops earliest on those answers). Two stricter calibrations of the same, to see
   whether the test fold's larger loss is the allowance's: no loss allowed, and the loss's

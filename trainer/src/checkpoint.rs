@@ -9,10 +9,10 @@ use std::path::{Path, PathBuf};
 use candle_nn::VarMap;
 use pvt3_models::weights::{load_weights, save_weights};
 use pvt3_models::{Config, Model};
-use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 
 use crate::data::normalization::Normalization;
+use crate::json::{read_json, write_json};
 use crate::provenance::Provenance;
 use crate::run_dir::{Checkpoint, Run};
 use crate::{Error, Result};
@@ -69,20 +69,6 @@ fn checkpoint_error(path: &Path, reason: impl Into<String>) -> Error {
     Error::Checkpoint { path: path.to_path_buf(), reason: reason.into() }
 }
 
-pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
-    let text = serde_json::to_string_pretty(value).expect("plain data serialises");
-    std::fs::write(path, text + "\n").map_err(Error::io(path))
-}
-
-/// Writes JSON to a temporary file and renames it over `path`. The temporary file is this
-/// process's own, so that jobs writing the same file at once (`cv --only` in a job array) each
-/// rename a whole one.
-pub fn write_json_atomically<T: Serialize>(path: &Path, value: &T) -> Result<()> {
-    let tmp = sibling(path, &format!(".{}.tmp", std::process::id()));
-    write_json(&tmp, value)?;
-    std::fs::rename(&tmp, path).map_err(Error::io(path))
-}
-
 /// Removes the temporary files (`*.tmp`) under `dir`: a process killed between writing one and
 /// renaming it leaves it behind. Only for a directory one process writes, such as a run's.
 pub fn remove_temporaries(dir: &Path) -> Result<()> {
@@ -98,11 +84,8 @@ pub fn remove_temporaries(dir: &Path) -> Result<()> {
     Ok(())
 }
 
-pub fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T> {
-    let text = std::fs::read_to_string(path).map_err(Error::io(path))?;
-    serde_json::from_str(&text).map_err(|e| checkpoint_error(path, format!("malformed JSON ({e})")))
-}
-
+/// The path beside `target` with `suffix` added to its name: where a directory is written before it
+/// is renamed over `target` (`.tmp`), or kept while it is replaced (`.old`).
 fn sibling(target: &Path, suffix: &str) -> PathBuf {
     let mut name = target.file_name().expect("a directory name").to_os_string();
     name.push(suffix);

@@ -10,8 +10,9 @@ use pvt3_models::{Architecture, Config};
 use pvt3_spec::Sensor;
 
 use crate::checkpoint;
+use crate::data::augment::Robust;
 use crate::data::{Dataset, TEST_FOLD};
-use crate::options::{Robust, TrainOptions};
+use crate::options::TrainOptions;
 use crate::{Error, Result};
 
 /// What the user asked of the model: the network, and where its configuration comes from.
@@ -310,8 +311,9 @@ fn field_and_value(o: &str) -> Result<(&str, &str)> {
 mod tests {
     use pvt3_models::Config;
 
+    use crate::data::augment::Robust;
     use crate::data::{Condition, Dataset, TEST_FOLD};
-    use crate::options::{Robust, TrainOptions};
+    use crate::options::TrainOptions;
 
     #[test]
     fn robust_trains_for_other_touches_where_the_touches_that_train_vary_in_a_recorded_condition() {

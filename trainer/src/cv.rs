@@ -4,7 +4,7 @@
 //! with several seeds a 95 % confidence interval of the mean from the seeds' own means.
 //! Runs live in `OUT/seed{S}/fold{K}/` and resume one by one; `jobs` runs train side by side.
 //! With more than one PVT³ run, one stopping rule for provisional answers is calibrated on all
-//! their validation answers and written into every run ([`crate::cv_stopping`]).
+//! their validation answers and written into every run ([`crate::stopping`]).
 
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -13,8 +13,8 @@ use std::sync::Mutex;
 use indicatif::{MultiProgress, ProgressBar};
 use serde::{Deserialize, Serialize};
 
-use crate::checkpoint::{read_json, write_json_atomically};
 use crate::data::TEST_FOLD;
+use crate::json::{read_json, write_json_atomically};
 use crate::provenance::Stopping;
 use crate::prune::{prune_and_fine_tune, PruneStage};
 use crate::run_dir::{CrossValidation, Run, CV_CURVES, CV_PARTNER_CURVES, CV_SUMMARY};
@@ -266,15 +266,15 @@ pub fn write_figure(out: &Path, summary: &CvSummary, dirs: &[PathBuf], figure: &
 }
 
 /// With more than one run: one stopping rule on all the runs' validation answers, and one on
-/// their pruned successors' ([`crate::cv_stopping`]), into the runs and the summary.
+/// their pruned successors' ([`crate::stopping`]), into the runs and the summary.
 fn calibrate_stopping(summary: &mut CvSummary, dirs: &[std::path::PathBuf]) -> Result<()> {
     if dirs.len() < 2 {
         return Ok(());
     }
-    summary.stopping = crate::cv_stopping::calibrate_together(dirs)?;
+    summary.stopping = crate::stopping::calibrate_together(dirs)?;
     if !summary.pruned_runs.is_empty() {
         let pruned: Vec<_> = dirs.iter().map(|d| Run(d).pruned()).collect();
-        summary.pruned_stopping = crate::cv_stopping::calibrate_together(&pruned)?;
+        summary.pruned_stopping = crate::stopping::calibrate_together(&pruned)?;
     }
     Ok(())
 }

@@ -11,9 +11,10 @@ use pvt3_models::weights::varmap_tensors;
 use pvt3_spec::names;
 use pvt3_spec::prune::PatchChoice;
 
-use crate::checkpoint::{self, read_json, write_json_atomically, Meta};
+use crate::checkpoint::{self, Meta};
 use crate::cv::CvSummary;
 use crate::data::Dataset;
+use crate::json::{read_json, write_json_atomically};
 use crate::options::TrainOptions;
 use crate::provenance::{Expected, Stopping};
 use crate::prune::{prune_and_fine_tune, PruneStage};

@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use pvt3_format::StopRule;
 use serde::{Deserialize, Serialize};
 
+use crate::json::nan_from_null;
 use crate::options::TrainOptions;
 use crate::{Error, Result};
 
@@ -107,12 +108,6 @@ impl Provenance {
             )
         })
     }
-}
-
-/// Reads a number, or `null` as NaN: how JSON writes a figure that was not measured (a final
-/// model's validation accuracy, a run's test accuracy without test touches).
-pub fn nan_from_null<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<f64, D::Error> {
-    Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))
 }
 
 fn current_or_none<'de, D: serde::Deserializer<'de>>(d: D) -> std::result::Result<Option<Stopping>, D::Error> {

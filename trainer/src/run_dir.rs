@@ -158,6 +158,16 @@ impl Checkpoint<'_> {
         self.0.join(PARTNER)
     }
 
+    /// `last/` only: where the run's sensor `i` keeps its resume state (0: the run's own, in
+    /// `last/` itself; 1: a joint run's other, [`Checkpoint::partner`]).
+    pub fn of_sensor(self, i: usize) -> PathBuf {
+        if i == 0 {
+            self.0.to_path_buf()
+        } else {
+            self.partner()
+        }
+    }
+
     /// `last/` only: where the run stands (epochs done, the best so far, the random state).
     pub fn state(self) -> PathBuf {
         self.0.join("state.json")

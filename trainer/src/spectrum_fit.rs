@@ -20,8 +20,8 @@ use ndarray::{Array2, Axis};
 use pvt3_models::Model;
 use pvt3_spec::names;
 
-use crate::checkpoint::{read_json, write_json_atomically};
 use crate::data::windows::Samples;
+use crate::json::{read_json, write_json_atomically};
 use crate::run_dir::Run;
 use crate::Result;
 

@@ -10,8 +10,6 @@
 //! `result.json` (written when the run is complete); a joint run's other sensor has its own in
 //! `partner/`.
 
-use std::fs::File;
-use std::io::Write;
 use std::path::Path;
 use std::time::Instant;
 
@@ -21,18 +19,16 @@ use pvt3_spec::prune::PruneSpec;
 use pvt3_spec::weights::Tensors;
 use serde::{Deserialize, Serialize};
 
-use crate::checkpoint::{self, write_json, write_json_atomically};
-use crate::data::windows::Samples;
 use crate::data::Dataset;
 use crate::joint::Partner;
+use crate::json::{nan_from_null, write_json};
 use crate::options::TrainOptions;
-use crate::provenance::nan_from_null;
-use crate::run_dir::{Checkpoint, Run};
+use crate::run_dir::Run;
 use crate::schedule::Schedule;
 use crate::{Error, Result};
 pub use learner::Learner;
-use run_state::{Found, RunState};
 use sensor::Sensor;
+use state::RunState;
 /// The outcome of a finished run.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct RunResult {
@@ -78,57 +74,33 @@ pub struct RunSpec<'a> {
 /// network trains beside, into the run directory `out/partner/` (its resume state inside
 /// `out/last/`, so that the two resume together).
 pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Result<Option<RunResult>> {
-    let (config, opts, last) = match run_state::find(spec, out, resume)? {
-        Found::Finished(result) => return Ok(Some(result)),
-        Found::Run { config, opts, last } => (config, opts, last),
-    };
-    // A run from given weights (fine-tuning) keeps its spectral heads as they are, unless it
-    // prunes patches a head over the image's space read: it now reads them as 0.
-    let prunes_pixels = spec.config.spectral_space() && spec.pruning.as_ref().is_some_and(|p| p.patches > 0.0);
-    let fit_heads = last.is_none() && (spec.start.is_none() || prunes_pixels);
-    let mut sensors = sensor::of_run(spec, config, &opts, out)?;
-    let mut run = run_state::begin(&mut sensors, &opts, last)?;
-    for sensor in &mut sensors {
-        if let Some(chosen) = sensor.ready(fit_heads, &opts)? {
-            bar.println(format!("{}: {chosen}", sensor.dir.display()));
-        }
+    if let Some(result) = resume::finished(spec, out, resume)? {
+        return Ok(Some(result));
     }
-    let steps_per_epoch = sensors[0].split.train.len().div_ceil(opts.optimization.batch_size);
+    let mut run = resume::open(spec, out, resume, bar)?;
+    let opts = run.opts.clone();
+    let steps_per_epoch = run.sensors[0].split.train.len().div_ceil(opts.optimization.batch_size);
     let schedule = Schedule::new(&opts.optimization, steps_per_epoch);
     bar.set_length((opts.optimization.epochs * steps_per_epoch) as u64);
-    bar.set_position((run.epochs_done * steps_per_epoch) as u64);
-    let mut logs = sensors.iter().map(|s| open_log(&Run(&s.dir).metrics())).collect::<Result<Vec<_>>>()?;
-    let first_epoch = run.epochs_done + 1;
+    bar.set_position((run.state.epochs_done * steps_per_epoch) as u64);
+    let first_epoch = run.state.epochs_done + 1;
     for epoch in first_epoch..=opts.optimization.epochs {
-        if run.stalled(sensors.len(), opts.optimization.patience) {
+        if run.state.stalled(run.sensors.len(), opts.optimization.patience) {
             break;
         }
         if spec.pause_after.is_some_and(|p| epoch - first_epoch >= p) {
             return Ok(None);
         }
         let started = Instant::now();
-        let trained = epoch::train(&mut sensors, epoch, &schedule, &opts, &mut run, bar)?;
+        let trained = epoch::train(&mut run.sensors, epoch, &schedule, &opts, &mut run.state, bar)?;
         crate::crash::point("stepped");
         // With weight averaging, the average is what is evaluated, selected and checkpointed.
-        let validated = (sensors.iter_mut().enumerate())
-            .map(|(i, s)| s.validate(epoch, run.best_of(i), (spec.val_fold, &spec.pruning)))
+        let validated = (run.sensors.iter_mut().enumerate())
+            .map(|(i, s)| s.validate(epoch, run.state.best_of(i), (spec.val_fold, &spec.pruning)))
             .collect::<Result<Vec<_>>>()?;
         crate::crash::point("validated");
-        let seconds = started.elapsed().as_secs_f64();
-        run.wall_seconds += seconds;
-        run.epochs_done = epoch;
-        // The epoch's metrics line before its resume state: a run killed between the two resumes
-        // from the epoch before, whose log it cuts back to (a line after a saved state would be
-        // lost).
-        for (i, ((sensor, log), (tally, val))) in sensors.iter().zip(&mut logs).zip(trained.tallies.iter().zip(&validated)).enumerate() {
-            let line = trained.line(epoch, seconds, tally, val);
-            writeln!(log, "{}", serde_json::to_string(&line).expect("plain data")).map_err(Error::io(&sensor.dir))?;
-            crate::plot::curves::write_run(&sensor.dir, run.best_of(i).as_ref().map(|b| b.epoch))?;
-        }
-        crate::crash::point("logged");
-        run_state::save_last(&sensors, &Run(out).last(), &run, (spec.val_fold, &spec.pruning), (epoch, &validated))?;
-        crate::crash::point("saved");
-        let (tally, best) = (&trained.tallies[0], run.best.as_ref().expect("set after the first epoch"));
+        run.end_epoch((epoch, started.elapsed().as_secs_f64()), &trained, &validated, (spec.val_fold, &spec.pruning))?;
+        let (tally, best) = (&trained.tallies[0], run.state.best.as_ref().expect("set after the first epoch"));
         bar.set_message(format!(
             "epoch {epoch}/{} loss {:.3} train {:.3} val {:.3} (best {:.3} @ {})",
             opts.optimization.epochs,
@@ -139,7 +111,7 @@ pub fn train(spec: &RunSpec, out: &Path, resume: bool, bar: &ProgressBar) -> Res
             best.epoch
         ));
     }
-    finish(&sensors, spec, &opts, &mut run).map(Some)
+    finish(&run.sensors, spec, &opts, &mut run.state).map(Some)
 }
 
 /// The finished run's results, a joint run's other sensor's first (a run with its `result.json`
@@ -158,37 +130,19 @@ fn finish(sensors: &[Sensor], spec: &RunSpec, opts: &TrainOptions, run: &mut Run
             wall_seconds: run.wall_seconds,
             head: crate::spectrum_fit::recorded(&sensor.dir)?.map(|c| c.choice.form),
         };
-        calibrate_stopping(&Run(&sensor.dir).model(), &sensor.val_set)?;
+        crate::stopping::calibrate_run(&Run(&sensor.dir).model(), &sensor.val_set)?;
         write_json(&Run(&sensor.dir).result(), &done)?;
         result = Some(done);
     }
     Ok(result.expect("a run has its own sensor"))
 }
 
-fn open_log(path: &Path) -> Result<File> {
-    std::fs::OpenOptions::new().create(true).append(true).open(path).map_err(Error::io(path))
-}
-
-/// Calibrates the stopping rule of provisional answers ([`crate::anytime`]) for the PVT³
-/// checkpoint in `dir` on the validation samples, into its provenance (which the exporter
-/// writes into the file). Other networks give no provisional answers, and a run with nothing to
-/// validate is calibrated by no one here.
-fn calibrate_stopping(dir: &Path, val_set: &Samples) -> Result<()> {
-    if val_set.is_empty() {
-        // A final model takes its cross-validation's rule (`crate::final_model`).
-        return Ok(());
-    }
-    let (mut meta, model, _) = checkpoint::load(dir)?;
-    let Some(pvt3) = crate::anytime::answering(&model) else { return Ok(()) };
-    meta.provenance.stopping = Some(crate::anytime::prefixes(pvt3, val_set)?.calibrate());
-    write_json_atomically(&Checkpoint(dir).provenance(), &meta.provenance)
-}
-
 mod epoch;
 mod learner;
 pub mod loss;
-mod run_state;
+mod resume;
 mod sensor;
+mod state;
 
 #[cfg(test)]
 pub(crate) mod tests;

@@ -9,9 +9,131 @@ pub mod mixup;
 
 use pvt3_models::Rng;
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 
 use super::normalization::Normalization;
-use crate::options::Augmentation;
+
+// The options' heading in `--help` (per argument: a heading set for a flattened group would hold
+// for every argument after it too).
+const AUGMENTATION: &str = "Augmentation";
+
+/// How training windows are changed as they are batched ([`augment`]) and how a
+/// batch is blended or pushed beyond its touches in the learner's forward pass.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize, clap::Args)]
+pub struct Augmentation {
+    /// Each training sample is scaled by a random gain in [1 - g, 1 + g].
+    #[arg(long = "aug-gain", id = "aug_gain", value_name = "AUG_GAIN", default_value_t = 0.1, help_heading = AUGMENTATION)]
+    #[serde(rename = "aug_gain")]
+    pub gain: f64,
+    /// Gaussian noise of this standard deviation (in normalised units).
+    #[arg(long = "aug-noise", id = "aug_noise", value_name = "AUG_NOISE", default_value_t = 0.05, help_heading = AUGMENTATION)]
+    #[serde(rename = "aug_noise")]
+    pub noise: f64,
+    /// Shift each training sample in time by a random offset in [-N, N] frames
+    /// (edge frames repeated).
+    #[arg(long = "aug-shift", id = "aug_shift", value_name = "AUG_SHIFT", default_value_t = 0, help_heading = AUGMENTATION)]
+    #[serde(default, rename = "aug_shift")]
+    pub shift: usize,
+    /// Multiply each training window's raw readings by a random factor,
+    /// log-uniform in [1 / (1 + S), 1 + S], as a lighter or firmer press would (a capacitive
+    /// sensor's readings grow about in proportion to the force: docs/robustness.md). E.g. 0.5.
+    /// 0 turns it off.
+    #[arg(long = "aug-scale", id = "aug_scale", value_name = "AUG_SCALE", default_value_t = 0.0, help_heading = AUGMENTATION)]
+    #[serde(default, rename = "aug_scale")]
+    pub scale: f64,
+    /// Multiply each channel's raw readings in a training window by a random
+    /// factor of its own, log-uniform in [1 / (1 + S), 1 + S]: the pattern of levels across the
+    /// sensor distorted, as a press beyond the trained forces distorts it (docs/robustness.md,
+    /// "What force does to the readings"). E.g. 0.05. 0 turns it off.
+    #[arg(long = "aug-channel-scale", id = "aug_channel_scale", value_name = "AUG_CHANNEL_SCALE", default_value_t = 0.0, help_heading = AUGMENTATION)]
+    #[serde(default, rename = "aug_channel_scale")]
+    pub channel_scale: f64,
+    /// Multiply each training window's variation about its mean (per channel, the
+    /// level kept) by a random factor, log-uniform in [1 / (1 + S), 1 + S]: a firmer press makes
+    /// a texture's vibration grow faster than the level (docs/robustness.md). E.g. 0.5. 0 turns
+    /// it off.
+    #[arg(long = "aug-vibration", id = "aug_vibration", value_name = "AUG_VIBRATION", default_value_t = 0.0, help_heading = AUGMENTATION)]
+    #[serde(default, rename = "aug_vibration")]
+    pub vibration: f64,
+    /// Read each training window at a random speed, as if the touch had been made
+    /// up to 1 + S times faster or slower (log-uniform; resampled, the touch's own frames beyond
+    /// the window read where it has them), so that a model meets speeds it was not trained at.
+    /// E.g. 1 (half to twice the speed). 0 turns it off.
+    #[arg(long = "aug-stretch", id = "aug_stretch", value_name = "AUG_STRETCH", default_value_t = 0.0, help_heading = AUGMENTATION)]
+    #[serde(default, rename = "aug_stretch")]
+    pub stretch: f64,
+    /// With probability P, reverse a training window in time, as if the sensor had slid over
+    /// the same texture the other way: its ridges pass under the sensor in the reverse order
+    /// (the sensor's layout is not mirrored). E.g. 0.5. 0 turns it off.
+    #[arg(long = "aug-reverse", id = "aug_reverse", value_name = "AUG_REVERSE", default_value_t = 0.0, help_heading = AUGMENTATION)]
+    #[serde(default, rename = "aug_reverse")]
+    pub reverse: f64,
+    /// Move each training window's image by up to N pixels (or taxels) each way, both axes drawn
+    /// alone, edge pixels repeated: a camera's touch pressed a little elsewhere on the gel.
+    /// 0 turns it off.
+    #[arg(long = "aug-translate", id = "aug_translate", value_name = "AUG_TRANSLATE", default_value_t = 0, help_heading = AUGMENTATION)]
+    #[serde(default, rename = "aug_translate")]
+    pub translate: usize,
+    /// With probability P each, mirror a training window's image left to right, and top to
+    /// bottom (drawn alone): a texture's surface is as likely the one way round as the other, and
+    /// both mirrors together turn it half round. For an image's rows and columns, where the image
+    /// looks alike mirrored: not a GelSight's colour image, lit from fixed sides
+    /// (docs/camera.md), nor a grid of taxels that is not a picture. E.g. 0.5. 0 turns it off.
+    #[arg(long = "aug-flip", id = "aug_flip", value_name = "AUG_FLIP", default_value_t = 0.0, help_heading = AUGMENTATION)]
+    #[serde(default, rename = "aug_flip")]
+    pub flip: f64,
+    /// Mixup: blend each training batch with a shuffled copy of itself, λ ~ Beta(α, α) per batch,
+    /// and the two labels' losses alike; this is α (e.g. 0.2). 0 turns it off.
+    #[arg(long, default_value_t = 0.0, help_heading = AUGMENTATION)]
+    #[serde(default)]
+    pub mixup: f64,
+    /// Same-class extrapolation: move each training sample away from another of its class in the
+    /// batch, x + λ (x − x_p) with λ ~ U(0, L) per sample, its label kept; this is L (e.g. 1).
+    /// The step between two touches of a material continues past them, as a press firmer or
+    /// lighter than any trained would: with 1, unseen forces 0.96 instead of 0.86 on FabricSlide
+    /// (docs/robustness.md). 0 turns it off.
+    #[arg(long, default_value_t = 0.0, help_heading = AUGMENTATION)]
+    #[serde(default)]
+    pub extrapolate: f64,
+    /// With --extrapolate: move only each channel's level (its mean over the window) and keep the
+    /// window's own variation. Two touches' vibrations are not aligned in time, so their
+    /// difference is noise that a whole-window step adds to the sample: on FabricSlide the levels
+    /// alone keep unseen firmer presses at 0.95 and a lighter one at 0.95, where whole windows
+    /// give 0.96 and 0.88 (docs/robustness.md).
+    #[arg(long, requires = "extrapolate", help_heading = AUGMENTATION)]
+    #[serde(default)]
+    pub extrapolate_levels: bool,
+    /// Training for ways of touching beyond the trained ones. `auto`: where the touches that
+    /// train were made in more than one recorded way (a condition of `pvt3 import --name`, such
+    /// as force or speed, in two levels or more) and neither --aug-channel-scale nor --extrapolate
+    /// is asked, train with `--aug-channel-scale 0.15`, `--aug-stretch 1` unless a stretch is
+    /// asked, and a PVT³ of a sensor's channels with `--set spectral_bands=16` unless the bands are
+    /// set, and say so (what it changes: docs/robustness.md); a set that records no conditions
+    /// trains as asked. `on`: as if it recorded them; `off`: as asked.
+    #[arg(long, value_enum, default_value_t = Robust::Auto, help_heading = AUGMENTATION)]
+    #[serde(default = "Robust::before_auto")]
+    pub robust: Robust,
+}
+
+/// Whether training prepares a model for ways of touching beyond the trained ones
+/// (`configure::robust`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, clap::ValueEnum)]
+#[serde(rename_all = "lowercase")]
+pub enum Robust {
+    /// Where the data record that the touches were made in more than one way.
+    Auto,
+    /// Always.
+    On,
+    /// Never: the augmentations as asked.
+    Off,
+}
+
+impl Robust {
+    /// What a run recorded before `--robust` was: its options as asked.
+    fn before_auto() -> Self {
+        Robust::Off
+    }
+}
 
 /// One normalised training window (`norm.frames` frames a channel, channels in rows, `grid`'s
 /// height × width × colours of them) changed in place as `opts` asks: its raw readings scaled per

@@ -68,7 +68,7 @@ impl<'a> Samples<'a> {
     /// no draw, when it is exactly one window long). With `stretch` > 0 each window is also read
     /// at a random speed, as if the touch had been made faster or slower: it spans `r` times the
     /// model's frames of the touch, `r` log-uniform in [1 / (1 + stretch), 1 + stretch] (at most
-    /// the whole touch), resampled to the model's frames ([`pvt3_runtime::resample`]).
+    /// the whole touch), resampled to the model's frames ([`pvt3_format::resample`]).
     pub fn cropped(data: &'a Dataset, indices: &[usize], norm: &Normalization, stretch: f64, rng: &mut Rng) -> Self {
         let draw = |i: usize, rng: &mut Rng| {
             let len = data.lengths[i];

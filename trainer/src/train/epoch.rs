@@ -8,7 +8,7 @@ use indicatif::ProgressBar;
 
 use super::learner::step_together;
 use super::sensor::{rows_by_class, Sensor, Tally, Validated};
-use super::RunState;
+use super::state::RunState;
 use crate::data::augment::augment;
 use crate::data::windows::Samples;
 use crate::metrics::EpochMetrics;
@@ -53,7 +53,9 @@ pub(super) fn train(
     bar: &ProgressBar,
 ) -> Result<Trained> {
     // Windows drawn anew this epoch, each sensor's in turn (see `Sensor::crops`).
-    let drawn: Vec<Option<Samples>> = sensors.iter().map(|s| s.epoch_windows(&mut run.rng)).collect();
+    let drawn: Vec<Option<Samples>> = (sensors.iter())
+        .map(|s| s.crops.then(|| Samples::cropped(s.data, &s.split.train, &s.normalization, s.options.augmentation.stretch, &mut run.rng)))
+        .collect();
     let (mut sets, mut nets) = (Vec::new(), Vec::new());
     for (sensor, drawn) in sensors.iter_mut().zip(&drawn) {
         let Sensor { net, train_set, normalization, config, .. } = sensor;

@@ -1,7 +1,8 @@
-//! A model with its optimiser, and the training step: the augmentations that act on a whole
-//! batch, the forward pass and its loss ([`super::loss`]), backward, clipping and AdamW. A joint
-//! run's networks step together ([`step_together`]): one backward pass through both losses and
-//! the distance between their encodings.
+//! A sensor's network as training changes it ([`Net`]: its learner and weight average, and their
+//! resume files), a model with its optimiser ([`Learner`]), and the training step: the
+//! augmentations that act on a whole batch, the forward pass and its loss ([`super::loss`]),
+//! backward, clipping and AdamW. A joint run's networks step together ([`step_together`]): one
+//! backward pass through both losses and the distance between their encodings.
 
 use std::path::Path;
 
@@ -13,10 +14,50 @@ use pvt3_spec::names::Role;
 use pvt3_spec::weights::Tensors;
 
 use super::loss;
+use crate::average::WeightAverage;
+use crate::checkpoint::{self, Meta};
 use crate::data::augment::{extrapolation, mixup};
 use crate::optim::{is_weight_matrix, AdamW};
 use crate::options::TrainOptions;
+use crate::run_dir::Checkpoint;
 use crate::{Error, Result};
+
+/// What a sensor's training steps change: its learner and weight average.
+pub(super) struct Net {
+    pub(super) learner: Learner,
+    pub(super) average: Option<WeightAverage>,
+}
+
+impl Net {
+    pub(super) fn update_average(&mut self, step: usize) -> Result<()> {
+        match &mut self.average {
+            Some(average) => average.update(step),
+            None => Ok(()),
+        }
+    }
+
+    /// The weights, optimiser state and weight average of the checkpoint `dir` (a `last/`).
+    pub(super) fn restore(&mut self, dir: &Path, step: usize) -> Result<()> {
+        pvt3_models::weights::load_weights(&self.learner.varmap, &Checkpoint(dir).weights())?;
+        self.learner.optimizer.load(&Checkpoint(dir).optimizer(), step)?;
+        if let Some(average) = &mut self.average {
+            average.load(&Checkpoint(dir).average())?;
+        }
+        Ok(())
+    }
+
+    /// Writes its resume state into `dir` (a `last/` being filled): the checkpoint of `meta`
+    /// with its weights, and the optimiser state and weight average.
+    pub(super) fn save_last(&self, dir: &Path, meta: &Meta) -> Result<()> {
+        checkpoint::write_files(dir, &self.learner.varmap, meta)?;
+        let files = Checkpoint(dir);
+        self.learner.optimizer.save(&files.optimizer())?;
+        if let Some(average) = &self.average {
+            average.save(&files.average())?;
+        }
+        Ok(())
+    }
+}
 
 /// A model with its optimiser: what one training step needs.
 pub struct Learner {

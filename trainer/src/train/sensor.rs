@@ -5,23 +5,24 @@ use std::path::{Path, PathBuf};
 
 use candle_core::{Tensor, D};
 use candle_nn::VarMap;
-use pvt3_models::{Config, Rng};
+use indicatif::ProgressBar;
+use pvt3_models::Config;
 use pvt3_spec::prune::PruneSpec;
 use pvt3_spec::weights::Tensors;
 use serde::{Deserialize, Serialize};
 
-use super::learner::is_mask;
+use super::learner::{is_mask, Net};
 use super::{Learner, RunSpec};
 use crate::average::WeightAverage;
 use crate::checkpoint::{self, Meta};
 use crate::data::normalization::Normalization;
 use crate::data::{Dataset, Split, TrainedOn};
 use crate::joint::Partner;
+use crate::json::nan_from_null;
 use crate::optim::is_weight_matrix;
 use crate::options::TrainOptions;
-use crate::provenance::nan_from_null;
 use crate::provenance::Provenance;
-use crate::run_dir::Run;
+use crate::run_dir::{Checkpoint, Run};
 use crate::spectrum_fit::Chosen;
 use crate::{data::windows::Samples, evaluate::evaluate};
 use crate::{Error, Result};
@@ -49,21 +50,6 @@ pub(super) struct Sensor<'a> {
     pub(super) val_set: Samples<'a>,
     pub(super) test_set: Samples<'a>,
     pub(super) net: Net,
-}
-
-/// What a sensor's training steps change: its learner and weight average.
-pub(super) struct Net {
-    pub(super) learner: Learner,
-    pub(super) average: Option<WeightAverage>,
-}
-
-impl Net {
-    pub(super) fn update_average(&mut self, step: usize) -> Result<()> {
-        match &mut self.average {
-            Some(average) => average.update(step),
-            None => Ok(()),
-        }
-    }
 }
 
 impl<'a> Sensor<'a> {
@@ -107,12 +93,6 @@ impl<'a> Sensor<'a> {
             val_set,
             test_set,
         })
-    }
-
-    /// This epoch's training windows, when they are drawn anew each epoch (see `crops`).
-    pub(super) fn epoch_windows(&self, rng: &mut Rng) -> Option<Samples<'a>> {
-        let stretch = self.options.augmentation.stretch;
-        self.crops.then(|| Samples::cropped(self.data, &self.split.train, &self.normalization, stretch, rng))
     }
 
     /// Readies the network for the epochs of this call: its spectral heads fitted to its
@@ -195,8 +175,17 @@ impl<'a> Sensor<'a> {
 }
 
 /// The run's sensors, each with its options and run directory (made here): the run's own, its
-/// teachers loaded (`--distill`), and a joint run's other sensor.
-pub(super) fn of_run<'a>(spec: &RunSpec<'a>, config: Config, opts: &TrainOptions, out: &Path) -> Result<Vec<Sensor<'a>>> {
+/// teachers loaded (`--distill`), and a joint run's other sensor; each readied for the epochs of
+/// this call: restored from the run's `last/` and its step when it resumes (`resumed`), otherwise
+/// its spectral heads fitted ([`Sensor::ready`]: what a camera head's fit chose is said on `bar`).
+pub(super) fn of_run<'a>(
+    spec: &RunSpec<'a>,
+    config: Config,
+    opts: &TrainOptions,
+    out: &Path,
+    resumed: Option<(&Path, usize)>,
+    bar: &ProgressBar,
+) -> Result<Vec<Sensor<'a>>> {
     let mut main = Sensor::new(spec.data, config, spec.classes.clone(), (spec.val_fold, opts), out, (spec.start.as_ref(), None))?;
     let mut sensors = Vec::new();
     if let Some(p) = &spec.partner {
@@ -214,6 +203,18 @@ pub(super) fn of_run<'a>(spec: &RunSpec<'a>, config: Config, opts: &TrainOptions
     sensors.insert(0, main);
     for sensor in &sensors {
         std::fs::create_dir_all(&sensor.dir).map_err(Error::io(&sensor.dir))?;
+    }
+    // A run from given weights (fine-tuning) keeps its spectral heads as they are, unless it
+    // prunes patches a head over the image's space read: it now reads them as 0.
+    let prunes_pixels = spec.config.spectral_space() && spec.pruning.as_ref().is_some_and(|p| p.patches > 0.0);
+    let fit_heads = resumed.is_none() && (spec.start.is_none() || prunes_pixels);
+    for (i, sensor) in sensors.iter_mut().enumerate() {
+        if let Some((last, step)) = resumed {
+            sensor.net.restore(&Checkpoint(last).of_sensor(i), step)?;
+        }
+        if let Some(chosen) = sensor.ready(fit_heads, opts)? {
+            bar.println(format!("{}: {chosen}", sensor.dir.display()));
+        }
     }
     Ok(sensors)
 }

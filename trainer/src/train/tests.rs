@@ -8,10 +8,11 @@ use indicatif::ProgressBar;
 use pvt3_models::{Config, Rng};
 
 use super::*;
-use crate::checkpoint::read_json;
+use crate::data::augment::{Augmentation, Robust};
 use crate::data::{Dataset, Frames};
-use crate::options::{Augmentation, Distillation, HeldZeros, Optimization, Pruning, Robust};
-use crate::run_dir::CrossValidation;
+use crate::json::read_json;
+use crate::options::{Distillation, HeldZeros, Optimization, Pruning};
+use crate::run_dir::{Checkpoint, CrossValidation};
 
 fn tiny_config() -> Config {
     Config {

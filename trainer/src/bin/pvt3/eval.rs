@@ -14,6 +14,7 @@ use pvt3_trainer::data::{windows::Samples, Condition};
 use pvt3_trainer::data::{Dataset, TEST_FOLD};
 use pvt3_trainer::evaluate::levels::{self, Level};
 use pvt3_trainer::evaluate::{evaluate, Evaluation};
+use pvt3_trainer::json;
 use pvt3_trainer::plot::{self, anytime as anytime_picture, confusion};
 use pvt3_trainer::provenance::CalibratedOn;
 use pvt3_trainer::run_dir::CV_SUMMARY;
@@ -265,7 +266,7 @@ fn anytime_report(run: &Loaded, samples: &Samples, a: &EvalArgs) -> Result<()> {
     let pvt3 = run.model.pvt3("pvt3 eval --anytime")?;
     let answers = anytime::answers(pvt3, samples)?;
     if let Some(path) = &a.answers {
-        checkpoint::write_json_atomically(path, &answers).with_context(|| format!("writing {}", path.display()))?;
+        json::write_json_atomically(path, &answers).with_context(|| format!("writing {}", path.display()))?;
     }
     let prefixes = Prefixes::from(&answers);
     let calibrated = anytime::carried_rule(pvt3, meta, &run.data)?;

@@ -4,7 +4,8 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result};
-use pvt3_trainer::checkpoint::{self, BakedFile};
+use pvt3_trainer::checkpoint::BakedFile;
+use pvt3_trainer::json;
 
 /// Write a model as one ONNX file (opset 17): raw frames in, normalisation and kept-frame
 /// selection inside, logits and probabilities out.
@@ -38,7 +39,7 @@ pub fn export_onnx(model: &Path, out: &Path) -> Result<String> {
 
 pub fn bake(a: BakeArgs) -> Result<()> {
     let file = BakedFile::from_checkpoint(&a.run)?;
-    checkpoint::write_json_atomically(&a.out, &file)?;
+    json::write_json_atomically(&a.out, &file)?;
     let baked = &file.baked;
     println!(
         "baked {}: {} → {} parameters, {} → {} multiply-adds per sample, {} of {} temporal tokens kept",

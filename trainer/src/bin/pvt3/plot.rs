@@ -4,8 +4,8 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Result};
-use pvt3_trainer::checkpoint::read_json;
 use pvt3_trainer::cv::{self, CvSummary};
+use pvt3_trainer::json::read_json;
 use pvt3_trainer::plot::curves;
 use pvt3_trainer::run_dir::{CrossValidation, Run, CV_CURVES, CV_PARTNER_CURVES, CV_SUMMARY};
 

@@ -1,19 +1,36 @@
-//! A cross-validation's stopping rule: one rule calibrated on the validation answers of all its
-//! PVT³ runs together (each run's model on its own validation fold, thousands of samples where a
+//! The stopping rule of provisional answers ([`crate::anytime`]) calibrated into a model's
+//! provenance, which the exporter writes into the file: a run's on its own validation windows
+//! ([`calibrate_run`]), and a cross-validation's, one rule calibrated on the validation answers of
+//! all its PVT³ runs together (each run's model on its own validation fold, thousands of samples where a
 //! single run has about 200), written into every run's provenance, so that any of them exports
 //! with it (docs/anytime.md, "Calibrated on a cross-validation"). Each run's validation fold is
 //! the one it recorded ([`crate::provenance::Provenance::dataset`]); the test fold is never read.
 
 use std::collections::HashMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use crate::anytime::Prefixes;
-use crate::checkpoint::{self, write_json_atomically};
+use crate::checkpoint;
 use crate::data::windows::Samples;
 use crate::data::Dataset;
+use crate::json::write_json_atomically;
 use crate::provenance::Stopping;
 use crate::run_dir::Checkpoint;
 use crate::Result;
+
+/// Calibrates the stopping rule of the PVT³ checkpoint in `dir` on the validation samples, into its
+/// provenance. Other networks give no provisional answers, and a run with nothing to validate is
+/// calibrated by no one here.
+pub fn calibrate_run(dir: &Path, val_set: &Samples) -> Result<()> {
+    if val_set.is_empty() {
+        // A final model takes its cross-validation's rule (`crate::final_model`).
+        return Ok(());
+    }
+    let (mut meta, model, _) = checkpoint::load(dir)?;
+    let Some(pvt3) = crate::anytime::answering(&model) else { return Ok(()) };
+    meta.provenance.stopping = Some(crate::anytime::prefixes(pvt3, val_set)?.calibrate());
+    write_json_atomically(&Checkpoint(dir).provenance(), &meta.provenance)
+}
 
 /// Calibrates one rule ([`Prefixes::calibrate_pooled`]) on the validation answers of the runs in
 /// `dirs` (run or checkpoint directories of one configuration) and writes it into each run's
