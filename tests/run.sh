@@ -103,6 +103,13 @@ fi
 # what decides it changed, it is built, and its single-threaded phases (one codegen unit, fat
 # LTO) then overlap the other steps; otherwise its record is read. Checked at the end.
 mkdir -p target
+# A fresh target directory grows to 4.9 GiB (a fresh clone of cb76bbc: the host build 2.7, the other
+# platforms 1.2, aarch64 0.75, the onnxruntime venv 0.2), and a disk that fills mid-build stops the
+# run minutes in with "No space left on device": say so before anything is built.
+if [ ! -d target/ci ]; then
+  free_mib=$(( $(df -Pk target | awk 'NR == 2 { print $4 }') / 1024 ))
+  [ "$free_mib" -ge 6144 ] || missing "disk space: a fresh run of the tests writes 4.9 GiB under target/ and needs 6 GiB free there (with room for Debian's packages); $free_mib MiB are free"
+fi
 small_log=target/robot-small-size.log
 bash tests/robot-small.sh check >"$small_log" 2>&1 &
 small_pid=$!
