@@ -1,8 +1,7 @@
 //! Checkpoints are directories of files named in [`crate::run_dir::Checkpoint`]: configuration,
 //! weights, normalisation, class names and provenance (and in a run's `last/`, what resuming
-//! needs besides). A directory is written under a temporary name and swapped
-//! in by renames, so a crash never leaves a half-written checkpoint; if it strikes between the two
-//! renames, the previous version is still found under `NAME.old`.
+//! needs besides), each replaced whole ([`crate::atomic::replace_dir`]), so a crash never leaves a
+//! half-written checkpoint.
 
 use std::path::{Path, PathBuf};
 
@@ -11,6 +10,7 @@ use pvt3_models::weights::{load_weights, save_weights};
 use pvt3_models::{Config, Model};
 use serde::{Deserialize, Serialize};
 
+use crate::atomic::{existing_dir, replace_dir};
 use crate::data::normalization::Normalization;
 use crate::json::{read_json, write_json};
 use crate::provenance::Provenance;
@@ -69,65 +69,6 @@ fn checkpoint_error(path: &Path, reason: impl Into<String>) -> Error {
     Error::Checkpoint { path: path.to_path_buf(), reason: reason.into() }
 }
 
-/// Removes the temporary files (`*.tmp`) under `dir`: a process killed between writing one and
-/// renaming it leaves it behind. Only for a directory one process writes, such as a run's.
-pub fn remove_temporaries(dir: &Path) -> Result<()> {
-    let Ok(entries) = std::fs::read_dir(dir) else { return Ok(()) };
-    for entry in entries {
-        let path = entry.map_err(Error::io(dir))?.path();
-        if path.is_dir() {
-            remove_temporaries(&path)?;
-        } else if path.extension().is_some_and(|e| e == "tmp") {
-            std::fs::remove_file(&path).map_err(Error::io(&path))?;
-        }
-    }
-    Ok(())
-}
-
-/// The path beside `target` with `suffix` added to its name: where a directory is written before it
-/// is renamed over `target` (`.tmp`), or kept while it is replaced (`.old`).
-fn sibling(target: &Path, suffix: &str) -> PathBuf {
-    let mut name = target.file_name().expect("a directory name").to_os_string();
-    name.push(suffix);
-    target.with_file_name(name)
-}
-
-/// Writes a directory through `fill` under a temporary name, then swaps it in for `target`.
-pub fn replace_dir(target: &Path, fill: impl FnOnce(&Path) -> Result<()>) -> Result<()> {
-    let tmp = sibling(target, ".tmp");
-    let old = sibling(target, ".old");
-    if tmp.exists() {
-        std::fs::remove_dir_all(&tmp).map_err(Error::io(&tmp))?;
-    }
-    std::fs::create_dir_all(&tmp).map_err(Error::io(&tmp))?;
-    fill(&tmp)?;
-    crate::crash::point("filled");
-    if target.exists() {
-        if old.exists() {
-            std::fs::remove_dir_all(&old).map_err(Error::io(&old))?;
-        }
-        std::fs::rename(target, &old).map_err(Error::io(target))?;
-    }
-    crate::crash::point("swapping");
-    std::fs::rename(&tmp, target).map_err(Error::io(&tmp))?;
-    if old.exists() {
-        std::fs::remove_dir_all(&old).map_err(Error::io(&old))?;
-    }
-    Ok(())
-}
-
-/// The directory to read for `target`: itself, or the `.old` copy a crash left behind.
-pub fn existing_dir(target: &Path) -> Option<PathBuf> {
-    let old = sibling(target, ".old");
-    if target.is_dir() {
-        Some(target.to_path_buf())
-    } else if old.is_dir() {
-        Some(old)
-    } else {
-        None
-    }
-}
-
 /// Writes the checkpoint files into an existing directory.
 pub fn write_files(dir: &Path, varmap: &VarMap, meta: &Meta) -> Result<()> {
     let files = Checkpoint(dir);
@@ -183,25 +124,4 @@ fn resolve(path: &Path) -> Result<PathBuf> {
         .filter_map(|c| existing_dir(c))
         .find(|d| Checkpoint(d).config().exists())
         .ok_or_else(|| checkpoint_error(path, "not a checkpoint directory (no config.json in it or in its model/)"))
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_killed_writes_temporaries_are_removed_and_nothing_else() {
-        let dir = std::env::temp_dir().join(format!("pvt3-temporaries-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(dir.join("model")).unwrap();
-        let names = ["curves.svg", "curves.svg.41.tmp", "model/provenance.json", "model/provenance.json.7.tmp", "metrics.jsonl"];
-        for name in names {
-            std::fs::write(dir.join(name), "x").unwrap();
-        }
-        remove_temporaries(&dir).unwrap();
-        let left: Vec<bool> = names.iter().map(|n| dir.join(n).exists()).collect();
-        assert_eq!(left, [true, false, true, false, true]);
-        remove_temporaries(&dir.join("absent")).unwrap();
-        std::fs::remove_dir_all(&dir).unwrap();
-    }
 }

@@ -3,7 +3,7 @@
 //! measured written as `null` and read back as NaN. Below everything that stores its records
 //! this way (checkpoints, provenance, metrics, results, a head's choice).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
@@ -11,19 +11,18 @@ use serde::{Deserialize, Serialize};
 use crate::{Error, Result};
 
 pub fn write_json<T: Serialize>(path: &Path, value: &T) -> Result<()> {
-    let text = serde_json::to_string_pretty(value).expect("plain data serialises");
-    std::fs::write(path, text + "\n").map_err(Error::io(path))
+    std::fs::write(path, text(value)).map_err(Error::io(path))
 }
 
-/// Writes JSON to a temporary file and renames it over `path`. The temporary file is this
-/// process's own, so that jobs writing the same file at once (`cv --only` in a job array) each
-/// rename a whole one.
+/// A record as a run's JSON files hold it: indented, a newline at the end.
+fn text<T: Serialize>(value: &T) -> String {
+    serde_json::to_string_pretty(value).expect("plain data serialises") + "\n"
+}
+
+/// Writes JSON whole ([`crate::atomic::write_file`]), where another process may read or write the
+/// same file.
 pub fn write_json_atomically<T: Serialize>(path: &Path, value: &T) -> Result<()> {
-    let mut tmp = path.as_os_str().to_os_string();
-    tmp.push(format!(".{}.tmp", std::process::id()));
-    let tmp = PathBuf::from(tmp);
-    write_json(&tmp, value)?;
-    std::fs::rename(&tmp, path).map_err(Error::io(path))
+    crate::atomic::write_file(path, text(value))
 }
 
 pub fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T> {

@@ -2,6 +2,7 @@
 //! evaluation for PVT³. The `pvt3` binary is a thin command line over this library.
 
 pub mod anytime;
+pub mod atomic;
 pub mod average;
 pub mod bench;
 pub mod checkpoint;

@@ -11,18 +11,17 @@ pub mod curves;
 
 use std::path::Path;
 
-use crate::{Error, Result};
+use crate::Result;
 
 /// `text` with the characters XML reserves escaped.
 pub fn escape(text: &str) -> String {
     text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
 }
 
-/// Writes `svg` to `path` through a temporary file, so that a viewer never sees half a picture.
+/// Writes `svg` to `path` whole ([`crate::atomic::write_file`]), so that a viewer never sees half
+/// a picture.
 pub fn write(path: &Path, svg: &str) -> Result<()> {
-    let tmp = path.with_extension(format!("svg.{}.tmp", std::process::id()));
-    std::fs::write(&tmp, svg).map_err(Error::io(&tmp))?;
-    std::fs::rename(&tmp, path).map_err(Error::io(path))
+    crate::atomic::write_file(path, svg)
 }
 
 #[cfg(test)]
