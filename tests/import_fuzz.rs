@@ -358,7 +358,7 @@ fn damage_tree(dir: &Path, tree: Tree, damage: Damage, rng: &mut Rng, args: &mut
             }
         }
         Damage::TooFewTouches => {
-            let victims: Vec<PathBuf> = std::fs::read_dir(&file.parent().unwrap()).unwrap().map(|e| e.unwrap().path()).collect();
+            let victims: Vec<PathBuf> = std::fs::read_dir(file.parent().unwrap()).unwrap().map(|e| e.unwrap().path()).collect();
             for victim in victims.iter().take(1 + rng.below(victims.len())) {
                 let _ = std::fs::remove_file(victim).or_else(|_| std::fs::remove_dir_all(victim));
             }
@@ -368,7 +368,7 @@ fn damage_tree(dir: &Path, tree: Tree, damage: Damage, rng: &mut Rng, args: &mut
             std::fs::create_dir_all(dir.join("empty_class")).unwrap();
             std::fs::write(file.with_file_name("notes.md"), "x").unwrap();
         }
-        Damage::OtherSize if !csv => write_png(&file.with_extension("png"), &vec![9; 3 * 5 * 7], 7, 5),
+        Damage::OtherSize if !csv => write_png(&file.with_extension("png"), &[9; 3 * 5 * 7], 7, 5),
         Damage::OtherSize => std::fs::write(&file, "time,e1\n1,2\n2,3\n").unwrap(),
         Damage::LongColumn if csv => {
             let long = "a".repeat(4_000) + "e1";

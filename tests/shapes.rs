@@ -89,7 +89,7 @@ impl Case {
                 // Each touch its own phase, as presses differ.
                 let phase = touch as f32 * 2.3;
                 let pattern = ((pixel as f32 * (0.3 + class) + frame as f32 * 0.7 + phase).sin() + 1.0) * 60.0;
-                let v = 40.0 + pattern + 20.0 * rng.normal() as f32;
+                let v = 40.0 + pattern + 20.0 * rng.normal();
                 if self.camera {
                     v.round().clamp(0.0, 255.0)
                 } else {

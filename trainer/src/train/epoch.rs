@@ -6,7 +6,7 @@
 
 use indicatif::ProgressBar;
 
-use super::learner::step_together;
+use super::learner::{step_together, Stepped};
 use super::sensor::{rows_by_class, Sensor, Tally, Validated};
 use super::state::RunState;
 use crate::data::augment::augment;
@@ -86,8 +86,8 @@ pub(super) fn train(
             });
         }
         let mut learners: Vec<_> = nets.iter_mut().map(|n| &mut n.learner).collect();
-        let (stepped, apart) = step_together(&mut learners, &batches, pull, opts, lr, &mut run.rng)?;
-        for ((tally, (loss, logits)), (_, y)) in tallies.iter_mut().zip(stepped).zip(&batches) {
+        let Stepped { each, apart } = step_together(&mut learners, &batches, pull, opts, lr, &mut run.rng)?;
+        for ((tally, (loss, logits)), (_, y)) in tallies.iter_mut().zip(each).zip(&batches) {
             tally.add(loss, &logits, y, rows.len())?;
             if let Some(apart) = apart {
                 *tally.apart.get_or_insert(0.0) += apart * rows.len() as f64;

@@ -147,8 +147,7 @@ impl Learner {
             None => x.clone(),
         };
         let batch = [(x, y.clone())];
-        let (mut stepped, _) = step_together(&mut [self], &batch, 0.0, opts, lr, rng)?;
-        Ok(stepped.remove(0))
+        Ok(step_together(&mut [self], &batch, 0.0, opts, lr, rng)?.each.remove(0))
     }
 
     /// The configuration whose patches this learner's training batches come cut into
@@ -248,8 +247,7 @@ struct Pass {
 /// One optimiser step of every network in `learners`, each on its batch (`batches`, in the same
 /// order): each network's loss, and with two networks (`--joint`) `pull` × the mean squared
 /// error between their encodings ([`loss::encodings_apart`], measured at any `pull`), backward
-/// once through the sum, and each network's own update. Returns each network's loss and logits,
-/// and the encodings' distance in a joint step.
+/// once through the sum, and each network's own update.
 pub fn step_together(
     learners: &mut [&mut Learner],
     batches: &[(Tensor, Tensor)],
@@ -257,7 +255,7 @@ pub fn step_together(
     opts: &TrainOptions,
     lr: f64,
     rng: &mut Rng,
-) -> Result<(Vec<(f64, Tensor)>, Option<f64>)> {
+) -> Result<Stepped> {
     let joint = learners.len() > 1;
     let mut passes = Vec::with_capacity(learners.len());
     for (learner, (x, y)) in learners.iter_mut().zip(batches) {
@@ -278,8 +276,16 @@ pub fn step_together(
     for (learner, pass) in learners.iter_mut().zip(&passes) {
         learner.update(&grads, &pass.saved, opts, lr)?;
     }
-    let stepped = passes.into_iter().map(|p| Ok((p.loss.to_scalar::<f32>()? as f64, p.logits))).collect::<Result<_>>()?;
-    Ok((stepped, apart.map(|a| a.to_scalar::<f32>()).transpose()?.map(f64::from)))
+    let each = passes.into_iter().map(|p| Ok((p.loss.to_scalar::<f32>()? as f64, p.logits))).collect::<Result<_>>()?;
+    Ok(Stepped { each, apart: apart.map(|a| a.to_scalar::<f32>()).transpose()?.map(f64::from) })
+}
+
+/// What [`step_together`] returns.
+pub struct Stepped {
+    /// Each network's loss and logits, in the order of its learners.
+    pub each: Vec<(f64, Tensor)>,
+    /// The encodings' distance, in a joint step.
+    pub apart: Option<f64>,
 }
 
 /// A selection mask (channel or frame).

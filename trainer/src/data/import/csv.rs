@@ -103,7 +103,7 @@ fn time_like(name: &str) -> bool {
 /// Reads `dir` as one folder per class of CSV touches.
 pub fn read_folder(dir: &Path, opts: &ImportOptions) -> Result<Imported> {
     let (files, classes) = list_touches(dir, &opts.naming, Recording::Csv)?;
-    let (names, touches, condition_values) = read_touches(files, &classes)?;
+    let ReadTouches { names, touches, condition_values } = read_touches(files, &classes)?;
     let conditions = conditions(&opts.naming, &condition_values);
     let (chosen, left_out) = choose_columns(&names, &touches, opts)?;
     let channels: Vec<String> = chosen.iter().map(|&c| names[c].clone()).collect();
@@ -143,9 +143,16 @@ pub fn read_folder(dir: &Path, opts: &ImportOptions) -> Result<Imported> {
     Ok(out)
 }
 
-/// Every listed touch read, in order: the columns' names (one header for all), the touches and
-/// their condition values.
-fn read_touches(files: Vec<Listed>, classes: &[String]) -> Result<(Vec<String>, Vec<TouchFile>, Vec<Vec<String>>)> {
+/// Every listed touch, read in order.
+struct ReadTouches {
+    /// The columns' names: one header for all.
+    names: Vec<String>,
+    touches: Vec<TouchFile>,
+    /// Each touch's condition values.
+    condition_values: Vec<Vec<String>>,
+}
+
+fn read_touches(files: Vec<Listed>, classes: &[String]) -> Result<ReadTouches> {
     let mut header: Option<(PathBuf, Vec<String>)> = None;
     let mut touches = Vec::new();
     let mut condition_values = Vec::new();
@@ -166,7 +173,7 @@ fn read_touches(files: Vec<Listed>, classes: &[String]) -> Result<(Vec<String>, 
         condition_values.push(values);
     }
     let (_, names) = header.expect("at least one touch was read");
-    Ok((names, touches, condition_values))
+    Ok(ReadTouches { names, touches, condition_values })
 }
 
 /// Each touch's value of the condition `given` names (`option` its flag), as a number: what the
