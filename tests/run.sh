@@ -21,11 +21,12 @@
 #      docs/deploy.md), so both supported feature sets are tested: all of them on the host, the
 #      small one on aarch64. musl or glibc changes one line of the runtime (runtime/src/heap.rs,
 #      glibc's allocator tuning, tested on the host);
-#   4. other platforms: the trainer checked (cargo check) for Windows (x86_64-pc-windows-gnu, with
-#      Debian's mingw-w64) and macOS (aarch64-apple-darwin, its assembly by clang); the runtime's
-#      lints, clippy with warnings denied (every unsafe block has a SAFETY note), on the Windows
-#      build the check half did; the runtime and pvt3-run built as static musl binaries for
-#      x86-64, run on the golden windows and held to the host build's answers. In the
+#   4. other platforms: the trainer checked (cargo check) for macOS (aarch64-apple-darwin, its
+#      assembly by clang), and every crate's library and programs for Windows
+#      (x86_64-pc-windows-gnu, with Debian's mingw-w64) with clippy's lints, warnings denied; the
+#      runtime's and the format's tests linted there too (every unsafe block has a SAFETY note);
+#      the runtime and pvt3-run built as static musl binaries for x86-64, run on the golden
+#      windows and held to the host build's answers. In the
 #      background from the end of step 1's build, in a target directory of its own (so that
 #      neither cargo waits for the other's lock): it takes the CPU the other steps leave;
 #   5. the small robot library's size (tests/robot-small.sh, in the background from the start):
@@ -201,8 +202,11 @@ declare -A answered=(
 other_platforms() {
   local platforms=(--target-dir target/platforms) dev=(debug=false debug-assertions=false overflow-checks=false incremental=false 'package.tract-linalg.opt-level=1')
   platforms+=($(printf -- "--config profile.dev.%s " "${dev[@]}"))
-  # The trainer checked for Windows and macOS.
-  CC_aarch64_apple_darwin=clang cargo check "${platforms[@]}" --target x86_64-pc-windows-gnu --target aarch64-apple-darwin -p pvt3-trainer --bins
+  # The trainer checked for macOS; every crate's library and programs, the trainer's among them,
+  # checked for Windows with clippy's lints, warnings denied (the trainer's tests use Unix's
+  # signals and byte paths, so they are linted on the host alone, by whoever changes them).
+  CC_aarch64_apple_darwin=clang cargo check "${platforms[@]}" --target aarch64-apple-darwin -p pvt3-trainer --bins
+  cargo clippy "${platforms[@]}" --target x86_64-pc-windows-gnu --workspace --lib --bins -- -D warnings
   # The runtime's lints: clippy with warnings denied (every unsafe block has a SAFETY note), on
   # the Windows build the check above has half done (the same code as Linux's but for glibc's
   # allocator tuning in runtime/src/heap.rs, which only the host build compiles, and which is
@@ -230,7 +234,7 @@ joined "$need_pid" "$need_log" "what the tests need could not be installed"
 valgrind=()
 [ "$(uname -m)" != x86_64 ] || valgrind=(--skip the_c_example_gives_the_rust_result)
 
-step "other platforms, in the background: the trainer checked for Windows and macOS, the runtime's lints, the runtime and pvt3-run built static with musl for x86-64"
+step "other platforms, in the background: the trainer checked for macOS, every crate linted for Windows, the runtime and pvt3-run built static with musl for x86-64"
 platforms_log=target/other-platforms.log
 (set -e; other_platforms) >"$platforms_log" 2>&1 &
 platforms_pid=$!
