@@ -110,9 +110,9 @@ pub fn choose(texture: &Array2<f64>, ridges: &[(f64, Array2<f64>)], labels: &[us
         .iter()
         .map(|form| (*form, scored.iter().filter(|s| s.choice.form == *form).map(|s| s.correct).max().unwrap_or(0) as f64 / n))
         .collect();
-    // The lower loss first; then the texture among equals (the head without the pixels, whose map
-    // is the smaller); then the more touches read.
-    let key = |s: &Scored| (-s.loss, s.choice == Choice::TEXTURE, s.correct);
+    // The texture first among equals (the head without the pixels, whose map is the smaller);
+    // then the lower loss.
+    let key = |s: &Scored| (s.correct, s.choice == Choice::TEXTURE, -s.loss);
     let best = scored.into_iter().reduce(|best, s| if key(&s) > key(&best) { s } else { best });
     Chosen { choice: best.expect("the texture's candidate").choice, validation }
 }
