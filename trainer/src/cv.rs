@@ -212,31 +212,16 @@ pub fn cross_validate(
     for &(seed, _) in work {
         spec_of(seed)?;
     }
-    let next = AtomicUsize::new(0);
-    let results: Mutex<Vec<Option<Result<Option<FoldResult>>>>> = Mutex::new(work.iter().map(|_| None).collect());
-    std::thread::scope(|scope| {
-        for _ in 0..jobs.min(work.len().max(1)) {
-            scope.spawn(|| loop {
-                let i = next.fetch_add(1, Ordering::SeqCst);
-                let Some(&(seed, fold)) = work.get(i) else {
-                    break;
-                };
-                let bar = progress.add(ProgressBar::new(0).with_style(style.clone()));
-                bar.set_prefix(format!("seed {seed} fold {fold}"));
-                let run_spec = RunSpec { val_fold: Some(fold), ..spec_of(seed).expect("checked above").clone() };
-                let dir = CrossValidation(out).run(seed, fold);
-                let result = run_fold(&run_spec, stage, &dir, resume, &bar);
-                bar.finish();
-                let failed = result.is_err();
-                results.lock().expect("no panics while holding the lock")[i] = Some(result);
-                if failed {
-                    next.store(work.len(), Ordering::SeqCst);
-                }
-            });
-        }
+    let results = run_jobs(work, jobs, |seed, fold| {
+        let bar = progress.add(ProgressBar::new(0).with_style(style.clone()));
+        bar.set_prefix(format!("seed {seed} fold {fold}"));
+        let run_spec = RunSpec { val_fold: Some(fold), ..spec_of(seed).expect("checked above").clone() };
+        let result = run_fold(&run_spec, stage, &CrossValidation(out).run(seed, fold), resume, &bar);
+        bar.finish();
+        result
     });
     let (mut own, mut partners) = (Gathered::default(), Gathered::default());
-    let finished = results.into_inner().expect("threads joined").into_iter().zip(work).filter_map(|(r, w)| Some((r?, w)));
+    let finished = results.into_iter().zip(work).filter_map(|(r, w)| Some((r?, w)));
     for (r, &(seed, fold)) in finished {
         let Some(mut result) = r? else { return Ok(None) };
         let dir = CrossValidation(out).run(seed, fold);
@@ -252,6 +237,31 @@ pub fn cross_validate(
     }
     write_json_atomically(&out.join(CV_SUMMARY), &summary)?;
     Ok(Some(summary))
+}
+
+/// Runs `run` on each (seed, fold) of `work`, `jobs` at a time, and returns their results in the
+/// order of `work`: `None` for a run that never started, because one before it failed (once a run
+/// fails, no other starts).
+fn run_jobs<T: Send>(work: &[(u64, usize)], jobs: usize, run: impl Fn(u64, usize) -> Result<T> + Sync) -> Vec<Option<Result<T>>> {
+    let next = AtomicUsize::new(0);
+    let results = Mutex::new(work.iter().map(|_| None).collect::<Vec<_>>());
+    std::thread::scope(|scope| {
+        for _ in 0..jobs.min(work.len().max(1)) {
+            scope.spawn(|| loop {
+                let i = next.fetch_add(1, Ordering::SeqCst);
+                let Some(&(seed, fold)) = work.get(i) else {
+                    break;
+                };
+                let result = run(seed, fold);
+                let failed = result.is_err();
+                results.lock().expect("no panics while holding the lock")[i] = Some(result);
+                if failed {
+                    next.store(work.len(), Ordering::SeqCst);
+                }
+            });
+        }
+    });
+    results.into_inner().expect("threads joined")
 }
 
 /// The figure of all the runs (`out/figure`), titled with the summary's accuracy.
@@ -361,25 +371,7 @@ pub fn report(out: &Path) -> Result<CvSummary> {
             let Some((fold_result, this)) = finished_run(net, &mut unfinished).map_err(|e| refuse(e.to_string()))? else {
                 break;
             };
-            if (fold_result.dense.seed, fold_result.dense.val_fold) != (seed, Some(fold)) {
-                return Err(refuse(format!(
-                    "{} holds the run of seed {} {}",
-                    net.display(),
-                    fold_result.dense.seed,
-                    fold_result.dense.val_fold.map_or("trained on every touch".into(), |k| format!("fold {k}"))
-                )));
-            }
-            match setup {
-                None => *setup = Some((this, net.clone())),
-                Some((first, first_dir)) if *first != this => {
-                    return Err(refuse(format!(
-                        "{} and {} were trained differently (data, held-out levels, configuration, options or pruning)",
-                        first_dir.display(),
-                        net.display()
-                    )))
-                }
-                Some(_) => {}
-            }
+            check_alike(net, (seed, fold), &fold_result, this, setup).map_err(refuse)?;
             found.push((fold_result, net.clone()));
         }
         if found.len() < nets.iter().flatten().count() {
@@ -403,6 +395,34 @@ pub fn report(out: &Path) -> Result<CvSummary> {
     summary.unfinished = unfinished;
     write_json_atomically(&out.join(CV_SUMMARY), &summary)?;
     Ok(summary)
+}
+
+/// Refuses the finished run in `net` where it is not the run of `seed` and `fold` that its
+/// directory names, or was trained otherwise (`this`) than the first run read (`setup`, which it
+/// becomes where none was read before).
+fn check_alike(
+    net: &Path,
+    (seed, fold): (u64, usize),
+    result: &FoldResult,
+    this: Setup,
+    setup: &mut Option<(Setup, PathBuf)>,
+) -> std::result::Result<(), String> {
+    if (result.dense.seed, result.dense.val_fold) != (seed, Some(fold)) {
+        let trained = result.dense.val_fold.map_or("trained on every touch".into(), |k| format!("fold {k}"));
+        return Err(format!("{} holds the run of seed {} {trained}", net.display(), result.dense.seed));
+    }
+    match setup {
+        None => *setup = Some((this, net.to_path_buf())),
+        Some((first, first_dir)) if *first != this => {
+            return Err(format!(
+                "{} and {} were trained differently (data, held-out levels, configuration, options or pruning)",
+                first_dir.display(),
+                net.display()
+            ));
+        }
+        Some(_) => {}
+    }
+    Ok(())
 }
 
 /// The finished run in `dir` (with its pruned successor, when it has one) and how it was trained;

@@ -120,6 +120,13 @@ fn print_runs(s: &CvSummary, wall: f64, summary: &std::path::Path) {
     for dir in &s.unfinished {
         println!("not finished, not counted: {dir}");
     }
+    print_table(s);
+    print_accuracy(s, wall, summary);
+}
+
+/// A line a run: its seed, fold, chosen epoch, validation and test accuracy, seconds, pruned
+/// successor's test accuracy and, for a camera head, its form.
+fn print_table(s: &CvSummary) {
     // A camera head's form, as each run's validation fold chose it (docs/camera.md).
     let heads = s.runs.iter().any(|r| r.head.is_some());
     let head = |r: &pvt3_trainer::train::RunResult| match (heads, r.head) {
@@ -142,6 +149,10 @@ fn print_runs(s: &CvSummary, wall: f64, summary: &std::path::Path) {
             head(r)
         );
     }
+}
+
+/// The runs' accuracy (pruned and not) with its interval, and their stopping rules.
+fn print_accuracy(s: &CvSummary, wall: f64, summary: &std::path::Path) {
     if let (Some(m), Some(sd)) = (s.pruned_mean_test_accuracy, s.pruned_std_test_accuracy) {
         let interval =
             s.pruned_ci95_test_accuracy.map_or(String::new(), |[lo, hi]| format!(", 95 % confidence interval [{lo:.4}, {hi:.4}]"));

@@ -109,18 +109,7 @@ pub fn read_camera_folder(dir: &Path, opts: &CameraOptions, mut progress: impl F
         return Err(Error::Usage(format!("--frames {frames}: a touch takes 1 to {MAX_FRAMES} frames")));
     }
     let values: Vec<Vec<String>> = files.iter().map(|f| f.values.clone()).collect();
-    let mut set = CameraSet {
-        x: Vec::new(),
-        background: opts.subtract_first.then(Vec::new),
-        frame_shape: [0; 3],
-        frames,
-        labels: Vec::new(),
-        classes,
-        sources: Vec::new(),
-        conditions: conditions(&opts.naming, &values),
-        spans: Vec::new(),
-        camera: None,
-    };
+    let mut set = CameraSet::empty(frames, classes, conditions(&opts.naming, &values), opts.subtract_first);
     // The first touch and its first frame: every touch's frames must have its shape.
     let mut first: Option<(&Path, Picture)> = None;
     let mut recorded = Vec::new();
@@ -137,16 +126,7 @@ pub fn read_camera_folder(dir: &Path, opts: &CameraOptions, mut progress: impl F
         let ReadTouch { frames, background, span, camera } = touch.map_err(|e| Error::import(path, None, e))?;
         recorded.push(camera);
         match &first {
-            Some((p, f)) if f.shape() != frames[0].shape() => {
-                let why = format!(
-                    "its frames are {}, {}'s {} (--size shrinks every touch to one size, --grey greys them)",
-                    frames[0].describe(),
-                    p.display(),
-                    f.describe()
-                );
-                return Err(Error::import(path, None, why));
-            }
-            Some(_) => {}
+            Some(first) => same_shape(first, (path, &frames[0]))?,
             None => {
                 set.frame_shape = frames[0].shape();
                 first = Some((path, frames[0].clone()));
@@ -159,6 +139,20 @@ pub fn read_camera_folder(dir: &Path, opts: &CameraOptions, mut progress: impl F
     }
     set.camera = recorded.first().copied().filter(|c| recorded.iter().all(|r| r == c));
     Ok(set)
+}
+
+/// Refuses the touch at `path` whose frame is not the shape of the first touch's.
+fn same_shape((first_path, first): &(&Path, Picture), (path, frame): (&Path, &Picture)) -> Result<()> {
+    if first.shape() == frame.shape() {
+        return Ok(());
+    }
+    let why = format!(
+        "its frames are {}, {}'s {} (--size shrinks every touch to one size, --grey greys them)",
+        frame.describe(),
+        first_path.display(),
+        first.describe()
+    );
+    Err(Error::import(path, None, why))
 }
 
 /// One touch as read: its chosen frames, cropped, shrunk and greyed; its background, where
@@ -192,6 +186,23 @@ fn read_touch(path: &Path, opts: &CameraOptions, frames: usize) -> std::result::
 }
 
 impl CameraSet {
+    /// A set with no touch yet, of `frames` frames a touch, with a background for each touch when
+    /// `subtract_first` asks for it.
+    fn empty(frames: usize, classes: Vec<String>, conditions: Vec<Condition>, subtract_first: bool) -> Self {
+        CameraSet {
+            x: Vec::new(),
+            background: subtract_first.then(Vec::new),
+            frame_shape: [0; 3],
+            frames,
+            labels: Vec::new(),
+            classes,
+            sources: Vec::new(),
+            conditions,
+            spans: Vec::new(),
+            camera: None,
+        }
+    }
+
     /// A touch's frames appended to `x` in the layout `[H, W, C, T]`, and its background.
     fn append(&mut self, frames: &[Picture], background: Option<Picture>) {
         let (pixels, t) = (frames[0].data.len(), frames.len());
