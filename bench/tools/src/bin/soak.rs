@@ -9,7 +9,7 @@
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::time::{Duration, Instant};
 
-use pvt3_runtime::{read_npy, Classifier, Prediction};
+use pvt3_runtime::{read_npy, Classifier, Prediction, Session};
 
 /// Resident memory of this process, in KiB (Linux: /proc/self/statm, in pages).
 fn resident_kib() -> u64 {
@@ -21,6 +21,87 @@ fn resident_kib() -> u64 {
 /// Frame `t` of window `w` of windows laid out `[height, width, (channels,) frames]`.
 fn frame(x: &[f32], sample: usize, frames: usize, w: usize, t: usize) -> Vec<f32> {
     (0..sample / frames).map(|j| x[w * sample + j * frames + t]).collect()
+}
+
+/// The windows of the input, as the model reads them.
+struct Windows {
+    x: Vec<f32>,
+    /// Values a window, frames a window, windows.
+    sample: usize,
+    frames: usize,
+    count: usize,
+}
+
+impl Windows {
+    fn window(&self, w: usize) -> &[f32] {
+        &self.x[w * self.sample..(w + 1) * self.sample]
+    }
+
+    fn all(&self) -> &[f32] {
+        &self.x[..self.count * self.sample]
+    }
+
+    /// Window `w` streamed through `s`: the provisional answer after every token, and the last.
+    fn stream(&self, c: &Classifier, s: &mut Session, w: usize) -> (Vec<Prediction>, Prediction) {
+        let mut peeks = Vec::new();
+        for t in 0..self.frames {
+            s.push_frame(&frame(&self.x, self.sample, self.frames, w, t)).unwrap();
+            if (t + 1) % c.tubelet() == 0 {
+                peeks.push(s.peek().unwrap().prediction);
+            }
+        }
+        (peeks, s.finish().unwrap())
+    }
+}
+
+/// The answers of one thread, before any other runs: what every later answer must equal.
+struct Expected {
+    batch: Vec<Prediction>,
+    single: Vec<Prediction>,
+    /// Each window streamed (where the model streams).
+    streamed: Vec<(Vec<Prediction>, Prediction)>,
+}
+
+impl Expected {
+    fn of(c: &Classifier, win: &Windows) -> Self {
+        let batch = c.classify_batch(win.all(), win.count).unwrap();
+        let single = (0..win.count).map(|w| c.classify(win.window(w)).unwrap()).collect();
+        let streamed = match c.streams() {
+            true => {
+                let mut s = c.session().unwrap();
+                (0..win.count).map(|w| win.stream(c, &mut s, w)).collect()
+            }
+            false => Vec::new(),
+        };
+        Self { batch, single, streamed }
+    }
+}
+
+/// Round `round` of a thread's work: the whole batch, one window, or (where the model streams)
+/// a touch through a session of its own, dropped after it (sessions must not leak), and a
+/// continuous stream over two windows back to back. Returns how many of its checks found an
+/// answer other than the expected one, and how many answers it took.
+fn one_round(c: &Classifier, win: &Windows, expected: &Expected, round: usize) -> (u64, u64) {
+    let differs = |same: bool| u64::from(!same);
+    let w = round % win.count;
+    match round % 4 {
+        0 => (differs(c.classify_batch(win.all(), win.count).unwrap() == expected.batch), win.count as u64),
+        1 | 2 => (differs(c.classify(win.window(w)).unwrap() == expected.single[w]), 1),
+        _ if c.streams() => {
+            let touch = win.stream(c, &mut c.session().unwrap(), w);
+            let mut mismatches = differs(touch == expected.streamed[w]);
+            let mut slide = c.continuous(win.frames / c.tubelet()).unwrap();
+            for v in [w, (w + 1) % win.count] {
+                for t in 0..win.frames {
+                    if let Some(p) = slide.push_frame(&frame(&win.x, win.sample, win.frames, v, t)).unwrap() {
+                        mismatches += differs(p == expected.single[v]);
+                    }
+                }
+            }
+            (mismatches, 1 + 2 + touch.0.len() as u64)
+        }
+        _ => (0, 0),
+    }
 }
 
 fn main() {
@@ -35,77 +116,22 @@ fn main() {
     let c = Classifier::load(model).expect("the model loads");
     let (_, x) = read_npy(std::path::Path::new(input)).expect("the input reads");
     let sample: usize = c.sample_shape().iter().product();
-    let frames = *c.sample_shape().last().unwrap();
-    let windows = x.len() / sample;
-    c.prepare(&[1, windows], c.streams()).expect("plans build");
-    // The answers of one thread, before any other runs: what every later answer must equal.
-    let batch = c.classify_batch(&x[..windows * sample], windows).unwrap();
-    let single: Vec<Prediction> = (0..windows).map(|w| c.classify(&x[w * sample..(w + 1) * sample]).unwrap()).collect();
-    let streamed: Vec<(Vec<Prediction>, Prediction)> = if c.streams() {
-        let mut s = c.session().unwrap();
-        (0..windows)
-            .map(|w| {
-                let mut peeks = Vec::new();
-                for t in 0..frames {
-                    s.push_frame(&frame(&x, sample, frames, w, t)).unwrap();
-                    if (t + 1) % c.tubelet() == 0 {
-                        peeks.push(s.peek().unwrap().prediction);
-                    }
-                }
-                (peeks, s.finish().unwrap())
-            })
-            .collect()
-    } else {
-        Vec::new()
-    };
+    let win = Windows { count: x.len() / sample, frames: *c.sample_shape().last().unwrap(), sample, x };
+    c.prepare(&[1, win.count], c.streams()).expect("plans build");
+    let expected = Expected::of(&c, &win);
     let stop = AtomicBool::new(false);
     let (classified, mismatches) = (AtomicU64::new(0), AtomicU64::new(0));
     let mut samples = vec![(0.0, resident_kib())];
     let started = Instant::now();
     std::thread::scope(|scope| {
         for k in 0..threads {
-            let (c, x, batch, single, streamed, stop, classified, mismatches) =
-                (&c, &x, &batch, &single, &streamed, &stop, &classified, &mismatches);
+            let (c, win, expected, stop, classified, mismatches) = (&c, &win, &expected, &stop, &classified, &mismatches);
             scope.spawn(move || {
-                let check = |ok: bool| {
-                    if !ok {
-                        mismatches.fetch_add(1, Ordering::Relaxed);
-                    }
-                };
                 let mut round = k;
                 while !stop.load(Ordering::Relaxed) {
-                    let w = round % windows;
-                    match round % 4 {
-                        0 => {
-                            check(c.classify_batch(&x[..windows * sample], windows).unwrap() == *batch);
-                            classified.fetch_add(windows as u64, Ordering::Relaxed);
-                        }
-                        1 | 2 => {
-                            check(c.classify(&x[w * sample..(w + 1) * sample]).unwrap() == single[w]);
-                            classified.fetch_add(1, Ordering::Relaxed);
-                        }
-                        _ if c.streams() => {
-                            // A session of its own per touch, dropped after it: sessions must not leak.
-                            let mut s = c.session().unwrap();
-                            let mut peeks = Vec::new();
-                            for t in 0..frames {
-                                s.push_frame(&frame(x, sample, frames, w, t)).unwrap();
-                                if (t + 1) % c.tubelet() == 0 {
-                                    peeks.push(s.peek().unwrap().prediction);
-                                }
-                            }
-                            check(peeks == streamed[w].0 && s.finish().unwrap() == streamed[w].1);
-                            // And a continuous stream over two windows back to back.
-                            let mut slide = c.continuous(frames / c.tubelet()).unwrap();
-                            for (v, t) in [w, (w + 1) % windows].into_iter().flat_map(|v| (0..frames).map(move |t| (v, t))) {
-                                if let Some(p) = slide.push_frame(&frame(x, sample, frames, v, t)).unwrap() {
-                                    check(p == single[v]);
-                                }
-                            }
-                            classified.fetch_add(1 + 2 + peeks.len() as u64, Ordering::Relaxed);
-                        }
-                        _ => {}
-                    }
+                    let (differed, answers) = one_round(c, win, expected, round);
+                    mismatches.fetch_add(differed, Ordering::Relaxed);
+                    classified.fetch_add(answers, Ordering::Relaxed);
                     round += threads;
                 }
             });
