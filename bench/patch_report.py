@@ -1,6 +1,7 @@
 """Patch selection beside the unpruned model (docs/camera.md, "Patch selection beside the head"),
 from a finished `pvt3 cv ... --set patch_selection=true --prune-patches P` directory: each form's
-parameters and multiply-adds after baking (`pvt3 info`), validation and test accuracy, the change
+parameters and multiply-adds after baking (`pvt3 info`), validation accuracy, the test accuracy
+`pvt3 cv` summarised (cv.json: mean ± std, interval, seed means), the change
 pruning made paired run by run, and which patches the pruned runs kept (row order, the nonzero
 entries of each pruned model's `patch_mask`).
 
@@ -34,49 +35,34 @@ def kept_patches(model):
     return [i for i, v in enumerate(mask) if v != 0.0]
 
 
-def summary(values):
-    """Mean ± std over runs, the seed means and the 95 % interval of the seed means (t, 2 degrees)."""
-    by_seed = {}
-    for seed, v in values:
-        by_seed.setdefault(seed, []).append(v)
-    seed_means = [statistics.mean(v) for v in by_seed.values()]
-    flat = [v for _, v in values]
-    mean = statistics.mean(flat)
-    text = f"{mean:.4f} ± {statistics.stdev(flat):.4f}"
-    if len(seed_means) > 1:
-        t = {1: 12.706, 2: 4.303, 3: 3.182, 4: 2.776}[len(seed_means) - 1]
-        half = t * statistics.stdev(seed_means) / len(seed_means) ** 0.5
-        text += f" [{statistics.mean(seed_means) - half:.4f}, {statistics.mean(seed_means) + half:.4f}]"
-    return text + " (seed means " + ", ".join(f"{m:.4f}" for m in seed_means) + ")"
+def accuracy(cv, prefix):
+    """The test accuracy `pvt3 cv` summarised in cv.json (`prefix` "" or "pruned_"): mean ± std,
+    its 95 % interval and the seed means."""
+    lo, hi = cv[f"{prefix}ci95_test_accuracy"]
+    means = ", ".join(f"{m:.4f}" for m in cv[f"{prefix}seed_means"])
+    return f"{cv[f'{prefix}mean_test_accuracy']:.4f} ± {cv[f'{prefix}std_test_accuracy']:.4f} [{lo:.4f}, {hi:.4f}] (seed means {means})"
 
 
 def main():
-    cv = Path(sys.argv[1])
-    runs = sorted(p for p in cv.glob("seed*/fold*") if (p / "pruned" / "result.json").exists())
+    cv_dir = Path(sys.argv[1])
+    cv = json.loads((cv_dir / "cv.json").read_text())
+    runs = sorted(p for p in cv_dir.glob("seed*/fold*") if (p / "pruned" / "result.json").exists())
     result = lambda run: json.loads((run / "result.json").read_text())
-    rows = {"unpruned": [], "pruned": []}
-    changes, kept = [], Counter()
-    for run in runs:
-        seed = int(run.parent.name[4:])
-        before, after = result(run), result(run / "pruned")
-        rows["unpruned"].append((seed, before))
-        rows["pruned"].append((seed, after))
-        changes.append(after["test_accuracy"] - before["test_accuracy"])
-        kept.update(kept_patches(run / "pruned" / "model"))
-    print(f"`{cv}`, {len(runs)} runs\n")
+    changes = [result(run / "pruned")["test_accuracy"] - result(run)["test_accuracy"] for run in runs]
+    kept = Counter(i for run in runs for i in kept_patches(run / "pruned" / "model"))
+    print(f"`{cv_dir}`, {len(runs)} runs\n")
     print("| | parameters | multiply-adds a touch | validation, mean | test, mean ± std [95 % interval] |")
     print("|---|---:|---:|---:|---|")
-    for name, model in [("unpruned", runs[0] / "model"), ("pruned", runs[0] / "pruned" / "model")]:
+    for name, prefix, model in [("unpruned", "", runs[0] / "model"), ("pruned", "pruned_", runs[0] / "pruned" / "model")]:
         params, madds = baked(model)
-        val = statistics.mean(r["val_accuracy"] for _, r in rows[name])
-        test = summary([(s, r["test_accuracy"]) for s, r in rows[name]])
-        print(f"| {name} | {params:,} | {madds / 1e6:.2f} M | {val:.4f} | {test} |")
+        val = statistics.mean(r["val_accuracy"] for r in cv[f"{prefix}runs"])
+        print(f"| {name} | {params:,} | {madds / 1e6:.2f} M | {val:.4f} | {accuracy(cv, prefix)} |")
     better = sum(c > 1e-9 for c in changes)
     worse = sum(c < -1e-9 for c in changes)
     print(f"\nPaired change in test accuracy: {100 * statistics.mean(changes):+.2f} points on average; "
           f"better in {better} runs, worse in {worse}, the same in {len(changes) - better - worse}.")
-    perfect = sum(r["val_accuracy"] == 1.0 for _, r in rows["unpruned"])
-    print(f"Validation perfect in {perfect} of the {len(runs)} unpruned runs.")
+    perfect = sum(r["val_accuracy"] == 1.0 for r in cv["runs"])
+    print(f"Validation perfect in {perfect} of the {len(cv['runs'])} unpruned runs.")
     print("Patches kept (index: runs): " + ", ".join(f"{i}: {n}" for i, n in sorted(kept.items(), key=lambda kv: (-kv[1], kv[0]))))
 
 
