@@ -1,6 +1,6 @@
 //! Checkpoints are directories of files named in [`crate::run_dir::Checkpoint`]: configuration,
 //! weights, normalisation, class names and provenance (and in a run's `last/`, what resuming
-//! needs besides), each replaced whole ([`crate::atomic::replace_dir`]), so a crash never leaves a
+//! needs besides), each replaced whole ([`crate::atomic::dir::replace_dir`]), so a crash never leaves a
 //! half-written checkpoint.
 
 use std::path::{Path, PathBuf};
@@ -10,7 +10,7 @@ use pvt3_models::weights::{load_weights, save_weights};
 use pvt3_models::{Config, Model};
 use serde::{Deserialize, Serialize};
 
-use crate::atomic::{existing_dir, replace_dir};
+use crate::atomic::dir::{existing_dir, replace_dir};
 use crate::data::normalization::Normalization;
 use crate::json::{read_json, write_json};
 use crate::provenance::Provenance;

@@ -19,10 +19,10 @@ fn text<T: Serialize>(value: &T) -> String {
     serde_json::to_string_pretty(value).expect("plain data serialises") + "\n"
 }
 
-/// Writes JSON whole ([`crate::atomic::write_file`]), where another process may read or write the
+/// Writes JSON whole ([`crate::atomic::file::write_file`]), where another process may read or write the
 /// same file.
 pub fn write_json_atomically<T: Serialize>(path: &Path, value: &T) -> Result<()> {
-    crate::atomic::write_file(path, text(value))
+    crate::atomic::file::write_file(path, text(value))
 }
 
 pub fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T> {

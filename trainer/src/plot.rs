@@ -18,10 +18,10 @@ pub fn escape(text: &str) -> String {
     text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
 }
 
-/// Writes `svg` to `path` whole ([`crate::atomic::write_file`]), so that a viewer never sees half
+/// Writes `svg` to `path` whole ([`crate::atomic::file::write_file`]), so that a viewer never sees half
 /// a picture.
 pub fn write(path: &Path, svg: &str) -> Result<()> {
-    crate::atomic::write_file(path, svg)
+    crate::atomic::file::write_file(path, svg)
 }
 
 #[cfg(test)]

@@ -50,7 +50,7 @@ pub(super) fn finished(spec: &RunSpec, out: &Path, resume: bool) -> Result<Optio
 /// half-written are removed.
 pub(super) fn open<'a>(spec: &RunSpec<'a>, out: &Path, resume: bool, bar: &ProgressBar) -> Result<Training<'a>> {
     let run_dir = Run(out);
-    let resumable = atomic::existing_dir(&run_dir.last());
+    let resumable = atomic::dir::existing_dir(&run_dir.last());
     if !resume && (resumable.is_some() || run_dir.result().exists()) {
         return Err(Error::Usage(format!(
             "{} already holds a run; pass --resume to continue it, or choose another output directory",
@@ -66,7 +66,7 @@ pub(super) fn open<'a>(spec: &RunSpec<'a>, out: &Path, resume: bool, bar: &Progr
         }
         None => (spec.config.clone(), spec.options.clone(), None),
     };
-    atomic::remove_temporaries(out)?;
+    atomic::file::remove_temporaries(out)?;
     let sensors = sensor::of_run(spec, config, &opts, out, last.as_ref().map(|(dir, state)| (dir.as_path(), state.step)), bar)?;
     let state = last.map_or_else(|| RunState::fresh(&opts), |(_, state)| state);
     let logs = sensors.iter().map(|s| Log::open(&Run(&s.dir).metrics(), state.epochs_done)).collect::<Result<_>>()?;
@@ -96,7 +96,7 @@ impl Training<'_> {
         }
         crate::crash::point("logged");
         let (sensors, state) = (&self.sensors, &self.state);
-        atomic::replace_dir(&self.last, |dir| {
+        atomic::dir::replace_dir(&self.last, |dir| {
             for (i, (sensor, val)) in sensors.iter().zip(validated).enumerate() {
                 let sub = Checkpoint(dir).of_sensor(i);
                 std::fs::create_dir_all(&sub).map_err(Error::io(&sub))?;
@@ -115,7 +115,7 @@ impl Training<'_> {
 fn check_resumed_split(spec: &RunSpec, dir: &Path) -> Result<()> {
     let partner = spec.partner.as_ref().map(|p| (p.data, Checkpoint(dir).partner()));
     for (data, checkpoint) in std::iter::once((spec.data, dir.to_path_buf())).chain(partner) {
-        let Some(existing) = atomic::existing_dir(&checkpoint) else { continue };
+        let Some(existing) = atomic::dir::existing_dir(&checkpoint) else { continue };
         let (_, meta) = checkpoint::load_meta(&existing)?;
         if let Some(recorded) = &meta.provenance.trained_on {
             let held = |h: Option<&crate::data::HoldOut>| h.map_or("no held-out levels".to_string(), |h| format!("held out {h}"));
