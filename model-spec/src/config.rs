@@ -162,7 +162,26 @@ impl Config {
 
     /// Checks that the sizes fit together.
     pub fn validate(&self) -> Result<()> {
-        let mut positive = vec![
+        if let Some((name, _)) = self.sizes().iter().find(|(_, v)| *v == 0) {
+            return Err(Error::Config(format!("{name} must be at least 1")));
+        }
+        for (name, p) in [("dropout", self.dropout), ("patch_dropout", self.patch_dropout())] {
+            if !(0.0..1.0).contains(&p) {
+                return Err(Error::Config(format!("{name} = {p} is not in [0, 1)")));
+            }
+        }
+        for (pn, p, n, v) in self.divisions()? {
+            if v % p != 0 {
+                return Err(Error::Config(format!("{pn} = {p} does not divide {n} = {v}")));
+            }
+        }
+        Ok(())
+    }
+
+    /// The sizes that must be at least 1, by name: the window's, the transformer's and the
+    /// network's own.
+    fn sizes(&self) -> Vec<(&'static str, usize)> {
+        let mut sizes = vec![
             ("height", self.height),
             ("width", self.width),
             ("channels", self.channels),
@@ -178,63 +197,62 @@ impl Config {
         ];
         match &self.network {
             Network::Pvt3(_) => {}
-            Network::Vit(v) => positive.push(("tile_rows", v.tile_rows)),
-            Network::Raec(r) => positive.extend([("rnn_hidden", r.rnn_hidden), ("latent", r.latent)]),
+            Network::Vit(v) => sizes.push(("tile_rows", v.tile_rows)),
+            Network::Raec(r) => sizes.extend([("rnn_hidden", r.rnn_hidden), ("latent", r.latent)]),
         }
-        if let Some((name, _)) = positive.iter().find(|(_, v)| *v == 0) {
-            return Err(Error::Config(format!("{name} must be at least 1")));
-        }
-        for (name, p) in [("dropout", self.dropout), ("patch_dropout", self.patch_dropout())] {
-            if !(0.0..1.0).contains(&p) {
-                return Err(Error::Config(format!("{name} = {p} is not in [0, 1)")));
-            }
-        }
-        let divides = match &self.network {
+        sizes
+    }
+
+    /// What must divide what for the network (a size and its name, then the divided one's), once
+    /// the network's own checks pass.
+    fn divisions(&self) -> Result<Vec<(&'static str, usize, &'static str, usize)>> {
+        match &self.network {
             Network::Pvt3(p) => {
                 self.validate_spectral(p)?;
-                vec![
+                Ok(vec![
                     ("patch_height", self.patch_height, "height", self.height),
                     ("patch_width", self.patch_width, "width", self.width),
                     ("tubelet", self.tubelet, "frames", self.frames),
-                ]
+                ])
             }
             Network::Vit(v) => {
                 if self.tubelet != 1 {
                     return Err(Error::Config(format!("tubelet = {}: ViT tiles single frames; tubelet must be 1", self.tubelet)));
                 }
                 let (th, tw) = self.tiled_size();
-                vec![
+                Ok(vec![
                     ("tile_rows", v.tile_rows, "frames", self.frames),
                     ("patch_height", self.patch_height, "the tiled frame's height", th),
                     ("patch_width", self.patch_width, "the tiled frame's width", tw),
-                ]
+                ])
             }
             Network::Raec(r) => {
-                if self.tubelet != 1 && r.conv_channels > 0 {
-                    return Err(Error::Config(format!(
-                        "tubelet = {}: a RAEC with a convolution reads single frames; tubelet must be 1",
-                        self.tubelet
-                    )));
-                }
-                let (ch, cw) = r.conv_output(self);
-                if r.conv_channels > 0 && (ch < 2 || cw < 2) {
-                    return Err(Error::Config(format!(
-                        "a {} × {} convolution and 2 × 2 pooling do not fit a {} × {} frame",
-                        self.patch_height, self.patch_width, self.height, self.width
-                    )));
-                }
-                if r.decoder_mirrors_conv() && (ch % 2 != 0 || cw % 2 != 0) {
-                    return Err(Error::Config(format!(
-                        "decoder_from_state un-pools the {ch} × {cw} convolution output, which 2 × 2 pooling must tile"
-                    )));
-                }
-                vec![("tubelet", self.tubelet, "frames", self.frames)]
+                self.validate_raec(r)?;
+                Ok(vec![("tubelet", self.tubelet, "frames", self.frames)])
             }
-        };
-        for (pn, p, n, v) in divides {
-            if v % p != 0 {
-                return Err(Error::Config(format!("{pn} = {p} does not divide {n} = {v}")));
-            }
+        }
+    }
+
+    /// Checks that a RAEC's convolution fits the frame: single frames, room for its 2 × 2
+    /// pooling, and an output that pooling tiles where the decoder mirrors it.
+    fn validate_raec(&self, r: &RaecConfig) -> Result<()> {
+        if self.tubelet != 1 && r.conv_channels > 0 {
+            return Err(Error::Config(format!(
+                "tubelet = {}: a RAEC with a convolution reads single frames; tubelet must be 1",
+                self.tubelet
+            )));
+        }
+        let (ch, cw) = r.conv_output(self);
+        if r.conv_channels > 0 && (ch < 2 || cw < 2) {
+            return Err(Error::Config(format!(
+                "a {} × {} convolution and 2 × 2 pooling do not fit a {} × {} frame",
+                self.patch_height, self.patch_width, self.height, self.width
+            )));
+        }
+        if r.decoder_mirrors_conv() && (ch % 2 != 0 || cw % 2 != 0) {
+            return Err(Error::Config(format!(
+                "decoder_from_state un-pools the {ch} × {cw} convolution output, which 2 × 2 pooling must tile"
+            )));
         }
         Ok(())
     }
@@ -372,5 +390,31 @@ mod tests {
         assert!(msg.contains("patch_width = 3 does not divide width = 10"), "{msg}");
         let vit = Config { tubelet: 5, ..Config::preset("vit-icub20").unwrap() };
         assert!(vit.validate().unwrap_err().to_string().contains("tubelet must be 1"));
+    }
+
+    /// Each check names what fails, for every network: a size of 0, a dropout out of range, a
+    /// size that does not divide, a RAEC's convolution that does not fit.
+    #[test]
+    fn every_misfit_is_refused_by_name() {
+        #[track_caller]
+        fn refused(cfg: Config) -> String {
+            cfg.validate().unwrap_err().to_string()
+        }
+        let (icub, vit, raec) = (Config::icub20(), Config::preset("vit-icub20").unwrap(), Config::preset("raec-icub20").unwrap());
+        for cfg in [&icub, &vit, &raec] {
+            cfg.validate().unwrap();
+            assert!(refused(Config { mlp_dim: 0, ..cfg.clone() }).contains("mlp_dim must be at least 1"));
+            assert!(refused(Config { dropout: 1.0, ..cfg.clone() }).contains("dropout = 1 is not in [0, 1)"));
+        }
+        assert!(refused(Config { tubelet: 4, ..icub.clone() }).contains("tubelet = 4 does not divide frames = 75"));
+        assert!(refused(Config { frames: 74, ..vit.clone() }).contains("tile_rows = 5 does not divide frames = 74"));
+        assert!(
+            refused(Config { network: Network::Vit(VitConfig { tile_rows: 0 }), ..vit.clone() }).contains("tile_rows must be at least 1")
+        );
+        let Network::Raec(r) = &raec.network else { unreachable!("a RAEC preset") };
+        assert!(refused(Config { network: Network::Raec(RaecConfig { latent: 0, ..*r }), ..raec.clone() })
+            .contains("latent must be at least 1"));
+        assert!(refused(Config { tubelet: 5, ..raec.clone() }).contains("a RAEC with a convolution reads single frames"));
+        assert!(refused(Config { patch_height: 6, ..raec.clone() }).contains("do not fit a 6 × 10 frame"));
     }
 }
