@@ -93,15 +93,60 @@ pub fn figure(title: &str, panels: &[Panel]) -> String {
     s
 }
 
+/// Where a panel draws its data: the plot area's edges (`x0..x1`, `y0..y1`, in the picture's
+/// units) and the ranges of x and y they show.
+struct Area {
+    x0: f64,
+    x1: f64,
+    y0: f64,
+    y1: f64,
+    x_range: (f64, f64),
+    y_range: (f64, f64),
+}
+
+impl Area {
+    /// The plot area of `panel` at (`ox`, `oy`): within its margins, over its data's x range
+    /// and its y range (given, or the data's).
+    fn of(panel: &Panel, ox: f64, oy: f64) -> Self {
+        let (left, right, top, bottom) = MARGIN;
+        let xs = panel.series.iter().flat_map(|s| s.points.iter().map(|p| p.0));
+        let (xlo, xhi) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)));
+        let x_range = if xlo.is_finite() { (xlo, if xhi > xlo { xhi } else { xlo + 1.0 }) } else { (0.0, 1.0) };
+        let y_range = panel.y_range.unwrap_or_else(|| data_range(panel));
+        Self { x0: ox + left, x1: ox + PANEL_W - right, y0: oy + top, y1: oy + PANEL_H - bottom, x_range, y_range }
+    }
+
+    /// Where `x` is drawn.
+    fn px(&self, x: f64) -> f64 {
+        let (lo, hi) = self.x_range;
+        self.x0 + (x - lo) / (hi - lo) * (self.x1 - self.x0)
+    }
+
+    /// Where `y` is drawn, held within the area.
+    fn py(&self, y: f64) -> f64 {
+        let (lo, hi) = self.y_range;
+        self.y1 - (y.clamp(lo, hi) - lo) / (hi - lo) * (self.y1 - self.y0)
+    }
+}
+
 fn draw_panel(s: &mut String, panel: &Panel, ox: f64, oy: f64) {
-    let (left, right, top, bottom) = MARGIN;
-    let (x0, x1, y0, y1) = (ox + left, ox + PANEL_W - right, oy + top, oy + PANEL_H - bottom);
-    let xs = panel.series.iter().flat_map(|s| s.points.iter().map(|p| p.0));
-    let (xlo, xhi) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| (lo.min(x), hi.max(x)));
-    let (xlo, xhi) = if xlo.is_finite() { (xlo, if xhi > xlo { xhi } else { xlo + 1.0 }) } else { (0.0, 1.0) };
-    let (ylo, yhi) = panel.y_range.unwrap_or_else(|| data_range(panel));
-    let px = |x: f64| x0 + (x - xlo) / (xhi - xlo) * (x1 - x0);
-    let py = |y: f64| y1 - (y.clamp(ylo, yhi) - ylo) / (yhi - ylo) * (y1 - y0);
+    let area = Area::of(panel, ox, oy);
+    draw_axes(s, panel, &area, oy);
+    let marker = panel.marker.as_ref().map(|(x, text)| (area.px(*x), text.as_str()));
+    if let Some((x, _)) = marker {
+        let (y0, y1) = (area.y0, area.y1);
+        let _ = writeln!(s, r##"<line x1="{x:.1}" y1="{y0}" x2="{x:.1}" y2="{y1}" stroke="#777" stroke-dasharray="4 3"/>"##);
+    }
+    for series in &panel.series {
+        draw_series(s, series, &area);
+    }
+    draw_legend(s, panel, &area, marker);
+}
+
+/// The panel's title (at `oy`), its y grid and ticks, its x ticks, its frame and the x axis's
+/// label.
+fn draw_axes(s: &mut String, panel: &Panel, area: &Area, oy: f64) {
+    let Area { x0, x1, y0, y1, x_range: (xlo, xhi), y_range: (ylo, yhi) } = *area;
     let _ = writeln!(
         s,
         r#"<text x="{}" y="{}" text-anchor="middle" font-size="12">{}</text>"#,
@@ -110,39 +155,43 @@ fn draw_panel(s: &mut String, panel: &Panel, ox: f64, oy: f64) {
         escape(&panel.title)
     );
     for t in ticks(ylo, yhi) {
-        let y = py(t);
+        let y = area.py(t);
         let _ = writeln!(s, r##"<line x1="{x0}" y1="{y:.1}" x2="{x1}" y2="{y:.1}" stroke="#e4e4e4"/>"##);
         let _ = writeln!(s, r#"<text x="{}" y="{:.1}" text-anchor="end">{}</text>"#, x0 - 4.0, y + 4.0, label(t));
     }
     for t in ticks(xlo, xhi).into_iter().filter(|t| t.fract() == 0.0 || xhi - xlo < 5.0) {
-        let x = px(t);
+        let x = area.px(t);
         let _ = writeln!(s, r#"<line x1="{x:.1}" y1="{y1}" x2="{x:.1}" y2="{}" stroke="black"/>"#, y1 + 4.0);
         let _ = writeln!(s, r#"<text x="{x:.1}" y="{}" text-anchor="middle">{}</text>"#, y1 + 16.0, label(t));
     }
     let _ = writeln!(s, r#"<rect x="{x0}" y="{y0}" width="{}" height="{}" fill="none" stroke="black"/>"#, x1 - x0, y1 - y0);
     let _ = writeln!(s, r#"<text x="{}" y="{}" text-anchor="middle">{}</text>"#, (x0 + x1) / 2.0, y1 + 32.0, escape(&panel.x_label));
-    let marker = panel.marker.as_ref().map(|(x, text)| (px(*x), text));
-    if let Some((x, _)) = marker {
-        let _ = writeln!(s, r##"<line x1="{x:.1}" y1="{y0}" x2="{x:.1}" y2="{y1}" stroke="#777" stroke-dasharray="4 3"/>"##);
-    }
-    for series in &panel.series {
-        let points: Vec<String> =
-            series.points.iter().filter(|p| p.1.is_finite()).map(|&(x, y)| format!("{:.1},{:.1}", px(x), py(y))).collect();
-        if series.dots {
-            for p in &points {
-                let (x, y) = p.split_once(',').expect("x,y");
-                let _ = writeln!(s, r#"<circle cx="{x}" cy="{y}" r="2.5" fill="{}"/>"#, series.color);
-            }
-        } else if !points.is_empty() {
-            let (width, opacity) = if series.faint { (1.0, 0.45) } else { (1.8, 1.0) };
-            let _ = writeln!(
-                s,
-                r#"<polyline points="{}" fill="none" stroke="{}" stroke-width="{width}" stroke-opacity="{opacity}"/>"#,
-                points.join(" "),
-                series.color
-            );
+}
+
+/// A series' finite points: dots, or a line (thin and pale for a faint one).
+fn draw_series(s: &mut String, series: &Series, area: &Area) {
+    let points: Vec<String> =
+        series.points.iter().filter(|p| p.1.is_finite()).map(|&(x, y)| format!("{:.1},{:.1}", area.px(x), area.py(y))).collect();
+    if series.dots {
+        for p in &points {
+            let (x, y) = p.split_once(',').expect("x,y");
+            let _ = writeln!(s, r#"<circle cx="{x}" cy="{y}" r="2.5" fill="{}"/>"#, series.color);
         }
+    } else if !points.is_empty() {
+        let (width, opacity) = if series.faint { (1.0, 0.45) } else { (1.8, 1.0) };
+        let _ = writeln!(
+            s,
+            r#"<polyline points="{}" fill="none" stroke="{}" stroke-width="{width}" stroke-opacity="{opacity}"/>"#,
+            points.join(" "),
+            series.color
+        );
     }
+}
+
+/// The marker's label (at the drawn x of `marker`) and the legend of the series that are not
+/// faint, each where the panel leaves room for it.
+fn draw_legend(s: &mut String, panel: &Panel, area: &Area, marker: Option<(f64, &str)>) {
+    let Area { x0, x1, y0, y1, .. } = *area;
     let legend: Vec<&Series> = panel.series.iter().filter(|s| !s.faint).collect();
     let longest = legend.iter().map(|s| s.name.chars().count()).max().unwrap_or(0);
     let (w, h) = (16.0 + 6.5 * longest as f64 + 8.0, 14.0 * legend.len() as f64 + 4.0);
