@@ -152,10 +152,8 @@ fn space_features(m: &BakedPvt3, sample: &[f32], weights: &[f64], weighed: f64) 
         let upper = if j + 1 == bins { 0.0 } else { spectrum::space::share_above(v, edges[j], width) };
         lower - upper
     };
-    let k = spectrum::space::width_bins(w);
     let of = spectrum::space::band_of(h, w, bands).expect("a validated configuration");
     let sizes = spectrum::space::band_sizes(&of, bands);
-    let tau = 2.0 * std::f64::consts::PI;
     let log_frames = c.spectral_log_frames();
     let kept = spectrum::space::kept_pixels(c, &m.kept_patches);
     let mut features = Vec::with_capacity(c.spectral_features());
@@ -177,22 +175,7 @@ fn space_features(m: &BakedPvt3, sample: &[f32], weights: &[f64], weighed: f64) 
                     *bin += wt * values().map(|p| share(p, j)).sum::<f64>() / (rows * columns) as f64;
                 }
             }
-            let mut frame = vec![0.0; bands];
-            for ky in 0..h {
-                for kx in 0..k {
-                    let Some(j) = of[ky * k + kx] else { continue };
-                    let (mut re, mut im) = (0.0, 0.0);
-                    for y in 0..h {
-                        for x in 0..w {
-                            let angle = tau * (((ky * y) % h) as f64 / h as f64 + ((kx * x) % w) as f64 / w as f64);
-                            re += v(y, x) * angle.cos();
-                            im -= v(y, x) * angle.sin();
-                        }
-                    }
-                    frame[j] += (re * re + im * im) / (h * w) as f64 / sizes[j] as f64;
-                }
-            }
-            for (sum, p) in power.iter_mut().zip(frame) {
+            for (sum, p) in power.iter_mut().zip(ring_powers(v, (h, w), &of, &sizes)) {
                 *sum += wt * if log_frames { (p + spectrum::POWER_FLOOR).ln() } else { p };
             }
         }
@@ -204,6 +187,30 @@ fn space_features(m: &BakedPvt3, sample: &[f32], weights: &[f64], weighed: f64) 
         features.extend(pixel_sums.iter().map(|p| p / weighed));
     }
     features
+}
+
+/// Each ring's mean power in one frame `v(y, x)` of `h × w` values, by the transform's definition:
+/// a frequency `(ky, kx)` of the kept half-plane (`width_bins` of `w` across) belongs to the ring
+/// `of` names (or none), whose `sizes` are its frequencies' counts.
+fn ring_powers(v: impl Fn(usize, usize) -> f64, (h, w): (usize, usize), of: &[Option<usize>], sizes: &[usize]) -> Vec<f64> {
+    let k = spectrum::space::width_bins(w);
+    let tau = 2.0 * std::f64::consts::PI;
+    let mut frame = vec![0.0; sizes.len()];
+    for ky in 0..h {
+        for kx in 0..k {
+            let Some(j) = of[ky * k + kx] else { continue };
+            let (mut re, mut im) = (0.0, 0.0);
+            for y in 0..h {
+                for x in 0..w {
+                    let angle = tau * (((ky * y) % h) as f64 / h as f64 + ((kx * x) % w) as f64 / w as f64);
+                    re += v(y, x) * angle.cos();
+                    im -= v(y, x) * angle.sin();
+                }
+            }
+            frame[j] += (re * re + im * im) / (h * w) as f64 / sizes[j] as f64;
+        }
+    }
+    frame
 }
 
 /// Logits `[batch][classes]` for `batch` raw samples laid out back to back.
