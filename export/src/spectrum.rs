@@ -22,15 +22,19 @@ mod space;
 
 /// The spectral head's logits `[batch, classes]`, named [`SPECTRAL_LOGITS`].
 pub(crate) fn spectral_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, norm: &Normalization) -> String {
-    let c = &m.config;
-    let (channels, frames, bands) = (c.sensor_channels(), c.frames, c.spectral_bands());
-    let k = bins(frames);
     let weighed = frame_weights(g, m);
-    if c.spectral_space() {
-        let logits = space::logits(g, m, s, norm, &weighed);
-        return g.node(Op::Identity, &[&logits], vec![], Some(SPECTRAL_LOGITS));
-    }
+    let logits = match m.config.spectral_space() {
+        true => space::logits(g, m, s, norm, &weighed),
+        false => frames_logits(g, m, s, norm, &weighed),
+    };
+    g.node(Op::Identity, &[&logits], vec![], Some(SPECTRAL_LOGITS))
+}
 
+/// The logits of a head over the frames' spectrum: each channel's weighted level and the log
+/// band powers of its weighted, detrended frames (`weighed`: the weights' sum).
+fn frames_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, norm: &Normalization, weighed: &str) -> String {
+    let c = &m.config;
+    let (channels, frames) = (c.sensor_channels(), c.frames);
     // Every operand of the element-wise ops below is [channels, frames] or [b, channels, 1]: tract
     // runs those in one pass, where a [channels, 1] or [frames] operand broadcast over the other
     // axis takes 10–20 µs an op on BioTac's window (measured with bench/tools' profile).
@@ -49,7 +53,7 @@ pub(crate) fn spectral_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, n
     let column = g.i64s("frames_column", &[2], vec![frames as i64, 1]);
     let column = g.op(Op::Reshape, &[FRAME_WEIGHTS, &column]);
     let level = g.op(Op::MatMul, &[&x, &column]);
-    let level = g.op(Op::Div, &[&level, &weighed]);
+    let level = g.op(Op::Div, &[&level, weighed]);
     let centred = g.op(Op::Sub, &[&x, &level]);
     let centred = g.op(Op::Mul, &[&centred, &weights]);
     let level = if c.spectral_levels() {
@@ -58,9 +62,20 @@ pub(crate) fn spectral_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, n
     } else {
         level
     };
+    let power = band_powers(g, m, norm, &centred, weighed);
+    let log_power = log(g, &power);
+    logits_of(g, m, s, &level, &log_power, &[])
+}
+
+/// The band powers `[b, channels, bands]` of the weighted, detrended frames `centred`
+/// `[b, channels, frames]`, in the normalised frames' units and per unit of weight (`weighed`).
+fn band_powers(g: &mut Graph, m: &BakedPvt3, norm: &Normalization, centred: &str, weighed: &str) -> String {
+    let c = &m.config;
+    let (channels, frames, bands) = (c.sensor_channels(), c.frames, c.spectral_bands());
+    let k = bins(frames);
     // A real signal for the DFT op: [b, channels, frames, 1] → [b, channels, frames, 2].
     let real = g.i64s("spectral_real", &[4], vec![-1, channels as i64, frames as i64, 1]);
-    let centred = g.op(Op::Reshape, &[&centred, &real]);
+    let centred = g.op(Op::Reshape, &[centred, &real]);
     let transform = g.node(Op::Dft, &[&centred], vec![int("axis", 2)], None);
     let (start, end, axis) = (g.i64s("zero", &[1], vec![0]), g.i64s("bins", &[1], vec![k as i64]), g.i64s("two", &[1], vec![2]));
     let one_sided = g.op(Op::Slice, &[&transform, &start, &end, &axis]);
@@ -79,10 +94,7 @@ pub(crate) fn spectral_logits(g: &mut Graph, m: &BakedPvt3, s: &BakedSpectrum, n
     let variance: Vec<f32> = norm.std.iter().flat_map(|s| std::iter::repeat_n(s * s, bands)).collect();
     let variance = g.f32s("spectral_norm_variance", &[channels, bands], variance);
     let power = g.op(Op::Div, &[&power, &variance]);
-    let power = g.op(Op::Div, &[&power, &weighed]);
-    let log_power = log(g, &power);
-    let logits = logits_of(g, m, s, &level, &log_power, &[]);
-    g.node(Op::Identity, &[&logits], vec![], Some(SPECTRAL_LOGITS))
+    g.op(Op::Div, &[&power, weighed])
 }
 
 /// The logits of per-channel `level`s `[b, channels, 1]` and band powers' logarithms
