@@ -168,8 +168,13 @@ struct ReadTouch {
 fn read_touch(path: &Path, opts: &CameraOptions, frames: usize) -> std::result::Result<ReadTouch, String> {
     let recorded = decode::frames(path)?;
     if recorded.is_empty() || (recorded.len() < frames && !opts.allow_short) {
-        let repeat = if recorded.is_empty() { "" } else { "; --allow-short repeats its frames" };
-        return Err(format!("{} frames, fewer than the {frames} a touch takes (--frames{repeat})", recorded.len()));
+        let n = recorded.len();
+        let (noun, fix) = match n {
+            0 => ("frames", String::new()),
+            1 => ("frame", " 1 takes 1 frame a touch, a still image as itself; --allow-short repeats a short touch's frames".into()),
+            _ => ("frames", format!(" {n} takes {n} frames a touch; --allow-short repeats a short touch's frames")),
+        };
+        return Err(format!("{n} {noun}, fewer than the {frames} a touch takes (--frames{fix})"));
     }
     let taken = opts.span.take(&recorded, frames);
     let camera = Camera {

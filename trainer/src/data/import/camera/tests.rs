@@ -157,7 +157,19 @@ fn a_touch_that_cannot_be_read_is_an_error_naming_its_file() {
     let dir = frame_folders("errors");
     let err = |dir: &Path, opts: &CameraOptions| read_camera_folder(dir, opts, |_, _| {}).unwrap_err().to_string();
     let msg = err(&dir, &options(20, FrameSpan::Whole));
-    assert!(msg.contains("felt/touch_0: 12 frames, fewer than the 20 a touch takes (--frames; --allow-short repeats its frames)"), "{msg}");
+    assert!(msg.contains("felt/touch_0: 12 frames, fewer than the 20 a touch takes (--frames 12 takes 12 frames a touch; --allow-short repeats a short touch's frames)"), "{msg}");
+    // A touch's folder of one image: --frames 1 reads it as a still image.
+    let one = scratch("one-frame");
+    for touch in 0..5 {
+        std::fs::create_dir_all(one.join(format!("felt/touch_{touch}"))).unwrap();
+        write_png(&one.join(format!("felt/touch_{touch}/frame.png")), &frame(0, touch, 0));
+    }
+    let msg = err(&one, &options(20, FrameSpan::Whole));
+    assert!(
+        msg.contains("felt/touch_0: 1 frame, fewer than the 20 a touch takes (--frames 1 takes 1 frame a touch, a still image as itself;"),
+        "{msg}"
+    );
+    std::fs::remove_dir_all(&one).unwrap();
     let short = read_camera_folder(&dir, &CameraOptions { allow_short: true, ..options(20, FrameSpan::Whole) }, |_, _| {}).unwrap();
     assert_eq!((short.short().len(), short.short()[0]), (10, ("felt/touch_0", 12)));
     assert_eq!((taken(&short, 0, 0), taken(&short, 0, 1)), (taken(&short, 0, 1), frame(0, 0, 0).resize(4, 5)), "frame 0 twice");
