@@ -169,10 +169,10 @@ fn read_touch(path: &Path, opts: &CameraOptions, frames: usize) -> std::result::
     let recorded = decode::frames(path)?;
     if recorded.is_empty() || (recorded.len() < frames && !opts.allow_short) {
         let n = recorded.len();
-        let (noun, fix) = match n {
-            0 => ("frames", String::new()),
-            1 => ("frame", " 1 takes 1 frame a touch, a still image as itself; --allow-short repeats a short touch's frames".into()),
-            _ => ("frames", format!(" {n} takes {n} frames a touch; --allow-short repeats a short touch's frames")),
+        let (noun, still) = if n == 1 { ("frame", ", a still image as itself") } else { ("frames", "") };
+        let fix = match n {
+            0 => String::new(),
+            _ => format!(" {n} takes {n} {noun} a touch{still}; --allow-short repeats a short touch's frames"),
         };
         return Err(format!("{n} {noun}, fewer than the {frames} a touch takes (--frames{fix})"));
     }
