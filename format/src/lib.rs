@@ -18,6 +18,7 @@ mod header;
 pub mod onnx;
 mod picture;
 pub mod resample;
+mod sizes;
 pub mod span;
 mod touch;
 
@@ -25,6 +26,7 @@ pub use camera::{Camera, Crop};
 pub use digest::{digest, verify, Integrity};
 pub use header::{answers_agree, top_class, Dims, Header, HeaderError, Reading, StopRule, FORMAT_VERSION};
 pub use picture::Picture;
+pub use sizes::{check_sizes, Budget, SizeError, LEAST_FILE_BYTES, VALUES_PER_BYTE};
 pub use touch::{read_touch, ReadError, Touch, TouchReader};
 
 /// Input: raw sensor frames `[batch, height, width, (channels,) frames]`.

@@ -10,7 +10,7 @@ use tract_core::runtime::RunOptions;
 use tract_linalg::multithread::Executor;
 
 use pvt3_format::{
-    Header, FRAME_WEIGHTS, HEAD_FEATURES, HEAD_FRAMES, INPUT, LOGITS, PROBABILITIES, SPECTRAL_LOGITS, TOKEN_BIAS, TOKEN_ENCODINGS,
+    Budget, Header, FRAME_WEIGHTS, HEAD_FEATURES, HEAD_FRAMES, INPUT, LOGITS, PROBABILITIES, SPECTRAL_LOGITS, TOKEN_BIAS, TOKEN_ENCODINGS,
     TOKEN_FRAMES, TOKEN_INDEX,
 };
 
@@ -48,6 +48,9 @@ pub struct Classifier {
     /// The file's metadata, key and value, in the file's order.
     metadata: Vec<(String, String)>,
     sample_shape: Vec<usize>,
+    /// What the file may make the runtime hold ([`pvt3_format::check_sizes`]): every tensor a
+    /// plan computes is held to it before the plan is built.
+    budget: Budget,
     plans: Mutex<HashMap<usize, Arc<Plan>>>,
     stages: Mutex<Option<Arc<Stages>>>,
     threads: usize,
@@ -82,12 +85,15 @@ impl Classifier {
         let metadata: Vec<(String, String)> = model.metadata_props.into_iter().map(|e| (e.key, e.value)).collect();
         let entries = metadata.iter().map(|(k, v)| (k.as_str(), v.as_str()));
         let header = Header::parse(entries).map_err(|reason| Error::NotPvt3 { path: name.clone(), reason })?;
+        // Every size the file declares, before anything that size is allocated.
         let graph = model.graph.unwrap_or_default();
+        let budget = pvt3_format::check_sizes(&graph, &header, bytes.len())
+            .map_err(|e| Error::NotOnnx { path: name.clone(), reason: e.to_string() })?;
         let sample_shape = header.sample_shape();
         let plans = Mutex::new(HashMap::new());
         let stages = Mutex::new(None);
         let kernels = Kernels::default();
-        Ok(Self { graph, header, metadata, sample_shape, plans, stages, threads: 1, kernels, path: name })
+        Ok(Self { graph, header, metadata, sample_shape, budget, plans, stages, threads: 1, kernels, path: name })
     }
 
     /// Runs on `threads` threads from now on (default 1; small models rarely gain from more).
@@ -216,9 +222,10 @@ impl Classifier {
     }
 
     /// The part of the graph from `sources` (tensor names with fixed facts) to `outputs`, as a
-    /// tract model: the whole model, or one streaming stage of it.
-    pub(crate) fn wire(&self, sources: &[(&str, TypedFact)], outputs: &[&str]) -> Result<TypedModel> {
-        crate::wire::typed_model(&self.graph, sources, outputs).map_err(|reason| Error::NotOnnx { path: self.path.clone(), reason })
+    /// tract model of `windows` windows: the whole model, or one streaming stage of it (one).
+    pub(crate) fn wire(&self, sources: &[(&str, TypedFact)], outputs: &[&str], windows: usize) -> Result<TypedModel> {
+        let wire = || crate::wire::typed_model(&self.graph, sources, outputs, self.budget, windows);
+        catch_panic(AssertUnwindSafe(wire))?.map_err(|reason| Error::NotOnnx { path: self.path.clone(), reason })
     }
 
     /// `model` optimised, its kernels chosen, and made runnable on the caller's threads;
@@ -267,7 +274,7 @@ impl Classifier {
     /// The tract model that the plan for `batch` windows is built from, before tract optimises
     /// it: for profiling (`bench/tools/src/bin/profile.rs`).
     pub fn tract_model(&self, batch: usize) -> Result<TypedModel> {
-        self.wire(&[(INPUT, f32::fact(self.batch_shape(batch)))], &[LOGITS, PROBABILITIES])
+        self.wire(&[(INPUT, f32::fact(self.batch_shape(batch)))], &[LOGITS, PROBABILITIES], batch)
     }
 
     /// `[batch, height, width, (channels,) frames]`
@@ -304,7 +311,7 @@ impl Classifier {
         }
         let frames = *self.sample_shape().last().expect("a sample has a frame axis");
         let tubelet = self.tubelet();
-        let mut kept_index = vec![None; frames / tubelet];
+        let mut kept_index = crate::heap::zeros(frames / tubelet, "the window's tokens")?;
         for (kk, f) in self.kept_frames().iter().step_by(tubelet).enumerate() {
             kept_index[f / tubelet] = Some(kk);
         }
@@ -323,8 +330,8 @@ impl Classifier {
         }
         Ok(Stages {
             // A session feeds the spatial stage the index of a kept token: below `kept`.
-            spatial: self.optimise(self.wire(&spatial, &[TOKEN_ENCODINGS])?, &[(TOKEN_INDEX, kept)])?,
-            temporal: self.optimise(self.wire(&temporal, &[PROBABILITIES])?, &[])?,
+            spatial: self.optimise(self.wire(&spatial, &[TOKEN_ENCODINGS], 1)?, &[(TOKEN_INDEX, kept)])?,
+            temporal: self.optimise(self.wire(&temporal, &[PROBABILITIES], 1)?, &[])?,
             prefixes,
             head,
             stop_rule: self.stop_rule(),
@@ -343,7 +350,7 @@ impl Classifier {
             return Ok(Head::Window(self.batch_shape(1)));
         }
         let frame = [&[1], &token_shape[2..]].concat();
-        let model = self.wire(&[(HEAD_FRAMES, f32::fact(&frame))], &[HEAD_FEATURES])?;
+        let model = self.wire(&[(HEAD_FRAMES, f32::fact(&frame))], &[HEAD_FEATURES], 1)?;
         let row =
             model.output_outlets().and_then(|o| model.outlet_fact(o[0])).ok().and_then(|f| f.shape.as_concrete().map(<[usize]>::to_vec));
         let row = row.filter(|r| r.first() == Some(&1)).ok_or_else(|| Error::NotOnnx {

@@ -53,9 +53,9 @@ impl Classifier {
             frame_len,
             frames,
             stride: every * self.tubelet(),
-            ring: vec![0.0; frames * frame_len],
+            ring: crate::heap::zeros(frames * frame_len, "a window's ring of frames")?,
             received: 0,
-            window: vec![0.0; frames * frame_len],
+            window: crate::heap::zeros(frames * frame_len, "a window")?,
         })
     }
 }

@@ -120,6 +120,14 @@ pub enum Error {
     /// A touch could not be brought to how the model reads touches ([`crate::read_touch`]).
     #[error("reading the touch: {0}")]
     Touch(String),
+    /// A buffer whose size the file decides could not be allocated on this machine.
+    #[error("{what} needs {bytes} bytes, which this machine could not allocate")]
+    OutOfMemory {
+        /// The buffer.
+        what: &'static str,
+        /// Its size.
+        bytes: usize,
+    },
     /// tract failed (or panicked, caught) on a file that passed every check.
     #[error("tract: {0}")]
     Tract(String),

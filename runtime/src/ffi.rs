@@ -93,7 +93,7 @@ fn status(e: &Error) -> c_int {
         | Error::Incomplete { .. }
         | Error::NoTokenYet { .. }
         | Error::Touch(_) => PVT3_ERR_INPUT,
-        Error::NoPrefixes | Error::WholeWindowOnly => PVT3_ERR_MODEL,
+        Error::NoPrefixes | Error::WholeWindowOnly | Error::OutOfMemory { .. } => PVT3_ERR_MODEL,
         Error::Tract(_) => PVT3_ERR_INTERNAL,
     }
 }

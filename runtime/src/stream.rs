@@ -72,7 +72,7 @@ impl Classifier {
     /// A streaming session (builds the two stages on first use).
     pub fn session(&self) -> Result<Session> {
         let stages = self.stages()?;
-        let head = stages.head.as_ref().map(|h| vec![0.0; h.shape().iter().product()]);
+        let head = stages.head.as_ref().map(|h| crate::heap::zeros(h.shape().iter().product(), "the spectral head's rows")).transpose()?;
         Ok(Session {
             stages,
             received: 0,

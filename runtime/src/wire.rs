@@ -18,10 +18,19 @@ use tract_core::ops::math;
 use tract_core::ops::nn::{Reduce, Reducer, Softmax};
 
 use pvt3_format::onnx::{GraphProto as Graph, NodeProto as Node, Op};
+use pvt3_format::Budget;
 
-/// The model computing `outputs` from the tensors named in `sources`, each with its fixed fact.
-/// An error names what is missing or not understood.
-pub(crate) fn typed_model(graph: &Graph, sources: &[(&str, TypedFact)], outputs: &[&str]) -> Result<TypedModel, String> {
+/// The model computing `outputs` from the tensors named in `sources`, each with its fixed fact,
+/// for `windows` windows: every tensor it computes is within `budget` for that many windows
+/// ([`Budget::admit`]), checked as each node is wired, before anything computes it. An error
+/// names what is missing, not understood or too large.
+pub(crate) fn typed_model(
+    graph: &Graph,
+    sources: &[(&str, TypedFact)],
+    outputs: &[&str],
+    budget: Budget,
+    windows: usize,
+) -> Result<TypedModel, String> {
     let produced = |name: &str| graph.node.iter().any(|n| n.output.iter().any(|o| o == name));
     let read = |name: &str| graph.node.iter().any(|n| n.input.iter().any(|i| i == name));
     let unknown = outputs.iter().copied().find(|o| !produced(o)).or_else(|| sources.iter().map(|s| s.0).find(|s| !produced(s) && !read(s)));
@@ -38,13 +47,16 @@ pub(crate) fn typed_model(graph: &Graph, sources: &[(&str, TypedFact)], outputs:
             needed.extend(node.input.iter().map(String::as_str).filter(|n| !n.is_empty() && !seams.contains(n)));
         }
     }
-    let mut b = Builder { model: TypedModel::default(), wires: HashMap::new(), graph };
+    let mut b = Builder { model: TypedModel::default(), wires: HashMap::new(), graph, budget, windows };
     for (name, fact) in sources {
         let source = b.model.add_source(*name, fact.clone()).map_err(|e| e.to_string())?;
         b.wires.insert(name.to_string(), source);
     }
+    b.admitted_since(0).map_err(|e| format!("the input: {e}"))?;
     for node in graph.node.iter().zip(&keep).filter(|(_, k)| **k).map(|(n, _)| n) {
-        let out = b.node(node).map_err(|e| format!("{} ({}): {e:#}", node.name, node.op_type))?;
+        let wired = b.model.nodes().len();
+        let out = b.node(node).and_then(|out| b.admitted_since(wired).map(|_| out));
+        let out = out.map_err(|e| format!("{} ({}): {e:#}", node.name, node.op_type))?;
         let name = node.output.first().ok_or_else(|| format!("{}: a node without output", node.name))?;
         b.wires.insert(name.clone(), out);
     }
@@ -58,6 +70,9 @@ struct Builder<'a> {
     /// The outlet computing each tensor wired so far.
     wires: HashMap<String, OutletId>,
     graph: &'a Graph,
+    /// What any tensor may hold for one window, and how many windows the model holds.
+    budget: Budget,
+    windows: usize,
 }
 
 impl Builder<'_> {
@@ -67,10 +82,26 @@ impl Builder<'_> {
             return Ok(*o);
         }
         let init = self.graph.initializer.iter().find(|t| t.name == name).ok_or_else(|| format_err!("no tensor named `{name}`"))?;
-        let tensor = crate::onnx::to_tensor(init).map_err(|e| format_err!("{e}"))?;
+        let tensor = crate::onnx::to_tensor(init, self.budget).map_err(|e| format_err!("{e}"))?;
         let o = self.model.add_const(name, tensor)?;
         self.wires.insert(name.into(), o);
         Ok(o)
+    }
+
+    /// Checks that `shape` is within the budget for the model's windows.
+    fn admit(&self, shape: &[usize]) -> TractResult<()> {
+        self.budget.admit(shape, self.windows).map(drop).map_err(|why| format_err!("a tensor {why}"))
+    }
+
+    /// Checks every output of the nodes wired from node `first` on ([`Self::admit`]).
+    fn admitted_since(&self, first: usize) -> TractResult<()> {
+        for node in &self.model.nodes()[first..] {
+            for output in &node.outputs {
+                let shape = output.fact.shape.as_concrete().ok_or_else(|| format_err!("a shape that is not fixed"))?;
+                self.admit(shape)?;
+            }
+        }
+        Ok(())
     }
 
     fn fact(&self, o: OutletId) -> TractResult<TypedFact> {
@@ -98,8 +129,10 @@ impl Builder<'_> {
     /// Wires `op`; an op whose inputs are all constants is computed here and becomes a constant
     /// itself, so that what feeds a gather's indices is known (and checked) when it is wired.
     fn wire(&mut self, name: String, op: impl Into<Box<dyn TypedOp>>, inputs: &[OutletId]) -> TractResult<OutletId> {
-        // Wired first: tract checks the inputs' shapes against the op before anything runs it.
+        // Wired first: tract checks the inputs' shapes against the op before anything runs it,
+        // and the output's size is checked before anything computes it.
         let o = self.model.wire_node(name.clone(), op, inputs)?[0];
+        self.admit(&self.shape(o)?)?;
         let konsts: Option<TVec<TValue>> = inputs.iter().map(|o| Some(self.fact(*o).ok()?.konst?.into_tvalue())).collect();
         if let Some(values) = konsts.filter(|_| !inputs.is_empty()) {
             if let Some(mut out) = self.model.node(o.node).op.eval_out_of_plan(values)? {
@@ -172,6 +205,7 @@ impl Builder<'_> {
                 arity(2..=2)?;
                 let to = self.konst(inputs[1])?;
                 ensure!(to.iter().all(|d| *d >= 0), "a shape {to:?}");
+                self.admit(&to.iter().map(|d| *d as usize).collect::<Vec<_>>())?;
                 let to: TVec<TDim> = to.iter().map(|d| d.to_dim()).collect();
                 let from: TVec<TDim> = self.shape(x)?.iter().map(|d| d.to_dim()).collect();
                 let dims = tract_core::broadcast::multi_broadcast(&[&*from, &*to])?;
@@ -251,6 +285,7 @@ impl Builder<'_> {
         let from: TVec<TDim> = self.shape(x)?.iter().map(|d| d.to_dim()).collect();
         let to = self.konst(inputs[1])?;
         ensure!(to.iter().all(|d| *d >= -1) && to.iter().filter(|d| **d == -1).count() <= 1, "a shape {to:?}");
+        self.admit(&to.iter().map(|d| (*d).max(0) as usize).collect::<Vec<_>>())?;
         let to: TVec<TDim> = to.iter().map(|d| d.to_dim()).collect();
         let mut wire = x;
         for (i, op) in to_axis_ops_with_onnx_rules(&from, &to, false)?.into_iter().enumerate() {
@@ -377,7 +412,7 @@ mod tests {
     }
 
     fn run(graph: &Graph, shape: &[usize], x: &[f32], output: &str) -> (Vec<usize>, Vec<f32>) {
-        let model = typed_model(graph, &[("x", f32::fact(shape))], &[output]).unwrap();
+        let model = typed_model(graph, &[("x", f32::fact(shape))], &[output], Budget::of_file(0), 1).unwrap();
         let out =
             model.into_optimized().unwrap().into_runnable().unwrap().run(tvec!(Tensor::from_shape(shape, x).unwrap().into())).unwrap();
         (out[0].shape().to_vec(), out[0].to_plain_array_view::<f32>().unwrap().iter().copied().collect())
@@ -446,11 +481,11 @@ mod tests {
     #[test]
     fn unknown_operators_and_tensors_are_named() {
         let graph = Graph { node: vec![node("Conv", &["x", "w"], "y", vec![])], initializer: vec![i64s("w", &[1])], ..Default::default() };
-        let err = typed_model(&graph, &[("x", f32::fact([1]))], &["y"]).unwrap_err();
+        let err = typed_model(&graph, &[("x", f32::fact([1]))], &["y"], Budget::of_file(0), 1).unwrap_err();
         assert!(err.contains("operator Conv, which pvt3 does not export"), "{err}");
-        let err = typed_model(&graph, &[("x", f32::fact([1]))], &["z"]).unwrap_err();
+        let err = typed_model(&graph, &[("x", f32::fact([1]))], &["z"], Budget::of_file(0), 1).unwrap_err();
         assert!(err.contains("no tensor named `z`"), "{err}");
-        let err = typed_model(&graph, &[("seam", f32::fact([1]))], &["y"]).unwrap_err();
+        let err = typed_model(&graph, &[("seam", f32::fact([1]))], &["y"], Budget::of_file(0), 1).unwrap_err();
         assert!(err.contains("no tensor named `seam`"), "{err}");
     }
 }

@@ -1,6 +1,6 @@
 //! The C ABI: the header agrees with the code, the C example (built with the system compiler
 //! against the static library) gives the Rust result, and no entry point crashes on null
-//! pointers, wrong lengths, or truncated, foreign or missing files.
+//! pointers, wrong lengths, or truncated, foreign, hostile or missing files.
 
 mod support;
 
@@ -538,6 +538,10 @@ fn every_entry_point_reports_instead_of_crashing() {
         assert!(last_error().contains("flash"), "{}", last_error());
         assert_eq!(pvt3_classifier_load_bytes(half.as_ptr(), half.len(), null(), &mut c), PVT3_ERR_MODEL);
         assert!(last_error().contains("(memory)"), "{}", last_error());
+        // A hostile file, damaged inside and signed again, sizes no machine can allocate: a status.
+        let (hostile, initializer) = support::damaged_camera_file();
+        assert_eq!(pvt3_classifier_load_bytes(hostile.as_ptr(), hostile.len(), name.as_ptr(), &mut c), PVT3_ERR_MODEL);
+        assert!(last_error().contains(&format!("initializer `{initializer}` is of shape")), "{}", last_error());
         let absent = CString::new(dir.join("absent.onnx").to_str().unwrap()).unwrap();
         assert_eq!(pvt3_classifier_load(absent.as_ptr(), &mut c), PVT3_ERR_IO);
         std::fs::remove_dir_all(dir).unwrap();

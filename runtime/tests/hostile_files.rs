@@ -5,8 +5,10 @@
 //! typed error from `load`, `prepare` or the classification, or a classification: never a panic,
 //! caught or not. Damaged `.npy` inputs likewise.
 //!
-//! `PVT3_FUZZ_CASES` sets the mutants per file (default: 1000 on x86-64, 40 under an emulator);
-//! `bench/fuzz.sh` runs the same generator for 100,000 and reports what happened.
+//! Every kind of file pvt3 writes is damaged ([`subjects`]), and a camera's 8-bit frames of the
+//! wrong length. `PVT3_FUZZ_CASES` sets the mutants per file (default: 400 on x86-64, 40 under
+//! an emulator); `bench/fuzz.sh` runs the same generator for 100,000 a file and reports what
+//! happened.
 
 mod support;
 
@@ -16,7 +18,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use prost::Message;
 use pvt3_format::onnx::{ModelProto, Op};
 use pvt3_runtime::{Classifier, Error};
-use support::{golden, golden_vectors, root, Draw};
+use support::{golden, root, Draw};
 
 /// What a damaged count or index looks like.
 trait Near {
@@ -42,7 +44,7 @@ impl Near for Draw {
 /// One damage inside the model, named for the report.
 fn damage(m: &mut ModelProto, d: &mut Draw) -> &'static str {
     let g = m.graph.as_mut().expect("a graph");
-    match d.below(12) {
+    match d.below(15) {
         0 if !g.initializer.is_empty() => {
             let i = d.below(g.initializer.len());
             let t = &mut g.initializer[i];
@@ -151,6 +153,54 @@ fn damage(m: &mut ModelProto, d: &mut Draw) -> &'static str {
             }
             "a node's output renamed"
         }
+        11 if !g.initializer.is_empty() => {
+            // Emptied, its other dimensions kept or made wild: it then holds what it says (none).
+            let i = d.below(g.initializer.len());
+            let t = &mut g.initializer[i];
+            t.raw_data.clear();
+            t.float_data.clear();
+            t.int64_data.clear();
+            let k = d.below(t.dims.len() + 1);
+            t.dims.insert(k, 0);
+            if let Some(k) = (t.dims.len() > 1).then(|| d.below(t.dims.len())).filter(|k| t.dims[*k] != 0) {
+                t.dims[k] = d.near(t.dims[k]).max(0);
+            }
+            "an initializer emptied"
+        }
+        12 if !g.initializer.is_empty() => {
+            // Another shape or element type that its data still fills: read as another tensor.
+            let i = d.below(g.initializer.len());
+            let t = &mut g.initializer[i];
+            let bytes = t.raw_data.len() as i64;
+            match d.below(3) {
+                0 => t.dims.reverse(),
+                1 => t.dims = vec![bytes / if t.data_type == 7 { 8 } else { 4 }],
+                _ => {
+                    t.data_type = if t.data_type == 7 { 1 } else { 7 };
+                    t.dims = vec![bytes / if t.data_type == 7 { 8 } else { 4 }];
+                }
+            }
+            "an initializer's shape or type, its data still filling it"
+        }
+        13 => {
+            // The graph's declared input: an axis, its element type or its name.
+            let Some(input) = g.input.first_mut() else { return "nothing (no graph input)" };
+            let tensor = input.r#type.get_or_insert_with(Default::default).tensor_type.get_or_insert_with(Default::default);
+            let dims = &mut tensor.shape.get_or_insert_with(Default::default).dim;
+            match d.below(3) {
+                0 if !dims.is_empty() => {
+                    let k = d.below(dims.len());
+                    let v = match dims[k].value {
+                        Some(pvt3_format::onnx::DimensionValue::DimValue(v)) => v,
+                        _ => 1,
+                    };
+                    dims[k].value = Some(pvt3_format::onnx::DimensionValue::DimValue(d.near(v)));
+                }
+                1 => tensor.elem_type = [0, 7, 10, 99][d.below(4)],
+                _ => input.name.push('x'),
+            }
+            "the graph's input"
+        }
         _ => {
             // The header: the window's dimensions or the kept frames.
             let keys = [pvt3_format::keys::CONFIG, pvt3_format::keys::KEPT_FRAMES];
@@ -179,9 +229,34 @@ fn damage(m: &mut ModelProto, d: &mut Draw) -> &'static str {
 /// What happened to the mutants, by kind of damage: (refused, ran, panicked).
 type Outcomes = BTreeMap<&'static str, [usize; 3]>;
 
+/// A file to damage and what it is given: a window of its model's frames, cycled to fill any
+/// window its damaged header asks for, and for a camera's file one of the camera's frames.
+pub struct Subject {
+    pub path: std::path::PathBuf,
+    pub window: Vec<f32>,
+}
+
+/// Every kind of file pvt3 writes, as shipped or as the tests' fixtures keep it: the golden iCub
+/// model, the shipped iCub model (pruned, with a stopping rule), BioTac with its spectral head
+/// (streaming), the camera (a patch embedding and a head over the image's space, read from the
+/// camera's 8-bit frames) and a `--robust auto` file (its head of 16 bands); each with its own
+/// touch.
+pub fn subjects() -> Vec<Subject> {
+    let repo = root().join("..");
+    let touch = |path: &str| pvt3_runtime::read_npy(&repo.join(path)).unwrap().1;
+    let files = [
+        ("tests/golden/icub20/model.onnx", "tests/golden/icub20/input.npy"),
+        ("shipped/icub20.onnx", "shipped/icub20-touch.npy"),
+        ("shipped/biotac20.onnx", "shipped/biotac20-touch.npy"),
+        ("shipped/physiclear.onnx", "shipped/physiclear-touch.npy"),
+        ("tests/fixtures/fabricslide-robust-auto.onnx", "tests/fixtures/fabricslide-touch.npy"),
+    ];
+    files.iter().map(|(model, input)| Subject { path: repo.join(model), window: touch(input) }).collect()
+}
+
 /// Loads, prepares and classifies `bytes` (a window, and a streamed touch where the file
-/// streams); `Ok(true)` if it classified, `Ok(false)` if refused, `Err` with the message of a
-/// panic the runtime caught.
+/// streams, of the camera's own frames where it has a camera); `Ok(true)` if it classified,
+/// `Ok(false)` if refused, `Err` with the message of a panic the runtime caught.
 fn try_file(bytes: &[u8], window: &[f32]) -> Result<bool, String> {
     let run = || -> pvt3_runtime::Result<()> {
         let c = Classifier::from_bytes(bytes, "hostile.onnx")?;
@@ -202,6 +277,9 @@ fn try_file(bytes: &[u8], window: &[f32]) -> Result<bool, String> {
                 }
             }
             s.finish()?;
+            if c.camera().is_some() {
+                camera_frames(&c, &mut s, window)?;
+            }
         }
         Ok(())
     };
@@ -210,6 +288,22 @@ fn try_file(bytes: &[u8], window: &[f32]) -> Result<bool, String> {
         Err(Error::Tract(m)) if m.starts_with("panicked") => Err(m),
         Err(_) => Ok(false),
     }
+}
+
+/// The camera's own frames, as a robot pushes them (the recorded size, 8-bit), then frames of
+/// the wrong length and touches of the wrong shape, each of which must be refused (a panic,
+/// which the fuzz reports, if one is taken).
+fn camera_frames(c: &Classifier, s: &mut pvt3_runtime::Session, window: &[f32]) -> pvt3_runtime::Result<()> {
+    let len = c.camera_frame_len();
+    let frame: Vec<u8> = (0..len).map(|i| (window[i % window.len()] as u8).wrapping_add(i as u8)).collect();
+    s.push_camera_frame(&frame)?;
+    s.push_camera_frame(&frame)?;
+    for wrong in [0, 1, len - 1, len + 1, 2 * len + 1] {
+        let bytes = vec![7u8; wrong];
+        assert!(matches!(s.push_camera_frame(&bytes), Err(Error::FrameLength { .. })), "a camera frame of {wrong} bytes, not {len}, taken");
+        assert!(c.classify_camera_touches(&bytes, 1 + wrong % 3).is_err(), "{wrong} bytes taken as touches of frames of {len}");
+    }
+    Ok(())
 }
 
 /// `cases` re-signed mutants of the model in `path`, 1–3 damages each, on two threads.
@@ -253,7 +347,7 @@ pub fn fuzz(path: &std::path::Path, cases: usize, seed: u64, window: &[f32]) -> 
 }
 
 fn cases() -> usize {
-    let default = if cfg!(target_arch = "x86_64") { 1000 } else { 40 };
+    let default = if cfg!(target_arch = "x86_64") { 400 } else { 40 };
     std::env::var("PVT3_FUZZ_CASES").ok().and_then(|v| v.parse().ok()).unwrap_or(default)
 }
 
@@ -271,31 +365,67 @@ fn count_panics() {
 #[test]
 fn re_signed_damaged_models_are_refused_or_run_and_never_panic() {
     count_panics();
-    let (x, _) = golden_vectors();
-    let files = [golden("model.onnx"), root().join("../tests/fixtures/biotac20-spectral.onnx")];
     let mut report = String::new();
-    for (k, path) in files.iter().enumerate() {
-        let (outcomes, panicked) = fuzz(path, cases(), 0x5eed + k as u64, &x[..4500]);
+    // PVT3_FUZZ_FILE=NAME damages only the files whose path holds NAME.
+    let only = std::env::var("PVT3_FUZZ_FILE").unwrap_or_default();
+    for (k, subject) in subjects().iter().enumerate().filter(|(_, s)| s.path.to_string_lossy().contains(&only)) {
+        let path = &subject.path;
+        let (outcomes, panicked) = fuzz(path, cases(), 0x5eed + k as u64, &subject.window);
         let total: [usize; 3] = outcomes.values().fold([0; 3], |a, o| [a[0] + o[0], a[1] + o[1], a[2] + o[2]]);
         report += &format!("{}: {} refused, {} ran, {} panicked\n", path.display(), total[0], total[1], total[2]);
         for (kind, [refused, ran, panics]) in &outcomes {
             report += &format!("  {kind}: {refused} refused, {ran} ran, {panics} panicked\n");
         }
         assert!(panicked.is_empty(), "{report}{}", panicked.join("\n"));
-        // Both outcomes: every build runs both intact files (the small one, tested on aarch64,
-        // the spectral head with its own FFT).
-        assert_eq!(try_file(&std::fs::read(path).unwrap(), &x[..4500]), Ok(true), "{} runs intact", path.display());
+        // Both outcomes: every build runs every intact file (the small one, tested on aarch64,
+        // the spectral heads with its own FFT).
+        assert_eq!(try_file(&std::fs::read(path).unwrap(), &subject.window), Ok(true), "{} runs intact", path.display());
         assert!(total[0] > cases() / 2 && total[1] > 0, "the damage reaches both outcomes: {report}");
     }
     println!("{report}");
     assert_eq!(PANICS.load(Ordering::SeqCst), 0, "no panic, not even a caught one\n{report}");
 }
 
+/// The damage that panicked in tract before sizes were checked (an initializer emptied, its
+/// other axis wild) is refused at load, naming the initializer; so are its sizes made to
+/// disagree with its data, and its data type changed.
+#[test]
+fn a_camera_file_with_an_initializer_s_sizes_damaged_is_refused_by_name() {
+    let (bytes, name) = support::damaged_camera_file();
+    let err = Classifier::from_bytes(&bytes, "camera.onnx").err().expect("refused");
+    let message = err.to_string();
+    assert!(matches!(err, Error::NotOnnx { .. }), "{message}");
+    assert!(message.contains(&format!("initializer `{name}` is of shape [1125899906842624, 0]: more than")), "{message}");
+    let good = ModelProto::decode(std::fs::read(root().join("../shipped/physiclear.onnx")).unwrap().as_slice()).unwrap();
+    type Damage = fn(&mut pvt3_format::onnx::TensorProto);
+    let damages: [(Damage, &str); 3] = [
+        (|t| t.dims[0] *= 2, "values of 4 bytes) but"),
+        (|t| t.dims[0] = -t.dims[0], "has a negative dimension"),
+        (|t| t.data_type = 11, "has element type 11"),
+    ];
+    for (damage, why) in damages {
+        let mut m = good.clone();
+        let t = m.graph.as_mut().unwrap().initializer.iter_mut().find(|t| t.data_type == 1 && t.dims.len() == 2).unwrap();
+        damage(t);
+        let name = t.name.clone();
+        m.sign();
+        let message = Classifier::from_bytes(&m.encode_to_vec(), "camera.onnx").err().expect("refused").to_string();
+        assert!(message.contains(&format!("initializer `{name}`")) && message.contains(why), "{message}");
+    }
+}
+
 #[test]
 fn damaged_npy_inputs_are_refused_and_never_panic() {
-    let good = std::fs::read(golden("input.npy")).unwrap();
+    // The golden iCub windows (float32) and the camera's touch (8-bit).
+    for (k, file) in [golden("input.npy"), root().join("../shipped/physiclear-touch.npy")].iter().enumerate() {
+        damaged_npy(file, 0x1234_5678 + k as u64);
+    }
+}
+
+fn damaged_npy(file: &std::path::Path, seed: u64) {
+    let good = std::fs::read(file).unwrap();
     let dir = support::scratch("npy");
-    let mut d = Draw(0x1234_5678);
+    let mut d = Draw(seed);
     let mut outcomes = [0usize; 2];
     for case in 0..cases() {
         let mut m = good.clone();

@@ -22,7 +22,7 @@ impl Classifier {
         }
         let frames = touch_len / frame_len;
         let mut session = self.session()?;
-        let mut frame = vec![0u8; frame_len];
+        let mut frame = crate::heap::zeros(frame_len, "a camera's frame")?;
         values
             .chunks_exact(touch_len)
             .map(|touch| {

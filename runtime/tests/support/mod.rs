@@ -87,3 +87,18 @@ impl Draw {
         (self.0 % n.max(1) as u64) as usize
     }
 }
+
+/// The shipped camera file re-signed after its first initializer was emptied with a wild
+/// dimension (`[2⁵⁰, 0]`): a file that holds what its dimensions say (nothing) but whose size
+/// no reader can allocate. Before sizes were checked, tract panicked on such files. The
+/// initializer's name is returned beside the bytes.
+pub fn damaged_camera_file() -> (Vec<u8>, String) {
+    use prost::Message;
+    let bytes = std::fs::read(root().join("../shipped/physiclear.onnx")).unwrap();
+    let mut model = pvt3_format::onnx::ModelProto::decode(bytes.as_slice()).unwrap();
+    let t = &mut model.graph.as_mut().unwrap().initializer[0];
+    (t.dims, t.raw_data) = (vec![1 << 50, 0], Vec::new());
+    let name = t.name.clone();
+    model.sign();
+    (model.encode_to_vec(), name)
+}
