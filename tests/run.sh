@@ -21,7 +21,8 @@
 #      docs/deploy.md), so both supported feature sets are tested: all of them on the host, the
 #      small one on aarch64. musl or glibc changes one line of the runtime (runtime/src/heap.rs,
 #      glibc's allocator tuning, tested on the host);
-#   4. other platforms: the trainer checked (cargo check) for macOS (aarch64-apple-darwin, its
+#   4. other platforms: the trainer checked (cargo check) for macOS (aarch64-apple-darwin, without
+#      its `bags` feature, whose C needs the macOS SDK; its
 #      assembly by clang), and every crate's library and programs for Windows
 #      (x86_64-pc-windows-gnu, with Debian's mingw-w64) with clippy's lints, warnings denied; the
 #      runtime's and the format's tests linted there too (every unsafe block has a SAFETY note);
@@ -205,7 +206,9 @@ other_platforms() {
   # The trainer checked for macOS; every crate's library and programs, the trainer's among them,
   # checked for Windows with clippy's lints, warnings denied (the trainer's tests use Unix's
   # signals and byte paths, so they are linted on the host alone, by whoever changes them).
-  CC_aarch64_apple_darwin=clang cargo check "${platforms[@]}" --target aarch64-apple-darwin -p pvt3-trainer --bins
+  # For macOS without its `bags` feature: the bag storages' C (SQLite, zstd, lz4) needs the
+  # macOS SDK's headers, which this machine lacks (Windows's, mingw's, it has).
+  CC_aarch64_apple_darwin=clang cargo check "${platforms[@]}" --target aarch64-apple-darwin -p pvt3-trainer --bins --no-default-features
   cargo clippy "${platforms[@]}" --target x86_64-pc-windows-gnu --workspace --lib --bins -- -D warnings
   # The runtime's lints: clippy with warnings denied (every unsafe block has a SAFETY note), on
   # the Windows build the check above has half done (the same code as Linux's but for glibc's

@@ -12,7 +12,7 @@ use crate::Picture;
 pub enum FrameSpan {
     /// Evenly over the whole recording.
     Whole,
-    /// Evenly over the span in which the gel moves ([`moving_span`]), widened to the frames asked
+    /// Evenly over the span in which the gel moves ([`Motion`]), widened to the frames asked
     /// where it is shorter; the whole recording where nothing moves.
     #[default]
     Moving,
@@ -33,9 +33,53 @@ impl FrameSpan {
     /// The `count` frames a touch takes of `recorded` (one or more frames): spread evenly over
     /// this span of it.
     pub fn take(self, recorded: &[Picture], count: usize) -> Taken {
-        let (first, last) = match self {
-            Self::Whole => (0, recorded.len() - 1),
-            Self::Moving => widened(moving_span(recorded), count, recorded.len()),
+        let mut motion = Motion::new(self);
+        recorded.iter().for_each(|frame| motion.push(frame));
+        motion.take(count)
+    }
+}
+
+/// A recording's frames seen one at a time, for [`FrameSpan::take`] of a recording too long to
+/// hold: what the span needs of each frame (for the moving span, its change from the one before)
+/// in the memory of one frame.
+pub struct Motion {
+    span: FrameSpan,
+    frames: usize,
+    /// The last frame, grey, for the moving span.
+    previous: Option<Picture>,
+    /// Each frame's change from the one before (the mean absolute difference of their grey levels).
+    change: Vec<f32>,
+}
+
+impl Motion {
+    /// Nothing seen yet, for the frames of `span`.
+    pub fn new(span: FrameSpan) -> Self {
+        Self { span, frames: 0, previous: None, change: Vec::new() }
+    }
+
+    /// The recording's next frame.
+    pub fn push(&mut self, frame: &Picture) {
+        self.frames += 1;
+        if self.span == FrameSpan::Moving {
+            let grey = frame.grey();
+            if let Some(previous) = &self.previous {
+                let sum = previous.data.iter().zip(&grey.data).map(|(a, b)| f32::from(a.abs_diff(*b))).sum::<f32>();
+                self.change.push(sum / previous.data.len() as f32);
+            }
+            self.previous = Some(grey);
+        }
+    }
+
+    /// Frames seen.
+    pub fn frames(&self) -> usize {
+        self.frames
+    }
+
+    /// The `count` frames a touch takes of the frames seen (one or more).
+    pub fn take(&self, count: usize) -> Taken {
+        let (first, last) = match self.span {
+            FrameSpan::Whole => (0, self.frames - 1),
+            FrameSpan::Moving => widened(moving_span(&self.change), count, self.frames),
         };
         Taken { first, last, frames: evenly(first, last, count) }
     }
@@ -55,17 +99,12 @@ fn evenly(start: usize, end: usize, count: usize) -> Vec<usize> {
     (0..count).map(|k| start + (2 * k + 1) * len / (2 * count)).collect()
 }
 
-/// The span in which the gel moves: each frame's change from the one before (the mean absolute
-/// difference of their grey levels), smoothed by a median over [`SMOOTHING`] frames; a frame
-/// moves where that exceeds [`MOVING_FRACTION`] of the way from the recording's stillest to its
-/// busiest frame; the span is the longest run of moving frames, pauses of up to [`PAUSE`]
-/// frames bridged. `None` for a recording that never changes.
-pub fn moving_span(frames: &[Picture]) -> Option<(usize, usize)> {
-    let greys: Vec<Picture> = frames.iter().map(Picture::grey).collect();
-    let change: Vec<f32> = greys
-        .windows(2)
-        .map(|w| w[0].data.iter().zip(&w[1].data).map(|(a, b)| f32::from(a.abs_diff(*b))).sum::<f32>() / w[0].data.len() as f32)
-        .collect();
+/// The span in which the gel moves, of a recording whose frames change by `change` (frame
+/// `i + 1`'s is `change[i]`, [`Motion`]): each change smoothed by a median over [`SMOOTHING`]
+/// frames; a frame moves where that exceeds [`MOVING_FRACTION`] of the way from the recording's
+/// stillest to its busiest frame; the span is the longest run of moving frames, pauses of up to
+/// [`PAUSE`] frames bridged. `None` for a recording that never changes.
+fn moving_span(change: &[f32]) -> Option<(usize, usize)> {
     let smooth: Vec<f32> = (0..change.len())
         .map(|i| {
             let mut near = change[i.saturating_sub(SMOOTHING / 2)..(i + SMOOTHING / 2 + 1).min(change.len())].to_vec();
@@ -115,7 +154,6 @@ mod tests {
         assert_eq!(widened(Some((10, 11)), 5, 12), (7, 11));
         assert_eq!(widened(None, 5, 12), (0, 11));
         let still: Vec<Picture> = (0..6).map(|_| Picture { height: 2, width: 3, channels: 3, data: vec![9; 18] }).collect();
-        assert_eq!(moving_span(&still), None);
         assert_eq!(FrameSpan::Moving.take(&still, 4), Taken { first: 0, last: 5, frames: vec![0, 2, 3, 5] });
     }
 }

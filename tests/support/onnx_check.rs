@@ -1,6 +1,6 @@
-//! Runs `tests/onnx_check.py` (onnx checker + onnxruntime) from Rust tests. The first call
-//! creates a Python venv under `target/onnx-venv` and installs onnx, onnxruntime and numpy into it,
-//! so the test command needs nothing but Python 3 on the machine.
+//! Runs `tests/onnx_check.py` (onnx checker + onnxruntime) and the tests' other Python scripts
+//! from Rust tests. The first call creates a Python venv under `target/onnx-venv` and installs
+//! [`PACKAGES`] into it, so the test command needs nothing but Python 3 on the machine.
 
 use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
@@ -8,6 +8,10 @@ use std::process::Command;
 use std::sync::OnceLock;
 
 use super::workspace::workspace;
+
+/// What the scripts import: onnx's checker and onnxruntime, numpy, and the writers of ROS 2 bags
+/// that `tests/bag_writer.py` uses (rosbags; mcap with mcap-ros2-support).
+const PACKAGES: [&str; 6] = ["onnx", "onnxruntime", "numpy", "rosbags", "mcap", "mcap-ros2-support"];
 
 /// The venv's python, created once (test binaries run one after another; the venv is kept
 /// across runs).
@@ -17,16 +21,18 @@ fn python() -> &'static Path {
         let venv = workspace().canonicalize().expect("workspace root").join("target/onnx-venv");
         let python = venv.join("bin/python");
         let ready = venv.join("ready");
-        if !ready.exists() {
-            // A venv without the marker is what an interrupted install left: start again.
+        let installed = PACKAGES.join(" ");
+        if std::fs::read_to_string(&ready).ok().as_deref() != Some(installed.as_str()) {
+            // A venv without the marker is what an interrupted install left, and one with another
+            // list an older checkout's: start again.
             let _ = std::fs::remove_dir_all(&venv);
             let run = |cmd: &mut Command| {
                 let out = cmd.output().expect("python3 runs");
                 assert!(out.status.success(), "{cmd:?} failed:\n{}", String::from_utf8_lossy(&out.stderr));
             };
             run(Command::new("python3").args(["-m", "venv"]).arg(&venv));
-            run(Command::new(&python).args(["-m", "pip", "install", "-q", "onnx", "onnxruntime", "numpy"]));
-            std::fs::write(&ready, "").expect("marker written");
+            run(Command::new(&python).args(["-m", "pip", "install", "-q"]).args(PACKAGES));
+            std::fs::write(&ready, &installed).expect("marker written");
         }
         python
     })

@@ -15,8 +15,8 @@ use pvt3_trainer::data::Condition;
 use crate::progress;
 
 /// Read a folder of touches into a data set: CSV recordings (one CSV file per touch, a header
-/// row, touches of any length), or a camera-based sensor's (GelSight, DIGIT: one video, or one
-/// folder of PNG or JPEG frames, per touch; videos decoded by FFmpeg).
+/// row, touches of any length), or a camera-based sensor's (GelSight, DIGIT: one video, one
+/// folder of PNG or JPEG frames, or one ROS 2 bag, per touch; videos decoded by FFmpeg).
 ///
 /// Example: `pvt3 import csvs/ --out data.npz`, then `pvt3 cv --data data.npz`. Where the file
 /// names say the class and how each touch was made: `pvt3 import fabric/ --name
@@ -27,8 +27,9 @@ use crate::progress;
 pub struct ImportArgs {
     /// The folder: DIR/<class>/<touch>, class names the folder names; or, with --name naming the
     /// class, DIR/<touch>. A touch is a .csv file, or a camera's video (.mov, .mp4, .avi, .mkv,
-    /// .webm, .m4v, .mpg), folder of frame images (.png, .jpg, in name order) or still image (one
-    /// .png or .jpg, a touch of one frame).
+    /// .webm, .m4v, .mpg), folder of frame images (.png, .jpg, in name order), still image (one
+    /// .png or .jpg, a touch of one frame) or ROS 2 bag (a folder with metadata.yaml and its
+    /// .mcap or .db3 files, or one .mcap file; --topic names the camera's topic).
     pub dir: PathBuf,
     /// The data set to write (`x`, `y`, `lengths`, class names, channels, the files read).
     #[arg(short, long, default_value = "data.npz")]
@@ -73,7 +74,7 @@ pub struct ImportArgs {
 
 /// How a camera's frames are read (videos, frame folders or still images only).
 #[derive(clap::Args)]
-#[command(next_help_heading = "Camera touches (videos, frame folders or still images)")]
+#[command(next_help_heading = "Camera touches (videos, frame folders, still images or ROS 2 bags)")]
 pub struct CameraArgs {
     /// The rectangle of each frame to keep, HEIGHTxWIDTH+TOP+LEFT in pixels (e.g. 200x280+20+20
     /// to drop a 20-pixel border of 240 × 320 frames). Default: the whole frame.
@@ -103,12 +104,18 @@ pub struct CameraArgs {
     /// list it, instead of refusing it.
     #[arg(long)]
     pub allow_short: bool,
+    /// A bag's topic to read, its camera's frames (sensor_msgs/msg/Image: rgb8, bgr8, rgba8,
+    /// bgra8, mono8, mono16; or CompressedImage: png, jpeg). Without it, or where a bag lacks
+    /// it, the import lists the bag's topics with their types and message counts.
+    #[arg(long, value_name = "NAME")]
+    pub topic: Option<String>,
 }
 
 impl CameraArgs {
     fn options(&self, naming: Naming) -> CameraOptions {
         let (crop, size, grey, frames, span) = (self.crop, self.size, self.grey, self.frames, self.frames_from);
-        CameraOptions { naming, crop, size, grey, frames, span, subtract_first: self.subtract_first, allow_short: self.allow_short }
+        let (subtract_first, allow_short, topic) = (self.subtract_first, self.allow_short, self.topic.clone());
+        CameraOptions { naming, crop, size, grey, frames, span, subtract_first, allow_short, topic }
     }
 
     /// The camera options given on the command line (those left at their defaults not named).
@@ -122,6 +129,7 @@ impl CameraArgs {
             (self.frames_from != defaults.span, "--frames-from"),
             (self.subtract_first, "--subtract-first"),
             (self.allow_short, "--allow-short"),
+            (self.topic.is_some(), "--topic"),
         ];
         given.into_iter().filter_map(|(g, name)| g.then_some(name)).collect()
     }
@@ -255,6 +263,12 @@ fn describe_camera(set: &CameraSet, opts: &CameraOptions) {
     }
     for (source, recorded) in set.short() {
         println!("short: {source} has {recorded} frames, repeated to {}", set.frames);
+    }
+    for (source, t) in &set.timings {
+        println!(
+            "times: {source} has {} gaps (frames dropped), {} repeated stamps, {} frames out of order",
+            t.gaps, t.repeated, t.out_of_order
+        );
     }
     print_conditions(&set.conditions);
 }

@@ -44,6 +44,8 @@ pub struct CameraOptions {
     /// A recording of fewer frames than `frames` read with its frames repeated, evenly, instead
     /// of refused.
     pub allow_short: bool,
+    /// The topic a bag's frames are read from (`sensor_msgs/msg/Image` or `CompressedImage`).
+    pub topic: Option<String>,
 }
 
 impl Default for CameraOptions {
@@ -58,6 +60,7 @@ impl Default for CameraOptions {
             span: FrameSpan::Moving,
             subtract_first: false,
             allow_short: false,
+            topic: None,
         }
     }
 }
@@ -88,6 +91,40 @@ pub struct CameraSet {
     /// How the frames were read from the camera's, where every recording's frames have one
     /// shape (what a robot's camera gives the exported model).
     pub camera: Option<Camera>,
+    /// The touches whose frames' times were not evenly spaced and rising (bags), by source.
+    pub timings: Vec<(String, Timing)>,
+}
+
+/// How a recording's frame times (a bag's `header.stamp`s, or its receive times) stray from a
+/// steady clock: what a robot's driver dropped, repeated or sent out of order.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Timing {
+    /// Intervals longer than 1.5 times the median: frames dropped.
+    pub gaps: usize,
+    /// Frames stamped as the one before.
+    pub repeated: usize,
+    /// Frames stamped before the one before.
+    pub out_of_order: usize,
+}
+
+impl Timing {
+    /// The timing of frames taken at `times` (nanoseconds), in the order they came.
+    pub fn of(times: &[i64]) -> Self {
+        let steps: Vec<i64> = times.windows(2).map(|w| w[1] - w[0]).collect();
+        let mut rising: Vec<i64> = steps.iter().copied().filter(|s| *s > 0).collect();
+        rising.sort_unstable();
+        let median = rising.get(rising.len() / 2).copied().unwrap_or(0);
+        Self {
+            gaps: steps.iter().filter(|s| median > 0 && **s * 2 > median * 3).count(),
+            repeated: steps.iter().filter(|s| **s == 0).count(),
+            out_of_order: steps.iter().filter(|s| **s < 0).count(),
+        }
+    }
+
+    /// Whether any frame strayed.
+    pub fn strays(&self) -> bool {
+        *self != Self::default()
+    }
 }
 
 impl CameraSet {
@@ -123,8 +160,12 @@ pub fn read_camera_folder(dir: &Path, opts: &CameraOptions, mut progress: impl F
     });
     for (file, touch) in decoded {
         let path = file.path.as_path();
-        let ReadTouch { frames, background, span, camera } = touch.map_err(|e| Error::import(path, None, e))?;
+        let ReadTouch { frames, background, span, camera, timing } = touch.map_err(|e| Error::import(path, None, e))?;
         recorded.push(camera);
+        let source = path.strip_prefix(dir).unwrap_or(path).display().to_string();
+        if let Some(timing) = timing.filter(Timing::strays) {
+            set.timings.push((source.clone(), timing));
+        }
         match &first {
             Some(first) => same_shape(first, (path, &frames[0]))?,
             None => {
@@ -134,7 +175,7 @@ pub fn read_camera_folder(dir: &Path, opts: &CameraOptions, mut progress: impl F
         }
         set.append(&frames, background);
         set.labels.push(set.classes.binary_search(&file.class).expect("a listed class") as u32);
-        set.sources.push(path.strip_prefix(dir).unwrap_or(path).display().to_string());
+        set.sources.push(source);
         set.spans.push(span);
     }
     set.camera = recorded.first().copied().filter(|c| recorded.iter().all(|r| r == c));
@@ -156,19 +197,36 @@ fn same_shape((first_path, first): &(&Path, Picture), (path, frame): (&Path, &Pi
 }
 
 /// One touch as read: its chosen frames, cropped, shrunk and greyed; its background, where
-/// asked; (frames recorded, first taken, last taken); and how its frames were read.
+/// asked; (frames recorded, first taken, last taken); how its frames were read; and, for a bag,
+/// how its frames' times strayed.
 struct ReadTouch {
     frames: Vec<Picture>,
     background: Option<Picture>,
     span: (usize, usize, usize),
     camera: Camera,
+    timing: Option<Timing>,
 }
 
 /// The touch at `path` read as `opts` say, `frames` frames of it.
 fn read_touch(path: &Path, opts: &CameraOptions, frames: usize) -> std::result::Result<ReadTouch, String> {
+    #[cfg(feature = "bags")]
+    if decode::is_bag(path) {
+        return bag_touch::read(path, opts, frames);
+    }
     let recorded = decode::frames(path)?;
-    if recorded.is_empty() || (recorded.len() < frames && !opts.allow_short) {
-        let n = recorded.len();
+    enough(recorded.len(), frames, opts)?;
+    let taken = opts.span.take(&recorded, frames);
+    let camera = opts.camera(&recorded[0]);
+    let prepare = |p: &Picture| p.clone().read_as(&camera);
+    let chosen = taken.frames.iter().map(|&i| prepare(&recorded[i])).collect::<std::result::Result<Vec<_>, _>>()?;
+    let background = if opts.subtract_first { Some(prepare(&recorded[0])?) } else { None };
+    Ok(ReadTouch { frames: chosen, background, span: (recorded.len(), taken.first, taken.last), camera, timing: None })
+}
+
+/// Refuses a recording of `n` frames that is empty, or shorter than the `frames` a touch takes
+/// without `--allow-short`.
+fn enough(n: usize, frames: usize, opts: &CameraOptions) -> std::result::Result<(), String> {
+    if n == 0 || (n < frames && !opts.allow_short) {
         let (noun, still) = if n == 1 { ("frame", ", a still image as itself") } else { ("frames", "") };
         let fix = match n {
             0 => String::new(),
@@ -176,18 +234,20 @@ fn read_touch(path: &Path, opts: &CameraOptions, frames: usize) -> std::result::
         };
         return Err(format!("{n} {noun}, fewer than the {frames} a touch takes (--frames{fix})"));
     }
-    let taken = opts.span.take(&recorded, frames);
-    let camera = Camera {
-        recorded: recorded[0].shape(),
-        crop: opts.crop,
-        size: opts.size.map(|(h, w)| [h, w]),
-        grey: opts.grey,
-        subtract_first: opts.subtract_first,
-    };
-    let prepare = |p: &Picture| p.clone().read_as(&camera);
-    let chosen = taken.frames.iter().map(|&i| prepare(&recorded[i])).collect::<std::result::Result<Vec<_>, _>>()?;
-    let background = if opts.subtract_first { Some(prepare(&recorded[0])?) } else { None };
-    Ok(ReadTouch { frames: chosen, background, span: (recorded.len(), taken.first, taken.last), camera })
+    Ok(())
+}
+
+impl CameraOptions {
+    /// How frames recorded as `first` is are read.
+    fn camera(&self, first: &Picture) -> Camera {
+        Camera {
+            recorded: first.shape(),
+            crop: self.crop,
+            size: self.size.map(|(h, w)| [h, w]),
+            grey: self.grey,
+            subtract_first: self.subtract_first,
+        }
+    }
 }
 
 impl CameraSet {
@@ -205,6 +265,7 @@ impl CameraSet {
             conditions,
             spans: Vec::new(),
             camera: None,
+            timings: Vec::new(),
         }
     }
 
@@ -250,5 +311,7 @@ impl CameraSet {
     }
 }
 
+#[cfg(feature = "bags")]
+mod bag_touch;
 #[cfg(test)]
 mod tests;

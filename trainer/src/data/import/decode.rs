@@ -17,11 +17,12 @@ fn has_extension(path: &Path, extensions: &[&str]) -> bool {
     path.extension().and_then(|e| e.to_str()).is_some_and(|e| extensions.iter().any(|x| x.eq_ignore_ascii_case(e)))
 }
 
-/// Whether `path` is a camera touch: a video file, a folder holding frame images, or a still
-/// image ([`is_still`]).
+/// Whether `path` is a camera touch: a video file, a folder holding frame images, a still
+/// image ([`is_still`]), or a ROS 2 bag ([`is_bag`]; its topic is checked as it is read).
 pub fn is_camera_touch(path: &Path) -> bool {
     (path.is_file() && has_extension(path, &VIDEO_EXTENSIONS))
         || is_still(path)
+        || is_bag(path)
         || (path.is_dir() && !frame_files(path).unwrap_or_default().is_empty())
 }
 
@@ -29,6 +30,18 @@ pub fn is_camera_touch(path: &Path) -> bool {
 /// their touches: a class folder of images).
 pub fn is_still(path: &Path) -> bool {
     path.is_file() && has_extension(path, &IMAGE_EXTENSIONS)
+}
+
+/// Whether `path` is a ROS 2 bag, in a build that reads them (the `bags` feature, on by default).
+pub fn is_bag(path: &Path) -> bool {
+    #[cfg(feature = "bags")]
+    let bag = super::bag::is_bag(path);
+    #[cfg(not(feature = "bags"))]
+    let bag = {
+        let _ = path;
+        false
+    };
+    bag
 }
 
 /// Every frame of a touch, in order: a video's, a folder's images by name, or a still image.
@@ -69,41 +82,10 @@ fn frame_files(dir: &Path) -> std::io::Result<Vec<PathBuf>> {
 fn image(path: &Path) -> Result<Picture, String> {
     let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
     if has_extension(path, &["png"]) {
-        png_image(&bytes)
+        pvt3_messages::png(&bytes)
     } else {
-        jpeg_image(&bytes)
+        pvt3_messages::jpeg(&bytes)
     }
-}
-
-fn png_image(bytes: &[u8]) -> Result<Picture, String> {
-    let mut decoder = png::Decoder::new(std::io::Cursor::new(bytes));
-    // Palettes expanded, 16-bit samples cut to 8, so that every image is 8-bit grey or RGB(A).
-    decoder.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
-    let mut reader = decoder.read_info().map_err(|e| format!("not a readable PNG ({e})"))?;
-    let mut data = vec![0; reader.output_buffer_size().ok_or("a PNG too large to read")?];
-    let info = reader.next_frame(&mut data).map_err(|e| format!("not a readable PNG ({e})"))?;
-    data.truncate(info.buffer_size());
-    let (height, width) = (info.height as usize, info.width as usize);
-    let picture = |channels, data| Ok(Picture { height, width, channels, data });
-    match info.color_type {
-        png::ColorType::Grayscale => picture(1, data),
-        png::ColorType::Rgb => picture(3, data),
-        png::ColorType::GrayscaleAlpha => picture(1, data.chunks_exact(2).map(|p| p[0]).collect()),
-        png::ColorType::Rgba => picture(3, data.chunks_exact(4).flat_map(|p| [p[0], p[1], p[2]]).collect()),
-        other => Err(format!("a PNG of colour type {other:?}, not grey or RGB")),
-    }
-}
-
-fn jpeg_image(bytes: &[u8]) -> Result<Picture, String> {
-    use zune_jpeg::zune_core::{bytestream::ZCursor, colorspace::ColorSpace, options::DecoderOptions};
-    let mut decoder = zune_jpeg::JpegDecoder::new(ZCursor::new(bytes));
-    decoder.decode_headers().map_err(|e| format!("not a readable JPEG ({e:?})"))?;
-    let grey = decoder.input_colorspace().is_some_and(|c| c == ColorSpace::Luma);
-    let out = if grey { ColorSpace::Luma } else { ColorSpace::RGB };
-    let mut decoder = zune_jpeg::JpegDecoder::new_with_options(ZCursor::new(bytes), DecoderOptions::default().jpeg_set_out_colorspace(out));
-    let data = decoder.decode().map_err(|e| format!("not a readable JPEG ({e:?})"))?;
-    let (width, height) = decoder.dimensions().ok_or("a JPEG without dimensions")?;
-    Ok(Picture { height, width, channels: out.num_components(), data })
 }
 
 /// Every frame of a video, as `ffmpeg` decodes it to 8-bit RGB.

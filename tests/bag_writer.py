@@ -1,0 +1,191 @@
+"""Camera touches written as ROS 2 bags by libraries no one here wrote, beside the same frames
+as image files, for tests/bags.rs: `pvt3 import` must read both alike, byte for byte.
+
+    python tests/bag_writer.py OUT
+
+OUT/frames/CASE/CLASS/TOUCH/NNN.png (or .jpg): each touch's frames as a frame folder.
+OUT/bags/WRITER/CASE/CLASS/TOUCH: the same frames as a bag, on topic /camera, stamped
+33 ms apart from the touch's start (the bag's receive times 1 ms later). The writers:
+rosbags' rosbag2 writer with MCAP (a bag directory, metadata.yaml and its .mcap) and with
+SQLite (its .db3), and mcap-ros2-support's writer (a lone .mcap file, zstd or lz4 chunks).
+The cases: sensor_msgs/msg/Image in every encoding pvt3 reads (bgr8 with rows padded past
+their pixels, mono16 in both byte orders) and CompressedImage in PNG and JPEG (encoded by
+FFmpeg from the PNG frames).
+"""
+
+import struct
+import subprocess
+import sys
+import tempfile
+import zlib
+from pathlib import Path
+
+import numpy as np
+from mcap.writer import CompressionType
+from mcap_ros2.writer import Writer as McapRos2Writer
+from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.typesys import Stores, get_typestore
+
+H, W, FRAMES = 8, 10, 6
+CLASSES, TOUCHES = ("felt", "wood"), 5
+TOPIC = "/camera"
+STORE = get_typestore(Stores.ROS2_JAZZY)
+
+TIME_DEF = "int32 sec\nuint32 nanosec\n"
+HEADER_DEF = "builtin_interfaces/Time stamp\nstring frame_id\n"
+SEPARATOR = "=" * 80 + "\n"
+DEPENDENCIES = f"{SEPARATOR}MSG: std_msgs/Header\n{HEADER_DEF}{SEPARATOR}MSG: builtin_interfaces/Time\n{TIME_DEF}"
+DEFINITIONS = {
+    "sensor_msgs/msg/Image": "std_msgs/Header header\nuint32 height\nuint32 width\nstring encoding\n"
+    "uint8 is_bigendian\nuint32 step\nuint8[] data\n" + DEPENDENCIES,
+    "sensor_msgs/msg/CompressedImage": "std_msgs/Header header\nstring format\nuint8[] data\n" + DEPENDENCIES,
+}
+
+
+def rgb(klass, touch, frame):
+    """A touch's frame, 8-bit RGB: its class's colours, a square sliding over them."""
+    y, x = np.mgrid[0:H, 0:W]
+    image = np.stack([(40 * klass + 7 * c + 3 * y + x + 5 * touch) % 256 for c in range(3)], axis=-1)
+    square = (abs(y - 3) <= 1) & (abs(x - frame - 1) <= 1)
+    image[square] = [250, 20 + 30 * touch, 90]
+    return image.astype(np.uint8)
+
+
+def png(image):
+    """The PNG of an 8-bit RGB or grey image, or a 16-bit grey one."""
+    grey = image.ndim == 2
+    depth = 16 if image.dtype == np.uint16 else 8
+    rows = image.astype(">u2") if depth == 16 else image
+    raw = b"".join(b"\x00" + row.tobytes() for row in rows)
+
+    def chunk(kind, data):
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data) & 0xFFFFFFFF)
+
+    header = struct.pack(">IIBBBBB", image.shape[1], image.shape[0], depth, 0 if grey else 2, 0, 0, 0)
+    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b"")
+
+
+def jpeg(image):
+    """The JPEG FFmpeg makes of an RGB image."""
+    with tempfile.TemporaryDirectory() as tmp:
+        source, target = Path(tmp, "f.png"), Path(tmp, "f.jpg")
+        source.write_bytes(png(image))
+        subprocess.run(["ffmpeg", "-v", "error", "-nostdin", "-i", source, "-q:v", "3", target], check=True)
+        return target.read_bytes()
+
+
+def grey(image):
+    return (image.astype(np.uint32).sum(axis=-1) // 3).astype(np.uint8)
+
+
+def image_message(encoding, pixels, step_pad=0, bigendian=False):
+    """(type, fields) of an Image of `pixels` (H × W × channels, or H × W) in `encoding`."""
+    rows = pixels.reshape(H, -1)
+    if pixels.dtype == np.uint16:
+        rows = pixels.astype(">u2" if bigendian else "<u2").view(np.uint8).reshape(H, -1)
+    padded = np.concatenate([rows, np.full((H, step_pad), 77, np.uint8)], axis=1)
+    fields = dict(height=H, width=W, encoding=encoding, is_bigendian=int(bigendian), step=padded.shape[1], data=padded.ravel())
+    return "sensor_msgs/msg/Image", fields
+
+
+def cases():
+    """Each case: (name, frame file extension, frame(klass, touch, f) -> (file bytes, (type, fields)))."""
+
+    def raw(encoding, order, pad=0):
+        def frame(k, t, f):
+            image = rgb(k, t, f)
+            channels = image[..., order]
+            if encoding.endswith("a8"):
+                channels = np.concatenate([channels, np.full((H, W, 1), 128, np.uint8)], axis=-1)
+            return png(image), image_message(encoding, channels, pad)
+
+        return frame
+
+    def mono8(k, t, f):
+        image = grey(rgb(k, t, f))
+        return png(image), image_message("mono8", image)
+
+    def mono16(bigendian):
+        def frame(k, t, f):
+            image = grey(rgb(k, t, f)).astype(np.uint16) * 257 + np.uint16(3 * f)
+            return png(image), image_message("mono16", image, bigendian=bigendian)
+
+        return frame
+
+    def compressed(encode, fmt):
+        def frame(k, t, f):
+            data = encode(rgb(k, t, f))
+            return data, ("sensor_msgs/msg/CompressedImage", dict(format=fmt, data=np.frombuffer(data, np.uint8)))
+
+        return frame
+
+    return [
+        ("rgb8", "png", raw("rgb8", [0, 1, 2])),
+        ("bgr8-padded", "png", raw("bgr8", [2, 1, 0], pad=5)),
+        ("rgba8", "png", raw("rgba8", [0, 1, 2])),
+        ("bgra8", "png", raw("bgra8", [2, 1, 0])),
+        ("mono8", "png", mono8),
+        ("mono16-little", "png", mono16(False)),
+        ("mono16-big", "png", mono16(True)),
+        ("compressed-png", "png", compressed(png, "png")),
+        ("compressed-jpeg", "jpg", compressed(jpeg, "rgb8; jpeg compressed bgr8")),
+    ]
+
+
+def stamped(touch_start, f):
+    ns = touch_start + f * 33_000_000
+    return ns, dict(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
+
+
+def rosbags_message(msgtype, fields, stamp):
+    types = STORE.types
+    header = types["std_msgs/msg/Header"](stamp=types["builtin_interfaces/msg/Time"](**stamp), frame_id="camera")
+    return STORE.serialize_cdr(types[msgtype](header=header, **fields), msgtype)
+
+
+def write_rosbags(path, messages, storage):
+    version = 9 if storage == StoragePlugin.MCAP else 8
+    with Writer(path, version=version, storage_plugin=storage) as writer:
+        connection = writer.add_connection(TOPIC, messages[0][1], typestore=STORE)
+        for ns, msgtype, fields, stamp in messages:
+            writer.write(connection, ns + 1_000_000, rosbags_message(msgtype, fields, stamp))
+
+
+def write_mcap_ros2(path, messages, compression):
+    with open(path, "wb") as f:
+        writer = McapRos2Writer(f, compression=compression)
+        schema = writer.register_msgdef(messages[0][1], DEFINITIONS[messages[0][1]])
+        for ns, msgtype, fields, stamp in messages:
+            message = dict(fields, header=dict(stamp=stamp, frame_id="camera"), data=bytes(fields["data"]))
+            writer.write_message(TOPIC, schema, message, log_time=ns + 1_000_000, publish_time=ns)
+        writer.finish()
+
+
+WRITERS = {
+    "rosbags-mcap": lambda p, m: write_rosbags(p, m, StoragePlugin.MCAP),
+    "rosbags-sqlite3": lambda p, m: write_rosbags(p, m, StoragePlugin.SQLITE3),
+    "mcap-ros2-zstd": lambda p, m: write_mcap_ros2(p.with_suffix(".mcap"), m, CompressionType.ZSTD),
+    "mcap-ros2-lz4": lambda p, m: write_mcap_ros2(p.with_suffix(".mcap"), m, CompressionType.LZ4),
+}
+
+
+def main(out):
+    for case, extension, frame in cases():
+        for k, klass in enumerate(CLASSES):
+            for t in range(TOUCHES):
+                folder = out / "frames" / case / klass / f"touch{t}"
+                folder.mkdir(parents=True)
+                messages = []
+                for f in range(FRAMES):
+                    data, (msgtype, fields) = frame(k, t, f)
+                    (folder / f"{f:03}.{extension}").write_bytes(data)
+                    ns, stamp = stamped(1_700_000_000_000_000_000 + t * 10**9, f)
+                    messages.append((ns, msgtype, fields, stamp))
+                for writer, write in WRITERS.items():
+                    bag = out / "bags" / writer / case / klass / f"touch{t}"
+                    bag.parent.mkdir(parents=True, exist_ok=True)
+                    write(bag, messages)
+
+
+if __name__ == "__main__":
+    main(Path(sys.argv[1]))

@@ -1,0 +1,79 @@
+//! `pvt3 import` of ROS 2 bags written by libraries no one here wrote (tests/bag_writer.py:
+//! rosbags' rosbag2 writer, MCAP and SQLite; mcap-ros2-support's, zstd and lz4 chunks), for every
+//! camera message pvt3 reads: each set imports equal, byte for byte, to the same frames written
+//! as image files and imported. And what a user who names no topic, or the wrong one, is told.
+
+#[path = "support/onnx_check.rs"]
+#[allow(dead_code)] // the other end-to-end tests use the rest of it
+mod onnx_check;
+#[path = "support/pvt3_command.rs"]
+#[allow(dead_code)] // the other end-to-end tests use the rest of it
+mod pvt3_command;
+#[path = "support/workspace.rs"]
+mod workspace;
+
+use std::path::Path;
+
+use ndarray::ArrayD;
+use onnx_check::run_script;
+use pvt3_command::{fails, ok, scratch};
+
+const WRITERS: [&str; 4] = ["rosbags-mcap", "rosbags-sqlite3", "mcap-ros2-zstd", "mcap-ros2-lz4"];
+const CASES: [&str; 9] =
+    ["rgb8", "bgr8-padded", "rgba8", "bgra8", "mono8", "mono16-little", "mono16-big", "compressed-png", "compressed-jpeg"];
+
+/// The entries of a set that hold what it read (its sources' names differ: `.mcap` or not).
+fn read(set: &Path) -> Vec<(String, ArrayD<u8>)> {
+    let mut npz = ndarray_npy::NpzReader::new(std::fs::File::open(set).unwrap()).unwrap();
+    let mut entries: Vec<(String, ArrayD<u8>)> =
+        ["x", "camera", "class_names"].iter().map(|k| (k.to_string(), npz.by_name(k).unwrap())).collect();
+    let y: ArrayD<i64> = npz.by_name("y").unwrap();
+    entries.push(("y".into(), y.mapv(|v| v as u8)));
+    entries
+}
+
+fn import(dir: &Path, out: &Path, topic: bool) -> String {
+    let (dir, out) = (dir.to_str().unwrap(), out.to_str().unwrap());
+    let mut args = vec!["import", dir, "--frames", "6", "--frames-from", "whole", "--out", out];
+    if topic {
+        args.extend(["--topic", "/camera"]);
+    }
+    ok(&args)
+}
+
+#[test]
+fn bags_of_every_writer_and_message_import_equal_to_their_frames() {
+    let dir = scratch("bags");
+    run_script("tests/bag_writer.py", &[&dir]);
+    for case in CASES {
+        let reference = dir.join(format!("{case}.npz"));
+        import(&dir.join("frames").join(case), &reference, false);
+        let expected = read(&reference);
+        for writer in WRITERS {
+            let out = dir.join(format!("{case}-{writer}.npz"));
+            let said = import(&dir.join("bags").join(writer).join(case), &out, true);
+            assert!(said.contains("10 touches of 2 classes") && !said.contains("times:"), "{case}, {writer}:\n{said}");
+            assert!(read(&out) == expected, "{case}, {writer}: the bag's set differs from its frames'");
+        }
+    }
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+#[test]
+fn a_bag_without_its_topic_lists_the_topics_it_has() {
+    let dir = scratch("bag-topics");
+    run_script("tests/bag_writer.py", &[&dir]);
+    let bags = dir.join("bags/rosbags-sqlite3/rgb8");
+    let out = dir.join("x.npz");
+    let said = fails(&["import", bags.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    assert!(said.contains("a bag needs --topic") && said.contains("/camera (sensor_msgs/msg/Image, 6 messages)"), "{said}");
+    let said = fails(&["import", bags.to_str().unwrap(), "--topic", "/tactile", "--out", out.to_str().unwrap()]);
+    assert!(said.contains("no topic `/tactile`; its topics:\n  /camera (sensor_msgs/msg/Image, 6 messages)"), "{said}");
+    // A metadata.yaml naming a file that is not there.
+    let bag = bags.join("felt/touch0");
+    let file = std::fs::read_dir(&bag).unwrap().map(|e| e.unwrap().path()).find(|p| p.extension().is_some_and(|e| e == "db3")).unwrap();
+    std::fs::remove_file(&file).unwrap();
+    let said = fails(&["import", bags.to_str().unwrap(), "--topic", "/camera", "--out", out.to_str().unwrap()]);
+    assert!(said.contains("touch0") && said.contains("metadata.yaml names touch0.db3, which is not there"), "{said}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
