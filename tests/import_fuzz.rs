@@ -1,5 +1,7 @@
 //! `pvt3 import` against hostile recordings: small trees of a user's touches (CSV class folders, a
-//! flat CSV folder named by pattern, PNG frame folders, PNG and JPEG still images, videos), each
+//! flat CSV folder named by pattern, PNG frame folders, PNG and JPEG still images, videos, ROS 2
+//! bags in MCAP and SQLite, written here with the crates that read them: tests/bags.rs holds the
+//! reading to bags written by libraries no one here wrote), each
 //! mutant damaged one way (a file truncated, its bytes flipped or replaced, a cell out of range or
 //! not a number, a ragged row, a name with a line break or bytes that are not UTF-8, classes left
 //! too small, stray files) or given hostile options, and the release command run on it with a
@@ -35,10 +37,12 @@ enum Tree {
     Frames,
     Stills,
     Jpeg,
+    BagMcap,
+    BagSqlite,
     Video,
 }
 
-const TREES: [Tree; 6] = [Tree::Csv, Tree::CsvFlat, Tree::Frames, Tree::Stills, Tree::Jpeg, Tree::Video];
+const TREES: [Tree; 8] = [Tree::Csv, Tree::CsvFlat, Tree::Frames, Tree::Stills, Tree::Jpeg, Tree::BagMcap, Tree::BagSqlite, Tree::Video];
 
 /// How a mutant was damaged.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -154,7 +158,7 @@ fn hostile_recordings_are_imported_sanely_or_refused_by_name() {
     let started = Instant::now();
     for m in 0..mutants {
         // Videos are slow to decode: one mutant in twelve.
-        let tree = if rng.below(12) == 0 { Tree::Video } else { TREES[rng.below(5)] };
+        let tree = if rng.below(12) == 0 { Tree::Video } else { TREES[rng.below(TREES.len() - 1)] };
         let damage = DAMAGES[rng.below(DAMAGES.len())];
         let dir = root.join(format!("m{m}"));
         copy(&bases[&tree], &dir);
@@ -163,6 +167,7 @@ fn hostile_recordings_are_imported_sanely_or_refused_by_name() {
             Tree::CsvFlat => args.extend(["--name".into(), "{class}_F{force}_V{speed}mmps_*".into()]),
             // Their touches hold 4 frames: undamaged, they import.
             Tree::Frames | Tree::Video => args.extend(["--frames".into(), "4".into()]),
+            Tree::BagMcap | Tree::BagSqlite => args.extend(["--frames", "4", "--topic", "/camera"].map(String::from)),
             _ => {}
         }
         damage_tree(&dir, tree, damage, &mut rng, &mut args);
@@ -188,7 +193,7 @@ fn base(root: &Path, kind: Tree) -> PathBuf {
             csv_tree::write(&nested, 3, 6, 8, 12);
             csv_tree::flatten(&nested, &dir, 3, 6);
         }
-        Tree::Frames | Tree::Stills | Tree::Jpeg | Tree::Video => {
+        Tree::Frames | Tree::Stills | Tree::Jpeg | Tree::BagMcap | Tree::BagSqlite | Tree::Video => {
             for class in 0..2 {
                 let class_dir = dir.join(format!("class_{class}"));
                 std::fs::create_dir_all(&class_dir).unwrap();
@@ -202,6 +207,8 @@ fn base(root: &Path, kind: Tree) -> PathBuf {
                         }
                         Tree::Stills => write_png(&class_dir.join(format!("touch_{touch}.png")), &frames[0], W, H),
                         Tree::Jpeg => write_jpeg(&class_dir.join(format!("touch_{touch}.jpg")), &frames[0]),
+                        Tree::BagMcap => bag::write_mcap(&class_dir.join(format!("touch_{touch}.mcap")), &frames),
+                        Tree::BagSqlite => bag::write_sqlite(&class_dir.join(format!("touch_{touch}")), &frames),
                         _ => write_video(&class_dir.join(format!("touch_{touch}.mkv")), &frames),
                     }
                 }
@@ -217,6 +224,71 @@ const W: usize = 10;
 /// An RGB frame, H × W: its class's level and a square that moves with the frame.
 fn picture(class: usize, touch: usize, f: usize) -> Vec<u8> {
     (0..H * W * 3).map(|i| ((i / 3 % W == f + touch) as usize * 150 + 40 * class + i % 3 * 7) as u8).collect()
+}
+
+/// Bags of `sensor_msgs/msg/Image` (rgb8) on `/camera`, one message a frame, stamped 40 ms apart.
+mod bag {
+    use std::path::Path;
+
+    use super::{H, W};
+
+    /// The CDR of frame `f`, `data` its RGB bytes.
+    fn image(f: usize, data: &[u8]) -> Vec<u8> {
+        let mut m = vec![0, 1, 0, 0];
+        let mut u32 = |m: &mut Vec<u8>, v: u32| {
+            m.resize(4 + (m.len() - 4).next_multiple_of(4), 0);
+            m.extend_from_slice(&v.to_le_bytes());
+        };
+        let text = |m: &mut Vec<u8>, u32: &mut dyn FnMut(&mut Vec<u8>, u32), s: &str| {
+            u32(m, s.len() as u32 + 1);
+            m.extend_from_slice(s.as_bytes());
+            m.push(0);
+        };
+        u32(&mut m, 1);
+        u32(&mut m, (f * 40_000_000) as u32);
+        text(&mut m, &mut u32, "camera");
+        u32(&mut m, H as u32);
+        u32(&mut m, W as u32);
+        text(&mut m, &mut u32, "rgb8");
+        m.push(0);
+        u32(&mut m, (W * 3) as u32);
+        u32(&mut m, data.len() as u32);
+        m.extend_from_slice(data);
+        m
+    }
+
+    const TYPE: &str = "sensor_msgs/msg/Image";
+
+    pub fn write_mcap(path: &Path, frames: &[Vec<u8>]) {
+        let mut writer = mcap::Writer::new(std::io::BufWriter::new(std::fs::File::create(path).unwrap())).unwrap();
+        let schema = writer.add_schema(TYPE, "ros2msg", b"").unwrap();
+        let channel = writer.add_channel(schema, "/camera", "cdr", &Default::default()).unwrap();
+        for (f, frame) in frames.iter().enumerate() {
+            let time = 1_000_000_000 + f as u64 * 40_000_000;
+            let header = mcap::records::MessageHeader { channel_id: channel, sequence: f as u32, log_time: time, publish_time: time };
+            writer.write_to_known_channel(&header, &image(f, frame)).unwrap();
+        }
+        writer.finish().unwrap();
+    }
+
+    /// A bag directory as rosbag2 writes it before Jazzy: metadata.yaml beside its `.db3`.
+    pub fn write_sqlite(dir: &Path, frames: &[Vec<u8>]) {
+        std::fs::create_dir_all(dir).unwrap();
+        let metadata = "rosbag2_bagfile_information:\n  version: 5\n  storage_identifier: sqlite3\n  relative_file_paths:\n    - bag_0.db3\n  compression_format: ''\n  compression_mode: ''\n";
+        std::fs::write(dir.join("metadata.yaml"), metadata).unwrap();
+        let db = rusqlite::Connection::open(dir.join("bag_0.db3")).unwrap();
+        db.execute_batch(
+            "CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL, serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL);
+             CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL, timestamp INTEGER NOT NULL, data BLOB NOT NULL);",
+        )
+        .unwrap();
+        db.execute("INSERT INTO topics VALUES (1, '/camera', ?1, 'cdr', '')", [TYPE]).unwrap();
+        for (f, frame) in frames.iter().enumerate() {
+            let time = 1_000_000_000 + f as i64 * 40_000_000;
+            db.execute("INSERT INTO messages (topic_id, timestamp, data) VALUES (1, ?1, ?2)", rusqlite::params![time, image(f, frame)])
+                .unwrap();
+        }
+    }
 }
 
 fn write_png(path: &Path, data: &[u8], width: usize, height: usize) {
