@@ -230,3 +230,14 @@ fn still_images_a_labels_file_lists_import_as_one_frame_each() {
     assert!(set.spans.iter().all(|s| *s == (1, 0, 0)), "{:?}", set.spans);
     std::fs::remove_dir_all(dir).unwrap();
 }
+
+#[test]
+fn a_recording_s_times_count_its_gaps_repeats_and_reorderings() {
+    let steady: Vec<i64> = (0..10).map(|k| k * 40).collect();
+    assert_eq!(Timing::of(&steady), Timing::default());
+    assert!(!Timing::of(&steady).strays());
+    // 0, 40, 80, [dropped 120], 160, 160 (repeated), 200, 190 (back), 240
+    let stray = [0, 40, 80, 160, 160, 200, 190, 240];
+    assert_eq!(Timing::of(&stray), Timing { gaps: 1, repeated: 1, out_of_order: 1 });
+    assert_eq!(Timing::of(&[5]), Timing::default(), "one frame: nothing to stray");
+}
