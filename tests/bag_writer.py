@@ -10,7 +10,9 @@ rosbags' rosbag2 writer with MCAP (a bag directory, metadata.yaml and its .mcap)
 SQLite (its .db3), and mcap-ros2-support's writer (a lone .mcap file, zstd or lz4 chunks).
 The cases: sensor_msgs/msg/Image in every encoding pvt3 reads (bgr8 with rows padded past
 their pixels, mono16 in both byte orders) and CompressedImage in PNG and JPEG (encoded by
-FFmpeg from the PNG frames).
+FFmpeg from the PNG frames). OUT/long/run holds the rgb8 case's touches one after another in one
+bag (rosbags, MCAP), touch i received from i seconds after its first message on, and
+OUT/long/labels.csv cuts them out again (path,class,start,end).
 """
 
 import struct
@@ -169,7 +171,23 @@ WRITERS = {
 }
 
 
+def write_long(out, frame):
+    """The case's touches in one bag, touch i from i s on, and the labels file that cuts them."""
+    (out / "long").mkdir(parents=True)
+    messages, rows = [], ["path,class,start,end"]
+    for k, klass in enumerate(CLASSES):
+        for t in range(TOUCHES):
+            i = k * TOUCHES + t
+            for f in range(FRAMES):
+                ns, stamp = stamped(1_700_000_000_000_000_000 + i * 10**9, f)
+                messages.append((ns, *frame(k, t, f)[1], stamp))
+            rows.append(f"run,{klass},{i},{i + 0.5}")
+    write_rosbags(out / "long" / "run", messages, StoragePlugin.MCAP)
+    (out / "long" / "labels.csv").write_text("\n".join(rows) + "\n")
+
+
 def main(out):
+    write_long(out, cases()[0][2])
     for case, extension, frame in cases():
         for k, klass in enumerate(CLASSES):
             for t in range(TOUCHES):

@@ -59,6 +59,23 @@ fn bags_of_every_writer_and_message_import_equal_to_their_frames() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
+/// One long bag, cut into its touches by a labels file (`path,class,start,end`), imports as the
+/// touches' own frames do.
+#[test]
+fn a_long_bag_is_cut_into_touches_by_a_labels_file() {
+    let dir = scratch("bag-cut");
+    run_script("tests/bag_writer.py", &[&dir]);
+    let reference = dir.join("reference.npz");
+    import(&dir.join("frames/rgb8"), &reference, false);
+    let out = dir.join("cut.npz");
+    let (long, labels, o) = (dir.join("long"), dir.join("long/labels.csv"), out.to_str().unwrap());
+    let args = ["--labels", labels.to_str().unwrap(), "--topic", "/camera", "--frames", "6", "--frames-from", "whole", "--out", o];
+    let said = ok(&[&["import", long.to_str().unwrap()], &args[..]].concat());
+    assert!(said.contains("10 touches of 2 classes"), "{said}");
+    assert!(read(&out) == read(&reference), "the cut touches differ from their own frames");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
 #[test]
 fn a_bag_without_its_topic_lists_the_topics_it_has() {
     let dir = scratch("bag-topics");
@@ -68,7 +85,7 @@ fn a_bag_without_its_topic_lists_the_topics_it_has() {
     let said = fails(&["import", bags.to_str().unwrap(), "--out", out.to_str().unwrap()]);
     assert!(said.contains("a bag needs --topic") && said.contains("/camera (sensor_msgs/msg/Image, 6 messages)"), "{said}");
     let said = fails(&["import", bags.to_str().unwrap(), "--topic", "/tactile", "--out", out.to_str().unwrap()]);
-    assert!(said.contains("no topic `/tactile`; its topics:\n  /camera (sensor_msgs/msg/Image, 6 messages)"), "{said}");
+    assert!(said.contains("no message on topic `/tactile`; its topics:\n  /camera (sensor_msgs/msg/Image, 6 messages)"), "{said}");
     // A metadata.yaml naming a file that is not there.
     let bag = bags.join("felt/touch0");
     let file = std::fs::read_dir(&bag).unwrap().map(|e| e.unwrap().path()).find(|p| p.extension().is_some_and(|e| e == "db3")).unwrap();

@@ -73,29 +73,76 @@ pub fn topics(path: &Path) -> Result<Vec<Topic>, String> {
 }
 
 /// The kind of message `topic` of the bag at `path` carries, or why it cannot be read: the bag
-/// lacks it (every topic is listed, with its type and count), or pvt3 does not read its type.
+/// has no message on it (every topic is then listed, with its type and count), or pvt3 does not
+/// read its type. The type is that of the topic's first message, found without reading the
+/// rest of the bag.
 pub fn topic_kind(path: &Path, topic: Option<&str>) -> Result<(String, Kind), String> {
-    let topics = topics(path)?;
-    let list = || {
+    let listed = || -> Result<String, String> {
+        let topics = topics(path)?;
         let lines: Vec<String> = topics.iter().map(|t| format!("  {} ({}, {} messages)", t.name, t.type_name, t.count)).collect();
-        if lines.is_empty() {
-            "it has no topic".to_string()
-        } else {
-            format!("its topics:\n{}", lines.join("\n"))
-        }
+        Ok(if lines.is_empty() { "it has no topic".to_string() } else { format!("its topics:\n{}", lines.join("\n")) })
     };
     let Some(name) = topic else {
-        return Err(format!("a bag needs --topic, the topic to read; {}", list()));
+        return Err(format!("a bag needs --topic, the topic to read; {}", listed()?));
     };
-    let found = topics.iter().find(|t| t.name == name).ok_or_else(|| format!("no topic `{name}`; {}", list()))?;
-    let kind = Kind::of(&found.type_name).ok_or_else(|| {
-        let known: Vec<&str> = Kind::ALL.iter().map(|(n, _)| *n).collect();
-        format!("topic `{name}` carries {}, which pvt3 does not read ({})", found.type_name, known.join(", "))
-    })?;
-    if found.count == 0 {
-        return Err(format!("topic `{name}` has no message"));
+    let mut type_name = None;
+    for (file, storage) in files(path)? {
+        type_name = match storage {
+            Storage::Mcap => mcap_file::type_of(&file, name),
+            Storage::Sqlite => sqlite::type_of(&file, name),
+        }
+        .map_err(|e| format!("{}: {e}", file.display()))?;
+        if type_name.is_some() {
+            break;
+        }
     }
-    Ok((found.name.clone(), kind))
+    let type_name = type_name.ok_or_else(|| match listed() {
+        Ok(list) => format!("no message on topic `{name}`; {list}"),
+        Err(e) => e,
+    })?;
+    let kind = Kind::of(&type_name).ok_or_else(|| {
+        let known: Vec<&str> = Kind::ALL.iter().map(|(n, _)| *n).collect();
+        format!("topic `{name}` carries {type_name}, which pvt3 does not read ({})", known.join(", "))
+    })?;
+    Ok((name.to_string(), kind))
+}
+
+/// Which messages of a bag a touch takes: those received within a window of seconds from the
+/// bag's first message (its first file's first message), or all of them.
+pub struct Within {
+    window: Option<(i64, i64)>,
+    seconds: (f64, f64),
+}
+
+impl Within {
+    /// The messages of the bag at `path` received from `window.0` to `window.1` seconds (the end
+    /// excluded) after its first message, or every message.
+    pub fn new(path: &Path, window: Option<(f64, f64)>) -> Result<Self, String> {
+        let Some((start, end)) = window else { return Ok(Self { window: None, seconds: (0.0, f64::INFINITY) }) };
+        let (file, storage) = files(path)?.into_iter().next().expect("a bag names a file");
+        let first = match storage {
+            Storage::Mcap => mcap_file::first_time(&file),
+            Storage::Sqlite => sqlite::first_time(&file),
+        }?
+        .ok_or("the bag has no message")?;
+        let at = |s: f64| first.saturating_add((s * 1e9).round() as i64);
+        Ok(Self { window: Some((at(start), at(end))), seconds: (start, end) })
+    }
+
+    /// Whether a message received at `time` (nanoseconds) is the touch's.
+    pub fn holds(&self, time: i64) -> bool {
+        self.window.is_none_or(|(start, end)| (start..end).contains(&time))
+    }
+
+    /// The window's start, in seconds from the first message.
+    pub fn start(&self) -> f64 {
+        self.seconds.0
+    }
+
+    /// Its end.
+    pub fn end(&self) -> f64 {
+        self.seconds.1
+    }
 }
 
 /// Calls `each` with every message of `topic` in the bag at `path`, in the bag's order, and

@@ -153,7 +153,7 @@ pub fn read_camera_folder(dir: &Path, opts: &CameraOptions, mut progress: impl F
     // Touches decoded a few at a time on every core, appended in order.
     let mut done = 0;
     let decoded = files.chunks(4 * rayon::current_num_threads()).flat_map(|chunk| {
-        let read: Vec<_> = chunk.par_iter().map(|f| (f, read_touch(&f.path, opts, frames))).collect();
+        let read: Vec<_> = chunk.par_iter().map(|f| (f, read_touch(&f.path, f.window, opts, frames))).collect();
         done += chunk.len();
         progress(done, files.len());
         read
@@ -162,7 +162,7 @@ pub fn read_camera_folder(dir: &Path, opts: &CameraOptions, mut progress: impl F
         let path = file.path.as_path();
         let ReadTouch { frames, background, span, camera, timing } = touch.map_err(|e| Error::import(path, None, e))?;
         recorded.push(camera);
-        let source = path.strip_prefix(dir).unwrap_or(path).display().to_string();
+        let source = file.source(dir);
         if let Some(timing) = timing.filter(Timing::strays) {
             set.timings.push((source.clone(), timing));
         }
@@ -207,12 +207,14 @@ struct ReadTouch {
     timing: Option<Timing>,
 }
 
-/// The touch at `path` read as `opts` say, `frames` frames of it.
-fn read_touch(path: &Path, opts: &CameraOptions, frames: usize) -> std::result::Result<ReadTouch, String> {
+/// The touch at `path` read as `opts` say, `frames` frames of it; of a bag, the seconds
+/// `window` says (from its first message), or all of it.
+fn read_touch(path: &Path, window: Option<(f64, f64)>, opts: &CameraOptions, frames: usize) -> std::result::Result<ReadTouch, String> {
     #[cfg(feature = "bags")]
     if decode::is_bag(path) {
-        return bag_touch::read(path, opts, frames);
+        return bag_touch::read(path, window, opts, frames);
     }
+    debug_assert!(window.is_none(), "the listing cuts bags alone");
     let recorded = decode::frames(path)?;
     enough(recorded.len(), frames, opts)?;
     let taken = opts.span.take(&recorded, frames);

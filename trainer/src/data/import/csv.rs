@@ -156,7 +156,7 @@ fn read_touches(files: Vec<Listed>, classes: &[String]) -> Result<ReadTouches> {
     let mut header: Option<(PathBuf, Vec<String>)> = None;
     let mut touches = Vec::new();
     let mut condition_values = Vec::new();
-    for Listed { path, class, values } in files {
+    for Listed { path, class, values, .. } in files {
         let (names, touch) = read_file(&path, classes.binary_search(&class).expect("a known class"))?;
         match &header {
             None => header = Some((path.clone(), names)),

@@ -5,6 +5,7 @@
 use std::path::{Path, PathBuf};
 
 use super::decode;
+use super::decode::is_bag;
 use super::labels::Labels;
 use super::npz::check_line;
 use crate::data::{Condition, FOLDS};
@@ -189,11 +190,24 @@ impl Recording {
     }
 }
 
-/// A touch's file, found by [`list_touches`]: its class name and its condition values.
+/// A touch's file, found by [`list_touches`]: its class name, its condition values and, for a
+/// touch a labels file cuts from a long recording, the seconds it takes.
 pub(super) struct Listed {
     pub(super) path: PathBuf,
     pub(super) class: String,
     pub(super) values: Vec<String>,
+    pub(super) window: Option<(f64, f64)>,
+}
+
+impl Listed {
+    /// The touch's name in a data set: its path under `dir`, and the seconds it takes of it.
+    pub(super) fn source(&self, dir: &Path) -> String {
+        let path = self.path.strip_prefix(dir).unwrap_or(&self.path).display().to_string();
+        match self.window {
+            Some((start, end)) => format!("{path} ({start} s to {end} s)"),
+            None => path,
+        }
+    }
 }
 
 /// The touches of `dir` and the classes, sorted: one folder per class, side by side when the
@@ -228,7 +242,7 @@ fn side_by_side(dir: &Path, pattern: &NamePattern, kind: Recording) -> Result<Ve
     for path in found {
         let mut values = read_name(&path, pattern)?;
         let class = values.remove(class_at);
-        files.push(Listed { path, class, values });
+        files.push(Listed { path, class, values, window: None });
     }
     Ok(files)
 }
@@ -256,7 +270,7 @@ fn in_class_folders(dir: &Path, name: Option<&NamePattern>, kind: Recording) -> 
                 Some(pattern) => read_name(&path, pattern)?,
                 None => Vec::new(),
             };
-            files.push(Listed { path, class: class.clone(), values });
+            files.push(Listed { path, class: class.clone(), values, window: None });
         }
     }
     Ok(files)
@@ -291,7 +305,11 @@ fn labelled_touches(dir: &Path, labels: &Labels, kind: Recording) -> Result<Vec<
                 format!("{} is not a {} (in {})", row.path, kind.what(), dir.display()),
             ));
         }
-        files.push(Listed { path, class: row.class.clone(), values: row.values.clone() });
+        if row.window.is_some() && !is_bag(&path) {
+            let why = format!("{}: start and end cut touches from ROS 2 bags, and it is none", row.path);
+            return Err(Error::import(&labels.file, Some(row.line), why));
+        }
+        files.push(Listed { path, class: row.class.clone(), values: row.values.clone(), window: row.window });
     }
     Ok(files)
 }

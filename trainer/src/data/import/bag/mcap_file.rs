@@ -55,3 +55,25 @@ pub(super) fn messages(path: &Path, topic: &str, each: &mut dyn FnMut(Message) -
     }
     Ok(())
 }
+
+/// The receive time of its first message, if it has one.
+pub(super) fn first_time(path: &Path) -> Result<Option<i64>, String> {
+    match reader(path)?.next() {
+        Some(message) => {
+            let message = message.map_err(|e| format!("not a readable MCAP file ({e})"))?;
+            Ok(Some(i64::try_from(message.log_time).map_err(|_| format!("a receive time of {} ns", message.log_time))?))
+        }
+        None => Ok(None),
+    }
+}
+
+/// The message type of `topic`'s first message (its schema's name), if the file has one.
+pub(super) fn type_of(path: &Path, topic: &str) -> Result<Option<String>, String> {
+    for message in reader(path)? {
+        let message = message.map_err(|e| format!("not a readable MCAP file ({e})"))?;
+        if message.channel.topic == topic {
+            return Ok(Some(message.channel.schema.as_ref().map_or_else(|| "(no schema)".to_string(), |s| s.name.clone())));
+        }
+    }
+    Ok(None)
+}

@@ -52,3 +52,22 @@ pub(super) fn messages(path: &Path, topic: &str, each: &mut dyn FnMut(Message) -
     }
     Ok(())
 }
+
+/// The receive time of its first message, if it has one.
+pub(super) fn first_time(path: &Path) -> Result<Option<i64>, String> {
+    open(path)?.query_row("SELECT MIN(timestamp) FROM messages", [], |r| r.get(0)).map_err(bad)
+}
+
+/// The message type of `topic`, if the file has a message on it.
+pub(super) fn type_of(path: &Path, topic: &str) -> Result<Option<String>, String> {
+    let connection = open(path)?;
+    let mut query = connection
+        .prepare("SELECT type FROM topics WHERE name = ?1 AND EXISTS (SELECT 1 FROM messages WHERE messages.topic_id = topics.id)")
+        .map_err(bad)?;
+    let found = query.query_row([topic], |r| r.get(0));
+    match found {
+        Ok(t) => Ok(Some(t)),
+        Err(rusqlite::Error::QueryReturnedNoRows) => Ok(None),
+        Err(e) => Err(bad(e)),
+    }
+}

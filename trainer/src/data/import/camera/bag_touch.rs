@@ -13,16 +13,22 @@ use pvt3_messages::{decode, Frame, Kind};
 use super::{enough, CameraOptions, ReadTouch, Timing};
 use crate::data::import::bag;
 
-/// The camera touch of the bag at `path`, `frames` frames of its topic as `opts` say.
-pub(super) fn read(path: &Path, opts: &CameraOptions, frames: usize) -> Result<ReadTouch, String> {
+/// The camera touch of the bag at `path`, `frames` frames of its topic as `opts` say: the
+/// messages received in `window` (seconds from the bag's first message), or all of them.
+pub(super) fn read(path: &Path, window: Option<(f64, f64)>, opts: &CameraOptions, frames: usize) -> Result<ReadTouch, String> {
     let (topic, kind) = bag::topic_kind(path, opts.topic.as_deref())?;
     if !kind.is_camera() {
         return Err(format!("topic `{topic}` carries {}, a taxel array's values, not a camera's frames", kind.name()));
     }
+    // The touch's messages: their index among the topic's, and the index among the touch's.
+    let within = bag::Within::new(path, window)?;
     let mut motion = Motion::new(opts.span);
     let mut first: Option<Picture> = None;
     let mut times = Vec::new();
     bag::messages(path, &topic, |index, message| {
+        if !within.holds(message.time) {
+            return Ok(());
+        }
         let (picture, stamp) = picture(kind, &topic, index, &message.data)?;
         times.push(stamp.unwrap_or(message.time));
         if let Some(first) = &first {
@@ -35,16 +41,24 @@ pub(super) fn read(path: &Path, opts: &CameraOptions, frames: usize) -> Result<R
         first.get_or_insert(picture);
         Ok(())
     })?;
+    if motion.frames() == 0 && window.is_some() {
+        return Err(format!("topic `{topic}` has no message from {} s to {} s of the bag", within.start(), within.end()));
+    }
     enough(motion.frames(), frames, opts)?;
     let first = first.expect("a frame was read");
     let taken = motion.take(frames);
     let camera = opts.camera(&first);
     // The second pass keeps the frames taken (each once, however often it is taken), read.
     let mut kept: BTreeMap<usize, Option<Picture>> = taken.frames.iter().map(|&i| (i, None)).collect();
+    let mut taken_so_far = 0;
     bag::messages(path, &topic, |index, message| {
-        if let Some(slot) = kept.get_mut(&index) {
+        if !within.holds(message.time) {
+            return Ok(());
+        }
+        if let Some(slot) = kept.get_mut(&taken_so_far) {
             *slot = Some(picture(kind, &topic, index, &message.data)?.0.read_as(&camera)?);
         }
+        taken_so_far += 1;
         Ok(())
     })?;
     let chosen = taken
