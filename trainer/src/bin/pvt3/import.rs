@@ -54,7 +54,8 @@ pub struct ImportArgs {
     /// `path` (the touch's path relative to DIR: a .csv file, a video, a frame folder or an
     /// image) and `class`, and every other column is a condition recorded for `--hold-out`
     /// (e.g. `path,class,object` with `grasp_3/camera_0.avi,slip,mug`). Touches DIR holds that
-    /// the file does not list are not read.
+    /// the file does not list are not read. With `start` and `end` columns, each row cuts a
+    /// touch out of a long ROS 2 bag: the seconds from its first message.
     #[arg(long, value_name = "FILE.csv", conflicts_with = "name")]
     pub labels: Option<PathBuf>,
     /// Read every touch by distance travelled, not by time: CONDITION=SPEED names the condition
