@@ -4,7 +4,9 @@
 # files, a `--robust auto` file; a camera's 8-bit frames of the wrong length pushed into each
 # camera file that runs) and as many damaged .npy inputs of each kind (float32 windows, a camera's
 # 8-bit touch), on two threads; prints what was refused, what ran and what panicked, by kind of
-# damage. The test fails on any panic, caught or not. docs/deploy.md gives its figures.
+# damage. The test fails on any panic, caught or not, and on any refusal that names no part of the
+# file (an initializer, a node or its tensor, the graph's input, a header entry).
+# docs/benchmarks.md gives its figures.
 #
 #   bash bench/fuzz.sh [CASES [FILE]]   # default 100000 per file; FILE: only the files whose path holds it
 set -euo pipefail

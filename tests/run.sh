@@ -317,7 +317,7 @@ qemu_skips=(bench_reports_batch_and_streaming_latencies every_answer_is_the_batc
   a_reset_stream_waits_for_a_whole_window_and_misuse_is_an_error streaming_frame_by_frame_equals_the_whole_window
   the_example_answers_as_the_runtime_does json_gives_every_probability_of_every_window
   a_classifier_shared_by_threads_answers_each_as_it_answers_one
-  re_signed_damaged_models_are_refused_or_run_and_never_panic damaged_npy_inputs_are_refused_and_never_panic)
+  re_signed_damaged_models_are_refused_by_name_or_run_and_never_panic damaged_npy_inputs_are_refused_and_never_panic)
 (aarch64_env && cargo_test "${aarch64_tests[@]}" -- $(printf -- '--skip %s ' "${qemu_skips[@]}"))
 
 if [ -n "$valgrind_pid" ]; then

@@ -16,7 +16,7 @@ use pvt3_format::{
 
 use crate::error::{catch_panic, tract_error};
 use crate::kernels::Kernels;
-use crate::plan::{outputs_of, Plan};
+use crate::plan::Plan;
 use crate::stages::{Head, Stages};
 use crate::{Error, Result};
 use pvt3_format::onnx::GraphProto;
@@ -238,13 +238,14 @@ impl Classifier {
             #[cfg(not(feature = "threads"))]
             n => return Err(Error::NoThreads { asked: n }),
         };
+        let outputs = Plan::output_names(&model);
         let build = || {
             let mut model = crate::plan::optimised(model, index_bounds)?;
             crate::kernels::tune(&mut model, self.threads, self.kernels)?;
             model.into_runnable_with_options(&RunOptions { executor: Some(executor), ..Default::default() })
         };
         let plan = catch_panic(AssertUnwindSafe(build))?;
-        plan.map(Plan::new).map_err(|e| Error::NotOnnx { path: self.path.clone(), reason: format!("{e:#}") })
+        plan.map(|plan| Plan::new(plan, outputs)).map_err(|e| Error::NotOnnx { path: self.path.clone(), reason: format!("{e:#}") })
     }
 
     /// Whether the file can be streamed (sessions, provisional answers): not a model whose
@@ -380,9 +381,10 @@ impl Classifier {
     pub fn run(&self, frames: &[f32], batch: usize) -> Result<(Vec<f32>, Vec<f32>)> {
         self.validate(frames, batch)?;
         let input = Tensor::from_shape(&self.batch_shape(batch), frames).map_err(tract_error)?;
-        let outputs = self.plan(batch)?.run(tvec!(input.into()))?;
+        let plan = self.plan(batch)?;
+        let outputs = plan.run(tvec!(input.into()))?;
         let len = batch.checked_mul(self.classes().len()).ok_or(Error::BatchTooLarge { batch })?;
-        Ok((outputs_of(&outputs, 0, len)?, outputs_of(&outputs, 1, len)?))
+        Ok((plan.output(&outputs, 0, len)?, plan.output(&outputs, 1, len)?))
     }
 
     /// Classifies `batch` windows laid out back to back.

@@ -14,7 +14,7 @@ use tract_core::prelude::*;
 
 use crate::classifier::prediction;
 use crate::error::tract_error;
-use crate::plan::{outputs_of, Plan};
+use crate::plan::Plan;
 use crate::{Classifier, Error, Prediction, Result};
 
 /// A stream in progress ([`Classifier::continuous`]). It shares the classifier's plan and may
@@ -103,7 +103,7 @@ impl Continuous {
         }
         let input = Tensor::from_shape(&self.shape, &self.window).map_err(tract_error)?;
         let outputs = self.plan.run(tvec!(input.into()))?;
-        Ok(Some(prediction(&self.classes, &outputs_of(&outputs, 1, self.classes.len())?)))
+        Ok(Some(prediction(&self.classes, &self.plan.output(&outputs, 1, self.classes.len())?)))
     }
 
     /// Forgets the stream: the next answer comes after a whole new window.

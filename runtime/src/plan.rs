@@ -11,16 +11,6 @@ use tract_core::prelude::*;
 use crate::error::{catch_panic, tract_error};
 use crate::{Error, Result};
 
-/// Output `i` of a plan's `outputs`, which must hold `len` f32 values.
-pub(crate) fn outputs_of(outputs: &[TValue], i: usize, len: usize) -> Result<Vec<f32>> {
-    let values = outputs.get(i).ok_or_else(|| Error::Tract(format!("the plan has no output {i}")))?;
-    let values: Vec<f32> = values.to_plain_array_view::<f32>().map_err(tract_error)?.iter().copied().collect();
-    if values.len() != len {
-        return Err(Error::Tract(format!("output {i} has {} values, not the {len} the metadata implies", values.len())));
-    }
-    Ok(values)
-}
-
 /// tract's decluttering, one round: each of its passes run until it has nothing more to change,
 /// once, in tract's order. tract's own (`TypedModel::declutter`) repeats the round until a whole
 /// round changes nothing: on the exporter's graphs the second round changes a few `Add`, `Mul` and
@@ -80,13 +70,32 @@ fn check_gathers(model: &TypedModel, index_bounds: &[(&str, usize)]) -> TractRes
 
 pub(crate) struct Plan {
     plan: Arc<TypedRunnableModel>,
+    /// The graph's name of each output, as the file's refusals give it.
+    outputs: Vec<String>,
     /// States not in use; a caller running concurrently with another spawns its own.
     idle: Mutex<Vec<TypedSimpleState>>,
 }
 
 impl Plan {
-    pub(crate) fn new(plan: Arc<TypedRunnableModel>) -> Self {
-        Self { plan, idle: Mutex::new(Vec::new()) }
+    /// `plan`, whose outputs are the tensors named `outputs`.
+    pub(crate) fn new(plan: Arc<TypedRunnableModel>, outputs: Vec<String>) -> Self {
+        Self { plan, outputs, idle: Mutex::new(Vec::new()) }
+    }
+
+    /// The names of `model`'s outputs, as the wiring labelled them.
+    pub(crate) fn output_names(model: &TypedModel) -> Vec<String> {
+        model.output_outlets().unwrap_or_default().iter().map(|o| model.outlet_label(*o).unwrap_or("?").to_string()).collect()
+    }
+
+    /// Output `i` of this plan's `outputs`, which must hold `len` f32 values.
+    pub(crate) fn output(&self, outputs: &[TValue], i: usize, len: usize) -> Result<Vec<f32>> {
+        let name = self.outputs.get(i).map_or("?", String::as_str);
+        let values = outputs.get(i).ok_or_else(|| Error::Tract(format!("the plan has no output `{name}`")))?;
+        let values: Vec<f32> = values.to_plain_array_view::<f32>().map_err(tract_error)?.iter().copied().collect();
+        if values.len() != len {
+            return Err(Error::Tract(format!("output `{name}` has {} values, not the {len} the header implies", values.len())));
+        }
+        Ok(values)
     }
 
     /// Runs the plan. A state that panicked is dropped, not reused.
@@ -114,7 +123,7 @@ mod tests {
         let two = model.add_const("two", tensor1(&[2f32, 2.0, 2.0])).unwrap();
         let y = model.wire_node("y", tract_core::ops::math::mul(), &[x, two]).unwrap();
         model.select_output_outlets(&y).unwrap();
-        let plan = Plan::new(model.into_runnable().unwrap());
+        let plan = Plan::new(model.into_runnable().unwrap(), vec!["y".into()]);
         for k in 0..3 {
             let v = k as f32;
             let out = plan.run(tvec!(tensor1(&[v, 1.0, -v]).into())).unwrap();

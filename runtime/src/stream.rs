@@ -25,7 +25,6 @@ use tract_core::prelude::*;
 
 use crate::classifier::prediction;
 use crate::error::tract_error;
-use crate::plan::outputs_of;
 use crate::stages::{Head, Stages};
 use crate::{Classifier, Error, Prediction, Result, Touch, TouchReader};
 
@@ -166,7 +165,7 @@ impl Session {
             let frames = Tensor::from_shape(&self.stages.token_shape, &self.token).map_err(tract_error)?;
             let index = Tensor::from_shape(&[1], &[kk as i64]).map_err(tract_error)?;
             let out = self.stages.spatial.run(tvec!(frames.into(), index.into()))?;
-            self.encodings.extend(outputs_of(&out, 0, self.stages.dim)?);
+            self.encodings.extend(self.stages.spatial.output(&out, 0, self.stages.dim)?);
             self.token.clear();
         }
         Ok(())
@@ -188,7 +187,7 @@ impl Session {
                 let frame_shape = [&[1], &self.stages.token_shape[2..]].concat();
                 let frame = Tensor::from_shape(&frame_shape, frame).map_err(tract_error)?;
                 let out = plan.run(tvec!(frame.into()))?;
-                so_far[n * row..(n + 1) * row].copy_from_slice(&outputs_of(&out, 0, row)?);
+                so_far[n * row..(n + 1) * row].copy_from_slice(&plan.output(&out, 0, row)?);
             }
         }
         Ok(())
@@ -277,7 +276,7 @@ impl Session {
             inputs.push(Tensor::from_shape(head.shape(), so_far).map_err(tract_error)?.into());
         }
         let out = self.stages.temporal.run(inputs)?;
-        Ok(prediction(&self.stages.classes, &outputs_of(&out, 0, self.stages.classes.len())?))
+        Ok(prediction(&self.stages.classes, &self.stages.temporal.output(&out, 0, self.stages.classes.len())?))
     }
 
     /// Forgets the touch in progress.

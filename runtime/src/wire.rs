@@ -52,7 +52,7 @@ pub(crate) fn typed_model(
         let source = b.model.add_source(*name, fact.clone()).map_err(|e| e.to_string())?;
         b.wires.insert(name.to_string(), source);
     }
-    b.admitted_since(0).map_err(|e| format!("the input: {e}"))?;
+    b.admitted_since(0).map_err(|e| format!("the input {}: {e}", sources.iter().map(|s| format!("`{}`", s.0)).collect::<Vec<_>>().join(", ")))?;
     for node in graph.node.iter().zip(&keep).filter(|(_, k)| **k).map(|(n, _)| n) {
         let wired = b.model.nodes().len();
         let out = b.node(node).and_then(|out| b.admitted_since(wired).map(|_| out));
@@ -62,6 +62,10 @@ pub(crate) fn typed_model(
     }
     let outlets = outputs.iter().map(|o| b.input(o)).collect::<TractResult<Vec<_>>>().map_err(|e| e.to_string())?;
     b.model.select_output_outlets(&outlets).map_err(|e| e.to_string())?;
+    // Each output labelled with its tensor's name, which a plan's refusals then give.
+    for (outlet, name) in outlets.iter().zip(outputs) {
+        b.model.set_outlet_label(*outlet, name.to_string()).map_err(|e| e.to_string())?;
+    }
     Ok(b.model)
 }
 

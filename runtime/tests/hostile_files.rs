@@ -2,8 +2,9 @@
 //! initializer's dimensions, data or type; an index's values; a node's attributes, inputs,
 //! outputs or operator; nodes dropped or reordered; the metadata's window and kept frames) and
 //! then signed again as the exporter signs, so that the integrity digest passes. Each must be a
-//! typed error from `load`, `prepare` or the classification, or a classification: never a panic,
-//! caught or not. Damaged `.npy` inputs likewise.
+//! typed error from `load`, `prepare` or the classification that names the part of the file at
+//! fault (an initializer, a node or its tensor, the graph's input or a header entry), or a
+//! classification: never a panic, caught or not. Damaged `.npy` inputs likewise.
 //!
 //! Every kind of file pvt3 writes is damaged ([`subjects`]), and a camera's 8-bit frames of the
 //! wrong length. `PVT3_FUZZ_CASES` sets the mutants per file (default: 400 on x86-64, 40 under
@@ -255,9 +256,9 @@ pub fn subjects() -> Vec<Subject> {
 }
 
 /// Loads, prepares and classifies `bytes` (a window, and a streamed touch where the file
-/// streams, of the camera's own frames where it has a camera); `Ok(true)` if it classified,
-/// `Ok(false)` if refused, `Err` with the message of a panic the runtime caught.
-fn try_file(bytes: &[u8], window: &[f32]) -> Result<bool, String> {
+/// streams, of the camera's own frames where it has a camera); `Ok(Ok(()))` if it classified,
+/// `Ok(Err(refusal))` if refused, `Err` with the message of a panic the runtime caught.
+fn try_file(bytes: &[u8], window: &[f32]) -> Result<Result<(), String>, String> {
     let run = || -> pvt3_runtime::Result<()> {
         let c = Classifier::from_bytes(bytes, "hostile.onnx")?;
         c.prepare(&[1], c.streams())?;
@@ -284,9 +285,9 @@ fn try_file(bytes: &[u8], window: &[f32]) -> Result<bool, String> {
         Ok(())
     };
     match run() {
-        Ok(()) => Ok(true),
+        Ok(()) => Ok(Ok(())),
         Err(Error::Tract(m)) if m.starts_with("panicked") => Err(m),
-        Err(_) => Ok(false),
+        Err(refusal) => Ok(Err(refusal.to_string())),
     }
 }
 
@@ -306,11 +307,21 @@ fn camera_frames(c: &Classifier, s: &mut pvt3_runtime::Session, window: &[f32]) 
     Ok(())
 }
 
+/// What a fuzz found: the outcomes by kind of damage, the panics, and the refusals that name no
+/// part of the file (each `case N (damages): message`).
+pub struct Fuzzed {
+    pub outcomes: Outcomes,
+    pub panics: Vec<String>,
+    pub unnamed: Vec<String>,
+}
+
 /// `cases` re-signed mutants of the model in `path`, 1–3 damages each, on two threads.
-pub fn fuzz(path: &std::path::Path, cases: usize, seed: u64, window: &[f32]) -> (Outcomes, Vec<String>) {
+pub fn fuzz(path: &std::path::Path, cases: usize, seed: u64, window: &[f32]) -> Fuzzed {
     let good = ModelProto::decode(std::fs::read(path).unwrap().as_slice()).unwrap();
     let outcomes = std::sync::Mutex::new(Outcomes::new());
     let panics = std::sync::Mutex::new(Vec::new());
+    let unnamed = std::sync::Mutex::new(Vec::new());
+    let names = named_parts(&good);
     let next = AtomicUsize::new(0);
     std::thread::scope(|scope| {
         for _ in 0..2 {
@@ -332,10 +343,15 @@ pub fn fuzz(path: &std::path::Path, cases: usize, seed: u64, window: &[f32]) -> 
                     Err(p.downcast_ref::<&str>().map(|s| s.to_string()).or_else(|| p.downcast_ref::<String>().cloned()).unwrap_or_default())
                 });
                 let slot = match &outcome {
-                    Ok(false) => 0,
-                    Ok(true) => 1,
+                    Ok(Err(_)) => 0,
+                    Ok(Ok(())) => 1,
                     Err(_) => 2,
                 };
+                if let Ok(Err(refusal)) = &outcome {
+                    if !names.iter().any(|n| names_word(refusal, n)) {
+                        unnamed.lock().unwrap().push(format!("case {case} ({}): {refusal}", kinds.join(", ")));
+                    }
+                }
                 if let Err(message) = outcome {
                     panics.lock().unwrap().push(format!("case {case} ({}): {message}", kinds.join(", ")));
                 }
@@ -343,7 +359,28 @@ pub fn fuzz(path: &std::path::Path, cases: usize, seed: u64, window: &[f32]) -> 
             });
         }
     });
-    (outcomes.into_inner().unwrap(), panics.into_inner().unwrap())
+    Fuzzed {
+        outcomes: outcomes.into_inner().unwrap(),
+        panics: panics.into_inner().unwrap(),
+        unnamed: unnamed.into_inner().unwrap(),
+    }
+}
+
+/// What a refusal may name: the file's initializers, nodes, tensors, graph input and header entries.
+fn named_parts(m: &ModelProto) -> Vec<String> {
+    let g = m.graph.as_ref().expect("a graph");
+    let tensors = g.node.iter().flat_map(|n| n.output.iter().chain([&n.name]));
+    let inputs = g.input.iter().map(|i| &i.name);
+    let names = g.initializer.iter().map(|t| &t.name).chain(tensors).chain(inputs).chain(m.metadata_props.iter().map(|e| &e.key));
+    names.filter(|n| !n.is_empty()).cloned().collect()
+}
+
+/// Whether `text` holds `name` as a whole word (so `Add_1` is not found in `Add_12`).
+fn names_word(text: &str, name: &str) -> bool {
+    let word = |c: char| c.is_alphanumeric() || c == '_' || c == '.';
+    text.match_indices(name).any(|(at, _)| {
+        !text[..at].ends_with(word) && !text[at + name.len()..].starts_with(word)
+    })
 }
 
 fn cases() -> usize {
@@ -363,23 +400,25 @@ fn count_panics() {
 }
 
 #[test]
-fn re_signed_damaged_models_are_refused_or_run_and_never_panic() {
+fn re_signed_damaged_models_are_refused_by_name_or_run_and_never_panic() {
     count_panics();
     let mut report = String::new();
     // PVT3_FUZZ_FILE=NAME damages only the files whose path holds NAME.
     let only = std::env::var("PVT3_FUZZ_FILE").unwrap_or_default();
     for (k, subject) in subjects().iter().enumerate().filter(|(_, s)| s.path.to_string_lossy().contains(&only)) {
         let path = &subject.path;
-        let (outcomes, panicked) = fuzz(path, cases(), 0x5eed + k as u64, &subject.window);
+        let Fuzzed { outcomes, panics: panicked, unnamed } = fuzz(path, cases(), 0x5eed + k as u64, &subject.window);
         let total: [usize; 3] = outcomes.values().fold([0; 3], |a, o| [a[0] + o[0], a[1] + o[1], a[2] + o[2]]);
         report += &format!("{}: {} refused, {} ran, {} panicked\n", path.display(), total[0], total[1], total[2]);
         for (kind, [refused, ran, panics]) in &outcomes {
             report += &format!("  {kind}: {refused} refused, {ran} ran, {panics} panicked\n");
         }
+        report += &format!("  refusals naming no part of the file: {}\n", unnamed.len());
         assert!(panicked.is_empty(), "{report}{}", panicked.join("\n"));
+        assert!(unnamed.is_empty(), "refusals that name no part of {}:\n{report}{}", path.display(), unnamed.join("\n"));
         // Both outcomes: every build runs every intact file (the small one, tested on aarch64,
         // the spectral heads with its own FFT).
-        assert_eq!(try_file(&std::fs::read(path).unwrap(), &subject.window), Ok(true), "{} runs intact", path.display());
+        assert_eq!(try_file(&std::fs::read(path).unwrap(), &subject.window), Ok(Ok(())), "{} runs intact", path.display());
         assert!(total[0] > cases() / 2 && total[1] > 0, "the damage reaches both outcomes: {report}");
     }
     println!("{report}");
