@@ -1,7 +1,8 @@
 //! `pvt3 import` of ROS 2 bags written by libraries no one here wrote (tests/bag_writer.py:
 //! rosbags' rosbag2 writer, MCAP and SQLite; mcap-ros2-support's, zstd and lz4 chunks), for every
-//! camera message pvt3 reads: each set imports equal, byte for byte, to the same frames written
-//! as image files and imported. And what a user who names no topic, or the wrong one, is told.
+//! message pvt3 reads: each camera set imports equal, byte for byte, to the same frames written
+//! as image files and imported, and each taxel array's to the same values written as CSV files.
+//! And what a user who names no topic, or the wrong one, is told.
 
 #[path = "support/onnx_check.rs"]
 #[allow(dead_code)] // the other end-to-end tests use the rest of it
@@ -19,6 +20,7 @@ use onnx_check::run_script;
 use pvt3_command::{fails, ok, scratch};
 
 const WRITERS: [&str; 4] = ["rosbags-mcap", "rosbags-sqlite3", "mcap-ros2-zstd", "mcap-ros2-lz4"];
+const ARRAYS: [&str; 6] = ["float32", "float64", "int16", "int32", "uint16", "uint8"];
 const CASES: [&str; 9] =
     ["rgb8", "bgr8-padded", "rgba8", "bgra8", "mono8", "mono16-little", "mono16-big", "compressed-png", "compressed-jpeg"];
 
@@ -41,10 +43,47 @@ fn import(dir: &Path, out: &Path, topic: bool) -> String {
     ok(&args)
 }
 
+/// The entries of a taxel array's set that hold what it read, as their bytes.
+fn read_values(set: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut npz = ndarray_npy::NpzReader::new(std::fs::File::open(set).unwrap()).unwrap();
+    let x: ArrayD<f32> = npz.by_name("x").unwrap();
+    let mut entries = vec![("x".to_string(), x.iter().flat_map(|v| v.to_le_bytes()).collect())];
+    entries.push(("x.shape".into(), x.shape().iter().flat_map(|d| d.to_le_bytes()).collect()));
+    for k in ["y", "lengths"] {
+        let v: ArrayD<i64> = npz.by_name(k).unwrap();
+        entries.push((k.into(), v.iter().flat_map(|v| v.to_le_bytes()).collect()));
+    }
+    for k in ["class_names", "channels"] {
+        let v: ArrayD<u8> = npz.by_name(k).unwrap();
+        entries.push((k.into(), v.iter().copied().collect()));
+    }
+    entries
+}
+
 #[test]
 fn bags_of_every_writer_and_message_import_equal_to_their_frames() {
     let dir = scratch("bags");
     run_script("tests/bag_writer.py", &[&dir]);
+    for case in ARRAYS {
+        // The CSV files' columns as a 3 × 4 grid; the bags' layout gives it, but float64's (none).
+        let reference = dir.join(format!("{case}.npz"));
+        let (csv, out) = (dir.join("csv").join(case), reference.to_str().unwrap());
+        ok(&["import", csv.to_str().unwrap(), "--columns", "data*", "--grid", "3x4", "--out", out]);
+        let expected = read_values(&reference);
+        for writer in WRITERS {
+            let (bag, out) = (dir.join("bags").join(writer).join(case), dir.join(format!("{case}-{writer}.npz")));
+            let mut args = vec!["import", bag.to_str().unwrap(), "--topic", "/taxels", "--out", out.to_str().unwrap()];
+            if case == "float64" {
+                args.extend(["--grid", "3x4"]);
+            }
+            let said = ok(&args);
+            assert!(
+                said.contains("10 touches of 2 classes") && said.contains("12 channels as a 3 × 4 grid") && !said.contains("times:"),
+                "{case}, {writer}:\n{said}"
+            );
+            assert!(read_values(&out) == expected, "{case}, {writer}: the bag's set differs from its CSV files'");
+        }
+    }
     for case in CASES {
         let reference = dir.join(format!("{case}.npz"));
         import(&dir.join("frames").join(case), &reference, false);

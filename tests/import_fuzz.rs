@@ -1,6 +1,6 @@
 //! `pvt3 import` against hostile recordings: small trees of a user's touches (CSV class folders, a
 //! flat CSV folder named by pattern, PNG frame folders, PNG and JPEG still images, videos, ROS 2
-//! bags in MCAP and SQLite, written here with the crates that read them: tests/bags.rs holds the
+//! bags in MCAP and SQLite of a camera's images and in MCAP of a taxel array's values, written here with the crates that read them: tests/bags.rs holds the
 //! reading to bags written by libraries no one here wrote), each
 //! mutant damaged one way (a file truncated, its bytes flipped or replaced, a cell out of range or
 //! not a number, a ragged row, a name with a line break or bytes that are not UTF-8, classes left
@@ -39,10 +39,12 @@ enum Tree {
     Jpeg,
     BagMcap,
     BagSqlite,
+    BagArray,
     Video,
 }
 
-const TREES: [Tree; 8] = [Tree::Csv, Tree::CsvFlat, Tree::Frames, Tree::Stills, Tree::Jpeg, Tree::BagMcap, Tree::BagSqlite, Tree::Video];
+const TREES: [Tree; 9] =
+    [Tree::Csv, Tree::CsvFlat, Tree::Frames, Tree::Stills, Tree::Jpeg, Tree::BagMcap, Tree::BagSqlite, Tree::BagArray, Tree::Video];
 
 /// How a mutant was damaged.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -168,6 +170,7 @@ fn hostile_recordings_are_imported_sanely_or_refused_by_name() {
             // Their touches hold 4 frames: undamaged, they import.
             Tree::Frames | Tree::Video => args.extend(["--frames".into(), "4".into()]),
             Tree::BagMcap | Tree::BagSqlite => args.extend(["--frames", "4", "--topic", "/camera"].map(String::from)),
+            Tree::BagArray => args.extend(["--topic", "/taxels"].map(String::from)),
             _ => {}
         }
         damage_tree(&dir, tree, damage, &mut rng, &mut args);
@@ -192,6 +195,15 @@ fn base(root: &Path, kind: Tree) -> PathBuf {
             let nested = root.join("csv-for-flat");
             csv_tree::write(&nested, 3, 6, 8, 12);
             csv_tree::flatten(&nested, &dir, 3, 6);
+        }
+        Tree::BagArray => {
+            for class in 0..2 {
+                let class_dir = dir.join(format!("class_{class}"));
+                std::fs::create_dir_all(&class_dir).unwrap();
+                for touch in 0..5 {
+                    bag::write_taxels(&class_dir.join(format!("touch_{touch}.mcap")), class, touch);
+                }
+            }
         }
         Tree::Frames | Tree::Stills | Tree::Jpeg | Tree::BagMcap | Tree::BagSqlite | Tree::Video => {
             for class in 0..2 {
@@ -226,7 +238,8 @@ fn picture(class: usize, touch: usize, f: usize) -> Vec<u8> {
     (0..H * W * 3).map(|i| ((i / 3 % W == f + touch) as usize * 150 + 40 * class + i % 3 * 7) as u8).collect()
 }
 
-/// Bags of `sensor_msgs/msg/Image` (rgb8) on `/camera`, one message a frame, stamped 40 ms apart.
+/// Bags of `sensor_msgs/msg/Image` (rgb8) on `/camera`, one message a frame, stamped 40 ms apart;
+/// and of a 2 × 3 taxel array's `std_msgs/msg/Int16MultiArray` on `/taxels`, 6 to 9 frames.
 mod bag {
     use std::path::Path;
 
@@ -260,13 +273,42 @@ mod bag {
     const TYPE: &str = "sensor_msgs/msg/Image";
 
     pub fn write_mcap(path: &Path, frames: &[Vec<u8>]) {
+        let messages: Vec<Vec<u8>> = frames.iter().enumerate().map(|(f, frame)| image(f, frame)).collect();
+        write_messages(path, TYPE, "/camera", &messages);
+    }
+
+    /// The CDR of a 2 × 3 Int16MultiArray holding `values`.
+    fn taxel_frame(values: &[i16]) -> Vec<u8> {
+        let mut m = vec![0, 1, 0, 0, 2, 0, 0, 0];
+        for (label, size, stride) in [("rows", 2u32, 6u32), ("cols", 3, 3)] {
+            m.extend_from_slice(&(label.len() as u32 + 1).to_le_bytes());
+            m.extend_from_slice(label.as_bytes());
+            m.push(0);
+            m.resize(4 + (m.len() - 4).next_multiple_of(4), 0);
+            m.extend_from_slice(&size.to_le_bytes());
+            m.extend_from_slice(&stride.to_le_bytes());
+        }
+        m.extend_from_slice(&0u32.to_le_bytes());
+        m.extend_from_slice(&(values.len() as u32).to_le_bytes());
+        values.iter().for_each(|v| m.extend_from_slice(&v.to_le_bytes()));
+        m
+    }
+
+    pub fn write_taxels(path: &Path, class: usize, touch: usize) {
+        let frames =
+            (0..6 + touch % 4).map(|f| taxel_frame(&(0..6).map(|k| (k * 7 + f * 3 + class * 40 + touch) as i16 - 20).collect::<Vec<_>>()));
+        write_messages(path, "std_msgs/msg/Int16MultiArray", "/taxels", &frames.collect::<Vec<_>>());
+    }
+
+    /// An MCAP file of `messages` of type `type_name` on `topic`, received 40 ms apart.
+    fn write_messages(path: &Path, type_name: &str, topic: &str, messages: &[Vec<u8>]) {
         let mut writer = mcap::Writer::new(std::io::BufWriter::new(std::fs::File::create(path).unwrap())).unwrap();
-        let schema = writer.add_schema(TYPE, "ros2msg", b"").unwrap();
-        let channel = writer.add_channel(schema, "/camera", "cdr", &Default::default()).unwrap();
-        for (f, frame) in frames.iter().enumerate() {
+        let schema = writer.add_schema(type_name, "ros2msg", b"").unwrap();
+        let channel = writer.add_channel(schema, topic, "cdr", &Default::default()).unwrap();
+        for (f, message) in messages.iter().enumerate() {
             let time = 1_000_000_000 + f as u64 * 40_000_000;
             let header = mcap::records::MessageHeader { channel_id: channel, sequence: f as u32, log_time: time, publish_time: time };
-            writer.write_to_known_channel(&header, &image(f, frame)).unwrap();
+            writer.write_to_known_channel(&header, message).unwrap();
         }
         writer.finish().unwrap();
     }

@@ -52,7 +52,8 @@ pub(crate) fn typed_model(
         let source = b.model.add_source(*name, fact.clone()).map_err(|e| e.to_string())?;
         b.wires.insert(name.to_string(), source);
     }
-    b.admitted_since(0).map_err(|e| format!("the input {}: {e}", sources.iter().map(|s| format!("`{}`", s.0)).collect::<Vec<_>>().join(", ")))?;
+    b.admitted_since(0)
+        .map_err(|e| format!("the input {}: {e}", sources.iter().map(|s| format!("`{}`", s.0)).collect::<Vec<_>>().join(", ")))?;
     for node in graph.node.iter().zip(&keep).filter(|(_, k)| **k).map(|(n, _)| n) {
         let wired = b.model.nodes().len();
         let out = b.node(node).and_then(|out| b.admitted_since(wired).map(|_| out));

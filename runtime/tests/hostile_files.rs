@@ -359,11 +359,7 @@ pub fn fuzz(path: &std::path::Path, cases: usize, seed: u64, window: &[f32]) -> 
             });
         }
     });
-    Fuzzed {
-        outcomes: outcomes.into_inner().unwrap(),
-        panics: panics.into_inner().unwrap(),
-        unnamed: unnamed.into_inner().unwrap(),
-    }
+    Fuzzed { outcomes: outcomes.into_inner().unwrap(), panics: panics.into_inner().unwrap(), unnamed: unnamed.into_inner().unwrap() }
 }
 
 /// What a refusal may name: the file's initializers, nodes, tensors, graph input and header entries.
@@ -378,9 +374,7 @@ fn named_parts(m: &ModelProto) -> Vec<String> {
 /// Whether `text` holds `name` as a whole word (so `Add_1` is not found in `Add_12`).
 fn names_word(text: &str, name: &str) -> bool {
     let word = |c: char| c.is_alphanumeric() || c == '_' || c == '.';
-    text.match_indices(name).any(|(at, _)| {
-        !text[..at].ends_with(word) && !text[at + name.len()..].starts_with(word)
-    })
+    text.match_indices(name).any(|(at, _)| !text[..at].ends_with(word) && !text[at + name.len()..].starts_with(word))
 }
 
 fn cases() -> usize {

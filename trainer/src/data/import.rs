@@ -12,3 +12,4 @@ mod decode;
 pub mod folder;
 pub mod labels;
 mod npz;
+pub mod timing;

@@ -10,6 +10,7 @@ use pvt3_trainer::data::import::camera::{read_camera_folder, CameraOptions, Came
 use pvt3_trainer::data::import::csv::{read_folder, ImportOptions};
 use pvt3_trainer::data::import::folder::{holds_camera_touches, NamePattern, Naming};
 use pvt3_trainer::data::import::labels::Labels;
+use pvt3_trainer::data::import::timing::Timing;
 use pvt3_trainer::data::Condition;
 
 use crate::progress;
@@ -29,7 +30,8 @@ pub struct ImportArgs {
     /// class, DIR/<touch>. A touch is a .csv file, or a camera's video (.mov, .mp4, .avi, .mkv,
     /// .webm, .m4v, .mpg), folder of frame images (.png, .jpg, in name order), still image (one
     /// .png or .jpg, a touch of one frame) or ROS 2 bag (a folder with metadata.yaml and its
-    /// .mcap or .db3 files, or one .mcap file; --topic names the camera's topic).
+    /// .mcap or .db3 files, or one .mcap file; --topic names the topic: a camera's, or a taxel
+    /// array's, read as a CSV touch).
     pub dir: PathBuf,
     /// The data set to write (`x`, `y`, `lengths`, class names, channels, the files read).
     #[arg(short, long, default_value = "data.npz")]
@@ -69,6 +71,14 @@ pub struct ImportArgs {
     /// (readings times FORCE/f for a touch pressed at f). E.g. `--per-force force=150`.
     #[arg(long, value_name = "CONDITION=FORCE", value_parser = parse_condition_value)]
     pub per_force: Option<(String, f64)>,
+    /// A bag's topic to read: a camera's frames (sensor_msgs/msg/Image: rgb8, bgr8, rgba8,
+    /// bgra8, mono8, mono16; or CompressedImage: png, jpeg), or a taxel array's values
+    /// (std_msgs/msg/Float32MultiArray, Float64, Int16, Int32, UInt16 or UInt8MultiArray: each
+    /// message a frame, its values the channels data[0], data[1], …, its layout's two
+    /// dimensions, where it has two, the grid). Without it, or where a bag lacks it, the import
+    /// lists the bag's topics with their types and message counts.
+    #[arg(long, value_name = "NAME")]
+    pub topic: Option<String>,
     #[command(flatten)]
     pub camera: CameraArgs,
 }
@@ -105,17 +115,12 @@ pub struct CameraArgs {
     /// list it, instead of refusing it.
     #[arg(long)]
     pub allow_short: bool,
-    /// A bag's topic to read, its camera's frames (sensor_msgs/msg/Image: rgb8, bgr8, rgba8,
-    /// bgra8, mono8, mono16; or CompressedImage: png, jpeg). Without it, or where a bag lacks
-    /// it, the import lists the bag's topics with their types and message counts.
-    #[arg(long, value_name = "NAME")]
-    pub topic: Option<String>,
 }
 
 impl CameraArgs {
-    fn options(&self, naming: Naming) -> CameraOptions {
+    fn options(&self, naming: Naming, topic: Option<String>) -> CameraOptions {
         let (crop, size, grey, frames, span) = (self.crop, self.size, self.grey, self.frames, self.frames_from);
-        let (subtract_first, allow_short, topic) = (self.subtract_first, self.allow_short, self.topic.clone());
+        let (subtract_first, allow_short) = (self.subtract_first, self.allow_short);
         CameraOptions { naming, crop, size, grey, frames, span, subtract_first, allow_short, topic }
     }
 
@@ -130,7 +135,6 @@ impl CameraArgs {
             (self.frames_from != defaults.span, "--frames-from"),
             (self.subtract_first, "--subtract-first"),
             (self.allow_short, "--allow-short"),
-            (self.topic.is_some(), "--topic"),
         ];
         given.into_iter().filter_map(|(g, name)| g.then_some(name)).collect()
     }
@@ -168,20 +172,22 @@ pub fn run(a: ImportArgs) -> Result<()> {
         (None, Some(pattern)) => Naming::Pattern(pattern.clone()),
         (None, None) => Naming::Folders,
     };
-    if holds_camera_touches(&a.dir, &naming) {
+    if holds_camera_touches(&a.dir, &naming, a.topic.as_deref()) {
         return run_camera(a, naming);
     }
     if let Some(option) = a.camera.given().first() {
         bail!("{option} is for a camera's touches (videos or frame folders), and {} holds none", a.dir.display());
     }
-    let opts = ImportOptions { columns: a.columns, grid: a.grid, naming, per_distance: a.per_distance, per_force: a.per_force };
+    let (columns, grid, topic) = (a.columns, a.grid, a.topic);
+    let opts = ImportOptions { columns, grid, naming, per_distance: a.per_distance, per_force: a.per_force, topic };
     let set = read_folder(&a.dir, &opts)?;
     set.write_npz(&a.out).with_context(|| format!("writing {}", a.out.display()))?;
     let (shortest, longest) = set.length_range();
     println!("{}, {shortest} to {longest} frames a touch", touches(&set.per_class()));
-    let layout = match set.grid {
-        Some((h, w)) => format!("a {h} × {w} grid"),
-        None => "one column".into(),
+    let layout = match (set.grid, &set.layout) {
+        (Some((h, w)), Some(dims)) if opts.grid.is_none() && dims[..] == [h, w] => format!("a {h} × {w} grid (the messages' layout)"),
+        (Some((h, w)), _) => format!("a {h} × {w} grid"),
+        (None, _) => "one column".into(),
     };
     println!("{} channels as {layout}: {}", set.channels.len(), set.channels.join(", "));
     if let Some((name, speed)) = &opts.per_distance {
@@ -194,6 +200,7 @@ pub fn run(a: ImportArgs) -> Result<()> {
     for (name, why) in &set.left_out {
         println!("left out: {name} ({why})");
     }
+    print_timings(&set.timings);
     println!("wrote {}; next: pvt3 cv --data {}", a.out.display(), a.out.display());
     Ok(())
 }
@@ -212,7 +219,7 @@ fn run_camera(a: ImportArgs, naming: Naming) -> Result<()> {
     if let Some(option) = given.first() {
         bail!("{option} is for CSV touches, and {} holds a camera's (videos or frame folders)", a.dir.display());
     }
-    let opts = a.camera.options(naming);
+    let opts = a.camera.options(naming, a.topic);
     let bar = progress::bar("decoding");
     let set = read_camera_folder(&a.dir, &opts, |done, all| {
         bar.set_length(all as u64);
@@ -265,13 +272,18 @@ fn describe_camera(set: &CameraSet, opts: &CameraOptions) {
     for (source, recorded) in set.short() {
         println!("short: {source} has {recorded} frames, repeated to {}", set.frames);
     }
-    for (source, t) in &set.timings {
+    print_timings(&set.timings);
+    print_conditions(&set.conditions);
+}
+
+/// The touches of a bag whose frames' times strayed, each with how.
+fn print_timings(timings: &[(String, Timing)]) {
+    for (source, t) in timings {
         println!(
             "times: {source} has {} gaps (frames dropped), {} repeated stamps, {} frames out of order",
             t.gaps, t.repeated, t.out_of_order
         );
     }
-    print_conditions(&set.conditions);
 }
 
 #[cfg(test)]

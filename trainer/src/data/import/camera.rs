@@ -19,6 +19,7 @@ use rayon::prelude::*;
 use super::decode;
 use super::folder::{conditions, list_touches, per_class, Naming, Recording};
 use super::npz::{self, add_json, Records};
+use super::timing::Timing;
 use crate::data::{key, Condition};
 use crate::{Error, Result};
 use pvt3_format::span::FrameSpan;
@@ -93,38 +94,6 @@ pub struct CameraSet {
     pub camera: Option<Camera>,
     /// The touches whose frames' times were not evenly spaced and rising (bags), by source.
     pub timings: Vec<(String, Timing)>,
-}
-
-/// How a recording's frame times (a bag's `header.stamp`s, or its receive times) stray from a
-/// steady clock: what a robot's driver dropped, repeated or sent out of order.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Timing {
-    /// Intervals longer than 1.5 times the median: frames dropped.
-    pub gaps: usize,
-    /// Frames stamped as the one before.
-    pub repeated: usize,
-    /// Frames stamped before the one before.
-    pub out_of_order: usize,
-}
-
-impl Timing {
-    /// The timing of frames taken at `times` (nanoseconds), in the order they came.
-    pub fn of(times: &[i64]) -> Self {
-        let steps: Vec<i64> = times.windows(2).map(|w| w[1] - w[0]).collect();
-        let mut rising: Vec<i64> = steps.iter().copied().filter(|s| *s > 0).collect();
-        rising.sort_unstable();
-        let median = rising.get(rising.len() / 2).copied().unwrap_or(0);
-        Self {
-            gaps: steps.iter().filter(|s| median > 0 && **s * 2 > median * 3).count(),
-            repeated: steps.iter().filter(|s| **s == 0).count(),
-            out_of_order: steps.iter().filter(|s| **s < 0).count(),
-        }
-    }
-
-    /// Whether any frame strayed.
-    pub fn strays(&self) -> bool {
-        *self != Self::default()
-    }
 }
 
 impl CameraSet {

@@ -1,8 +1,9 @@
 //! A folder of CSV touches → a data set: one CSV file a touch, a header row, then one row per
-//! frame. Which columns are sensor channels is chosen by name or pattern, or by default every
-//! numeric column that varies, time-stamp-like columns left out (and said so). Touches may
-//! differ in length; with `--per-distance` or `--per-force` each is read as the robot will read
-//! its touches (the runtime's `read_touch`).
+//! frame; or one ROS 2 bag a touch, a taxel array's messages its frames ([`bag_rows`]). Which
+//! columns are sensor channels is chosen by name or pattern, or by default every numeric column
+//! that varies, time-stamp-like columns left out (and said so), and every value of a bag's
+//! message. Touches may differ in length; with `--per-distance` or `--per-force` each is read as
+//! the robot will read its touches (the runtime's `read_touch`).
 
 use std::path::{Path, PathBuf};
 
@@ -12,6 +13,7 @@ use pvt3_format::{read_touch, Reading, Touch};
 
 use super::folder::{conditions, list_touches, per_class, Listed, Naming, Recording};
 use super::npz::{self, add_json, lines, Records};
+use super::timing::Timing;
 use crate::data::{key, Condition};
 use crate::{Error, Result};
 
@@ -35,6 +37,8 @@ pub struct ImportOptions {
     /// and the force every touch is scaled to (readings times `force / f`, for a touch pressed
     /// at `f`): a capacitive sensor's readings grow about in proportion to the force.
     pub per_force: Option<(String, f64)>,
+    /// The topic a bag's frames are read from (a `std_msgs/msg/*MultiArray`).
+    pub topic: Option<String>,
 }
 
 /// One touch as its file holds it: its class, its file, its frames `[frames][columns]` (every column of the
@@ -42,9 +46,22 @@ pub struct ImportOptions {
 struct TouchFile {
     class: usize,
     path: PathBuf,
+    /// Its name in the data set ([`Listed::source`]).
+    source: String,
     rows: Vec<Vec<Option<f64>>>,
-    /// The file line of each row, for errors.
+    /// The file line of each row, for errors (a bag's rows: the touch's message index, never
+    /// told: a message's values are checked as it is decoded).
     lines: Vec<u64>,
+    /// A bag's: how its frames' times strayed.
+    timing: Option<Timing>,
+}
+
+/// What every touch of a set must share: its columns' names and, for a bag's touches, their
+/// messages' layout (`layout.dim`'s sizes; a CSV file has none).
+#[derive(Clone, Debug, PartialEq)]
+struct Header {
+    names: Vec<String>,
+    layout: Option<Vec<usize>>,
 }
 
 /// The imported set, before it is written.
@@ -64,6 +81,10 @@ pub struct Imported {
     pub conditions: Vec<Condition>,
     /// How the touches were read, if they were brought to one speed or force.
     pub reading: Option<Reading>,
+    /// The touches whose frames' times were not evenly spaced and rising (bags), by source.
+    pub timings: Vec<(String, Timing)>,
+    /// A bag's messages' layout (`layout.dim`'s sizes, outermost first).
+    pub layout: Option<Vec<usize>>,
 }
 
 /// Columns left out of an import, each with why.
@@ -103,11 +124,18 @@ fn time_like(name: &str) -> bool {
 /// Reads `dir` as one folder per class of CSV touches.
 pub fn read_folder(dir: &Path, opts: &ImportOptions) -> Result<Imported> {
     let (files, classes) = list_touches(dir, &opts.naming, Recording::Csv)?;
-    let ReadTouches { names, touches, condition_values } = read_touches(files, &classes)?;
+    let ReadTouches { header, touches, condition_values } = read_touches(dir, files, &classes, opts.topic.as_deref())?;
+    let names = header.names;
     let conditions = conditions(&opts.naming, &condition_values);
-    let (chosen, left_out) = choose_columns(&names, &touches, opts)?;
+    let every_value = header.layout.is_some();
+    let (chosen, left_out) = choose_columns(&names, &touches, opts, every_value)?;
     let channels: Vec<String> = chosen.iter().map(|&c| names[c].clone()).collect();
-    if let Some((h, w)) = opts.grid {
+    // A bag's layout of two dimensions is the sensor's grid, where every value is a channel.
+    let grid = opts.grid.or(match header.layout.as_deref() {
+        Some(&[h, w]) if chosen.len() == names.len() => Some((h, w)),
+        _ => None,
+    });
+    if let Some((h, w)) = grid {
         if h * w != channels.len() {
             return Err(Error::Usage(format!(
                 "--grid {h}x{w} holds {} channels, and {} columns were chosen: {channels:?}",
@@ -130,50 +158,92 @@ pub fn read_folder(dir: &Path, opts: &ImportOptions) -> Result<Imported> {
         sources: Vec::new(),
         channels,
         left_out,
-        grid: opts.grid,
+        grid,
         conditions,
         reading,
+        timings: Vec::new(),
+        layout: header.layout,
     };
     for (n, t) in touches.into_iter().enumerate() {
         let touch = Touch { speed: speeds[n], force: forces[n] };
         out.touches.push(chosen_frames(&t, (&chosen, &names), reading.as_ref().map(|r| (r, touch)))?);
         out.labels.push(t.class as u32);
-        out.sources.push(t.path.strip_prefix(dir).unwrap_or(&t.path).display().to_string());
+        if let Some(timing) = t.timing.filter(Timing::strays) {
+            out.timings.push((t.source.clone(), timing));
+        }
+        out.sources.push(t.source);
     }
     Ok(out)
 }
 
 /// Every listed touch, read in order.
 struct ReadTouches {
-    /// The columns' names: one header for all.
-    names: Vec<String>,
+    /// One header for all.
+    header: Header,
     touches: Vec<TouchFile>,
     /// Each touch's condition values.
     condition_values: Vec<Vec<String>>,
 }
 
-fn read_touches(files: Vec<Listed>, classes: &[String]) -> Result<ReadTouches> {
-    let mut header: Option<(PathBuf, Vec<String>)> = None;
+fn read_touches(dir: &Path, files: Vec<Listed>, classes: &[String], topic: Option<&str>) -> Result<ReadTouches> {
+    let mut header: Option<(PathBuf, Header)> = None;
     let mut touches = Vec::new();
     let mut condition_values = Vec::new();
-    for Listed { path, class, values, .. } in files {
-        let (names, touch) = read_file(&path, classes.binary_search(&class).expect("a known class"))?;
+    for listed in files {
+        let class = classes.binary_search(&listed.class).expect("a known class");
+        let (names, touch) = read_listed(dir, &listed, class, topic)?;
+        let path = &listed.path;
         match &header {
             None => header = Some((path.clone(), names)),
             Some((first, h)) if *h != names => {
-                return Err(Error::import(
-                    &path,
-                    Some(1),
-                    format!("its header differs from {}'s: {:?} against {:?}", first.display(), names, h),
-                ));
+                let why = match (&names.layout, &h.layout) {
+                    (Some(layout), Some(was)) => format!(
+                        "its messages' layout {layout:?} of {} values differs from {}'s: {was:?} of {}",
+                        names.names.len(),
+                        first.display(),
+                        h.names.len()
+                    ),
+                    (None, None) => format!("its header differs from {}'s: {:?} against {:?}", first.display(), names.names, h.names),
+                    _ => format!("a bag and a CSV file ({}) in one set: their channels cannot be matched", first.display()),
+                };
+                return Err(Error::import(path, names.layout.is_none().then_some(1), why));
             }
             Some(_) => {}
         }
         touches.push(touch);
-        condition_values.push(values);
+        condition_values.push(listed.values);
     }
-    let (_, names) = header.expect("at least one touch was read");
-    Ok(ReadTouches { names, touches, condition_values })
+    let (_, header) = header.expect("at least one touch was read");
+    Ok(ReadTouches { header, touches, condition_values })
+}
+
+/// The listed touch: a CSV file, or a bag's messages.
+fn read_listed(dir: &Path, listed: &Listed, class: usize, topic: Option<&str>) -> Result<(Header, TouchFile)> {
+    #[cfg(feature = "bags")]
+    if super::decode::is_bag(&listed.path) {
+        return read_bag(dir, listed, class, topic);
+    }
+    let _ = topic;
+    let (names, mut touch) = read_file(&listed.path, class)?;
+    touch.source = listed.source(dir);
+    Ok((Header { names, layout: None }, touch))
+}
+
+/// A bag's touch as a CSV touch: a row a message, a column a value.
+#[cfg(feature = "bags")]
+fn read_bag(dir: &Path, listed: &Listed, class: usize, topic: Option<&str>) -> Result<(Header, TouchFile)> {
+    let bag = bag_rows::read(&listed.path, listed.window, topic).map_err(|e| Error::import(&listed.path, None, e))?;
+    let names = (0..bag.rows[0].len()).map(bag_rows::channel).collect();
+    let rows = bag.rows.iter().map(|r| r.iter().map(|v| Some(f64::from(*v))).collect()).collect();
+    let touch = TouchFile {
+        class,
+        path: listed.path.clone(),
+        source: listed.source(dir),
+        rows,
+        lines: (0..bag.rows.len() as u64).collect(),
+        timing: Some(bag.timing),
+    };
+    Ok((Header { names, layout: Some(bag.dims) }, touch))
 }
 
 /// Each touch's value of the condition `given` names (`option` its flag), as a number: what the
@@ -247,11 +317,13 @@ fn read_file(path: &Path, class: usize) -> Result<(Vec<String>, TouchFile)> {
     if rows.is_empty() {
         return Err(Error::import(path, None, "holds a header and no frame"));
     }
-    Ok((names, TouchFile { class, path: path.to_path_buf(), rows, lines }))
+    Ok((names, TouchFile { class, path: path.to_path_buf(), source: String::new(), rows, lines, timing: None }))
 }
 
-/// The columns to import (indices into the header) and those left out, with why.
-fn choose_columns(names: &[String], touches: &[TouchFile], opts: &ImportOptions) -> Result<(Vec<usize>, LeftOut)> {
+/// The columns to import (indices into the header) and those left out, with why; by default,
+/// with `every_value` (a bag's touches, whose messages hold the sensor's values and no time),
+/// every column.
+fn choose_columns(names: &[String], touches: &[TouchFile], opts: &ImportOptions, every_value: bool) -> Result<(Vec<usize>, LeftOut)> {
     // The first cell of a column that is not a number, if any.
     let text_at =
         |c: usize| touches.iter().find_map(|t| t.rows.iter().zip(&t.lines).find(|(r, _)| r[c].is_none()).map(|(_, l)| (&t.path, *l)));
@@ -269,6 +341,9 @@ fn choose_columns(names: &[String], touches: &[TouchFile], opts: &ImportOptions)
         }
         let left_out = (0..names.len()).filter(|c| !chosen.contains(c)).map(|c| (names[c].clone(), "not chosen")).collect();
         return Ok((chosen, left_out));
+    }
+    if every_value {
+        return Ok(((0..names.len()).collect(), Vec::new()));
     }
     let (mut chosen, mut left_out) = (Vec::new(), Vec::new());
     for (c, name) in names.iter().enumerate() {
@@ -346,5 +421,7 @@ impl Imported {
     }
 }
 
+#[cfg(feature = "bags")]
+mod bag_rows;
 #[cfg(test)]
 mod tests;

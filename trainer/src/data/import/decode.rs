@@ -44,6 +44,19 @@ pub fn is_bag(path: &Path) -> bool {
     bag
 }
 
+/// Whether the bag at `path` holds a camera's frames on `topic`, or no topic it can read (the
+/// camera's import then says why, listing its topics): not a taxel array's values.
+pub fn bag_holds_camera(path: &Path, topic: Option<&str>) -> bool {
+    #[cfg(feature = "bags")]
+    let camera = super::bag::topic_kind(path, topic).map_or(true, |(_, kind)| kind.is_camera());
+    #[cfg(not(feature = "bags"))]
+    let camera = {
+        let _ = (path, topic);
+        true
+    };
+    camera
+}
+
 /// Every frame of a touch, in order: a video's, a folder's images by name, or a still image.
 pub fn frames(path: &Path) -> Result<Vec<Picture>, String> {
     if is_still(path) {

@@ -167,7 +167,7 @@ pub(super) fn conditions(naming: &Naming, values: &[Vec<String>]) -> Vec<Conditi
 /// What one touch is on disk.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(super) enum Recording {
-    /// A CSV file: a header row, then a row a frame.
+    /// A CSV file: a header row, then a row a frame; or a ROS 2 bag of a taxel array.
     Csv,
     /// A camera's: a video file, a folder of frame images or a still image ([`super::camera`]).
     Camera,
@@ -176,7 +176,7 @@ pub(super) enum Recording {
 impl Recording {
     pub(super) fn is_touch(self, path: &Path) -> bool {
         match self {
-            Self::Csv => path.is_file() && path.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv")),
+            Self::Csv => is_csv(path) || is_bag(path),
             Self::Camera => decode::is_camera_touch(path),
         }
     }
@@ -184,8 +184,8 @@ impl Recording {
     /// What a touch is, for errors.
     fn what(self) -> &'static str {
         match self {
-            Self::Csv => ".csv file",
-            Self::Camera => "video, folder of frame images or still image",
+            Self::Csv => ".csv file or ROS 2 bag",
+            Self::Camera => "video, folder of frame images, still image or ROS 2 bag",
         }
     }
 }
@@ -322,19 +322,29 @@ fn sorted_entries(d: &Path) -> Result<Vec<PathBuf>> {
     Ok(v)
 }
 
-/// Whether `dir` holds a camera's touches (videos, frame folders or still images), side by side
-/// or one folder per class, or as a labels file lists them, and no CSV file: what `pvt3 import`
-/// reads it as.
-pub fn holds_camera_touches(dir: &Path, naming: &Naming) -> bool {
-    if let Naming::Labels(labels) = naming {
-        return labels.rows.iter().all(|r| Recording::Camera.is_touch(&dir.join(&r.path)));
-    }
-    let entries = sorted_entries(dir).unwrap_or_default();
-    let holds = |kind: Recording| {
-        entries.iter().any(|p| kind.is_touch(p))
-            || entries.iter().filter(|p| p.is_dir()).any(|d| touches_in(d, kind).is_ok_and(|t| !t.is_empty()))
+/// Whether `path` is a CSV file.
+fn is_csv(path: &Path) -> bool {
+    path.is_file() && path.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"))
+}
+
+/// Whether `dir` holds a camera's touches (videos, frame folders, still images, or bags whose
+/// `topic` is a camera's), side by side or one folder per class, or as a labels file lists
+/// them, and no CSV file: what `pvt3 import` reads it as. Bags of a taxel array's topic are read
+/// as CSV touches are.
+pub fn holds_camera_touches(dir: &Path, naming: &Naming, topic: Option<&str>) -> bool {
+    let touches: Vec<PathBuf> = match naming {
+        Naming::Labels(labels) => labels.rows.iter().map(|r| dir.join(&r.path)).collect(),
+        _ => {
+            let entries = sorted_entries(dir).unwrap_or_default();
+            let within = entries.iter().filter(|p| p.is_dir()).flat_map(|d| sorted_entries(d).unwrap_or_default());
+            entries.iter().cloned().chain(within).collect()
+        }
     };
-    holds(Recording::Camera) && !holds(Recording::Csv)
+    let camera = match naming {
+        Naming::Labels(_) => touches.iter().all(|p| Recording::Camera.is_touch(p)),
+        _ => touches.iter().any(|p| Recording::Camera.is_touch(p)) && !touches.iter().any(|p| is_csv(p)),
+    };
+    camera && touches.iter().find(|p| is_bag(p)).is_none_or(|bag| decode::bag_holds_camera(bag, topic))
 }
 
 /// The touches of kind `kind` in folder `d`, sorted.

@@ -10,8 +10,9 @@ use pvt3_format::span::Motion;
 use pvt3_format::Picture;
 use pvt3_messages::{decode, Frame, Kind};
 
-use super::{enough, CameraOptions, ReadTouch, Timing};
+use super::{enough, CameraOptions, ReadTouch};
 use crate::data::import::bag;
+use crate::data::import::timing::Timing;
 
 /// The camera touch of the bag at `path`, `frames` frames of its topic as `opts` say: the
 /// messages received in `window` (seconds from the bag's first message), or all of them.

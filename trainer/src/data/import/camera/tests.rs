@@ -96,7 +96,7 @@ fn taken(set: &CameraSet, n: usize, f: usize) -> Picture {
 #[test]
 fn frame_folders_import_as_shrunk_8_bit_frames_evenly_over_the_touch() {
     let dir = frame_folders("folders");
-    assert!(holds_camera_touches(&dir, &Naming::Folders));
+    assert!(holds_camera_touches(&dir, &Naming::Folders, None));
     let set = read_camera_folder(&dir, &options(4, FrameSpan::Whole), |_, _| {}).unwrap();
     assert_eq!((set.frame_shape, set.frames, set.per_class()), ([4, 5, 3], 4, vec![5, 5]));
     assert_eq!(set.sources[6], "rough_cloth/touch_1");
@@ -224,20 +224,9 @@ fn still_images_a_labels_file_lists_import_as_one_frame_each() {
     }
     std::fs::write(dir.join("slip.csv"), text).unwrap();
     let naming = Naming::Labels(crate::data::import::labels::Labels::read(&dir.join("slip.csv")).unwrap());
-    assert!(holds_camera_touches(&dir, &naming) && !holds_camera_touches(&dir, &Naming::Folders));
+    assert!(holds_camera_touches(&dir, &naming, None) && !holds_camera_touches(&dir, &Naming::Folders, None));
     let set = read_camera_folder(&dir, &CameraOptions { naming, ..CameraOptions::default() }, |_, _| {}).unwrap();
     assert_eq!((set.frames, set.classes.as_slice(), set.per_class()), (1, &["held".to_string(), "slipped".to_string()][..], vec![5, 5]));
     assert!(set.spans.iter().all(|s| *s == (1, 0, 0)), "{:?}", set.spans);
     std::fs::remove_dir_all(dir).unwrap();
-}
-
-#[test]
-fn a_recording_s_times_count_its_gaps_repeats_and_reorderings() {
-    let steady: Vec<i64> = (0..10).map(|k| k * 40).collect();
-    assert_eq!(Timing::of(&steady), Timing::default());
-    assert!(!Timing::of(&steady).strays());
-    // 0, 40, 80, [dropped 120], 160, 160 (repeated), 200, 190 (back), 240
-    let stray = [0, 40, 80, 160, 160, 200, 190, 240];
-    assert_eq!(Timing::of(&stray), Timing { gaps: 1, repeated: 1, out_of_order: 1 });
-    assert_eq!(Timing::of(&[5]), Timing::default(), "one frame: nothing to stray");
 }
