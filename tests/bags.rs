@@ -60,10 +60,18 @@ fn read_values(set: &Path) -> Vec<(String, Vec<u8>)> {
     entries
 }
 
+/// The writer runs once (it takes seconds): each check reads what it wrote, the last damaging it.
 #[test]
-fn bags_of_every_writer_and_message_import_equal_to_their_frames() {
+fn bags_written_by_other_libraries_import_as_their_files_do() {
     let dir = scratch("bags");
     run_script("tests/bag_writer.py", &[&dir]);
+    bags_of_every_writer_and_message_import_equal_to_their_frames(&dir);
+    a_long_bag_is_cut_into_touches_by_a_labels_file(&dir);
+    a_bag_without_its_topic_lists_the_topics_it_has(&dir);
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
+fn bags_of_every_writer_and_message_import_equal_to_their_frames(dir: &Path) {
     for case in ARRAYS {
         // The CSV files' columns as a 3 × 4 grid; the bags' layout gives it, but float64's (none).
         let reference = dir.join(format!("{case}.npz"));
@@ -95,15 +103,11 @@ fn bags_of_every_writer_and_message_import_equal_to_their_frames() {
             assert!(read(&out) == expected, "{case}, {writer}: the bag's set differs from its frames'");
         }
     }
-    std::fs::remove_dir_all(dir).unwrap();
 }
 
 /// One long bag, cut into its touches by a labels file (`path,class,start,end`), imports as the
 /// touches' own frames do.
-#[test]
-fn a_long_bag_is_cut_into_touches_by_a_labels_file() {
-    let dir = scratch("bag-cut");
-    run_script("tests/bag_writer.py", &[&dir]);
+fn a_long_bag_is_cut_into_touches_by_a_labels_file(dir: &Path) {
     let reference = dir.join("reference.npz");
     import(&dir.join("frames/rgb8"), &reference, false);
     let out = dir.join("cut.npz");
@@ -112,24 +116,26 @@ fn a_long_bag_is_cut_into_touches_by_a_labels_file() {
     let said = ok(&[&["import", long.to_str().unwrap()], &args[..]].concat());
     assert!(said.contains("10 touches of 2 classes"), "{said}");
     assert!(read(&out) == read(&reference), "the cut touches differ from their own frames");
-    std::fs::remove_dir_all(dir).unwrap();
 }
 
-#[test]
-fn a_bag_without_its_topic_lists_the_topics_it_has() {
-    let dir = scratch("bag-topics");
-    run_script("tests/bag_writer.py", &[&dir]);
+/// Damages the bags it reads: the last check.
+fn a_bag_without_its_topic_lists_the_topics_it_has(dir: &Path) {
     let bags = dir.join("bags/rosbags-sqlite3/rgb8");
     let out = dir.join("x.npz");
     let said = fails(&["import", bags.to_str().unwrap(), "--out", out.to_str().unwrap()]);
     assert!(said.contains("a bag needs --topic") && said.contains("/camera (sensor_msgs/msg/Image, 6 messages)"), "{said}");
     let said = fails(&["import", bags.to_str().unwrap(), "--topic", "/tactile", "--out", out.to_str().unwrap()]);
     assert!(said.contains("no message on topic `/tactile`; its topics:\n  /camera (sensor_msgs/msg/Image, 6 messages)"), "{said}");
+    // A taxel array's bags: a grid that disagrees with their layout, a camera's option.
+    let taxels = dir.join("bags/mcap-ros2-zstd/int16");
+    let said = fails(&["import", taxels.to_str().unwrap(), "--topic", "/taxels", "--grid", "2x6", "--out", out.to_str().unwrap()]);
+    assert!(said.contains("--grid 2x6 disagrees with the bag's messages, laid out 3 × 4 (layout.dim)"), "{said}");
+    let said = fails(&["import", taxels.to_str().unwrap(), "--topic", "/taxels", "--frames", "6", "--out", out.to_str().unwrap()]);
+    assert!(said.contains("--frames is for a camera's touches"), "{said}");
     // A metadata.yaml naming a file that is not there.
     let bag = bags.join("felt/touch0");
     let file = std::fs::read_dir(&bag).unwrap().map(|e| e.unwrap().path()).find(|p| p.extension().is_some_and(|e| e == "db3")).unwrap();
     std::fs::remove_file(&file).unwrap();
     let said = fails(&["import", bags.to_str().unwrap(), "--topic", "/camera", "--out", out.to_str().unwrap()]);
     assert!(said.contains("touch0") && said.contains("metadata.yaml names touch0.db3, which is not there"), "{said}");
-    std::fs::remove_dir_all(dir).unwrap();
 }

@@ -1,6 +1,6 @@
 //! rosbag2 recordings, as `pvt3 import` reads them: a bag directory (its `metadata.yaml` beside
-//! the `.mcap` or `.db3` files it names) or a lone `.mcap` file, one topic's messages in the
-//! bag's order, each with its receive time ([`messages`]). Messages are streamed: an MCAP's
+//! the `.mcap` or `.db3` files it names, read once when the [`Bag`] is opened) or a lone `.mcap`
+//! file, one topic's messages in the bag's order, each with its receive time ([`Bag::messages`]). Messages are streamed: an MCAP's
 //! chunks are decompressed one at a time (zstd and lz4, their CRCs checked), SQLite's rows are
 //! read as the query gives them, so a bag of any length is read in the memory of its largest
 //! chunk. What a message holds is read by `pvt3_messages`, as a robot's node reads its topic.
@@ -45,90 +45,120 @@ pub fn is_bag(path: &Path) -> bool {
         || (path.is_file() && path.extension().is_some_and(|e| e.eq_ignore_ascii_case("mcap")))
 }
 
-/// The files of the bag at `path`, each with its storage, in the bag's order.
-fn files(path: &Path) -> Result<Vec<(PathBuf, Storage)>, String> {
-    if path.is_file() {
-        return Ok(vec![(path.to_path_buf(), Storage::Mcap)]);
-    }
-    metadata::files(path)
+/// A bag: where it is and its files, each with its storage, in the bag's order.
+pub struct Bag {
+    path: PathBuf,
+    files: Vec<(PathBuf, Storage)>,
 }
 
-/// Every topic of the bag at `path`, with its type and message count, by name.
-pub fn topics(path: &Path) -> Result<Vec<Topic>, String> {
-    let mut all: Vec<Topic> = Vec::new();
-    for (file, storage) in files(path)? {
-        let topics = match storage {
-            Storage::Mcap => mcap_file::topics(&file),
-            Storage::Sqlite => sqlite::topics(&file),
-        };
-        for t in topics.map_err(|e| format!("{}: {e}", file.display()))? {
-            match all.iter_mut().find(|a| a.name == t.name) {
-                Some(a) => a.count += t.count,
-                None => all.push(t),
+impl Bag {
+    /// The bag at `path`: its `metadata.yaml` read, every file it names there.
+    pub fn open(path: &Path) -> Result<Self, String> {
+        let files = if path.is_file() { vec![(path.to_path_buf(), Storage::Mcap)] } else { metadata::files(path)? };
+        Ok(Self { path: path.to_path_buf(), files })
+    }
+
+    /// Every topic of the bag, with its type and message count, by name.
+    pub fn topics(&self) -> Result<Vec<Topic>, String> {
+        let mut all: Vec<Topic> = Vec::new();
+        for (file, storage) in &self.files {
+            let topics = match storage {
+                Storage::Mcap => mcap_file::topics(file),
+                Storage::Sqlite => sqlite::topics(file),
+            };
+            for t in topics.map_err(|e| format!("{}: {e}", file.display()))? {
+                match all.iter_mut().find(|a| a.name == t.name) {
+                    Some(a) => a.count += t.count,
+                    None => all.push(t),
+                }
             }
         }
+        all.sort_by(|a, b| a.name.cmp(&b.name));
+        Ok(all)
     }
-    all.sort_by(|a, b| a.name.cmp(&b.name));
-    Ok(all)
-}
 
-/// The kind of message `topic` of the bag at `path` carries, or why it cannot be read: the bag
-/// has no message on it (every topic is then listed, with its type and count), or pvt3 does not
-/// read its type. The type is that of the topic's first message, found without reading the
-/// rest of the bag.
-pub fn topic_kind(path: &Path, topic: Option<&str>) -> Result<(String, Kind), String> {
-    let listed = || -> Result<String, String> {
-        let topics = topics(path)?;
-        let lines: Vec<String> = topics.iter().map(|t| format!("  {} ({}, {} messages)", t.name, t.type_name, t.count)).collect();
-        Ok(if lines.is_empty() { "it has no topic".to_string() } else { format!("its topics:\n{}", lines.join("\n")) })
-    };
-    let Some(name) = topic else {
-        return Err(format!("a bag needs --topic, the topic to read; {}", listed()?));
-    };
-    let mut type_name = None;
-    for (file, storage) in files(path)? {
-        type_name = match storage {
-            Storage::Mcap => mcap_file::type_of(&file, name),
-            Storage::Sqlite => sqlite::type_of(&file, name),
+    /// The kind of message `topic` carries, or why it cannot be read: the bag has no message on it
+    /// (every topic is then listed, with its type and count), or pvt3 does not read its type. The
+    /// type is that of the topic's first message, found without reading the rest of the bag.
+    pub fn topic_kind(&self, topic: Option<&str>) -> Result<(String, Kind), String> {
+        let listed = || -> Result<String, String> {
+            let topics = self.topics()?;
+            let lines: Vec<String> = topics.iter().map(|t| format!("  {} ({}, {} messages)", t.name, t.type_name, t.count)).collect();
+            Ok(if lines.is_empty() { "it has no topic".to_string() } else { format!("its topics:\n{}", lines.join("\n")) })
+        };
+        let Some(name) = topic else {
+            return Err(format!("a bag needs --topic, the topic to read; {}", listed()?));
+        };
+        let mut type_name = None;
+        for (file, storage) in &self.files {
+            type_name = match storage {
+                Storage::Mcap => mcap_file::type_of(file, name),
+                Storage::Sqlite => sqlite::type_of(file, name),
+            }
+            .map_err(|e| format!("{}: {e}", file.display()))?;
+            if type_name.is_some() {
+                break;
+            }
         }
-        .map_err(|e| format!("{}: {e}", file.display()))?;
-        if type_name.is_some() {
-            break;
-        }
+        let type_name = type_name.ok_or_else(|| match listed() {
+            Ok(list) => format!("no message on topic `{name}`; {list}"),
+            Err(e) => e,
+        })?;
+        let kind = Kind::of(&type_name).ok_or_else(|| {
+            let known: Vec<&str> = Kind::ALL.iter().map(|(n, _)| *n).collect();
+            format!("topic `{name}` carries {type_name}, which pvt3 does not read ({})", known.join(", "))
+        })?;
+        Ok((name.to_string(), kind))
     }
-    let type_name = type_name.ok_or_else(|| match listed() {
-        Ok(list) => format!("no message on topic `{name}`; {list}"),
-        Err(e) => e,
-    })?;
-    let kind = Kind::of(&type_name).ok_or_else(|| {
-        let known: Vec<&str> = Kind::ALL.iter().map(|(n, _)| *n).collect();
-        format!("topic `{name}` carries {type_name}, which pvt3 does not read ({})", known.join(", "))
-    })?;
-    Ok((name.to_string(), kind))
+
+    /// The messages received from `window.0` to `window.1` seconds (the end excluded) after the
+    /// bag's first message (its first file's first message), or every message.
+    pub fn within(&self, window: Option<(f64, f64)>) -> Result<Within, String> {
+        let Some((start, end)) = window else { return Ok(Within { window: None, seconds: (0.0, f64::INFINITY) }) };
+        let (file, storage) = self.files.first().expect("a bag names a file");
+        let first = match storage {
+            Storage::Mcap => mcap_file::first_time(file),
+            Storage::Sqlite => sqlite::first_time(file),
+        }?
+        .ok_or("the bag has no message")?;
+        let at = |s: f64| first.saturating_add((s * 1e9).round() as i64);
+        Ok(Within { window: Some((at(start), at(end))), seconds: (start, end) })
+    }
+
+    /// Calls `each` with every message of `topic`, in the bag's order, and its index among the
+    /// topic's messages; stops at the first error, `each`'s or the bag's.
+    pub fn messages(&self, topic: &str, mut each: impl FnMut(usize, Message) -> Result<(), String>) -> Result<(), String> {
+        let mut index = 0;
+        for (file, storage) in &self.files {
+            let mut counted = |message: Message| {
+                let at = index;
+                index += 1;
+                each(at, message)
+            };
+            match storage {
+                Storage::Mcap => mcap_file::messages(file, topic, &mut counted),
+                Storage::Sqlite => sqlite::messages(file, topic, &mut counted),
+            }
+            .map_err(|e| {
+                if self.path.is_dir() {
+                    format!("{}: {e}", file.file_name().unwrap_or_default().to_string_lossy())
+                } else {
+                    e
+                }
+            })?;
+        }
+        Ok(())
+    }
 }
 
 /// Which messages of a bag a touch takes: those received within a window of seconds from the
-/// bag's first message (its first file's first message), or all of them.
+/// bag's first message (its first file's first message), or all of them ([`Bag::within`]).
 pub struct Within {
     window: Option<(i64, i64)>,
     seconds: (f64, f64),
 }
 
 impl Within {
-    /// The messages of the bag at `path` received from `window.0` to `window.1` seconds (the end
-    /// excluded) after its first message, or every message.
-    pub fn new(path: &Path, window: Option<(f64, f64)>) -> Result<Self, String> {
-        let Some((start, end)) = window else { return Ok(Self { window: None, seconds: (0.0, f64::INFINITY) }) };
-        let (file, storage) = files(path)?.into_iter().next().expect("a bag names a file");
-        let first = match storage {
-            Storage::Mcap => mcap_file::first_time(&file),
-            Storage::Sqlite => sqlite::first_time(&file),
-        }?
-        .ok_or("the bag has no message")?;
-        let at = |s: f64| first.saturating_add((s * 1e9).round() as i64);
-        Ok(Self { window: Some((at(start), at(end))), seconds: (start, end) })
-    }
-
     /// Whether a message received at `time` (nanoseconds) is the touch's.
     pub fn holds(&self, time: i64) -> bool {
         self.window.is_none_or(|(start, end)| (start..end).contains(&time))
@@ -143,25 +173,6 @@ impl Within {
     pub fn end(&self) -> f64 {
         self.seconds.1
     }
-}
-
-/// Calls `each` with every message of `topic` in the bag at `path`, in the bag's order, and
-/// its index among the topic's messages; stops at the first error, `each`'s or the bag's.
-pub fn messages(path: &Path, topic: &str, mut each: impl FnMut(usize, Message) -> Result<(), String>) -> Result<(), String> {
-    let mut index = 0;
-    for (file, storage) in files(path)? {
-        let mut counted = |message: Message| {
-            let at = index;
-            index += 1;
-            each(at, message)
-        };
-        match storage {
-            Storage::Mcap => mcap_file::messages(&file, topic, &mut counted),
-            Storage::Sqlite => sqlite::messages(&file, topic, &mut counted),
-        }
-        .map_err(|e| if path.is_dir() { format!("{}: {e}", file.file_name().unwrap_or_default().to_string_lossy()) } else { e })?;
-    }
-    Ok(())
 }
 
 #[cfg(test)]

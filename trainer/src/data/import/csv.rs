@@ -131,10 +131,14 @@ pub fn read_folder(dir: &Path, opts: &ImportOptions) -> Result<Imported> {
     let (chosen, left_out) = choose_columns(&names, &touches, opts, every_value)?;
     let channels: Vec<String> = chosen.iter().map(|&c| names[c].clone()).collect();
     // A bag's layout of two dimensions is the sensor's grid, where every value is a channel.
-    let grid = opts.grid.or(match header.layout.as_deref() {
+    let layout = match header.layout.as_deref() {
         Some(&[h, w]) if chosen.len() == names.len() => Some((h, w)),
         _ => None,
-    });
+    };
+    if let (Some((h, w)), Some((rows, cols))) = (opts.grid, layout.filter(|l| Some(*l) != opts.grid)) {
+        return Err(Error::Usage(format!("--grid {h}x{w} disagrees with the bag's messages, laid out {rows} × {cols} (layout.dim)")));
+    }
+    let grid = opts.grid.or(layout);
     if let Some((h, w)) = grid {
         if h * w != channels.len() {
             return Err(Error::Usage(format!(

@@ -48,7 +48,7 @@ pub fn is_bag(path: &Path) -> bool {
 /// camera's import then says why, listing its topics): not a taxel array's values.
 pub fn bag_holds_camera(path: &Path, topic: Option<&str>) -> bool {
     #[cfg(feature = "bags")]
-    let camera = super::bag::topic_kind(path, topic).map_or(true, |(_, kind)| kind.is_camera());
+    let camera = super::bag::Bag::open(path).and_then(|bag| bag.topic_kind(topic)).map_or(true, |(_, kind)| kind.is_camera());
     #[cfg(not(feature = "bags"))]
     let camera = {
         let _ = (path, topic);

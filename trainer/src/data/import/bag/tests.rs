@@ -26,7 +26,7 @@ fn metadata(storage: &str, files: &[&str], compression: (&str, &str)) -> String 
 fn a_bag_directory_names_its_files_and_their_storage() {
     let dir = bag("files", &metadata("sqlite3", &["a_0.db3", "a_1.db3"], ("", "")), &["a_0.db3", "a_1.db3"]);
     assert!(is_bag(&dir));
-    assert_eq!(files(&dir).unwrap(), vec![(dir.join("a_0.db3"), Storage::Sqlite), (dir.join("a_1.db3"), Storage::Sqlite)]);
+    assert_eq!(Bag::open(&dir).unwrap().files, vec![(dir.join("a_0.db3"), Storage::Sqlite), (dir.join("a_1.db3"), Storage::Sqlite)]);
     std::fs::remove_dir_all(&dir).unwrap();
     let refused = [
         (metadata("mcap", &["a.mcap", "b.mcap"], ("", "")), vec!["a.mcap"], "metadata.yaml names b.mcap, which is not there"),
@@ -37,7 +37,7 @@ fn a_bag_directory_names_its_files_and_their_storage() {
     ];
     for (i, (text, present, why)) in refused.into_iter().enumerate() {
         let dir = bag(&format!("refused{i}"), &text, &present);
-        let err = files(&dir).unwrap_err();
+        let err = Bag::open(&dir).err().unwrap();
         assert!(err.contains(why), "{i}: {err}");
         std::fs::remove_dir_all(&dir).unwrap();
     }
@@ -47,11 +47,11 @@ fn a_bag_directory_names_its_files_and_their_storage() {
 fn damaged_storage_files_are_refused_by_name() {
     let dir = bag("damaged", &metadata("mcap", &["a.mcap"], ("", "")), &[]);
     std::fs::write(dir.join("a.mcap"), b"\x89MCAP0\r\nnot a record").unwrap();
-    let err = topics(&dir).unwrap_err();
+    let err = Bag::open(&dir).unwrap().topics().unwrap_err();
     assert!(err.contains("a.mcap: not a readable MCAP file"), "{err}");
     std::fs::write(dir.join(metadata::FILE), metadata("sqlite3", &["a.db3"], ("", ""))).unwrap();
     std::fs::write(dir.join("a.db3"), b"SQLite format 3\0 and nothing else").unwrap();
-    let err = topics(&dir).unwrap_err();
+    let err = Bag::open(&dir).unwrap().topics().unwrap_err();
     assert!(err.contains("a.db3: not a readable"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -11,22 +11,23 @@ use pvt3_format::Picture;
 use pvt3_messages::{decode, Frame, Kind};
 
 use super::{enough, CameraOptions, ReadTouch};
-use crate::data::import::bag;
+use crate::data::import::bag::Bag;
 use crate::data::import::timing::Timing;
 
 /// The camera touch of the bag at `path`, `frames` frames of its topic as `opts` say: the
 /// messages received in `window` (seconds from the bag's first message), or all of them.
 pub(super) fn read(path: &Path, window: Option<(f64, f64)>, opts: &CameraOptions, frames: usize) -> Result<ReadTouch, String> {
-    let (topic, kind) = bag::topic_kind(path, opts.topic.as_deref())?;
+    let bag = Bag::open(path)?;
+    let (topic, kind) = bag.topic_kind(opts.topic.as_deref())?;
     if !kind.is_camera() {
         return Err(format!("topic `{topic}` carries {}, a taxel array's values, not a camera's frames", kind.name()));
     }
     // The touch's messages: their index among the topic's, and the index among the touch's.
-    let within = bag::Within::new(path, window)?;
+    let within = bag.within(window)?;
     let mut motion = Motion::new(opts.span);
     let mut first: Option<Picture> = None;
     let mut times = Vec::new();
-    bag::messages(path, &topic, |index, message| {
+    bag.messages(&topic, |index, message| {
         if !within.holds(message.time) {
             return Ok(());
         }
@@ -52,7 +53,7 @@ pub(super) fn read(path: &Path, window: Option<(f64, f64)>, opts: &CameraOptions
     // The second pass keeps the frames taken (each once, however often it is taken), read.
     let mut kept: BTreeMap<usize, Option<Picture>> = taken.frames.iter().map(|&i| (i, None)).collect();
     let mut taken_so_far = 0;
-    bag::messages(path, &topic, |index, message| {
+    bag.messages(&topic, |index, message| {
         if !within.holds(message.time) {
             return Ok(());
         }

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use pvt3_messages::{decode, Frame};
 
-use crate::data::import::bag;
+use crate::data::import::bag::Bag;
 use crate::data::import::timing::Timing;
 
 /// A bag's touch: its frames' values, their layout, and how their times strayed.
@@ -29,13 +29,14 @@ pub(super) fn channel(k: usize) -> String {
 /// The messages of `topic` (a taxel array's) in the bag at `path` received in `window`
 /// (seconds from the bag's first message), or all of them.
 pub(super) fn read(path: &Path, window: Option<(f64, f64)>, topic: Option<&str>) -> Result<BagRows, String> {
-    let (topic, kind) = bag::topic_kind(path, topic)?;
+    let bag = Bag::open(path)?;
+    let (topic, kind) = bag.topic_kind(topic)?;
     if kind.is_camera() {
         return Err(format!("topic `{topic}` carries {}, a camera's frames, and this folder holds CSV touches", kind.name()));
     }
-    let within = bag::Within::new(path, window)?;
+    let within = bag.within(window)?;
     let (mut rows, mut times, mut dims) = (Vec::new(), Vec::new(), None);
-    bag::messages(path, &topic, |index, message| {
+    bag.messages(&topic, |index, message| {
         if !within.holds(message.time) {
             return Ok(());
         }
