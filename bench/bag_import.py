@@ -1,9 +1,10 @@
 """What `pvt3 import` of a long ROS 2 bag costs beside a video of the same frames: a set of
 2 classes x 5 touches of 320 x 240 RGB frames, one touch 10,000 frames long, the others 50,
-written once as bags (rosbags' rosbag2 writer, MCAP, topic /camera, sensor_msgs/msg/Image rgb8)
-and once as lossless videos (FFmpeg's FFV1); each set imported in alternating rounds, the wall
-time and the peak resident memory of each import measured (/usr/bin/time). The two sets must
-import equal, byte for byte. Prints a markdown table for docs/benchmarks.md.
+written as bags of both storages (rosbags' rosbag2 writer, MCAP and SQLite, topic /camera,
+sensor_msgs/msg/Image rgb8) and as lossless videos (FFmpeg's FFV1); each set imported in
+alternating rounds, the wall time and the peak resident memory of each import measured
+(/usr/bin/time). The three sets must import equal, byte for byte. Prints a markdown table for
+docs/benchmarks.md.
 
     target/onnx-venv/bin/python bench/bag_import.py [PVT3] [ROUNDS]
 
@@ -42,9 +43,9 @@ def touches():
             yield klass, touch, LONG if (klass, touch) == (0, 0) else SHORT
 
 
-def write_bag(path, klass, touch, frames):
+def write_bag(path, klass, touch, frames, storage):
     types = STORE.types
-    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+    with Writer(path, version=9 if storage == StoragePlugin.MCAP else 8, storage_plugin=storage) as writer:
         connection = writer.add_connection("/camera", IMAGE, typestore=STORE)
         for f in range(frames):
             ns = 1_700_000_000_000_000_000 + f * 16_666_667
@@ -67,21 +68,28 @@ def write_video(path, klass, touch, frames):
     assert ffmpeg.wait() == 0, path
 
 
-def write_sets():
-    ready = OUT / "ready"
+KINDS = {"bags": "ROS 2 bags (MCAP)", "sqlite": "ROS 2 bags (SQLite)", "videos": "videos (FFV1)"}
+
+
+def write_set(kind):
+    """The set of `kind`, written once (a file `ready-KIND` says it is whole)."""
+    ready = OUT / f"ready-{kind}"
     if ready.exists():
         return
     for klass, touch, frames in touches():
-        for kind in ("bags", "videos"):
-            (OUT / kind / f"class_{klass}").mkdir(parents=True, exist_ok=True)
-        write_bag(OUT / "bags" / f"class_{klass}" / f"touch_{touch}", klass, touch, frames)
-        write_video(OUT / "videos" / f"class_{klass}" / f"touch_{touch}.mkv", klass, touch, frames)
+        folder = OUT / kind / f"class_{klass}"
+        folder.mkdir(parents=True, exist_ok=True)
+        if kind == "videos":
+            write_video(folder / f"touch_{touch}.mkv", klass, touch, frames)
+        else:
+            storage = StoragePlugin.MCAP if kind == "bags" else StoragePlugin.SQLITE3
+            write_bag(folder / f"touch_{touch}", klass, touch, frames, storage)
     ready.write_text("")
 
 
 def timed(pvt3, kind):
     args = [pvt3, "import", str(OUT / kind), "--out", str(OUT / f"{kind}.npz")]
-    if kind == "bags":
+    if kind != "videos":
         args += ["--topic", "/camera"]
     run = subprocess.run(["/usr/bin/time", "-f", "%e %M"] + args, capture_output=True, text=True)
     assert run.returncode == 0, run.stderr
@@ -90,20 +98,21 @@ def timed(pvt3, kind):
 
 
 def main(pvt3="target/release/pvt3", rounds="3"):
-    write_sets()
-    size = {kind: sum(p.stat().st_size for p in (OUT / kind).rglob("*") if p.is_file()) for kind in ("bags", "videos")}
-    results = {"bags": [], "videos": []}
+    for kind in KINDS:
+        write_set(kind)
+    size = {kind: sum(p.stat().st_size for p in (OUT / kind).rglob("*") if p.is_file()) for kind in KINDS}
+    results = {kind: [] for kind in KINDS}
     for _ in range(int(rounds)):
         for kind in results:
             results[kind].append(timed(pvt3, kind))
-    sets = [np.load(OUT / f"{kind}.npz") for kind in ("bags", "videos")]
-    assert np.array_equal(sets[0]["x"], sets[1]["x"]), "the bags' frames differ from the videos'"
+    sets = {kind: np.load(OUT / f"{kind}.npz") for kind in KINDS}
+    for kind in ("bags", "sqlite"):
+        assert np.array_equal(sets[kind]["x"], sets["videos"]["x"]), f"the {kind}' frames differ from the videos'"
     print(f"| touches as | on disk | import, median of {rounds} (range) | peak memory, median |")
     print("|---|---:|---|---:|")
     for kind, runs in results.items():
         times, memory = [r[0] for r in runs], [r[1] for r in runs]
-        what = "ROS 2 bags (MCAP)" if kind == "bags" else "videos (FFV1)"
-        print(f"| {what} | {size[kind] / 2**20:,.0f} MiB | {median(times):.1f} s ({min(times):.1f}-{max(times):.1f}) | {median(memory):,.0f} MiB |")
+        print(f"| {KINDS[kind]} | {size[kind] / 2**20:,.0f} MiB | {median(times):.1f} s ({min(times):.1f}-{max(times):.1f}) | {median(memory):,.0f} MiB |")
 
 
 if __name__ == "__main__":

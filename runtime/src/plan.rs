@@ -91,6 +91,9 @@ impl Plan {
     pub(crate) fn output(&self, outputs: &[TValue], i: usize, len: usize) -> Result<Vec<f32>> {
         let name = self.outputs.get(i).map_or("?", String::as_str);
         let values = outputs.get(i).ok_or_else(|| Error::Tract(format!("the plan has no output `{name}`")))?;
+        if values.datum_type() != f32::datum_type() {
+            return Err(Error::Tract(format!("output `{name}` holds {:?}, not the f32 the header implies", values.datum_type())));
+        }
         let values: Vec<f32> = values.to_plain_array_view::<f32>().map_err(tract_error)?.iter().copied().collect();
         if values.len() != len {
             return Err(Error::Tract(format!("output `{name}` has {} values, not the {len} the header implies", values.len())));
