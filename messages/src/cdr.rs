@@ -1,7 +1,8 @@
 //! CDR (OMG's Common Data Representation, XCDR1), as ROS 2 serialises a message: a 4-byte
 //! encapsulation header saying the byte order, then each field in order, aligned to its own size
 //! (up to 8 bytes) from the end of the header; a string is its length (with its terminating NUL)
-//! and its bytes, a sequence its length and its elements.
+//! and its bytes, a sequence its length and its elements. [`Reader`] reads either byte order;
+//! [`Writer`] writes little-endian, as ROS 2 does on every platform it runs on.
 
 use crate::{DecodeError, Result};
 
@@ -19,6 +20,8 @@ pub trait Primitive: Sized + Copy {
     const SIZE: usize;
     /// The value from its bytes in the message's order.
     fn from_bytes(bytes: &[u8], little: bool) -> Self;
+    /// Its bytes, little-endian, appended to `out`.
+    fn to_le(self, out: &mut Vec<u8>);
 }
 
 macro_rules! primitive {
@@ -28,6 +31,9 @@ macro_rules! primitive {
             fn from_bytes(bytes: &[u8], little: bool) -> Self {
                 let b = bytes.try_into().expect("SIZE bytes");
                 if little { <$t>::from_le_bytes(b) } else { <$t>::from_be_bytes(b) }
+            }
+            fn to_le(self, out: &mut Vec<u8>) {
+                out.extend_from_slice(&self.to_le_bytes());
             }
         }
     )*};
@@ -93,6 +99,56 @@ impl<'a> Reader<'a> {
     }
 }
 
+/// A message being written: the encapsulation header of little-endian CDR, then each field
+/// aligned as [`Reader`] reads it.
+pub struct Writer {
+    bytes: Vec<u8>,
+}
+
+impl Default for Writer {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+impl Writer {
+    /// An empty message.
+    pub fn new() -> Self {
+        Self { bytes: vec![0, 1, 0, 0] }
+    }
+
+    /// Pads to `align` bytes from the end of the header.
+    fn align(&mut self, align: usize) {
+        let at = (self.bytes.len() - 4).next_multiple_of(align) + 4;
+        self.bytes.resize(at, 0);
+    }
+
+    /// A value of type `T`.
+    pub fn write<T: Primitive>(&mut self, value: T) -> &mut Self {
+        self.align(T::SIZE);
+        value.to_le(&mut self.bytes);
+        self
+    }
+
+    /// A string: its length with its terminating NUL, its bytes, the NUL.
+    pub fn string(&mut self, text: &str) -> &mut Self {
+        self.write((text.len() + 1) as u32);
+        self.bytes.extend_from_slice(text.as_bytes());
+        self.bytes.push(0);
+        self
+    }
+
+    /// A sequence's length, its elements to follow.
+    pub fn length(&mut self, len: usize) -> &mut Self {
+        self.write(len as u32)
+    }
+
+    /// The message's bytes.
+    pub fn finish(self) -> Vec<u8> {
+        self.bytes
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -110,6 +166,18 @@ mod tests {
         assert_eq!(r.read::<f64>("e").unwrap(), 1.5);
         let err = r.read::<u8>("f").unwrap_err().0;
         assert_eq!(err, "truncated: f at byte 36 needs 1 bytes, 0 are left");
+    }
+
+    #[test]
+    fn what_the_writer_writes_the_reader_reads() {
+        let mut w = Writer::new();
+        w.write(1u8).write(7u32).string("ab").write(0x0102u16).write(1.5f64).length(2).write(-3i16).write(4i16);
+        let m = w.finish();
+        let mut r = Reader::new(&m).unwrap();
+        assert_eq!((r.read::<u8>("a").unwrap(), r.read::<u32>("b").unwrap()), (1, 7));
+        assert_eq!((r.string("c").unwrap(), r.read::<u16>("d").unwrap(), r.read::<f64>("e").unwrap()), ("ab".into(), 0x0102, 1.5));
+        assert_eq!(r.values::<i16>("f", f32::from).unwrap(), [-3.0, 4.0]);
+        assert_eq!(m.len(), 36 + 4 + 2 * 2, "aligned as the reader's test lays its fields out, then the sequence");
     }
 
     #[test]

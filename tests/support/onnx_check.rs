@@ -9,13 +9,14 @@ use std::sync::OnceLock;
 
 use super::workspace::workspace;
 
-/// What the scripts import: onnx's checker and onnxruntime, numpy, and the writers of ROS 2 bags
-/// that `tests/bag_writer.py` uses (rosbags; mcap with mcap-ros2-support).
-const PACKAGES: [&str; 6] = ["onnx", "onnxruntime", "numpy", "rosbags", "mcap", "mcap-ros2-support"];
+/// What the scripts import: onnx's checker and onnxruntime, numpy, the writers of ROS 2 bags
+/// that `tests/bag_writer.py` uses (rosbags; mcap with mcap-ros2-support), and the zenoh peer
+/// that `tests/ros_peer.py` makes of them (eclipse-zenoh).
+const PACKAGES: [&str; 7] = ["onnx", "onnxruntime", "numpy", "rosbags", "mcap", "mcap-ros2-support", "eclipse-zenoh"];
 
 /// The venv's python, created once (test binaries run one after another; the venv is kept
 /// across runs).
-fn python() -> &'static Path {
+pub fn python() -> &'static Path {
     static PYTHON: OnceLock<PathBuf> = OnceLock::new();
     PYTHON.get_or_init(|| {
         let venv = workspace().canonicalize().expect("workspace root").join("target/onnx-venv");

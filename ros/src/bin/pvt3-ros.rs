@@ -1,0 +1,48 @@
+//! `pvt3-ros`: the node, started as ROS users start one (`--ros-args -r … -p …`).
+
+use pvt3_ros::args::{Args, PARAMETERS, TOPICS};
+use pvt3_ros::node::Node;
+
+fn help() -> String {
+    let mut text = String::from(
+        "usage: pvt3-ros --ros-args -p model:=FILE.onnx [-p NAME:=VALUE]... [-r FROM:=TO]...\n\n\
+         A ROS 2 node over rmw_zenoh (a zenoh router on the robot): it classifies each touch of a tactile\n\
+         sensor's topic with a pvt3 file, decoding every message as `pvt3 import` decodes a bag and reading\n\
+         its frames as the file records (a camera's crop, size, grey and first frame; a taxel array's grid).\n\
+         The node is `pvt3` in `/` unless -r __node:=NAME or -r __ns:=/NS say otherwise; ROS_DOMAIN_ID picks\n\
+         the domain.\n\nParameters (-p NAME:=VALUE):\n",
+    );
+    for (name, default, what) in PARAMETERS {
+        let default = if default.is_empty() { String::new() } else { format!(" (default: {default})") };
+        text += &format!("  {name:<12} {what}{default}\n");
+    }
+    text += "\nTopics (remap with -r NAME:=/your/topic):\n";
+    for (name, type_name, what) in TOPICS {
+        text += &format!("  {name:<15} {type_name}\n  {:<15} {what}\n", "");
+    }
+    text
+}
+
+fn main() -> std::process::ExitCode {
+    let words: Vec<String> = std::env::args().skip(1).collect();
+    if words.iter().any(|w| w == "--help" || w == "-h") {
+        print!("{}", help());
+        return std::process::ExitCode::SUCCESS;
+    }
+    let run = || -> Result<(), String> {
+        let args = Args::parse(&words, std::env::var("ROS_DOMAIN_ID").ok().as_deref()).map_err(|e| e.to_string())?;
+        if args.parameter("model").is_empty() {
+            return Err("-p model:=FILE.onnx: the pvt3 file to classify with (see --help)".into());
+        }
+        let node = Node::start(args).map_err(|e| e.to_string())?;
+        eprintln!("pvt3-ros: joined the graph as session {} ({} entities)", node.session_id(), node.entities());
+        node.serve().map_err(|e| e.to_string())
+    };
+    match run() {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("pvt3-ros: {e}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,170 @@
+//! A touch as the node follows it: each decoded message pushed through the runtime's session
+//! as the file says its frames are read (a camera's frames cropped, shrunk and greyed, the
+//! touch's first kept as its background; a taxel array's values as the grid), until the touch
+//! ends: the window is full, the file's stopping rule decides early, contact is lost, or a reset
+//! comes. Free of any transport, so that its answers are tested against `pvt3-run`'s alone.
+
+use std::time::{Duration, Instant};
+
+use pvt3_messages::{Decoded, Frame, Stamp};
+use pvt3_runtime::{Classifier, Prediction, Session};
+
+use crate::outgoing::Status;
+
+/// When a touch begins and ends.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Boundary {
+    /// Every frame belongs to a touch; one ends when the window is full (or the stopping rule
+    /// decides), and the next frame begins the next.
+    Frames,
+    /// A touch begins when the contact topic says `true` and ends when it says `false` (or the
+    /// window is full, or the stopping rule decides); frames out of contact are dropped.
+    Contact,
+}
+
+/// A touch's answer: the prediction, the stamp of its last frame, and how it was reached.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Answer {
+    /// The prediction.
+    pub prediction: Prediction,
+    /// The last frame's stamp (`header.stamp`, or when the node received it).
+    pub stamp: Stamp,
+    /// How it was reached.
+    pub status: Status,
+}
+
+/// The touch in progress and how touches are cut.
+pub struct Touches {
+    classifier: Classifier,
+    session: Session,
+    boundary: Boundary,
+    early_stop: bool,
+    in_contact: bool,
+    /// Frames pushed in this touch, the last one's stamp, and the runtime's time so far.
+    frames: usize,
+    last: Stamp,
+    compute: Duration,
+}
+
+/// Why a message was not taken; the node reports it and keeps serving.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct Refused(pub String);
+
+impl Touches {
+    /// Touches of `classifier`'s file cut at `boundary`, answered early where `early_stop` and the
+    /// file's stopping rule say so.
+    pub fn new(classifier: Classifier, boundary: Boundary, early_stop: bool) -> Result<Self, pvt3_runtime::Error> {
+        let session = classifier.session()?;
+        let early_stop = early_stop && classifier.stop_rule().is_some();
+        Ok(Self {
+            classifier,
+            session,
+            boundary,
+            early_stop,
+            in_contact: false,
+            frames: 0,
+            last: Stamp::default(),
+            compute: Duration::ZERO,
+        })
+    }
+
+    /// The file's classifier.
+    pub fn classifier(&self) -> &Classifier {
+        &self.classifier
+    }
+
+    /// Takes a decoded message received at `received`; the touch's answer if it ends the touch.
+    pub fn frame(&mut self, decoded: Decoded, received: Stamp) -> Result<Option<Answer>, Refused> {
+        if self.boundary == Boundary::Contact && !self.in_contact {
+            return Ok(None);
+        }
+        let started = Instant::now();
+        let pushed = match decoded.frame {
+            Frame::Picture(p) => match self.classifier.camera() {
+                Some(camera) if camera.recorded == p.shape() => self.session.push_camera_frame(&p.data),
+                Some(camera) => {
+                    let [h, w, c] = camera.recorded;
+                    return Err(Refused(format!("a frame of {}; the file reads the camera's {h} × {w} × {c}", p.describe())));
+                }
+                None => return Err(Refused("a camera's frame; the file reads a taxel array's values".into())),
+            },
+            Frame::Values { values, .. } if self.classifier.camera().is_none() => {
+                let len = self.session.frame_len();
+                if values.len() != len {
+                    return Err(Refused(format!("{} values; the file reads frames of {len}", values.len())));
+                }
+                self.session.push_frame(&values)
+            }
+            Frame::Values { .. } => return Err(Refused("a taxel array's values; the file reads a camera's frames".into())),
+        };
+        pushed.map_err(|e| Refused(e.to_string()))?;
+        self.compute += started.elapsed();
+        self.frames += 1;
+        self.last = decoded.stamp.unwrap_or(received);
+        if self.session.received() == self.session.frames() {
+            return self.finish("window").map(Some);
+        }
+        let tubelet = self.classifier.tubelet();
+        if self.early_stop && self.session.received() > 0 && self.session.received().is_multiple_of(tubelet) {
+            let started = Instant::now();
+            let peek = self.session.peek().map_err(|e| Refused(e.to_string()))?;
+            self.compute += started.elapsed();
+            if peek.stop {
+                return Ok(Some(self.answer(peek.prediction, "early_stop")));
+            }
+        }
+        Ok(None)
+    }
+
+    /// Contact begins (`true`) or ends (`false`): an ending touch is answered from what it has.
+    pub fn contact(&mut self, on: bool) -> Result<Option<Answer>, Refused> {
+        let was = std::mem::replace(&mut self.in_contact, on);
+        if self.boundary != Boundary::Contact || on || !was || self.session.received() == 0 {
+            return Ok(None);
+        }
+        self.finish("contact").map(Some)
+    }
+
+    /// Ends the touch at once, unanswered.
+    pub fn reset(&mut self) {
+        self.session.reset();
+        self.frames = 0;
+        self.compute = Duration::ZERO;
+    }
+
+    /// The touch's answer from the frames it has: the whole window's, or the provisional answer
+    /// of the temporal tokens it fills.
+    fn finish(&mut self, ended_by: &'static str) -> Result<Answer, Refused> {
+        let started = Instant::now();
+        let prediction = if self.session.received() == self.session.frames() {
+            self.session.finish().map(Ok)
+        } else {
+            self.session.peek().map(|p| Ok(p.prediction))
+        };
+        let prediction = match prediction {
+            Ok(p) => p,
+            Err(e) => {
+                self.reset();
+                Err(Refused(format!("the touch ended after {} frames: {e}", self.frames)))
+            }
+        }?;
+        self.compute += started.elapsed();
+        Ok(self.answer(prediction, ended_by))
+    }
+
+    /// The answer, the session emptied for the next touch.
+    fn answer(&mut self, prediction: Prediction, ended_by: &'static str) -> Answer {
+        let status = Status {
+            class: prediction.label.clone(),
+            frames: self.frames,
+            window: self.session.frames(),
+            early_stop: ended_by == "early_stop",
+            ended_by,
+            compute_ms: self.compute.as_secs_f64() * 1e3,
+        };
+        let answer = Answer { prediction, stamp: self.last, status };
+        self.reset();
+        answer
+    }
+}
