@@ -9,8 +9,11 @@ It prints `ready` once the router listens, waits for pvt3-ros's subscription to 
 (its liveliness token), then publishes each touch of TOUCHES.npy ([touches,] height, width,
 [channels,] frames), frame by frame, on /frames: KIND `image` as sensor_msgs/msg/Image (rgb8, or
 mono8 for one channel), `array` as std_msgs/msg/Float32MultiArray (the grid row-major, its
-layout's two dimensions). With HOSTILE, first a burst of messages the node must refuse and
-survive: a wrong size, an unknown encoding, cut CDR, a type it does not read. It prints each
+layout's two dimensions), each with rmw_zenoh's attachment naming its publisher (the GID of its
+liveliness token, by python-xxhash). With HOSTILE, first a burst of messages the node must
+refuse and survive: a wrong size, an unknown encoding, cut CDR, a type it does not read; then a
+publisher that leaves half way through a touch (its token undeclared); and within each touch,
+a second publisher's frame and a frame stamped before the one before it. It prints each
 answer read from /classification (vision_msgs/msg/Classification) as a JSON line, and each
 /touch_status as one too, and exits once every touch is answered (or after 60 s).
 """
@@ -20,7 +23,9 @@ import sys
 import time
 
 import numpy as np
+import xxhash
 import zenoh
+from zenoh.ext import Int64, z_serialize
 from rosbags.typesys import Stores, get_types_from_msg, get_typestore
 
 STORE = get_typestore(Stores.ROS2_JAZZY)
@@ -59,6 +64,25 @@ def array(frame):
     layout = T["std_msgs/msg/MultiArrayLayout"](dim=dims, data_offset=0)
     message = T["std_msgs/msg/Float32MultiArray"](layout=layout, data=frame.reshape(-1).astype(np.float32))
     return STORE.serialize_cdr(message, "std_msgs/msg/Float32MultiArray")
+
+
+class Publisher:
+    """A publisher as rmw_zenoh declares one: its liveliness token, and its GID (the token's
+    XXH3-128, low half first) in each message's attachment."""
+
+    def __init__(self, session, n, msgtype):
+        package, _, name = msgtype.split("/")
+        qos = "::,10:,:,:,,"
+        self.token_key = f"@ros2_lv/0/{session.zid()}/0/{n}/MP/%/%/driver{n}/%frames/{package}::msg::dds_::{name}_/{STORE.hash_rihs01(msgtype)}/{qos}"
+        self.token = session.liveliness().declare_token(self.token_key)
+        digest = xxhash.xxh3_128_intdigest(self.token_key.encode())
+        self.gid = (digest & (2**64 - 1)).to_bytes(8, "little") + (digest >> 64).to_bytes(8, "little")
+        self.session, self.key, self.sequence = session, key("frames", msgtype), 0
+
+    def put(self, payload):
+        self.sequence += 1
+        attachment = z_serialize((Int64(self.sequence), Int64(time.time_ns()), self.gid))
+        self.session.put(self.key, bytes(payload), attachment=attachment)
 
 
 def hostile(session, first):
@@ -109,15 +133,30 @@ def main(port, touches_file, kind, hostile_first=False):
         time.sleep(0.05)
     print(json.dumps(dict(tokens=sorted(tokens))), flush=True)
     time.sleep(0.3)
-    frame_key = key("frames", "sensor_msgs/msg/Image" if kind == "image" else "std_msgs/msg/Float32MultiArray")
+    msgtype = "sensor_msgs/msg/Image" if kind == "image" else "std_msgs/msg/Float32MultiArray"
+    driver, second = Publisher(session, 1, msgtype), Publisher(session, 2, msgtype)
+    ns = 1_700_000_000_000_000_000
+
+    def message(frame, ns):
+        return image(np.ascontiguousarray(frame), ns) if kind == "image" else array(np.ascontiguousarray(frame))
+
     if hostile_first:
         hostile(session, np.ascontiguousarray(np.moveaxis(touches[0], -1, 0)[0]))
-    ns = 1_700_000_000_000_000_000
-    for touch in touches:
-        for frame in np.moveaxis(touch, -1, 0):
+        # A publisher that leaves half way through a touch: the node drops the touch.
+        leaving = Publisher(session, 3, msgtype)
+        for frame in np.moveaxis(touches[0], -1, 0)[: touches.shape[-1] // 2]:
             ns += 40_000_000
-            payload = image(np.ascontiguousarray(frame), ns) if kind == "image" else array(np.ascontiguousarray(frame))
-            session.put(frame_key, bytes(payload))
+            leaving.put(message(frame, ns))
+        time.sleep(0.2)
+        leaving.token.undeclare()
+        time.sleep(0.3)
+    for touch in touches:
+        for f, frame in enumerate(np.moveaxis(touch, -1, 0)):
+            ns += 40_000_000
+            driver.put(message(frame, ns))
+            if hostile_first and f == 3:
+                second.put(message(frame, ns))  # a second publisher on the topic
+                driver.put(message(frame, ns - 80_000_000))  # stamped before the frame before it
             time.sleep(0.002)
     while time.time() < deadline and len(answers) < len(touches):
         time.sleep(0.05)

@@ -108,12 +108,18 @@ impl Entity {
         if let Some(t) = topic {
             token += &format!("/{}/{}/{}/{}", mangle(&t.name), mangle(&dds_name(&t.type_name)), mangle(&t.hash), t.qos.key());
         }
-        let hash = xxhash_rust::xxh3::xxh3_128(token.as_bytes());
-        let mut gid = [0; 16];
-        gid[..8].copy_from_slice(&(hash as u64).to_le_bytes());
-        gid[8..].copy_from_slice(&((hash >> 64) as u64).to_le_bytes());
-        Self { token, gid }
+        Self { gid: gid(&token), token }
     }
+}
+
+/// The GID of the entity whose liveliness token is `token`: its XXH3-128, low half first (each
+/// half little-endian), as rmw_zenoh derives it.
+pub fn gid(token: &str) -> [u8; 16] {
+    let hash = xxhash_rust::xxh3::xxh3_128(token.as_bytes());
+    let mut gid = [0; 16];
+    gid[..8].copy_from_slice(&(hash as u64).to_le_bytes());
+    gid[8..].copy_from_slice(&((hash >> 64) as u64).to_le_bytes());
+    gid
 }
 
 #[cfg(test)]

@@ -33,12 +33,21 @@ fn zenoh_error(e: impl std::fmt::Display) -> NodeError {
     NodeError::Zenoh(e.to_string())
 }
 
+/// A message as it arrived: its key expression (which names its type), its CDR, and its
+/// publisher's GID where its attachment gives one.
+struct Received {
+    key: String,
+    data: Vec<u8>,
+    source: Option<[u8; 16]>,
+}
+
 /// What arrives on the node's subscriptions, in order.
 enum Event {
-    /// A frame: its key expression (which names its type) and its CDR.
-    Frame(String, Vec<u8>),
-    Contact(Vec<u8>),
+    Frame(Received),
+    Contact(Received),
     Reset,
+    /// A publisher of the frames' topic left the graph (its token's GID).
+    PublisherGone([u8; 16]),
 }
 
 /// A publisher and what rmw_zenoh puts beside each message.
@@ -115,8 +124,9 @@ impl Node {
         node.token(graph::Kind::Node, None)?;
         let frames_type = if camera { "sensor_msgs/msg/Image" } else { "std_msgs/msg/Float32MultiArray" };
         node.subscribe("frames", frames_type, Event::Frame)?;
-        node.subscribe("contact", "std_msgs/msg/Bool", |_, data| Event::Contact(data))?;
-        node.subscribe("reset", "std_msgs/msg/Empty", |_, _| Event::Reset)?;
+        node.subscribe("contact", "std_msgs/msg/Bool", Event::Contact)?;
+        node.subscribe("reset", "std_msgs/msg/Empty", |_| Event::Reset)?;
+        node.watch_publishers("frames")?;
         let classification = node.publisher("classification", "vision_msgs/msg/Classification")?;
         let status = node.publisher("touch_status", "diagnostic_msgs/msg/DiagnosticStatus")?;
         let rosout = node.publisher("/rosout", "rcl_interfaces/msg/Log")?;
@@ -141,8 +151,8 @@ impl Node {
         self.log(Level::Info, &format!("classifying {} with {}", self.args.topic("frames"), self.args.parameter("model")))?;
         while let Ok(event) = self.events.recv() {
             let result = match event {
-                Event::Frame(key, data) => self.frame(&key, &data),
-                Event::Contact(data) => match pvt3_messages::cdr::Reader::new(&data).and_then(|mut r| r.read::<u8>("data")) {
+                Event::Frame(received) => self.frame(&received),
+                Event::Contact(received) => match pvt3_messages::cdr::Reader::new(&received.data).and_then(|mut r| r.read::<u8>("data")) {
                     Ok(on) => self.touches.contact(on != 0).map_err(|e| e.0),
                     Err(e) => Err(format!("{}: {e}", self.args.topic("contact"))),
                 },
@@ -150,6 +160,7 @@ impl Node {
                     self.touches.reset();
                     Ok(None)
                 }
+                Event::PublisherGone(gid) => self.touches.publisher_gone(gid).map_or(Ok(None), Err),
             };
             match result {
                 Ok(Some(answer)) => self.publish(answer)?,
@@ -163,13 +174,13 @@ impl Node {
         Ok(())
     }
 
-    /// A frame message on key `key` (its type the key's third part from the end).
-    fn frame(&mut self, key: &str, data: &[u8]) -> Result<Option<crate::touch::Answer>, String> {
+    /// A frame message (its type the key's part before the hash).
+    fn frame(&mut self, received: &Received) -> Result<Option<crate::touch::Answer>, String> {
         let topic = self.args.topic("frames");
-        let type_name = key.rsplit('/').nth(1).unwrap_or_default();
+        let type_name = received.key.rsplit('/').nth(1).unwrap_or_default();
         let kind = Kind::of(type_name).ok_or_else(|| format!("{topic}: a message of type {type_name}, which pvt3 does not read"))?;
-        let decoded = decode(kind, data).map_err(|e| format!("{topic}: {e}"))?;
-        self.touches.frame(decoded, now()).map_err(|e| format!("{topic}: {e}"))
+        let decoded = decode(kind, &received.data).map_err(|e| format!("{topic}: {e}"))?;
+        self.touches.frame(decoded, now(), received.source).map_err(|e| format!("{topic}: {e}"))
     }
 
     fn publish(&mut self, answer: crate::touch::Answer) -> Result<(), NodeError> {
@@ -213,7 +224,7 @@ impl NodeBuilder<'_> {
 
     /// Subscribes to topic `name` of any type (its messages' keys say which), declaring it as
     /// `type_name`.
-    fn subscribe(&mut self, name: &str, type_name: &str, event: fn(String, Vec<u8>) -> Event) -> Result<(), NodeError> {
+    fn subscribe(&mut self, name: &str, type_name: &str, event: fn(Received) -> Event) -> Result<(), NodeError> {
         let topic = self.topic(name, type_name)?;
         let key = format!("{}/{}/*/*", self.args.node.domain, topic.name.trim_matches('/'));
         let sender = self.sender.clone();
@@ -221,13 +232,36 @@ impl NodeBuilder<'_> {
             .session
             .declare_subscriber(key)
             .callback(move |sample| {
-                let _ = sender.send(event(sample.key_expr().as_str().to_string(), sample.payload().to_bytes().into_owned()));
+                let source = sample.attachment().and_then(|a| zenoh_ext::z_deserialize::<(i64, i64, [u8; 16])>(a).ok()).map(|a| a.2);
+                let (key, data) = (sample.key_expr().as_str().to_string(), sample.payload().to_bytes().into_owned());
+                let _ = sender.send(event(Received { key, data, source }));
             })
             .wait()
             .map_err(zenoh_error)?;
         self.subscribers.push(subscriber);
         // Declared once the subscriber is: a publisher that waits for the token is heard.
         self.token(graph::Kind::Subscription, Some(&topic))?;
+        Ok(())
+    }
+
+    /// Watches the liveliness tokens of the publishers of topic `name`: one that leaves is
+    /// told to the touch by its GID (the XXH3-128 of its token, as rmw_zenoh derives it).
+    fn watch_publishers(&mut self, name: &str) -> Result<(), NodeError> {
+        let topic = self.args.topic(name).replace('/', "%");
+        let key = format!("@ros2_lv/{}/*/*/*/MP/*/*/*/{topic}/**", self.args.node.domain);
+        let sender = self.sender.clone();
+        let watch = self
+            .session
+            .liveliness()
+            .declare_subscriber(key)
+            .callback(move |sample| {
+                if sample.kind() == zenoh::sample::SampleKind::Delete {
+                    let _ = sender.send(Event::PublisherGone(graph::gid(sample.key_expr().as_str())));
+                }
+            })
+            .wait()
+            .map_err(zenoh_error)?;
+        self.subscribers.push(watch);
         Ok(())
     }
 

@@ -44,6 +44,8 @@ pub struct Touches {
     frames: usize,
     last: Stamp,
     compute: Duration,
+    /// The GID of the publisher whose frames make the touch, where its messages say.
+    source: Option<[u8; 16]>,
 }
 
 /// Why a message was not taken; the node reports it and keeps serving.
@@ -66,6 +68,7 @@ impl Touches {
             frames: 0,
             last: Stamp::default(),
             compute: Duration::ZERO,
+            source: None,
         })
     }
 
@@ -74,10 +77,24 @@ impl Touches {
         &self.classifier
     }
 
-    /// Takes a decoded message received at `received`; the touch's answer if it ends the touch.
-    pub fn frame(&mut self, decoded: Decoded, received: Stamp) -> Result<Option<Answer>, Refused> {
+    /// Takes a decoded message received at `received` from the publisher `source` (its GID,
+    /// where the message says); the touch's answer if it ends the touch. Within a touch, a frame
+    /// of a second publisher, or stamped before the frame before it, is refused: neither can be
+    /// put in its place in a stream.
+    pub fn frame(&mut self, decoded: Decoded, received: Stamp, source: Option<[u8; 16]>) -> Result<Option<Answer>, Refused> {
         if self.boundary == Boundary::Contact && !self.in_contact {
             return Ok(None);
+        }
+        if self.frames > 0 {
+            if source.is_some() && self.source.is_some() && source != self.source {
+                return Err(Refused(format!("a second publisher's frame, dropped: the touch is the first's ({} frames in)", self.frames)));
+            }
+            if let Some(stamp) = decoded.stamp.filter(|s| *s < self.last) {
+                let at = |s: Stamp| format!("{}.{:09}", s.sec, s.nanosec);
+                return Err(Refused(format!("a frame stamped {}, before the one before it ({}): dropped", at(stamp), at(self.last))));
+            }
+        } else {
+            self.source = source;
         }
         let started = Instant::now();
         let pushed = match decoded.frame {
@@ -124,6 +141,17 @@ impl Touches {
             return Ok(None);
         }
         self.finish("contact").map(Some)
+    }
+
+    /// The publisher `gid` has left the graph: a touch of its frames is dropped, unanswered,
+    /// and said so.
+    pub fn publisher_gone(&mut self, gid: [u8; 16]) -> Option<String> {
+        if self.frames == 0 || self.source != Some(gid) {
+            return None;
+        }
+        let frames = self.frames;
+        self.reset();
+        Some(format!("the publisher of the touch's frames left after {frames} frames: the touch is dropped"))
     }
 
     /// Ends the touch at once, unanswered.

@@ -3,7 +3,9 @@
 //! node's binary. Its answers equal the runtime's for the same frames (what `pvt3-run` computes,
 //! its own calls: `classify_camera_touches`, `classify_batch`), for a camera's file and a taxel
 //! array's; the listener finds the node by rmw_zenoh's tokens and reads its answers on the keys
-//! it computes itself; hostile frames are refused on `/rosout` while the node serves on.
+//! it computes itself; hostile traffic (frames of the wrong size or encoding, cut CDR, a foreign
+//! type, a publisher that leaves mid-touch, a second publisher, a frame out of order) is refused
+//! on `/rosout` while the node serves on.
 
 #[path = "../../tests/support/onnx_check.rs"]
 #[allow(dead_code)] // the other end-to-end tests use the rest of it
@@ -82,13 +84,18 @@ fn a_camera_s_touches_are_answered_as_the_runtime_answers_them_through_hostile_t
     let expected: Vec<Vec<f32>> = classifier.classify_camera_touches(&values, 2).unwrap().into_iter().map(|p| p.probabilities).collect();
     let heard = converse(&model, &touches, "image", true, &["early_stop:=false"]);
     assert_close(&heard.answers, &expected, "camera");
-    for why in [
+    let left = format!("the publisher of the touch's frames left after {} frames: the touch is dropped", frames / 2);
+    let refusals = [
         "a frame of 120 × 320 RGB; the file reads the camera's 240 × 320 × 3",
         "encoding `yuv422`",
         "truncated",
         "too short for a CDR message",
         "String_, which pvt3 does not read",
-    ] {
+        &left,
+        "a second publisher's frame, dropped: the touch is the first's (4 frames in)",
+        "before the one before it",
+    ];
+    for why in refusals {
         assert!(heard.logs.iter().any(|l| l.contains(why)), "/rosout lacks `{why}`: {:?}", heard.logs);
     }
     assert!(!heard.node_said.contains("panicked"), "{}", heard.node_said);

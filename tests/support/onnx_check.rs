@@ -11,8 +11,8 @@ use super::workspace::workspace;
 
 /// What the scripts import: onnx's checker and onnxruntime, numpy, the writers of ROS 2 bags
 /// that `tests/bag_writer.py` uses (rosbags; mcap with mcap-ros2-support), and the zenoh peer
-/// that `tests/ros_peer.py` makes of them (eclipse-zenoh).
-const PACKAGES: [&str; 7] = ["onnx", "onnxruntime", "numpy", "rosbags", "mcap", "mcap-ros2-support", "eclipse-zenoh"];
+/// that `tests/ros_peer.py` makes of them (eclipse-zenoh; python-xxhash for rmw_zenoh's GIDs).
+const PACKAGES: [&str; 8] = ["onnx", "onnxruntime", "numpy", "rosbags", "mcap", "mcap-ros2-support", "eclipse-zenoh", "xxhash"];
 
 /// The venv's python, created once (test binaries run one after another; the venv is kept
 /// across runs).
