@@ -97,7 +97,28 @@ impl Touches {
             self.source = source;
         }
         let started = Instant::now();
-        let pushed = match decoded.frame {
+        self.push(decoded.frame)?;
+        self.compute += started.elapsed();
+        self.frames += 1;
+        self.last = decoded.stamp.unwrap_or(received);
+        if self.session.received() == self.session.frames() {
+            return self.finish("window").map(Some);
+        }
+        let tubelet = self.classifier.tubelet();
+        if self.early_stop && self.session.received() > 0 && self.session.received().is_multiple_of(tubelet) {
+            let started = Instant::now();
+            let peek = self.session.peek().map_err(|e| Refused(e.to_string()))?;
+            self.compute += started.elapsed();
+            if peek.stop {
+                return Ok(Some(self.answer(peek.prediction, "early_stop")));
+            }
+        }
+        Ok(None)
+    }
+
+    /// Pushes a frame into the session as the file reads its frames.
+    fn push(&mut self, frame: Frame) -> Result<(), Refused> {
+        let pushed = match frame {
             Frame::Picture(p) => match self.classifier.camera() {
                 Some(camera) if camera.recorded == p.shape() => self.session.push_camera_frame(&p.data),
                 Some(camera) => {
@@ -115,23 +136,7 @@ impl Touches {
             }
             Frame::Values { .. } => return Err(Refused("a taxel array's values; the file reads a camera's frames".into())),
         };
-        pushed.map_err(|e| Refused(e.to_string()))?;
-        self.compute += started.elapsed();
-        self.frames += 1;
-        self.last = decoded.stamp.unwrap_or(received);
-        if self.session.received() == self.session.frames() {
-            return self.finish("window").map(Some);
-        }
-        let tubelet = self.classifier.tubelet();
-        if self.early_stop && self.session.received() > 0 && self.session.received().is_multiple_of(tubelet) {
-            let started = Instant::now();
-            let peek = self.session.peek().map_err(|e| Refused(e.to_string()))?;
-            self.compute += started.elapsed();
-            if peek.stop {
-                return Ok(Some(self.answer(peek.prediction, "early_stop")));
-            }
-        }
-        Ok(None)
+        pushed.map_err(|e| Refused(e.to_string()))
     }
 
     /// Contact begins (`true`) or ends (`false`): an ending touch is answered from what it has.

@@ -130,24 +130,7 @@ pub fn read_folder(dir: &Path, opts: &ImportOptions) -> Result<Imported> {
     let every_value = header.layout.is_some();
     let (chosen, left_out) = choose_columns(&names, &touches, opts, every_value)?;
     let channels: Vec<String> = chosen.iter().map(|&c| names[c].clone()).collect();
-    // A bag's layout of two dimensions is the sensor's grid, where every value is a channel.
-    let layout = match header.layout.as_deref() {
-        Some(&[h, w]) if chosen.len() == names.len() => Some((h, w)),
-        _ => None,
-    };
-    if let (Some((h, w)), Some((rows, cols))) = (opts.grid, layout.filter(|l| Some(*l) != opts.grid)) {
-        return Err(Error::Usage(format!("--grid {h}x{w} disagrees with the bag's messages, laid out {rows} × {cols} (layout.dim)")));
-    }
-    let grid = opts.grid.or(layout);
-    if let Some((h, w)) = grid {
-        if h * w != channels.len() {
-            return Err(Error::Usage(format!(
-                "--grid {h}x{w} holds {} channels, and {} columns were chosen: {channels:?}",
-                h * w,
-                channels.len()
-            )));
-        }
-    }
+    let grid = grid(opts.grid, header.layout.as_deref(), chosen.len() == names.len(), &channels)?;
     let reading = (opts.per_distance.is_some() || opts.per_force.is_some())
         .then(|| Reading { speed: opts.per_distance.as_ref().map(|p| p.1), force: opts.per_force.as_ref().map(|p| p.1) });
     if let Some(problem) = reading.and_then(|r| r.problem()) {
@@ -178,6 +161,25 @@ pub fn read_folder(dir: &Path, opts: &ImportOptions) -> Result<Imported> {
         out.sources.push(t.source);
     }
     Ok(out)
+}
+
+/// The channels' grid: `--grid`, or a bag's layout of two dimensions where every value of its
+/// messages is a channel (`all_chosen`); a `--grid` that disagrees with that layout, or that
+/// holds another number of channels than `channels`, is refused.
+fn grid(given: Option<(usize, usize)>, layout: Option<&[usize]>, all_chosen: bool, channels: &[String]) -> Result<Option<(usize, usize)>> {
+    let layout = match layout {
+        Some(&[h, w]) if all_chosen => Some((h, w)),
+        _ => None,
+    };
+    if let (Some((h, w)), Some((rows, cols))) = (given, layout.filter(|l| Some(*l) != given)) {
+        return Err(Error::Usage(format!("--grid {h}x{w} disagrees with the bag's messages, laid out {rows} × {cols} (layout.dim)")));
+    }
+    let grid = given.or(layout);
+    if let Some((h, w)) = grid.filter(|(h, w)| h * w != channels.len()) {
+        let (held, chosen) = (h * w, channels.len());
+        return Err(Error::Usage(format!("--grid {h}x{w} holds {held} channels, and {chosen} columns were chosen: {channels:?}")));
+    }
+    Ok(grid)
 }
 
 /// Every listed touch, read in order.
