@@ -26,7 +26,9 @@ pub fn classification(stamp: Stamp, frame_id: &str, classes: &[String], probabil
 /// message says the class and the frames read; its values are `class`, `frames` (read),
 /// `window` (the file's frames), `early_stop` (`true` where the stopping rule decided before the
 /// window was full), `ended_by` (`window`, `early_stop`, `contact` or `reset`) and
-/// `compute_ms` (the runtime's time over the touch, milliseconds).
+/// `compute_ms` (the runtime's time over the touch, milliseconds) and `last_ms` (its time on the
+/// message that ended the touch, from its arrival to the answer: what a publish-to-answer
+/// latency is held against).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Status {
     /// The class answered.
@@ -41,6 +43,8 @@ pub struct Status {
     pub ended_by: &'static str,
     /// The runtime's time over the touch, in milliseconds.
     pub compute_ms: f64,
+    /// The runtime's time on the message that ended the touch, in milliseconds.
+    pub last_ms: f64,
 }
 
 /// The status message of node `name`.
@@ -54,6 +58,7 @@ pub fn status(name: &str, s: &Status) -> Vec<u8> {
         ("early_stop", s.early_stop.to_string()),
         ("ended_by", s.ended_by.to_string()),
         ("compute_ms", format!("{:.3}", s.compute_ms)),
+        ("last_ms", format!("{:.3}", s.last_ms)),
     ];
     w.length(values.len());
     for (key, value) in values {

@@ -44,6 +44,8 @@ pub struct Touches {
     frames: usize,
     last: Stamp,
     compute: Duration,
+    /// When the runtime began on the message that ends the touch (a frame, or losing contact).
+    last_began: Instant,
     /// The GID of the publisher whose frames make the touch, where its messages say.
     source: Option<[u8; 16]>,
 }
@@ -68,6 +70,7 @@ impl Touches {
             frames: 0,
             last: Stamp::default(),
             compute: Duration::ZERO,
+            last_began: Instant::now(),
             source: None,
         })
     }
@@ -97,6 +100,7 @@ impl Touches {
             self.source = source;
         }
         let started = Instant::now();
+        self.last_began = started;
         self.push(decoded.frame)?;
         self.compute += started.elapsed();
         self.frames += 1;
@@ -145,6 +149,7 @@ impl Touches {
         if self.boundary != Boundary::Contact || on || !was || self.session.received() == 0 {
             return Ok(None);
         }
+        self.last_began = Instant::now();
         self.finish("contact").map(Some)
     }
 
@@ -195,6 +200,7 @@ impl Touches {
             early_stop: ended_by == "early_stop",
             ended_by,
             compute_ms: self.compute.as_secs_f64() * 1e3,
+            last_ms: self.last_began.elapsed().as_secs_f64() * 1e3,
         };
         let answer = Answer { prediction, stamp: self.last, status };
         self.reset();
