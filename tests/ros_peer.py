@@ -82,7 +82,7 @@ class Publisher:
     def put(self, payload):
         self.sequence += 1
         attachment = z_serialize((Int64(self.sequence), Int64(time.time_ns()), self.gid))
-        self.session.put(self.key, bytes(payload), attachment=attachment, express=True)
+        self.session.put(self.key, bytes(payload), attachment=attachment)
 
 
 def hostile(session, first):

@@ -269,8 +269,7 @@ impl NodeBuilder<'_> {
         let topic = self.topic(name, type_name)?;
         let entity = self.token(graph::Kind::Publisher, Some(&topic))?;
         let token = self.tokens.pop().expect("the publisher's token");
-        // Express: each answer sent at once, not batched with the next (there is none for a while).
-        let publisher = self.session.declare_publisher(topic.key_expr(self.args.node.domain)).express(true).wait().map_err(zenoh_error)?;
+        let publisher = self.session.declare_publisher(topic.key_expr(self.args.node.domain)).wait().map_err(zenoh_error)?;
         Ok(Out { publisher, gid: entity.gid, sequence: 0, _token: token })
     }
 }
