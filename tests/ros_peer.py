@@ -9,7 +9,8 @@ It prints `ready` once the router listens, waits for pvt3-ros's subscription to 
 (its liveliness token), then publishes each touch of TOUCHES.npy ([touches,] height, width,
 [channels,] frames), frame by frame, on /frames: KIND `image` as sensor_msgs/msg/Image (rgb8, or
 mono8 for one channel), `array` as std_msgs/msg/Float32MultiArray (the grid row-major, its
-layout's two dimensions), each with rmw_zenoh's attachment naming its publisher (the GID of its
+layout's two dimensions), each with rmw_zenoh's attachment naming its publisher (blocking, never dropping, when the link
+is busy: the test's driver loses no frame) (the GID of its
 liveliness token, by python-xxhash). With HOSTILE, first a burst of messages the node must
 refuse and survive: a wrong size, an unknown encoding, cut CDR, a type it does not read; then a
 publisher that leaves half way through a touch (its token undeclared); and within each touch,
@@ -82,7 +83,7 @@ class Publisher:
     def put(self, payload):
         self.sequence += 1
         attachment = z_serialize((Int64(self.sequence), Int64(time.time_ns()), self.gid))
-        self.session.put(self.key, bytes(payload), attachment=attachment)
+        self.session.put(self.key, bytes(payload), attachment=attachment, congestion_control=zenoh.CongestionControl.BLOCK)
 
 
 def hostile(session, first):
@@ -93,7 +94,7 @@ def hostile(session, first):
     odd = image(first, 1, encoding="yuv422")
     flags = STORE.serialize_cdr(T["std_msgs/msg/String"](data="x"), "std_msgs/msg/String")
     for payload, where in ((small, image_key), (odd, image_key), (good[: len(good) // 2], image_key), (good[:3], image_key), (flags, key("frames", "std_msgs/msg/String"))):
-        session.put(where, bytes(payload))
+        session.put(where, bytes(payload), congestion_control=zenoh.CongestionControl.BLOCK)
 
 
 def main(port, touches_file, kind, hostile_first=False):

@@ -269,7 +269,11 @@ impl NodeBuilder<'_> {
         let topic = self.topic(name, type_name)?;
         let entity = self.token(graph::Kind::Publisher, Some(&topic))?;
         let token = self.tokens.pop().expect("the publisher's token");
-        let publisher = self.session.declare_publisher(topic.key_expr(self.args.node.domain)).wait().map_err(zenoh_error)?;
+        // Blocking rather than dropping when the link is busy: an answer is one message a touch,
+        // and none may be lost.
+        let key = topic.key_expr(self.args.node.domain);
+        let publisher =
+            self.session.declare_publisher(key).congestion_control(zenoh::qos::CongestionControl::Block).wait().map_err(zenoh_error)?;
         Ok(Out { publisher, gid: entity.gid, sequence: 0, _token: token })
     }
 }
