@@ -21,7 +21,6 @@ import time
 from pathlib import Path
 
 import numpy as np
-import zenoh
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 import ros_peer  # noqa: E402  the test peer's messages, keys and publisher
@@ -59,12 +58,7 @@ def main(binary, model, kind, fps, seconds):
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
-    config = zenoh.Config()
-    config.insert_json5("mode", json.dumps("router"))
-    config.insert_json5("listen/endpoints", json.dumps([f"tcp/127.0.0.1:{port}"]))
-    config.insert_json5("scouting/multicast/enabled", "false")
-    config.insert_json5("scouting/gossip/enabled", "false")
-    session = zenoh.open(config)
+    session = ros_peer.router(port)
     arrived, last_ms = [], []
     store = ros_peer.STORE
 

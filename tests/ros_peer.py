@@ -97,16 +97,21 @@ def hostile(session, first):
         session.put(where, bytes(payload), congestion_control=zenoh.CongestionControl.BLOCK)
 
 
-def main(port, touches_file, kind, hostile_first=False):
-    touches = np.load(touches_file)
-    if touches.ndim == (5 if kind == "image" else 4) - 1:
-        touches = touches[None]
+def router(port):
+    """A zenoh session that is the graph's router, on 127.0.0.1:PORT alone: no multicast, no gossip."""
     config = zenoh.Config()
     config.insert_json5("mode", json.dumps("router"))
     config.insert_json5("listen/endpoints", json.dumps([f"tcp/127.0.0.1:{port}"]))
     config.insert_json5("scouting/multicast/enabled", "false")
     config.insert_json5("scouting/gossip/enabled", "false")
-    session = zenoh.open(config)
+    return zenoh.open(config)
+
+
+def main(port, touches_file, kind, hostile_first=False):
+    touches = np.load(touches_file)
+    if touches.ndim == (5 if kind == "image" else 4) - 1:
+        touches = touches[None]
+    session = router(port)
     answers, statuses, logs = [], [], []
 
     def on_answer(sample):
