@@ -116,6 +116,13 @@ fn a_long_bag_is_cut_into_touches_by_a_labels_file(dir: &Path) {
     let said = ok(&[&["import", long.to_str().unwrap()], &args[..]].concat());
     assert!(said.contains("10 touches of 2 classes"), "{said}");
     assert!(read(&out) == read(&reference), "the cut touches differ from their own frames");
+    // A row whose seconds hold no message of the bag.
+    let text = std::fs::read_to_string(&labels).unwrap();
+    let bad = long.join("bad.csv");
+    std::fs::write(&bad, text.replacen(",0,0.5\n", ",100,100.5\n", 1)).unwrap();
+    let args = ["--labels", bad.to_str().unwrap(), "--topic", "/camera", "--frames", "6", "--frames-from", "whole", "--out", o];
+    let said = fails(&[&["import", long.to_str().unwrap()], &args[..]].concat());
+    assert!(said.contains("run: topic `/camera` has no message from 100 s to 100.5 s of the bag"), "{said}");
 }
 
 /// Damages the bags it reads: the last check.

@@ -1,6 +1,7 @@
 //! rosbag2 recordings, as `pvt3 import` reads them: a bag directory (its `metadata.yaml` beside
 //! the `.mcap` or `.db3` files it names, read once when the [`Bag`] is opened) or a lone `.mcap`
-//! file, one topic's messages in the bag's order, each with its receive time ([`Bag::messages`]). Messages are streamed: an MCAP's
+//! file, one topic's messages in the bag's order, each with its receive time
+//! ([`Bag::messages_within`], a touch's window of them). Messages are streamed: an MCAP's
 //! chunks are decompressed one at a time (zstd and lz4, their CRCs checked), SQLite's rows are
 //! read as the query gives them, so a bag of any length is read in the memory of its largest
 //! chunk. What a message holds is read by `pvt3_messages`, as a robot's node reads its topic.
@@ -125,9 +126,32 @@ impl Bag {
         Ok(Within { window: Some((at(start), at(end))), seconds: (start, end) })
     }
 
+    /// Calls `each` with the messages of `topic` that `within` holds, as [`Bag::messages`] does;
+    /// refuses a window of seconds that holds none.
+    pub fn messages_within(
+        &self,
+        topic: &str,
+        within: &Within,
+        mut each: impl FnMut(usize, Message) -> Result<(), String>,
+    ) -> Result<(), String> {
+        let mut taken = 0;
+        self.messages(topic, |index, message| {
+            if !within.holds(message.time) {
+                return Ok(());
+            }
+            taken += 1;
+            each(index, message)
+        })?;
+        if taken == 0 && within.window.is_some() {
+            let (start, end) = within.seconds;
+            return Err(format!("topic `{topic}` has no message from {start} s to {end} s of the bag"));
+        }
+        Ok(())
+    }
+
     /// Calls `each` with every message of `topic`, in the bag's order, and its index among the
     /// topic's messages; stops at the first error, `each`'s or the bag's.
-    pub fn messages(&self, topic: &str, mut each: impl FnMut(usize, Message) -> Result<(), String>) -> Result<(), String> {
+    fn messages(&self, topic: &str, mut each: impl FnMut(usize, Message) -> Result<(), String>) -> Result<(), String> {
         let mut index = 0;
         for (file, storage) in &self.files {
             let mut counted = |message: Message| {
@@ -160,18 +184,8 @@ pub struct Within {
 
 impl Within {
     /// Whether a message received at `time` (nanoseconds) is the touch's.
-    pub fn holds(&self, time: i64) -> bool {
+    fn holds(&self, time: i64) -> bool {
         self.window.is_none_or(|(start, end)| (start..end).contains(&time))
-    }
-
-    /// The window's start, in seconds from the first message.
-    pub fn start(&self) -> f64 {
-        self.seconds.0
-    }
-
-    /// Its end.
-    pub fn end(&self) -> f64 {
-        self.seconds.1
     }
 }
 

@@ -230,8 +230,7 @@ fn read_listed(dir: &Path, listed: &Listed, class: usize, topic: Option<&str>) -
         return read_bag(dir, listed, class, topic);
     }
     let _ = topic;
-    let (names, mut touch) = read_file(&listed.path, class)?;
-    touch.source = listed.source(dir);
+    let (names, touch) = read_file(&listed.path, class, listed.source(dir))?;
     Ok((Header { names, layout: None }, touch))
 }
 
@@ -302,8 +301,8 @@ fn chosen_frames(t: &TouchFile, (chosen, names): (&[usize], &[String]), reading:
     Ok(frames)
 }
 
-/// One CSV touch: its header and rows; a ragged row is an error naming its line.
-fn read_file(path: &Path, class: usize) -> Result<(Vec<String>, TouchFile)> {
+/// One CSV touch, named `source` in the data set: its header and rows; a ragged row is an error naming its line.
+fn read_file(path: &Path, class: usize, source: String) -> Result<(Vec<String>, TouchFile)> {
     let mut reader = ::csv::ReaderBuilder::new()
         .flexible(true)
         .trim(::csv::Trim::All)
@@ -323,7 +322,7 @@ fn read_file(path: &Path, class: usize) -> Result<(Vec<String>, TouchFile)> {
     if rows.is_empty() {
         return Err(Error::import(path, None, "holds a header and no frame"));
     }
-    Ok((names, TouchFile { class, path: path.to_path_buf(), source: String::new(), rows, lines, timing: None }))
+    Ok((names, TouchFile { class, path: path.to_path_buf(), source, rows, lines, timing: None }))
 }
 
 /// The columns to import (indices into the header) and those left out, with why; by default,

@@ -27,10 +27,7 @@ pub(super) fn read(path: &Path, window: Option<(f64, f64)>, opts: &CameraOptions
     let mut motion = Motion::new(opts.span);
     let mut first: Option<Picture> = None;
     let mut times = Vec::new();
-    bag.messages(&topic, |index, message| {
-        if !within.holds(message.time) {
-            return Ok(());
-        }
+    bag.messages_within(&topic, &within, |index, message| {
         let (picture, stamp) = picture(kind, &topic, index, &message.data)?;
         times.push(stamp.unwrap_or(message.time));
         if let Some(first) = &first {
@@ -43,9 +40,6 @@ pub(super) fn read(path: &Path, window: Option<(f64, f64)>, opts: &CameraOptions
         first.get_or_insert(picture);
         Ok(())
     })?;
-    if motion.frames() == 0 && window.is_some() {
-        return Err(format!("topic `{topic}` has no message from {} s to {} s of the bag", within.start(), within.end()));
-    }
     enough(motion.frames(), frames, opts)?;
     let first = first.expect("a frame was read");
     let taken = motion.take(frames);
@@ -53,10 +47,7 @@ pub(super) fn read(path: &Path, window: Option<(f64, f64)>, opts: &CameraOptions
     // The second pass keeps the frames taken (each once, however often it is taken), read.
     let mut kept: BTreeMap<usize, Option<Picture>> = taken.frames.iter().map(|&i| (i, None)).collect();
     let mut taken_so_far = 0;
-    bag.messages(&topic, |index, message| {
-        if !within.holds(message.time) {
-            return Ok(());
-        }
+    bag.messages_within(&topic, &within, |index, message| {
         if let Some(slot) = kept.get_mut(&taken_so_far) {
             *slot = Some(picture(kind, &topic, index, &message.data)?.0.read_as(&camera)?);
         }

@@ -36,10 +36,7 @@ pub(super) fn read(path: &Path, window: Option<(f64, f64)>, topic: Option<&str>)
     }
     let within = bag.within(window)?;
     let (mut rows, mut times, mut dims) = (Vec::new(), Vec::new(), None);
-    bag.messages(&topic, |index, message| {
-        if !within.holds(message.time) {
-            return Ok(());
-        }
+    bag.messages_within(&topic, &within, |index, message| {
         let at = || format!("topic `{topic}`, message {index}");
         let decoded = decode(kind, &message.data).map_err(|e| format!("{}: {e}", at()))?;
         let Frame::Values { values, dims: layout } = decoded.frame else { unreachable!("a multi-array decodes to values") };
@@ -63,11 +60,6 @@ pub(super) fn read(path: &Path, window: Option<(f64, f64)>, topic: Option<&str>)
         times.push(decoded.stamp.map_or(message.time, |s| s.nanos()));
         Ok(())
     })?;
-    let Some((_, dims)) = dims else {
-        return Err(match window {
-            Some(_) => format!("topic `{topic}` has no message from {} s to {} s of the bag", within.start(), within.end()),
-            None => format!("topic `{topic}` has no message: an empty touch"),
-        });
-    };
+    let Some((_, dims)) = dims else { return Err(format!("topic `{topic}` has no message: an empty touch")) };
     Ok(BagRows { dims, rows, timing: Timing::of(&times) })
 }
