@@ -55,7 +55,6 @@ struct Out {
     publisher: zenoh::pubsub::Publisher<'static>,
     gid: [u8; 16],
     sequence: i64,
-    _token: zenoh::liveliness::LivelinessToken,
 }
 
 impl Out {
@@ -87,6 +86,7 @@ pub struct Node {
     classification: Out,
     status: Out,
     rosout: Out,
+    /// Kept for as long as the node serves: its subscribers and every entity's token.
     _subscribers: Vec<zenoh::pubsub::Subscriber<()>>,
     _tokens: Vec<zenoh::liveliness::LivelinessToken>,
     entities: usize,
@@ -268,12 +268,11 @@ impl NodeBuilder<'_> {
     fn publisher(&mut self, name: &str, type_name: &str) -> Result<Out, NodeError> {
         let topic = self.topic(name, type_name)?;
         let entity = self.token(graph::Kind::Publisher, Some(&topic))?;
-        let token = self.tokens.pop().expect("the publisher's token");
         // Blocking rather than dropping when the link is busy: an answer is one message a touch,
         // and none may be lost.
         let key = topic.key_expr(self.args.node.domain);
         let publisher =
             self.session.declare_publisher(key).congestion_control(zenoh::qos::CongestionControl::Block).wait().map_err(zenoh_error)?;
-        Ok(Out { publisher, gid: entity.gid, sequence: 0, _token: token })
+        Ok(Out { publisher, gid: entity.gid, sequence: 0 })
     }
 }
