@@ -6,9 +6,14 @@
 use crate::graph::Node;
 
 /// Every parameter, its default and what it does, for `--help` and for refusing a misspelt one.
-pub const PARAMETERS: [(&str, &str, &str); 5] = [
+pub const PARAMETERS: [(&str, &str, &str); 6] = [
     ("model", "", "the pvt3 file (.onnx) to classify with; required"),
-    ("touch", "frames", "how touches are cut: `frames` (each window of frames a touch) or `contact` (the contact topic's true to false)"),
+    (
+        "touch",
+        "frames",
+        "how touches are cut: `frames` (each window a touch), `contact` (the contact topic's true to false) or `moving` (a camera's recording, taken over the span in which the gel moves)",
+    ),
+    ("recording", "300", "touch:=moving: the frames a recording holds; it ends there, or when the contact topic says false"),
     ("early_stop", "true", "answer as soon as the file's stopping rule decides, before the window is full"),
     ("frame_id", "", "the header.frame_id of the answers"),
     ("router", "tcp/localhost:7447", "the zenoh router of the ROS 2 graph (rmw_zenoh's `ros2 run rmw_zenoh_cpp rmw_zenohd`)"),
@@ -19,7 +24,7 @@ pub const PARAMETERS: [(&str, &str, &str); 5] = [
 /// for a camera's file and `Float32MultiArray` for a taxel array's).
 pub const TOPICS: [(&str, &str, &str); 6] = [
     ("frames", "sensor_msgs/msg/Image, CompressedImage or std_msgs/msg/*MultiArray", "in: the sensor's frames"),
-    ("contact", "std_msgs/msg/Bool", "in: true when the sensor touches, false when it lets go (touch:=contact)"),
+    ("contact", "std_msgs/msg/Bool", "in: true when the sensor touches, false when it lets go (touch:=contact, touch:=moving)"),
     ("reset", "std_msgs/msg/Empty", "in: ends the touch at once, unanswered"),
     ("classification", "vision_msgs/msg/Classification", "out: each touch's answer, one hypothesis a class, stamped with its last frame"),
     (
@@ -134,6 +139,15 @@ mod tests {
         assert_eq!((a.parameter("model"), a.parameter("touch"), a.parameter("early_stop")), ("felt.onnx", "contact", "true"));
         let a = parse("--ros-args -r /hand/contact:=gripper/touching -r __ns:=/hand").unwrap();
         assert_eq!(a.topic("contact"), "/hand/gripper/touching");
+    }
+
+    #[test]
+    fn the_guide_lists_every_parameter_with_its_default() {
+        let guide = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/../docs/guide/ros.md")).unwrap();
+        for (name, default, _) in PARAMETERS {
+            let shown = if default.is_empty() { "(".to_string() } else { format!("`{default}`") };
+            assert!(guide.contains(&format!("| `{name}` | {shown}")), "docs/guide/ros.md: no row for `{name}`");
+        }
     }
 
     #[test]

@@ -13,7 +13,7 @@ use zenoh::Wait;
 use crate::args::Args;
 use crate::graph::{self, Entity, Qos, Topic};
 use crate::outgoing::{self, Level};
-use crate::touch::{Boundary, Touches};
+use crate::touch::{Boundary, Touches, TouchesError};
 
 /// Why the node could not start or stopped.
 #[derive(Debug, thiserror::Error)]
@@ -27,6 +27,15 @@ pub enum NodeError {
     /// zenoh refused (no router, a key it cannot take).
     #[error("zenoh: {0}")]
     Zenoh(String),
+}
+
+impl From<TouchesError> for NodeError {
+    fn from(e: TouchesError) -> Self {
+        match e {
+            TouchesError::Runtime(e) => Self::Model(e),
+            TouchesError::Boundary(why) => Self::Parameter(why),
+        }
+    }
 }
 
 fn zenoh_error(e: impl std::fmt::Display) -> NodeError {
@@ -99,7 +108,13 @@ impl Node {
         let boundary = match args.parameter("touch") {
             "frames" => Boundary::Frames,
             "contact" => Boundary::Contact,
-            other => return Err(NodeError::Parameter(format!("touch:={other}: expected frames or contact"))),
+            "moving" => {
+                let recording = args.parameter("recording");
+                let frames =
+                    recording.parse().map_err(|_| NodeError::Parameter(format!("recording:={recording}: expected a count of frames")))?;
+                Boundary::Moving(frames)
+            }
+            other => return Err(NodeError::Parameter(format!("touch:={other}: expected frames, contact or moving"))),
         };
         let early_stop = match args.parameter("early_stop") {
             "true" => true,

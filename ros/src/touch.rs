@@ -2,12 +2,15 @@
 //! as the file says its frames are read (a camera's frames cropped, shrunk and greyed, the
 //! touch's first kept as its background; a taxel array's values as the grid), until the touch
 //! ends: the window is full, the file's stopping rule decides early, contact is lost, or a reset
-//! comes. Free of any transport, so that its answers are tested against `pvt3-run`'s alone.
+//! comes. A camera's touch may instead be a recording whose frames are taken over the span in
+//! which the gel moves, as `pvt3 import` takes a video's ([`Boundary::Moving`]). Free of any
+//! transport, so that its answers are tested against `pvt3-run`'s alone.
 
 use std::time::{Duration, Instant};
 
+use pvt3_format::span::{FrameSpan, Motion};
 use pvt3_messages::{Decoded, Frame, Stamp};
-use pvt3_runtime::{Classifier, Prediction, Session};
+use pvt3_runtime::{Classifier, Picture, Prediction, Session};
 
 use crate::outgoing::Status;
 
@@ -20,6 +23,20 @@ pub enum Boundary {
     /// A touch begins when the contact topic says `true` and ends when it says `false` (or the
     /// window is full, or the stopping rule decides); frames out of contact are dropped.
     Contact,
+    /// A camera's: every frame is recorded, each read as the file says, until the recording
+    /// holds this many frames or contact is lost; the window's frames are then taken evenly over
+    /// the span in which the gel moves, as `pvt3 import` takes a video's, less the recording's
+    /// first frame where the file was trained so. The stopping rule does not apply.
+    Moving(usize),
+}
+
+/// A recording for [`Boundary::Moving`]: what the moving span needs of each frame, each frame
+/// read as the file says (a model's frame, far smaller than the camera's) and its stamp.
+#[derive(Default)]
+struct Recording {
+    motion: Option<Motion>,
+    read: Vec<Picture>,
+    stamps: Vec<Stamp>,
 }
 
 /// A touch's answer: the prediction, the stamp of its last frame, and how it was reached.
@@ -48,6 +65,7 @@ pub struct Touches {
     last_began: Instant,
     /// The GID of the publisher whose frames make the touch, where its messages say.
     source: Option<[u8; 16]>,
+    recording: Recording,
 }
 
 /// Why a message was not taken; the node reports it and keeps serving.
@@ -55,12 +73,33 @@ pub struct Touches {
 #[error("{0}")]
 pub struct Refused(pub String);
 
+/// Why touches cannot be cut as asked, for this file.
+#[derive(Debug, thiserror::Error)]
+pub enum TouchesError {
+    /// The runtime refused the file.
+    #[error(transparent)]
+    Runtime(#[from] pvt3_runtime::Error),
+    /// The boundary does not suit the file.
+    #[error("{0}")]
+    Boundary(String),
+}
+use TouchesError::Boundary as BoundaryError;
+
 impl Touches {
     /// Touches of `classifier`'s file cut at `boundary`, answered early where `early_stop` and the
     /// file's stopping rule say so.
-    pub fn new(classifier: Classifier, boundary: Boundary, early_stop: bool) -> Result<Self, pvt3_runtime::Error> {
+    pub fn new(classifier: Classifier, boundary: Boundary, early_stop: bool) -> Result<Self, TouchesError> {
         let session = classifier.session()?;
         let early_stop = early_stop && classifier.stop_rule().is_some();
+        if let Boundary::Moving(frames) = boundary {
+            let window = session.frames();
+            if classifier.camera().is_none() {
+                return Err(BoundaryError("touch:=moving takes a camera's recording; this file reads a taxel array's values".into()));
+            }
+            if frames < window {
+                return Err(BoundaryError(format!("recording:={frames}: a recording must hold the window's {window} frames at least")));
+            }
+        }
         Ok(Self {
             classifier,
             session,
@@ -72,6 +111,7 @@ impl Touches {
             compute: Duration::ZERO,
             last_began: Instant::now(),
             source: None,
+            recording: Recording::default(),
         })
     }
 
@@ -99,6 +139,9 @@ impl Touches {
         } else {
             self.source = source;
         }
+        if let Boundary::Moving(frames) = self.boundary {
+            return self.record(decoded, received, frames);
+        }
         let started = Instant::now();
         self.last_began = started;
         self.push(decoded.frame)?;
@@ -123,14 +166,6 @@ impl Touches {
     /// Pushes a frame into the session as the file reads its frames.
     fn push(&mut self, frame: Frame) -> Result<(), Refused> {
         let pushed = match frame {
-            Frame::Picture(p) => match self.classifier.camera() {
-                Some(camera) if camera.recorded == p.shape() => self.session.push_camera_frame(&p.data),
-                Some(camera) => {
-                    let [h, w, c] = camera.recorded;
-                    return Err(Refused(format!("a frame of {}; the file reads the camera's {h} × {w} × {c}", p.describe())));
-                }
-                None => return Err(Refused("a camera's frame; the file reads a taxel array's values".into())),
-            },
             Frame::Values { values, .. } if self.classifier.camera().is_none() => {
                 let len = self.session.frame_len();
                 if values.len() != len {
@@ -138,14 +173,82 @@ impl Touches {
                 }
                 self.session.push_frame(&values)
             }
-            Frame::Values { .. } => return Err(Refused("a taxel array's values; the file reads a camera's frames".into())),
+            frame => {
+                let picture = self.recorded_picture(frame)?;
+                self.session.push_camera_frame(&picture.data)
+            }
         };
         pushed.map_err(|e| Refused(e.to_string()))
+    }
+
+    /// Records a frame of a [`Boundary::Moving`] touch, read as the file says; the touch's answer
+    /// once the recording holds `frames`.
+    fn record(&mut self, decoded: Decoded, received: Stamp, frames: usize) -> Result<Option<Answer>, Refused> {
+        let started = Instant::now();
+        self.last_began = started;
+        let picture = self.recorded_picture(decoded.frame)?;
+        let camera = self.classifier.camera().expect("a moving span's file records a camera");
+        let read = picture.clone().read_as(&camera).map_err(Refused)?;
+        self.recording.motion.get_or_insert_with(|| Motion::new(FrameSpan::Moving)).push(&picture);
+        self.recording.read.push(read);
+        self.last = decoded.stamp.unwrap_or(received);
+        self.recording.stamps.push(self.last);
+        self.frames += 1;
+        self.compute += started.elapsed();
+        if self.frames == frames {
+            return self.finish_recording("recording").map(Some);
+        }
+        Ok(None)
+    }
+
+    /// The recording's answer: the window's frames taken over its moving span (after its first
+    /// frame, the background, where the file subtracts it), pushed and answered.
+    fn finish_recording(&mut self, ended_by: &'static str) -> Result<Answer, Refused> {
+        let started = Instant::now();
+        let recording = std::mem::take(&mut self.recording);
+        let motion = recording.motion.expect("a recording holds a frame");
+        let window = self.session.frames();
+        if recording.read.len() < window {
+            let recorded = recording.read.len();
+            self.reset();
+            return Err(Refused(format!(
+                "a recording of {recorded} frames ended by {ended_by}, fewer than the window's {window}: dropped"
+            )));
+        }
+        let taken = motion.take(window);
+        let subtract_first = self.classifier.camera().is_some_and(|c| c.subtract_first);
+        let first = subtract_first.then_some(0);
+        let pushed =
+            first.into_iter().chain(taken.frames.iter().copied()).try_for_each(|i| self.session.push_read_camera_frame(&recording.read[i]));
+        if let Err(e) = pushed {
+            self.reset();
+            return Err(Refused(format!("the recording of {} frames: {e}", recording.read.len())));
+        }
+        self.last = recording.stamps[*taken.frames.last().expect("a window holds a frame")];
+        self.compute += started.elapsed();
+        self.finish(ended_by)
+    }
+
+    /// A camera's frame as it was recorded, of the file's camera's shape.
+    fn recorded_picture(&self, frame: Frame) -> Result<Picture, Refused> {
+        match (frame, self.classifier.camera()) {
+            (Frame::Picture(p), Some(camera)) if camera.recorded == p.shape() => Ok(p),
+            (Frame::Picture(p), Some(camera)) => {
+                let [h, w, c] = camera.recorded;
+                Err(Refused(format!("a frame of {}; the file reads the camera's {h} × {w} × {c}", p.describe())))
+            }
+            (Frame::Picture(_), None) => Err(Refused("a camera's frame; the file reads a taxel array's values".into())),
+            (Frame::Values { .. }, _) => Err(Refused("a taxel array's values; the file reads a camera's frames".into())),
+        }
     }
 
     /// Contact begins (`true`) or ends (`false`): an ending touch is answered from what it has.
     pub fn contact(&mut self, on: bool) -> Result<Option<Answer>, Refused> {
         let was = std::mem::replace(&mut self.in_contact, on);
+        if matches!(self.boundary, Boundary::Moving(_)) && !on && was && self.frames > 0 {
+            self.last_began = Instant::now();
+            return self.finish_recording("contact").map(Some);
+        }
         if self.boundary != Boundary::Contact || on || !was || self.session.received() == 0 {
             return Ok(None);
         }
@@ -167,6 +270,7 @@ impl Touches {
     /// Ends the touch at once, unanswered.
     pub fn reset(&mut self) {
         self.session.reset();
+        self.recording = Recording::default();
         self.frames = 0;
         self.compute = Duration::ZERO;
     }
@@ -205,5 +309,21 @@ impl Touches {
         let answer = Answer { prediction, stamp: self.last, status };
         self.reset();
         answer
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn refused(model: &str, boundary: Boundary) -> String {
+        let classifier = Classifier::load(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..").join(model)).unwrap();
+        Touches::new(classifier, boundary, true).err().expect("refused").to_string()
+    }
+
+    #[test]
+    fn a_moving_span_is_a_camera_s_and_holds_a_window() {
+        assert!(refused("tests/golden/icub20/model.onnx", Boundary::Moving(300)).contains("touch:=moving takes a camera's recording"));
+        assert!(refused("shipped/physiclear.onnx", Boundary::Moving(2)).contains("recording:=2: a recording must hold the window's"));
     }
 }

@@ -5,7 +5,8 @@
 //! array's; the listener finds the node by rmw_zenoh's tokens and reads its answers on the keys
 //! it computes itself; hostile traffic (frames of the wrong size or encoding, cut CDR, a foreign
 //! type, a publisher that leaves mid-touch, a second publisher, a frame out of order) is refused
-//! on `/rosout` while the node serves on.
+//! on `/rosout` while the node serves on. A camera's recording cut as `touch:=moving` is answered
+//! over the frames `pvt3 import` takes of it (`FrameSpan::Moving`).
 
 #[path = "../../tests/support/onnx_check.rs"]
 #[allow(dead_code)] // the other end-to-end tests use the rest of it
@@ -17,7 +18,8 @@ use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Command, Stdio};
 
-use pvt3_runtime::Classifier;
+use pvt3_format::span::FrameSpan;
+use pvt3_runtime::{Classifier, Picture};
 use workspace::workspace;
 
 /// What the listener heard: the answers' probabilities, the statuses and the `/rosout` lines.
@@ -113,4 +115,62 @@ fn a_taxel_array_s_touches_are_answered_as_the_runtime_answers_them() {
     let expected: Vec<Vec<f32>> = classifier.classify_batch(&values, shape[0]).unwrap().into_iter().map(|p| p.probabilities).collect();
     let heard = converse(&model, &touches, "array", false, &[]);
     assert_close(&heard.answers, &expected, "iCub");
+}
+
+#[test]
+fn a_camera_s_recording_is_answered_over_its_moving_span_as_the_import_takes_it() {
+    let model = workspace().join("shipped/physiclear.onnx");
+    let classifier = Classifier::load(&model).unwrap();
+    let camera = classifier.camera().unwrap();
+    let [h, w, c] = camera.recorded;
+    let window = classifier.session().unwrap().frames();
+    // A recording of 4 windows' frames: the bare gel, then a texture sliding across it for two
+    // windows, then the bare gel again.
+    let recorded = 4 * window;
+    let sliding = window..3 * window;
+    let pictures: Vec<Picture> = (0..recorded)
+        .map(|t| {
+            let (row, column) = (|i: usize| i / (w * c), |i: usize| (i / c) % w);
+            let data =
+                (0..h * w * c)
+                    .map(|i| {
+                        if sliding.contains(&t) {
+                            ((column(i) + 3 * t) * 37 % 251 + row(i) * 5 % 50) as u8
+                        } else {
+                            (100 + row(i) / 8) as u8
+                        }
+                    })
+                    .collect();
+            Picture { height: h, width: w, channels: c, data }
+        })
+        .collect();
+    let taken = FrameSpan::Moving.take(&pictures, window);
+    assert!(taken.first >= window - 1 && taken.last <= 3 * window + 1, "the span {}..={} is not the sliding's", taken.first, taken.last);
+    let chosen: Vec<usize> = camera.subtract_first.then_some(0).into_iter().chain(taken.frames.iter().copied()).collect();
+    let layout = |frames: &[usize]| -> Vec<u8> {
+        (0..h * w * c).flat_map(|i| frames.iter().map(move |&t| (t, i))).map(|(t, i)| pictures[t].data[i]).collect()
+    };
+    let answer = |frames: &[usize]| classifier.classify_camera_touches(&layout(frames), 1).unwrap()[0].probabilities.clone();
+    let expected = vec![answer(&chosen)];
+    // The test tells the spans apart: the whole recording's frames answer otherwise, by more
+    // than ten times the tolerance.
+    let whole = FrameSpan::Whole.take(&pictures, window).frames;
+    let whole: Vec<usize> = camera.subtract_first.then_some(0).into_iter().chain(whole).collect();
+    let apart = answer(&whole).iter().zip(&expected[0]).map(|(a, b)| (a - b).abs()).fold(0f32, f32::max);
+    assert!(apart > 1e-4, "the whole recording answers as its moving span does (off by {apart})");
+    let dir = std::env::temp_dir().join(format!("pvt3-ros-moving-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let touches = dir.join("recording.npy");
+    let all: Vec<usize> = (0..recorded).collect();
+    let array = ndarray::ArrayD::from_shape_vec(ndarray::IxDyn(&[1, h, w, c, recorded]), layout(&all)).unwrap();
+    ndarray_npy::write_npy(&touches, &array).unwrap();
+    let heard = converse(&model, &touches, "image", false, &["touch:=moving", &format!("recording:={recorded}")]);
+    assert_close(&heard.answers, &expected, "moving span");
+    let status = &heard.statuses[0];
+    assert_eq!(
+        (status["frames"].as_str(), status["ended_by"].as_str()),
+        (Some(recorded.to_string().as_str()), Some("recording")),
+        "{status}"
+    );
+    std::fs::remove_dir_all(dir).unwrap();
 }

@@ -14,13 +14,27 @@ fn help() -> String {
     );
     for (name, default, what) in PARAMETERS {
         let default = if default.is_empty() { String::new() } else { format!(" (default: {default})") };
-        text += &format!("  {name:<12} {what}{default}\n");
+        text += &format!("  {name:<12} {}\n", wrapped(&format!("{what}{default}"), 15, 100));
     }
     text += "\nTopics (remap with -r NAME:=/your/topic):\n";
     for (name, type_name, what) in TOPICS {
         text += &format!("  {name:<15} {type_name}\n  {:<15} {what}\n", "");
     }
     text
+}
+
+/// `text` in lines of at most `width` columns, each after the first indented by `indent`.
+fn wrapped(text: &str, indent: usize, width: usize) -> String {
+    let mut lines = vec![String::new()];
+    for word in text.split(' ') {
+        let line = lines.last_mut().expect("a line");
+        if !line.is_empty() && indent + line.len() + 1 + word.len() > width {
+            lines.push(word.to_string());
+        } else {
+            *line += &format!("{}{word}", if line.is_empty() { "" } else { " " });
+        }
+    }
+    lines.join(&format!("\n{:indent$}", ""))
 }
 
 fn main() -> std::process::ExitCode {

@@ -52,6 +52,20 @@ impl Session {
             return Err(Error::FrameLength { got: frame.len(), expected: height * width * channels });
         }
         let picture = Picture { height, width, channels, data: frame.to_vec() }.read_as(&camera).map_err(Error::Touch)?;
+        self.push_read_camera_frame(&picture)
+    }
+
+    /// Takes a camera's frame already read as the file says ([`Picture::read_as`] with its
+    /// [`crate::Classifier::camera`]), for a caller that keeps read frames until it knows which a
+    /// touch takes (a recording's moving span): the background, the first frame of each touch of a
+    /// model trained less it, or the model's next frame, as [`Session::push_camera_frame`].
+    pub fn push_read_camera_frame(&mut self, picture: &Picture) -> Result<()> {
+        let Some(camera) = self.stages.camera else {
+            return Err(Error::Touch("a camera's frame read as the file says, but the file records no camera".into()));
+        };
+        if picture.data.len() != self.frame_len() {
+            return Err(Error::FrameLength { got: picture.data.len(), expected: self.frame_len() });
+        }
         let values = picture.data.iter().map(|v| f32::from(*v));
         let frame: Vec<f32> = match (&self.background, camera.subtract_first) {
             (_, false) => values.collect(),
