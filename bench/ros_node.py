@@ -3,7 +3,7 @@ rate through a zenoh router on 127.0.0.1 (eclipse-zenoh, messages by rosbags: te
 code), the node pinned to one core. For each touch, the time from the publish of its last frame
 to the answer's arrival, beside the runtime's own time on that frame (the node's `last_ms`:
 from the frame's arrival to the answer); the answers come in the touches' order, one a touch; every second, the node's CPU share and resident memory
-(/proc). Prints a markdown table for docs/benchmarks.md.
+(/proc). Prints a row of bench/ros_node.sh's table (docs/benchmarks.md).
 
     target/onnx-venv/bin/python bench/ros_node.py PVT3_ROS MODEL KIND FPS SECONDS
 
@@ -112,13 +112,10 @@ def main(binary, model, kind, fps, seconds):
     overhead = [lat - last for lat, last in zip(latencies, last_ms)]
     cpu = [(b[1] - a[1]) / (b[0] - a[0]) for a, b in zip(usage, usage[1:])]
     rss = [u[2] for u in usage]
-    size = os.path.getsize(binary) / 2**20
-    print(f"| file | fps | touches | publish to answer, p50 / p99 | runtime on the last frame, p50 / p99 | difference, p99 | CPU share, mean (max) | resident memory, first / last / max | {Path(binary).name} size |")
-    print("|---|---:|---:|---|---|---:|---|---|---:|")
     print(
-        f"| `{model}` | {fps:g} | {len(latencies)} | {percentile(latencies, 50):.2f} / {percentile(latencies, 99):.2f} ms "
+        f"| `{model}` | {fps:g} | {seconds:g} s, {len(latencies)} touches | {percentile(latencies, 50):.2f} / {percentile(latencies, 99):.2f} ms "
         f"| {percentile(last_ms, 50):.2f} / {percentile(last_ms, 99):.2f} ms | {percentile(overhead, 99):.2f} ms "
-        f"| {100 * np.mean(cpu):.1f} % ({100 * max(cpu, default=0):.1f} %) | {rss[0]:.1f} / {rss[-1]:.1f} / {max(rss):.1f} MiB | {size:.1f} MiB |"
+        f"| {100 * np.mean(cpu):.1f} % ({100 * max(cpu, default=0):.1f} %) | {rss[0]:.1f} / {rss[-1]:.1f} / {max(rss):.1f} MiB |"
     )
 
 

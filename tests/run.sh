@@ -14,9 +14,10 @@
 #      static musl binaries, and its tests that show it computes what x86-64 does run under
 #      qemu: golden logits, bit-identical loads, the kernels, damaged files, streaming, every
 #      C-ABI error path, the Rust example built, and runtime/examples/classify.c built with
-#      aarch64-linux-gnu-gcc (given musl's arm64 headers and libraries) and run; then the
-#      pvt3-run those tests built is checked static and held to the host build's answers on the
-#      golden windows. What needs onnxruntime or candle stays on the host. It is built without
+#      aarch64-linux-gnu-gcc (given musl's arm64 headers and libraries) and run, and the ROS
+#      node's answers through a zenoh peer on the host; then the pvt3-run and pvt3-ros those
+#      tests built are checked static, pvt3-run held to the host build's answers on the golden
+#      windows. What needs onnxruntime or candle stays on the host. It is built without
 #      default features, as the small robot build is (no `threads`, no rayon, no `spectral`:
 #      docs/deploy.md), so both supported feature sets are tested: all of them on the host, the
 #      small one on aarch64. musl or glibc changes one line of the runtime (runtime/src/heap.rs,
@@ -26,8 +27,8 @@
 #      assembly by clang), and every crate's library and programs for Windows
 #      (x86_64-pc-windows-gnu, with Debian's mingw-w64) with clippy's lints, warnings denied; the
 #      runtime's and the format's tests linted there too (every unsafe block has a SAFETY note);
-#      the runtime and pvt3-run built as static musl binaries for x86-64, run on the golden
-#      windows and held to the host build's answers. In the
+#      the runtime, pvt3-run and pvt3-ros built as static musl binaries for x86-64, pvt3-run run
+#      on the golden windows and held to the host build's answers. In the
 #      background from the end of step 1's build, in a target directory of its own (so that
 #      neither cargo waits for the other's lock): it takes the CPU the other steps leave;
 #   5. the small robot library's size (tests/robot-small.sh, in the background from the start):
@@ -164,13 +165,16 @@ background+=("$need_pid")
 # touch the first 141 frames of the set's first) as the host build does, within the 1e-5 every
 # form of the model keeps to the golden logits (the camera touch, 66 M multiply-adds, sums in
 # another order on aarch64: 1.4e-6 off) (target/CASE-host.jsonl, written after the host build).
+is_static() {
+  if readelf -l "$1" | grep -q INTERP; then
+    echo "tests/run.sh: $1 asks for a dynamic loader: not a static binary" >&2
+    return 1
+  fi
+}
 same_as_host() {
   local bin=$1 name=$(basename "$(dirname "$(dirname "$1")")") compared=()
   shift
-  if readelf -l "$bin" | grep -q INTERP; then
-    echo "tests/run.sh: $bin asks for a dynamic loader: not a static binary" >&2
-    return 1
-  fi
+  is_static "$bin"
   for case in "${!answered[@]}"; do
     "$@" "$bin" --json ${answered[$case]} >target/$case-$name.jsonl
     compared+=(target/$case-$name.jsonl target/$case-host.jsonl)
@@ -217,12 +221,14 @@ other_platforms() {
   cargo clippy "${platforms[@]}" --target x86_64-pc-windows-gnu -p pvt3-runtime -p pvt3-format --all-targets -- -D warnings
   # Their API docs: every public item documented (`#![warn(missing_docs)]`), every link resolved.
   RUSTDOCFLAGS="-D warnings" cargo doc "${platforms[@]}" --no-deps -p pvt3-runtime -p pvt3-format
-  # The runtime and pvt3-run built to show that they link statically and compute what the host
-  # build computes, never timed: as the small robot build (docs/deploy.md) without default
-  # features (one thread a plan, its own FFT: a static robot binary is a small one). The
-  # aarch64 one is the aarch64 tests' own build (step 3).
-  cargo build "${platforms[@]}" --target x86_64-unknown-linux-musl -p pvt3-runtime --no-default-features --lib --bin pvt3-run
+  # The runtime, pvt3-run and the ROS node built to show that they link statically and compute
+  # what the host build computes, never timed: as the small robot build (docs/deploy.md) without
+  # default features (one thread a plan, its own FFT: a static robot binary is a small one). The
+  # aarch64 ones are the aarch64 tests' own build (step 3), where the node's tests run too.
+  cargo build "${platforms[@]}" --target x86_64-unknown-linux-musl -p pvt3-runtime -p pvt3-ros --no-default-features --lib --bin pvt3-run --bin pvt3-ros
   same_as_host target/platforms/x86_64-unknown-linux-musl/debug/pvt3-run
+  is_static target/platforms/x86_64-unknown-linux-musl/debug/pvt3-ros
+  target/platforms/x86_64-unknown-linux-musl/debug/pvt3-ros --help | grep -q "touch_status"
 }
 
 step "host: cargo test --profile ci --workspace (built, then run)"
@@ -237,7 +243,7 @@ joined "$need_pid" "$need_log" "what the tests need could not be installed"
 valgrind=()
 [ "$(uname -m)" != x86_64 ] || valgrind=(--skip the_c_example_gives_the_rust_result)
 
-step "other platforms, in the background: the trainer checked for macOS, every crate linted for Windows, the runtime and pvt3-run built static with musl for x86-64"
+step "other platforms, in the background: the trainer checked for macOS, every crate linted for Windows, the runtime, pvt3-run and pvt3-ros built static with musl for x86-64"
 platforms_log=target/other-platforms.log
 (set -e; other_platforms) >"$platforms_log" 2>&1 &
 platforms_pid=$!
@@ -247,32 +253,11 @@ echo "(its output follows the aarch64 tests)"
 step "host: the tests"
 cargo_test --profile ci --workspace -- ${valgrind[@]+"${valgrind[@]}"}
 
-step "aarch64: cargo test --profile ci --target $target -p pvt3-runtime -p pvt3-format --no-default-features --no-run"
-# The aarch64 build's compiler, linker and runner, for its build and its tests alone (subshells):
-# the other platforms' builds name their own. Static musl binaries, so the emulator needs no
-# arm64 loader: Rust's links with musl's own start files and C library (rustup's target); the C
-# example (and tract's assembly) with aarch64-linux-gnu-gcc given musl's arm64 headers and
-# libraries (Debian's musl-dev:arm64) by the specs file Debian's musl-gcc gives gcc on x86-64,
-# retargeted, and unwinding with the unwinder Rust's musl target ships (gcc's, built for glibc,
-# asks for glibc's _dl_find_object). (rustc warns that a static musl target builds no shared
-# library: the static one and the Rust library are what the tests use.)
-aarch64_env() {
-  local cc=$PWD/target/aarch64-linux-musl-gcc
-  local unwind
-  unwind=$(rustc --print sysroot)/lib/rustlib/$target/lib/self-contained/libunwind.a
-  sed -e 's/x86_64/aarch64/g' -e "s|%:if-exists(libgcc_eh.a%s)|$unwind|" /usr/lib/x86_64-linux-musl/musl-gcc.specs >"$cc.specs"
-  printf '#!/bin/sh\nexec aarch64-linux-gnu-gcc "$@" -specs "%s" -static\n' "$cc.specs" >"$cc"
-  chmod +x "$cc"
-  export TARGET_CC=$cc
-  export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_MUSL_LINKER=aarch64-linux-gnu-gcc
-  export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_MUSL_RUNNER=qemu-aarch64
-  # The tests run the C example and pvt3-run through the same emulator.
-  export PVT3_TARGET_RUNNER=qemu-aarch64
-  # Code compiled only off x86-64 gets no clippy: at least no warning may pass here.
-  export CARGO_TARGET_AARCH64_UNKNOWN_LINUX_MUSL_RUSTFLAGS="-D warnings"
-}
-aarch64_tests=(--profile ci --target "$target" -p pvt3-runtime -p pvt3-format --no-default-features)
-(aarch64_env && cargo test "${aarch64_tests[@]}" --no-run)
+step "aarch64: cargo test --profile ci --target $target -p pvt3-runtime -p pvt3-format -p pvt3-ros --no-default-features --no-run"
+# The aarch64 build's compiler, linker and runner (tests/aarch64-env.sh), for its build and its
+# tests alone (subshells): the other platforms' builds name their own.
+aarch64_tests=(--profile ci --target "$target" -p pvt3-runtime -p pvt3-format -p pvt3-ros --no-default-features)
+(source tests/aarch64-env.sh && cargo test "${aarch64_tests[@]}" --no-run)
 
 valgrind_pid=
 if [ ${#valgrind[@]} -gt 0 ]; then
@@ -311,22 +296,27 @@ step "aarch64: the tests under qemu"
 # pvt3-run's JSON lines (its answers stay), one classifier shared by four threads, the thousands
 # of hostile files (damaged_files stays), and a provisional answer's logic: a peek after each of
 # 75 frames (150 runs of the temporal plan, 40 s under qemu; peeks run there in the C example
-# and the C ABI's test) and a file without the key bias streaming but refusing to peek.
+# and the C ABI's test) and a file without the key bias streaming but refusing to peek. The ROS
+# node's tests run there, the node under qemu and its peer on the host: a taxel array's touches
+# and a camera's recording over its moving span answered as the runtime answers them; the
+# hostile traffic, logic alone, runs on the host.
 qemu_skips=(bench_reports_batch_and_streaming_latencies every_answer_is_the_batch_classification_of_the_latest_window
   a_peek_reads_the_touch_so_far_and_leaves_it_going a_file_without_the_key_bias_gives_no_provisional_answer
   a_reset_stream_waits_for_a_whole_window_and_misuse_is_an_error streaming_frame_by_frame_equals_the_whole_window
   the_example_answers_as_the_runtime_does json_gives_every_probability_of_every_window
   a_classifier_shared_by_threads_answers_each_as_it_answers_one
-  re_signed_damaged_models_are_refused_by_name_or_run_and_never_panic damaged_npy_inputs_are_refused_and_never_panic)
-(aarch64_env && cargo_test "${aarch64_tests[@]}" -- $(printf -- '--skip %s ' "${qemu_skips[@]}"))
+  re_signed_damaged_models_are_refused_by_name_or_run_and_never_panic damaged_npy_inputs_are_refused_and_never_panic
+  a_camera_s_touches_are_answered_as_the_runtime_answers_them_through_hostile_traffic)
+(source tests/aarch64-env.sh && cargo_test "${aarch64_tests[@]}" -- $(printf -- '--skip %s ' "${qemu_skips[@]}"))
 
 if [ -n "$valgrind_pid" ]; then
   step "C ABI under valgrind (run beside the tests under qemu)"
   joined "$valgrind_pid" "$valgrind_log" "the C ABI failed under valgrind"
 fi
 
-step "aarch64: pvt3-run, as the tests built it, is static and answers the golden windows as the host build does"
+step "aarch64: pvt3-run and pvt3-ros, as the tests built them, are static; pvt3-run answers the golden windows as the host build does"
 same_as_host "target/$target/ci/pvt3-run" qemu-aarch64
+is_static "target/$target/ci/pvt3-ros"
 
 step "other platforms (run beside the steps above)"
 joined "$platforms_pid" "$platforms_log" "another platform's build failed"

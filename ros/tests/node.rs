@@ -6,11 +6,15 @@
 //! it computes itself; hostile traffic (frames of the wrong size or encoding, cut CDR, a foreign
 //! type, a publisher that leaves mid-touch, a second publisher, a frame out of order) is refused
 //! on `/rosout` while the node serves on. A camera's recording cut as `touch:=moving` is answered
-//! over the frames `pvt3 import` takes of it (`FrameSpan::Moving`).
+//! over the frames `pvt3 import` takes of it (`FrameSpan::Moving`). Built for aarch64, the node
+//! runs under the emulator `PVT3_TARGET_RUNNER` names (tests/run.sh), the peer on the host.
 
 #[path = "../../tests/support/onnx_check.rs"]
 #[allow(dead_code)] // the other end-to-end tests use the rest of it
 mod onnx_check;
+#[path = "../../tests/support/target.rs"]
+#[allow(dead_code)] // `emulated` is the runtime's tests'
+mod target;
 #[path = "../../tests/support/workspace.rs"]
 mod workspace;
 
@@ -47,7 +51,7 @@ fn converse(model: &Path, touches: &Path, kind: &str, hostile: bool, params: &[&
     let model = format!("model:={}", model.display());
     args.extend(["-p", &model]);
     params.iter().for_each(|p| args.extend(["-p", p]));
-    let mut node = Command::new(env!("CARGO_BIN_EXE_pvt3-ros")).args(&args).stderr(Stdio::piped()).spawn().expect("the node runs");
+    let mut node = target::target_command(env!("CARGO_BIN_EXE_pvt3-ros")).args(&args).stderr(Stdio::piped()).spawn().expect("the node runs");
     let heard: Vec<serde_json::Value> = lines.map(|l| serde_json::from_str(&l.unwrap()).unwrap()).collect();
     assert!(peer.wait().unwrap().success(), "the peer failed");
     node.kill().unwrap();
