@@ -26,11 +26,12 @@ fn classifies_every_window_of_an_npy_batch_as_the_golden_logits_do() {
     }
 }
 
-/// `--json`: one object per window, with every probability, the same answers as the lines.
+/// `--json`: one object per window, with every probability, the same answers as the lines. Its
+/// place on the command line is free (here last).
 #[test]
 fn json_gives_every_probability_of_every_window() {
     let (_, logits) = read_npy(&golden("logits.npy")).unwrap();
-    let out = pvt3_run().arg("--json").arg(golden("model.onnx")).arg(golden("input.npy")).output().unwrap();
+    let out = pvt3_run().arg(golden("model.onnx")).arg(golden("input.npy")).arg("--json").output().unwrap();
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let lines: Vec<serde_json::Value> = String::from_utf8(out.stdout).unwrap().lines().map(|l| serde_json::from_str(l).unwrap()).collect();
     assert_eq!(lines.len(), 8);
@@ -68,9 +69,14 @@ fn wrong_input_fails_with_a_message() {
         ),
         "{err}"
     );
-    let out = pvt3_run().output().unwrap();
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).starts_with("usage: pvt3-run"));
+    // A command line it cannot read: exit status 2, what is wrong, then the usage.
+    for (args, why) in
+        [(&[][..], "pvt3-run: expected MODEL.onnx INPUT.npy"), (&["a.onnx", "--jsn", "b.npy"][..], "pvt3-run: no option `--jsn`")]
+    {
+        let out = pvt3_run().args(args).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.code() == Some(2) && err.starts_with(why) && err.contains("usage: pvt3-run"), "{args:?}: {err}");
+    }
     let out = pvt3_run().arg(golden("manifest.json")).arg(golden("input.npy")).output().unwrap();
     assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("manifest.json"));
 }

@@ -5,7 +5,8 @@
 //! camera's 8-bit frames as it gives them, read as the import read them. Prints one line per
 //! window: index, class, label, probability; with `--json`, one JSON object per window with
 //! every probability.
-//! `--help` and `--version` answer on standard output.
+//! `--help` and `--version` answer on standard output. Exit status: 0 answered, 1 refused (the
+//! reason on standard error), 2 a command line it cannot read.
 //!
 //! `pvt3-run --bench MODEL.onnx [THREADS [SECONDS]]` measures latency on this machine instead
 //! (one JSON line; see `bench.rs`).
@@ -32,29 +33,38 @@ import read them.
 --bench measures latency instead, on THREADS threads (default 1) for about SECONDS (default 2)
 per measurement: batch 1 and 32, batch 1 with tract's own kernels and with kernels timed at load,
 the first call, and a streamed touch (per kept frame, per pruned frame, end of touch; not for a
-file whose spectral head reads the whole window, exported before the head streamed). Prints one JSON line.";
+file whose spectral head reads the whole window, exported before the head streamed). Prints one JSON line.
+Options may come in any position.
+
+Exit status: 0 when every window is answered (or the benchmark ran); 1 when the file or the input
+is refused, the reason on standard error; 2 for a command line it cannot read.";
 
 fn main() -> ExitCode {
     // SAFETY: first thing in main, before any other thread exists.
     unsafe { pvt3_runtime::keep_freed_memory() };
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let number = |i: usize, default: f64| args.get(i).map_or(Some(default), |v| v.parse::<f64>().ok().filter(|v| *v > 0.0));
-    let outcome = match args.iter().map(String::as_str).collect::<Vec<_>>().as_slice() {
-        ["--help" | "-h"] => {
-            println!("{USAGE}");
+    // Flags in any position; the rest are the positional words, in order.
+    let (flags, words): (Vec<&str>, Vec<&str>) = args.iter().map(String::as_str).partition(|a| a.starts_with('-') && a.len() > 1);
+    let number = |word: Option<&&str>, default: f64| word.map_or(Some(default), |v| v.parse::<f64>().ok().filter(|v| *v > 0.0));
+    let outcome = match (flags.as_slice(), words.as_slice()) {
+        (flags, _) if flags.iter().any(|f| ["--help", "-h"].contains(f)) => {
+            say(USAGE);
             return ExitCode::SUCCESS;
         }
-        ["--version" | "-V"] => {
-            println!("pvt3-run {}", pvt3_runtime::version());
+        (flags, _) if flags.iter().any(|f| ["--version", "-V"].contains(f)) => {
+            say(&format!("pvt3-run {}", pvt3_runtime::version()));
             return ExitCode::SUCCESS;
         }
-        ["--bench", model, ..] if args.len() <= 4 => match (number(2, 1.0), number(3, 2.0)) {
-            (Some(threads), Some(seconds)) => bench::bench(model, threads as usize, seconds).map(|report| println!("{report}")),
-            _ => return usage(),
+        (["--bench"], [model, rest @ ..]) if rest.len() <= 2 => match (number(rest.first(), 1.0), number(rest.get(1), 2.0)) {
+            (Some(threads), Some(seconds)) => bench::bench(model, threads as usize, seconds).map(|report| say(&report.to_string())),
+            _ => return usage("THREADS and SECONDS are positive numbers"),
         },
-        [model, input] if !model.starts_with('-') => run(model, input, false),
-        ["--json", model, input] if !model.starts_with('-') => run(model, input, true),
-        _ => return usage(),
+        ([], [model, input]) => run(model, input, false),
+        (["--json"], [model, input]) => run(model, input, true),
+        (flags, _) => match flags.iter().find(|f| !["--json", "--bench"].contains(f)) {
+            Some(unknown) => return usage(&format!("no option `{unknown}`")),
+            None => return usage("expected MODEL.onnx INPUT.npy, or --bench MODEL.onnx"),
+        },
     };
     match outcome {
         Ok(()) => ExitCode::SUCCESS,
@@ -65,8 +75,22 @@ fn main() -> ExitCode {
     }
 }
 
-fn usage() -> ExitCode {
-    eprintln!("{USAGE}");
+/// Prints a line on standard output; a reader that has closed it (`pvt3-run … | head`) ends the
+/// program quietly, as Unix tools end.
+fn say(line: &str) {
+    use std::io::Write;
+    if let Err(e) = writeln!(std::io::stdout(), "{line}") {
+        if e.kind() != std::io::ErrorKind::BrokenPipe {
+            eprintln!("pvt3-run: standard output: {e}");
+            std::process::exit(1);
+        }
+        std::process::exit(0);
+    }
+}
+
+/// A command line it cannot read: what is wrong, then the usage; exit status 2.
+fn usage(why: &str) -> ExitCode {
+    eprintln!("pvt3-run: {why}\n\n{USAGE}");
     ExitCode::from(2)
 }
 
@@ -85,9 +109,9 @@ fn run(model: &str, input: &str, json: bool) -> pvt3_runtime::Result<()> {
         match json {
             true => {
                 let line = serde_json::json!({"window": i, "class": p.class, "label": p.label, "probabilities": p.probabilities});
-                println!("{line}");
+                say(&line.to_string());
             }
-            false => println!("{i}\t{}\t{}\t{:.4}", p.class, p.label, p.probabilities[p.class]),
+            false => say(&format!("{i}\t{}\t{}\t{:.4}", p.class, p.label, p.probabilities[p.class])),
         }
     }
     Ok(())

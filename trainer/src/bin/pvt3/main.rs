@@ -19,12 +19,23 @@ mod train;
 use anyhow::Result;
 use clap::{Parser, Subcommand};
 
+/// What every command's exit status means, for `--help` (and docs/guide/command-line.md).
+const EXIT_STATUS: &str =
+    "Exit status: 0 done; 1 refused or failed, the reason on standard error (a file, an option, what it could not do); 2 a command line it cannot read.";
+
 #[derive(Parser)]
-#[command(name = "pvt3", version, about = "PVT³ tactile texture classification: import, train, cross-validate, evaluate, export, inspect")]
+#[command(
+    name = "pvt3",
+    version,
+    propagate_version = true,
+    about = "PVT³ tactile texture classification: import, train, cross-validate, evaluate, export, inspect",
+    after_help = EXIT_STATUS
+)]
 struct Cli {
-    /// CPU threads for training and evaluation (default: all cores). One run splits each batch's
-    /// sequences over them (two threads: 1.5-1.7x one); `cv --jobs N` uses the cores best, one
-    /// fold per thread. The result is the same bits on any count.
+    /// CPU threads (default: all cores). Training and evaluation split each batch's sequences
+    /// over them (two threads: 1.5-1.7x one; `cv --jobs N` uses the cores best, one fold per
+    /// thread); a camera import reads touches on them; export, bake, info and plot run on one.
+    /// The result is the same bits on any count.
     #[arg(long, global = true)]
     threads: Option<usize>,
     #[command(subcommand)]
@@ -107,6 +118,15 @@ mod tests {
     #[test]
     fn the_command_line_is_consistent() {
         Cli::command().debug_assert();
+    }
+
+    /// `--version` answers on every subcommand.
+    #[test]
+    fn every_subcommand_tells_its_version() {
+        for sub in Cli::command().get_subcommands().map(|c| c.get_name().to_string()) {
+            let e = Cli::try_parse_from(["pvt3", sub.as_str(), "--version"]).err().unwrap_or_else(|| panic!("{sub} --version ran"));
+            assert_eq!(e.kind(), clap::error::ErrorKind::DisplayVersion, "{sub}");
+        }
     }
 
     /// Options parse into their types: value enums, seeds, pruning, --only; bad values are
