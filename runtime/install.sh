@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Installs the runtime's C library where a robot's build finds it: PREFIX/lib/libpvt3_runtime.a
-# and .so, PREFIX/include/pvt3.h and PREFIX/lib/pkgconfig/pvt3.pc, so that
-# `pkg-config --cflags --libs pvt3` (with --static for the static library) gives the flags.
+# and .so, PREFIX/include/pvt3.h and PREFIX/lib/pkgconfig/pvt3.pc and pvt3-static.pc, so that
+# `pkg-config --cflags --libs pvt3` gives the flags of the shared library (the static one where
+# no shared one is built, as for musl), and `pvt3-static` those of the static library, by its
+# path: with both installed, `-lpvt3_runtime` would take the shared one.
 #
 #   bash runtime/install.sh PREFIX [PROFILE]   # builds it first: cargo build --profile PROFILE
 #                                              # (default robot; robot-small: see docs/deploy.md)
@@ -26,5 +28,9 @@ version=$(awk -F'"' '/^version *=/ { print $2; exit }' Cargo.toml)
 install -d "$prefix/lib/pkgconfig" "$prefix/include"
 install -m 644 "${libs[@]}" "$prefix/lib/"
 install -m 644 runtime/include/pvt3.h "$prefix/include/"
-sed -e "s#@PREFIX@#$prefix#" -e "s#@VERSION@#$version#" runtime/pkg/pvt3.pc.in >"$prefix/lib/pkgconfig/pvt3.pc"
-echo "installed pvt3 $version into $prefix: lib/$(cd "$prefix/lib" && ls libpvt3_runtime.* | paste -sd,), include/pvt3.h, lib/pkgconfig/pvt3.pc"
+pcs=(pvt3)
+[ ! -e "$prefix/lib/libpvt3_runtime.a" ] || pcs+=(pvt3-static)
+for pc in "${pcs[@]}"; do
+  sed -e "s#@PREFIX@#$prefix#" -e "s#@VERSION@#$version#" "runtime/pkg/$pc.pc.in" >"$prefix/lib/pkgconfig/$pc.pc"
+done
+echo "installed pvt3 $version into $prefix: lib/$(cd "$prefix/lib" && ls libpvt3_runtime.* | paste -sd,), include/pvt3.h, lib/pkgconfig/$(printf '%s.pc\n' "${pcs[@]}" | paste -sd,)"

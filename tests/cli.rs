@@ -154,6 +154,8 @@ fn cv_runs_folds_side_by_side_and_resumes_without_retraining() {
     args.extend(SMALL);
     let first = ok(&args);
     assert!(first.contains("mean test accuracy"), "{first}");
+    // One seed: no interval, and it says why and how to get one.
+    assert!(first.contains("no 95 % confidence interval") && first.contains("--seeds 0,1,2"), "{first}");
     let next = format!("next: pvt3 eval {o} (all runs' test answers together");
     assert!(first.contains(&next) && first.contains(&format!("pvt3 final {o} -o model.onnx")), "{first}");
     let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("cv.json")).unwrap()).unwrap();
@@ -508,6 +510,9 @@ fn the_final_model_trains_on_every_touch_as_the_cv_chose(cv: &Path, summary: &se
     for key in ["mean_test_accuracy", "std_test_accuracy", "ci95_test_accuracy"] {
         assert_eq!(done["expected"][key], summary[key], "{key}");
     }
+    // Where there is no interval (one seed), the file says why.
+    let why = done["expected"]["no_interval"].as_str().unwrap_or_default();
+    assert_eq!(why.contains("needs two seeds at least"), summary["ci95_test_accuracy"].is_null(), "{printed}");
     let provenance = |run: &Path| -> serde_json::Value {
         serde_json::from_str(&std::fs::read_to_string(run.join("model/provenance.json")).unwrap()).unwrap()
     };

@@ -8,6 +8,18 @@
  * truncated or foreign files are all reported; a file damaged or altered since export is refused
  * at load (integrity digest).
  *
+ * Memory order of every buffer: row-major (C order) over the axes as written, the last axis
+ * innermost. Windows are [batch, height, width, (channels,) frames]: frames innermost, so the
+ * value of taxel (h, w), channel c, frame t of window b is at
+ *     frames[((((b * height + h) * width + w) * channels + c) * n_frames) + t]
+ * (channels = 1 without a channel axis; pvt3_classifier_input_shape gives the axes). A frame
+ * pushed to a session is [height, width, (channels)]: value (h, w, c) at (h * width + w) *
+ * channels + c. A camera's 8-bit frame is the same, row-major with channels innermost as the
+ * camera gives it; whole camera touches (pvt3_classify_camera_touches) are [touches, height,
+ * width, channels, frames], frames innermost again. Probabilities and logits are [batch,
+ * classes]. A buffer of the right length in another order is classified without error, and
+ * wrongly: check it against the runtime on a recorded window once.
+ *
  * Threads: a classifier may be used from several threads at once (pvt3_classify,
  * pvt3_classifier_prepare, pvt3_session_new, pvt3_session_new_touch, pvt3_continuous_new and the
  * getters; the Rust API's test checks every answer against one thread's), but
@@ -74,7 +86,8 @@ int pvt3_classifier_set_threads(pvt3_classifier *c, size_t threads);
  * what the first such call would otherwise build (tract's optimisation, tens of milliseconds).
  * Call it at start-up so that the first touch costs what every touch costs. */
 int pvt3_classifier_prepare(const pvt3_classifier *c, size_t batch, int streaming);
-/* Values in one window: height x width x (channels x) frames, raw sensor values. */
+/* Values in one window: height x width x (channels x) frames, raw sensor values, frames
+ * innermost (the memory order above). */
 int pvt3_classifier_sample_len(const pvt3_classifier *c, size_t *out);
 /* Frames in one window (its last axis); a frame has sample_len / frames values. */
 int pvt3_classifier_frames(const pvt3_classifier *c, size_t *out);

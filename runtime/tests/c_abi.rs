@@ -175,6 +175,33 @@ fn camera_example_answers_as_a_session(exe: &std::path::Path, dir: &std::path::P
     }
 }
 
+/// The guide's two lines that build a C program against the installed library (docs/guide/robot.md,
+/// "From C"): the static one, then the shared one, as written.
+fn guide_c_lines() -> [String; 2] {
+    let guide = std::fs::read_to_string(root().join("../docs/guide/robot.md")).unwrap();
+    let lines: Vec<String> =
+        guide.lines().filter(|l| l.starts_with("cc app.c ")).map(|l| l.split("  #").next().unwrap().trim().to_string()).collect();
+    let line = |needle: &str| {
+        lines.iter().find(|l| l.contains(needle)).unwrap_or_else(|| panic!("the guide has no `{needle}` line: {lines:?}")).clone()
+    };
+    [line("--libs pvt3-static)"), line("--libs pvt3)")]
+}
+
+/// Runs a guide's `cc app.c … -o app` line on `source`, writing `exe`, with the target's compiler
+/// and the libraries installed under `prefix`.
+fn build_as_the_guide_says(line: &str, source: &std::path::Path, exe: &std::path::Path, prefix: &std::path::Path) {
+    let script = line.replacen("cc app.c", r#""$CC" "$SOURCE""#, 1).replace(" -o app", r#" -o "$EXE""#);
+    let cc = std::process::Command::new("sh")
+        .args(["-c", &script])
+        .env("CC", target_cc())
+        .env("SOURCE", source)
+        .env("EXE", exe)
+        .env("PKG_CONFIG_PATH", prefix.join("lib/pkgconfig"))
+        .output()
+        .expect("sh runs");
+    assert!(cc.status.success(), "{line} ({}) failed:\n{}", source.display(), String::from_utf8_lossy(&cc.stderr));
+}
+
 #[test]
 fn the_c_example_gives_the_rust_result() {
     let dir = scratch("example");
@@ -184,7 +211,12 @@ fn the_c_example_gives_the_rust_result() {
     let built = dir.join("built");
     std::fs::create_dir_all(&built).unwrap();
     std::fs::copy(profile_dir.join("examples/libpvt3_c.a"), built.join("libpvt3_runtime.a")).unwrap();
-    // Installed as a robot's build finds it (runtime/install.sh), and built with pkg-config's flags.
+    // The shared library beside it, where the target builds one (musl's builds none).
+    let shared = profile_dir.join("libpvt3_runtime.so");
+    if shared.exists() {
+        std::fs::copy(&shared, built.join("libpvt3_runtime.so")).unwrap();
+    }
+    // Installed as a robot's build finds it (runtime/install.sh), and built by the guide's lines.
     let prefix = dir.join("prefix");
     let install = std::process::Command::new("bash")
         .arg(root().join("install.sh"))
@@ -195,18 +227,17 @@ fn the_c_example_gives_the_rust_result() {
     assert!(install.status.success(), "install.sh failed:\n{}", String::from_utf8_lossy(&install.stderr));
     let pc = std::fs::read_to_string(prefix.join("lib/pkgconfig/pvt3.pc")).unwrap();
     assert!(pc.contains(&format!("\nVersion: {}\n", env!("CARGO_PKG_VERSION"))), "{pc}");
-    let flags = std::process::Command::new("pkg-config")
-        .args(["--static", "--cflags", "--libs", "pvt3"])
-        .env("PKG_CONFIG_PATH", prefix.join("lib/pkgconfig"))
-        .output()
-        .expect("pkg-config runs (apt-get install pkgconf)");
-    assert!(flags.status.success(), "{}", String::from_utf8_lossy(&flags.stderr));
-    let flags = String::from_utf8(flags.stdout).unwrap();
-    assert!(flags.contains(&format!("-I{}", prefix.join("include").display())) && flags.contains("-lpvt3_runtime"), "{flags}");
-    for (source, exe) in [("classify.c", &exe), ("camera.c", &dir.join("camera"))] {
-        let cc = target_cc().arg(root().join("examples").join(source)).args(flags.split_whitespace()).arg("-o").arg(exe).output().unwrap();
-        assert!(cc.status.success(), "cc {source} failed:\n{}", String::from_utf8_lossy(&cc.stderr));
+    let [static_line, shared_line] = guide_c_lines();
+    let shared_classify = dir.join("classify-shared");
+    for (line, source, exe) in [
+        (&static_line, "classify.c", &exe),
+        (&static_line, "camera.c", &dir.join("camera")),
+        (&shared_line, "classify.c", &shared_classify),
+    ] {
+        build_as_the_guide_says(line, &root().join("examples").join(source), exe, &prefix);
     }
+    let needs = std::process::Command::new("readelf").arg("-d").arg(&exe).output().expect("readelf runs (binutils)");
+    assert!(!String::from_utf8_lossy(&needs.stdout).contains("libpvt3_runtime.so"), "the static line's program needs the shared library");
     camera_example_answers_as_a_session(&dir.join("camera"), &dir);
 
     // The example classifies, streams, peeks at and slides over the first `windows` windows.
@@ -254,6 +285,10 @@ fn the_c_example_gives_the_rust_result() {
             assert!(probs.iter().zip(&p.probabilities).all(|(a, b)| (a - b).abs() < 1e-5), "{line}");
         }
     }
+    // The shared line's program answers as the static one does, found by its run path.
+    let shared_out = target_command(&shared_classify).arg(golden("model.onnx")).arg(&raw).arg(windows.to_string()).output().unwrap();
+    assert!(shared_out.status.success(), "{}", String::from_utf8_lossy(&shared_out.stderr));
+    assert_eq!(String::from_utf8(shared_out.stdout).unwrap(), stdout, "the shared library's answers");
     let bad = target_command(&exe).arg(dir.join("absent.onnx")).arg(&raw).arg("8").output().unwrap();
     assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("absent.onnx"));
     // Under valgrind (tests/run.sh sets PVT3_VALGRIND on x86-64): the example's way through and

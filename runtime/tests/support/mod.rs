@@ -6,8 +6,6 @@
 #![allow(dead_code)] // each test file uses part of it
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
-
 #[path = "../../../tests/support/target.rs"]
 mod target;
 #[allow(unused_imports)] // each test file uses part of it
@@ -41,8 +39,8 @@ pub fn streamed_windows() -> usize {
 
 /// The C compiler for the target: `TARGET_CC` (as the `cc` crate reads it when cross-compiling),
 /// else `CC`, else `cc`.
-pub fn target_cc() -> Command {
-    Command::new(std::env::var("TARGET_CC").or_else(|_| std::env::var("CC")).unwrap_or_else(|_| "cc".into()))
+pub fn target_cc() -> String {
+    std::env::var("TARGET_CC").or_else(|_| std::env::var("CC")).unwrap_or_else(|_| "cc".into())
 }
 
 /// The golden input, `[8, 6, 10, 75]`, and logits, `[8, 20]`.
