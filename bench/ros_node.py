@@ -55,6 +55,11 @@ def percentile(values, q):
 
 def main(binary, model, kind, fps, seconds):
     fps, seconds = float(fps), float(seconds)
+    # The node has core 0 to itself: the driver, the router and the listener (this process) run on
+    # the others, so that the node's figures are its own.
+    others = os.sched_getaffinity(0) - {0}
+    if others:
+        os.sched_setaffinity(0, others)
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
@@ -112,10 +117,13 @@ def main(binary, model, kind, fps, seconds):
     overhead = [lat - last for lat, last in zip(latencies, last_ms)]
     cpu = [(b[1] - a[1]) / (b[0] - a[0]) for a, b in zip(usage, usage[1:])]
     rss = [u[2] for u in usage]
+    # Growth after the first minute (a least-squares line through each second's sample), MiB a minute.
+    later = [(t, r) for t, _, r in usage if t - usage[0][0] >= 60]
+    growth = 60 * np.polyfit([t for t, _ in later], [r for _, r in later], 1)[0] if len(later) > 2 else float("nan")
     print(
         f"| `{model}` | {fps:g} | {seconds:g} s, {len(latencies)} touches | {percentile(latencies, 50):.2f} / {percentile(latencies, 99):.2f} ms "
         f"| {percentile(last_ms, 50):.2f} / {percentile(last_ms, 99):.2f} ms | {percentile(overhead, 99):.2f} ms "
-        f"| {100 * np.mean(cpu):.1f} % ({100 * max(cpu, default=0):.1f} %) | {rss[0]:.1f} / {rss[-1]:.1f} / {max(rss):.1f} MiB |"
+        f"| {100 * np.mean(cpu):.1f} % ({100 * max(cpu, default=0):.1f} %) | {rss[0]:.1f} / {rss[-1]:.1f} / {max(rss):.1f} MiB | {growth:+.3f} MiB |"
     )
 
 

@@ -17,8 +17,8 @@ python=target/onnx-venv/bin/python
 echo "building pvt3-ros (release, and static for aarch64)" >&2
 cargo build -q --release -p pvt3-ros
 (source tests/aarch64-env.sh && cargo build -q --profile robot --target aarch64-unknown-linux-musl -p pvt3-ros --no-default-features)
-echo "| file | fps | run | publish to answer, p50 / p99 | runtime on the last frame, p50 / p99 | difference, p99 | CPU share, mean (max) | resident memory, first / last / max |"
-echo "|---|---:|---|---|---|---:|---|---|"
+echo "| file | fps | run | publish to answer, p50 / p99 | runtime on the last frame, p50 / p99 | difference, p99 | CPU share, mean (max) | resident memory, first / last / max | its growth a minute, after the first |"
+echo "|---|---:|---|---|---|---:|---|---|---:|"
 "$python" bench/ros_node.py target/release/pvt3-ros shipped/physiclear.onnx image 60 "$seconds"
 "$python" bench/ros_node.py target/release/pvt3-ros shipped/physiclear.onnx image 25 $((seconds / 5))
 node=target/aarch64-unknown-linux-musl/robot/pvt3-ros

@@ -163,6 +163,11 @@ pub fn t_975(df: usize) -> f64 {
     }
 }
 
+/// Why a cross-validation of one seed gives no interval, and how to get one: `pvt3 cv` says it,
+/// and `pvt3 final` records it where the interval would be.
+pub const NO_INTERVAL: &str =
+    "no 95 % confidence interval: the interval of the mean is over the seeds' means, so it needs two seeds at least (--seeds 0,1,2 runs three, each over the four folds)";
+
 /// The 95 % confidence interval of the mean of `values` (Student's t); `None` for fewer than two.
 pub fn ci95(values: &[f64]) -> Option<[f64; 2]> {
     (values.len() >= 2).then(|| {

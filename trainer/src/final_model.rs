@@ -97,6 +97,7 @@ impl Plan {
                 mean_test_accuracy: mean.unwrap_or(f64::NAN),
                 std_test_accuracy: std.unwrap_or(f64::NAN),
                 ci95_test_accuracy: ci95,
+                no_interval: ci95.is_none().then(|| crate::cv::NO_INTERVAL.to_string()),
                 selected_epochs: runs.iter().map(|r| r.best_epoch).collect(),
             }
         };

@@ -155,6 +155,9 @@ pub struct Expected {
     pub std_test_accuracy: f64,
     /// Student's t over the seeds' means; `None` with one seed.
     pub ci95_test_accuracy: Option<[f64; 2]>,
+    /// Why there is no interval, where there is none ([`crate::cv::NO_INTERVAL`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub no_interval: Option<String>,
     /// The epochs the runs selected by validation (of their fine-tuning, when pruned), whose
     /// median the final model trained.
     pub selected_epochs: Vec<usize>,
@@ -168,11 +171,15 @@ impl std::fmt::Display for Expected {
             write!(f, ", 95 % interval of the mean [{lo:.4}, {hi:.4}]")?;
         }
         let seeds = match self.seeds.len() {
-            1 => " (one seed: no interval)".to_string(),
+            1 => " (one seed)".to_string(),
             n => format!(" ({n} seeds)"),
         };
         let pruned = if self.pruned { "pruned " } else { "" };
-        write!(f, ", the test accuracy of the cross-validation {}'s {} {pruned}runs{seeds}", self.cv, self.runs)
+        write!(f, ", the test accuracy of the cross-validation {}'s {} {pruned}runs{seeds}", self.cv, self.runs)?;
+        match &self.no_interval {
+            Some(why) => write!(f, "; {why}"),
+            None => Ok(()),
+        }
     }
 }
 

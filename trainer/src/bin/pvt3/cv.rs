@@ -168,9 +168,12 @@ fn print_accuracy(s: &CvSummary, wall: f64, summary: &std::path::Path) {
         s.runs.len(),
         summary.display()
     );
-    if let Some([lo, hi]) = s.ci95_test_accuracy {
-        let means: Vec<String> = s.seed_means.iter().map(|m| format!("{m:.4}")).collect();
-        println!("95 % confidence interval of the mean [{lo:.4}, {hi:.4}] (Student's t over the seeds' means {})", means.join(", "));
+    match s.ci95_test_accuracy {
+        Some([lo, hi]) => {
+            let means: Vec<String> = s.seed_means.iter().map(|m| format!("{m:.4}")).collect();
+            println!("95 % confidence interval of the mean [{lo:.4}, {hi:.4}] (Student's t over the seeds' means {})", means.join(", "));
+        }
+        None => println!("{}", cv::NO_INTERVAL),
     }
     for (runs, stopping) in [("runs", &s.stopping), ("pruned runs", &s.pruned_stopping)] {
         if let Some(st) = stopping {
