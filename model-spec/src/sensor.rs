@@ -1,12 +1,15 @@
-//! The kind of sensor a data set's frames come from, decided once from the data ([`Sensor::of`])
-//! and read by every choice that differs between kinds: the layout derived for a sensor no preset
-//! fits ([`crate::Config::for_sensor`]), whether `--robust` adds a spectral head over each
-//! channel's frames, and what the trainer says of the layout. A new kind is a variant here with
+//! The kind of sensor a data set's frames come from, recorded by `pvt3 import` (which knows what
+//! it read: a CSV's or a multi-array's taxels, a camera's frames) and read by every choice that
+//! differs between kinds: the layout derived for a sensor no preset fits
+//! ([`crate::Config::for_sensor`]), whether `--robust` adds a spectral head over each channel's
+//! frames, and what the trainer says of the layout. A set that does not record it (written by
+//! hand, or before the import recorded it) is taken by its frames' size ([`Sensor::of`]). A new kind is a variant here with
 //! its rule, its layout in `for_sensor`, and its import (docs/architecture.md, "Adding a sensor
 //! kind").
 
 /// The kind of sensor whose frames a data set holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum Sensor {
     /// A tactile array's taxels or electrodes: a few values a frame on a small grid, or none
     /// (iCub skin, BioTac, a CSV folder's channels).
@@ -20,8 +23,22 @@ pub enum Sensor {
 pub const IMAGE_SIDE: usize = 16;
 
 impl Sensor {
+    /// Its name as a data set records it: `array` or `camera`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Array => "array",
+            Self::Camera => "camera",
+        }
+    }
+
+    /// The kind a data set records by [`Sensor::name`]; `None` for another word.
+    pub fn from_name(name: &str) -> Option<Self> {
+        [Self::Array, Self::Camera].into_iter().find(|s| s.name() == name)
+    }
+
     /// The kind of sensor whose samples are `[height, width, (channels,) frames]`: a camera's
     /// where a frame is an image, at least [`IMAGE_SIDE`] values each way; an array's otherwise.
+    /// For a set that does not record its kind: a large taxel grid passes for a camera here.
     pub fn of(sample_shape: &[usize]) -> Self {
         match *sample_shape {
             [height, width, ..] if height >= IMAGE_SIDE && width >= IMAGE_SIDE => Self::Camera,
@@ -51,5 +68,9 @@ mod tests {
         assert_eq!(Sensor::of(&[16, 16, 1]), Sensor::Camera);
         assert_eq!(Sensor::of(&[30, 40, 3, 25]), Sensor::Camera);
         assert_eq!(Sensor::of(&[10]), Sensor::Array);
+        for s in [Sensor::Array, Sensor::Camera] {
+            assert_eq!(Sensor::from_name(s.name()), Some(s));
+        }
+        assert_eq!(Sensor::from_name("grid"), None);
     }
 }

@@ -212,7 +212,7 @@ fn the_c_example_gives_the_rust_result() {
     std::fs::create_dir_all(&built).unwrap();
     std::fs::copy(profile_dir.join("examples/libpvt3_c.a"), built.join("libpvt3_runtime.a")).unwrap();
     // The shared library beside it, where the target builds one (musl's builds none).
-    let shared = profile_dir.join("libpvt3_runtime.so");
+    let shared = profile_dir.join("examples/libpvt3_c.so");
     if shared.exists() {
         std::fs::copy(&shared, built.join("libpvt3_runtime.so")).unwrap();
     }
@@ -236,8 +236,12 @@ fn the_c_example_gives_the_rust_result() {
     ] {
         build_as_the_guide_says(line, &root().join("examples").join(source), exe, &prefix);
     }
-    let needs = std::process::Command::new("readelf").arg("-d").arg(&exe).output().expect("readelf runs (binutils)");
-    assert!(!String::from_utf8_lossy(&needs.stdout).contains("libpvt3_runtime.so"), "the static line's program needs the shared library");
+    let needs = |exe: &std::path::Path| {
+        let out = std::process::Command::new("readelf").arg("-d").arg(exe).output().expect("readelf runs (binutils)");
+        String::from_utf8_lossy(&out.stdout).contains("libpvt3_runtime.so")
+    };
+    assert!(!needs(&exe), "the static line's program needs the shared library");
+    assert_eq!(needs(&shared_classify), shared.exists(), "the shared line's program and the shared library");
     camera_example_answers_as_a_session(&dir.join("camera"), &dir);
 
     // The example classifies, streams, peeks at and slides over the first `windows` windows.

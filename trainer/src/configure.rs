@@ -80,7 +80,7 @@ pub fn configure(data: &Dataset, choice: &ModelChoice, options: &TrainOptions) -
     cfg.classes = data.classes();
     cfg = apply_overrides(cfg, &choice.overrides)?;
     if derived {
-        notes.push(derived_layout(&cfg, data.sensor, &data.window_shape()));
+        notes.push(derived_layout(&cfg, data, &data.window_shape()));
     }
     cfg.dropout = choice.dropout.unwrap_or(cfg.dropout);
     let (cfg, mut options) = robust(data, cfg, options, &choice.overrides, &mut notes)?;
@@ -143,7 +143,11 @@ pub fn robust(
         does.push("reads windows at other speeds");
     }
     let fits = cfg.architecture() == Architecture::Pvt3 && cfg.frames / 2 >= ROBUST_SPECTRAL_BANDS;
-    let cfg = if fits && cfg.spectral_bands() == 0 && !overridden(overrides, "spectral_bands") && data.sensor == Sensor::Array {
+    let array = match data.sensor {
+        Sensor::Array => true,
+        Sensor::Camera => false,
+    };
+    let cfg = if fits && cfg.spectral_bands() == 0 && !overridden(overrides, "spectral_bands") && array {
         let spectral = format!("spectral_bands={ROBUST_SPECTRAL_BANDS}");
         chose.push(format!("--set {spectral}"));
         does.push("reads each channel's spectrum beside");
@@ -215,28 +219,40 @@ fn base_config(data: &Dataset, choice: &ModelChoice) -> Result<(Config, bool)> {
     Ok((derived.for_model(architecture), true))
 }
 
-/// The note on a layout derived for `sensor`'s samples of `window` (`Config::for_sensor`), as
-/// `cfg` has it after the user's overrides.
-fn derived_layout(cfg: &Config, sensor: Sensor, window: &[usize]) -> String {
-    let layout = if sensor == Sensor::Camera {
-        let (ph, pw) = (cfg.patch_height, cfg.patch_width);
-        let grid = format!("{} × {}", cfg.height / ph, cfg.width / pw);
-        let head = match cfg.spectral_space() {
-            true => format!(
-                ", a spectral head over the image's space ({} rings, a histogram of {} bins{}{})",
-                cfg.spectral_bands(),
-                cfg.spectral_histogram(),
-                if cfg.spectral_gradients() { " of the values and of their gradients across and down" } else { "" },
-                if cfg.spectral_pixels() { " and the pixels, the form chosen on validation" } else { "" }
-            ),
-            false => String::new(),
-        };
-        format!("a camera's layout, patches of {ph} × {pw} pixels ({grid} a frame){head}, one token per {} frames", cfg.tubelet)
-    } else {
-        format!("the BioTac layout, one token per {} frames of all {} values of a frame", cfg.tubelet, cfg.sensor_channels())
+/// The note on a layout derived for the samples of `window` of `data`'s sensor
+/// (`Config::for_sensor`), as `cfg` has it after the user's overrides; where the set does not
+/// record its sensor's kind, how it was taken.
+fn derived_layout(cfg: &Config, data: &Dataset, window: &[usize]) -> String {
+    let layout = match data.sensor {
+        Sensor::Camera => {
+            let (ph, pw) = (cfg.patch_height, cfg.patch_width);
+            let grid = format!("{} × {}", cfg.height / ph, cfg.width / pw);
+            let head = match cfg.spectral_space() {
+                true => format!(
+                    ", a spectral head over the image's space ({} rings, a histogram of {} bins{}{})",
+                    cfg.spectral_bands(),
+                    cfg.spectral_histogram(),
+                    if cfg.spectral_gradients() { " of the values and of their gradients across and down" } else { "" },
+                    if cfg.spectral_pixels() { " and the pixels, the form chosen on validation" } else { "" }
+                ),
+                false => String::new(),
+            };
+            format!("a camera's layout, patches of {ph} × {pw} pixels ({grid} a frame){head}, one token per {} frames", cfg.tubelet)
+        }
+        Sensor::Array => {
+            format!("the BioTac layout, one token per {} frames of all {} values of a frame", cfg.tubelet, cfg.sensor_channels())
+        }
+    };
+    let kind = match data.sensor_recorded {
+        true => String::new(),
+        false => format!(
+            " ({} does not record its sensor's kind: taken as {} by its frames' size; `pvt3 import --sensor` records it)",
+            data.path.display(),
+            data.sensor
+        ),
     };
     format!(
-        "no preset takes samples of {}: derived {layout} ({} temporal tokens); `pvt3 info --json` and --config FILE to choose otherwise",
+        "no preset takes samples of {}: derived {layout} ({} temporal tokens){kind}; `pvt3 info --json` and --config FILE to choose otherwise",
         shape(window),
         cfg.time_tokens()
     )
@@ -391,6 +407,8 @@ mod tests {
         };
         let default = note(&[]);
         assert!(default.contains("patches of 10 × 10 pixels (3 × 4 a frame), a spectral head over the image's space"), "{default}");
+        // The set does not record its sensor's kind: it is taken by the frames' size, and said so.
+        assert!(default.contains("mem does not record its sensor's kind: taken as a camera by its frames' size"), "{default}");
         assert!(default.contains("one token per 1 frames (25 temporal tokens)"), "{default}");
         let asked = note(&["tubelet=5", "spectral_histogram=0", "spectral_bands=0"]);
         assert!(asked.contains("(3 × 4 a frame), one token per 5 frames (5 temporal tokens)"), "{asked}");

@@ -55,6 +55,9 @@ pub mod key {
     /// `pvt3_format::Reading`, UTF-8.
     pub const READING: &str = "reading";
     pub const CAMERA: &str = "camera";
+    /// The kind of sensor the frames come from, one line (`pvt3_spec::Sensor::name`: `array` or
+    /// `camera`), as the import read them.
+    pub const SENSOR: &str = "sensor";
     /// Each camera touch's frame before contact, `x`'s shape without its frame axis, which a
     /// reader subtracts from its frames (`pvt3 import --subtract-first`).
     pub const BACKGROUND: &str = "background";
@@ -128,9 +131,12 @@ pub struct Dataset {
     pub x: Arc<Frames>,
     /// The layout of one sample: `[H, W, T]` or `[H, W, C, T]`; `T` is the longest touch's.
     pub sample_shape: Vec<usize>,
-    /// The kind of sensor the frames come from, decided once when the set is read
-    /// ([`pvt3_spec::Sensor::of`]): what every choice that differs between kinds reads.
+    /// The kind of sensor the frames come from, as the file records it ([`key::SENSOR`]), or
+    /// taken by the frames' size where it does not ([`pvt3_spec::Sensor::of`]): what every choice
+    /// that differs between kinds reads.
     pub sensor: pvt3_spec::Sensor,
+    /// Whether the file records [`Dataset::sensor`] (`false`: it was taken by the frames' size).
+    pub sensor_recorded: bool,
     /// Each touch's frames (`T` for all unless the file holds `lengths`).
     pub lengths: Vec<usize>,
     /// Class names from the file (`class_names`), if it has them.
@@ -165,6 +171,7 @@ impl Dataset {
         Self {
             x: Arc::new(x.into()),
             sensor: pvt3_spec::Sensor::of(&sample_shape),
+            sensor_recorded: false,
             sample_shape,
             lengths: vec![frames; labels.len()],
             class_names: None,

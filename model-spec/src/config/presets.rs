@@ -64,7 +64,7 @@ impl Config {
         Self { height: 19, width: 1, frames: 400, patch_height: 19, patch_width: 1, tubelet: 10, ..Self::icub20() }
     }
 
-    /// A sensor no preset fits, of kind `sensor` ([`Sensor::of`] the data), samples `[height,
+    /// A sensor no preset fits, of kind `sensor` (as its data set records it), samples `[height,
     /// width, (channels,) frames]`. The tubelet is the
     /// divisor of `frames` nearest (in ratio) to `frames / 40`, so that about 40 temporal tokens
     /// remain, as in the BioTac preset. A camera's images ([`Sensor::Camera`]) are cut into about 12
@@ -85,22 +85,26 @@ impl Config {
             return None;
         }
         let tubelet = nearest_divisor(frames, frames as f64 / 40.0);
-        if sensor == Sensor::Camera {
-            let side = ((height * width) as f64 / IMAGE_PATCHES).sqrt();
-            let (patch_height, patch_width) = (nearest_divisor(height, side), nearest_divisor(width, side));
-            let bands = (1..=IMAGE_BANDS).rev().find(|b| crate::spectrum::space::band_of(height, width, *b).is_ok()).unwrap_or(0);
-            let histogram = if bands > 0 { IMAGE_HISTOGRAM } else { 0 };
-            let network = Pvt3Config {
-                spectral_bands: bands,
-                spectral_space: bands > 0,
-                spectral_histogram: histogram,
-                spectral_pixels: bands > 0,
-                ..Pvt3Config::default()
+        match sensor {
+            Sensor::Camera => {
+                let side = ((height * width) as f64 / IMAGE_PATCHES).sqrt();
+                let (patch_height, patch_width) = (nearest_divisor(height, side), nearest_divisor(width, side));
+                let bands = (1..=IMAGE_BANDS).rev().find(|b| crate::spectrum::space::band_of(height, width, *b).is_ok()).unwrap_or(0);
+                let histogram = if bands > 0 { IMAGE_HISTOGRAM } else { 0 };
+                let network = Pvt3Config {
+                    spectral_bands: bands,
+                    spectral_space: bands > 0,
+                    spectral_histogram: histogram,
+                    spectral_pixels: bands > 0,
+                    ..Pvt3Config::default()
+                }
+                .into();
+                Some(Self { height, width, channels, frames, patch_height, patch_width, tubelet, network, ..Self::gelsight() })
             }
-            .into();
-            return Some(Self { height, width, channels, frames, patch_height, patch_width, tubelet, network, ..Self::gelsight() });
+            Sensor::Array => {
+                Some(Self { height, width, channels, frames, patch_height: height, patch_width: width, tubelet, ..Self::biotac20() })
+            }
         }
-        Some(Self { height, width, channels, frames, patch_height: height, patch_width: width, tubelet, ..Self::biotac20() })
     }
 
     /// GelSight-style optical tactile video: 25 RGB frames of 240 × 320, patches 40 × 40.

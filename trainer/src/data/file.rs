@@ -61,13 +61,21 @@ fn dataset(path: &Path, src: &mut impl ArraySource, seed: u64) -> Result<Dataset
     }
     let reading = a.record(key::READING, "how touches are read")?;
     let camera = a.record(key::CAMERA, "how camera frames are read")?;
+    let sensor = match a.lines(key::SENSOR, Some(1))? {
+        Some(line) => Some(
+            pvt3_spec::Sensor::from_name(&line[0])
+                .ok_or_else(|| Error::data(path, format!("array `{}` says `{}`: expected `array` or `camera`", key::SENSOR, line[0])))?,
+        ),
+        None => None,
+    };
     let (folds, fold_seed) = match fold {
         Some(f) => (folds(path, &f, n)?, None),
         None => (stratified_folds(&labels, FOLDS, seed), Some(seed)),
     };
     Ok(Dataset {
         x: Arc::new(x),
-        sensor: pvt3_spec::Sensor::of(&sample_shape),
+        sensor: sensor.unwrap_or_else(|| pvt3_spec::Sensor::of(&sample_shape)),
+        sensor_recorded: sensor.is_some(),
         sample_shape,
         lengths,
         class_names,

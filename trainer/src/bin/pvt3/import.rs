@@ -7,7 +7,7 @@ use anyhow::{bail, Context, Result};
 use pvt3_format::span::FrameSpan;
 use pvt3_format::Crop;
 use pvt3_trainer::data::import::camera::{read_camera_folder, CameraOptions, CameraSet};
-use pvt3_trainer::data::import::csv::{read_folder, ImportOptions};
+use pvt3_trainer::data::import::csv::{elided, read_folder, ImportOptions};
 use pvt3_trainer::data::import::folder::{holds_camera_touches, NamePattern, Naming};
 use pvt3_trainer::data::import::labels::Labels;
 use pvt3_trainer::data::import::timing::Timing;
@@ -79,6 +79,12 @@ pub struct ImportArgs {
     /// lists the bag's topics with their types and message counts.
     #[arg(long, value_name = "NAME")]
     pub topic: Option<String>,
+    /// The kind of sensor the set records, which the training's layout follows: `array` (a
+    /// tactile array's taxels or electrodes, a grid of any size) or `camera` (a camera's images,
+    /// cut into patches). Default: what the import read, `array` for CSV files and multi-arrays,
+    /// `camera` for videos, frames and images.
+    #[arg(long, value_enum)]
+    pub sensor: Option<pvt3_spec::Sensor>,
     #[command(flatten)]
     pub camera: CameraArgs,
 }
@@ -121,7 +127,7 @@ impl CameraArgs {
     fn options(&self, naming: Naming, topic: Option<String>) -> CameraOptions {
         let (crop, size, grey, frames, span) = (self.crop, self.size, self.grey, self.frames, self.frames_from);
         let (subtract_first, allow_short) = (self.subtract_first, self.allow_short);
-        CameraOptions { naming, crop, size, grey, frames, span, subtract_first, allow_short, topic }
+        CameraOptions { naming, crop, size, grey, frames, span, subtract_first, allow_short, topic, sensor: None }
     }
 
     /// The camera options given on the command line (those left at their defaults not named).
@@ -179,7 +185,8 @@ pub fn run(a: ImportArgs) -> Result<()> {
         bail!("{option} is for a camera's touches (videos or frame folders), and {} holds none", a.dir.display());
     }
     let (columns, grid, topic) = (a.columns, a.grid, a.topic);
-    let opts = ImportOptions { columns, grid, naming, per_distance: a.per_distance, per_force: a.per_force, topic };
+    let (per_distance, per_force, sensor) = (a.per_distance, a.per_force, a.sensor);
+    let opts = ImportOptions { columns, grid, naming, per_distance, per_force, topic, sensor };
     let set = read_folder(&a.dir, &opts)?;
     set.write_npz(&a.out).with_context(|| format!("writing {}", a.out.display()))?;
     let (shortest, longest) = set.length_range();
@@ -189,7 +196,7 @@ pub fn run(a: ImportArgs) -> Result<()> {
         (Some((h, w)), _) => format!("a {h} × {w} grid"),
         (None, _) => "one column".into(),
     };
-    println!("{} channels as {layout}: {}", set.channels.len(), set.channels.join(", "));
+    println!("{} channels as {layout}, {}: {}", set.channels.len(), recorded_as(set.sensor), elided(&set.channels));
     if let Some((name, speed)) = &opts.per_distance {
         println!("every touch resampled from time to distance: to the frames it would have at {name} {speed}");
     }
@@ -219,7 +226,7 @@ fn run_camera(a: ImportArgs, naming: Naming) -> Result<()> {
     if let Some(option) = given.first() {
         bail!("{option} is for CSV touches, and {} holds a camera's (videos or frame folders)", a.dir.display());
     }
-    let opts = a.camera.options(naming, a.topic);
+    let opts = CameraOptions { sensor: a.sensor, ..a.camera.options(naming, a.topic) };
     let bar = progress::bar("decoding");
     let set = read_camera_folder(&a.dir, &opts, |done, all| {
         bar.set_length(all as u64);
@@ -230,6 +237,15 @@ fn run_camera(a: ImportArgs, naming: Naming) -> Result<()> {
     describe_camera(&set, &opts);
     println!("wrote {}; next: pvt3 cv --data {}", a.out.display(), a.out.display());
     Ok(())
+}
+
+/// The kind of sensor the set records, in words, with the option that changes it.
+fn recorded_as(sensor: pvt3_spec::Sensor) -> String {
+    let other = match sensor {
+        pvt3_spec::Sensor::Array => pvt3_spec::Sensor::Camera,
+        pvt3_spec::Sensor::Camera => pvt3_spec::Sensor::Array,
+    };
+    format!("recorded as {sensor}'s (--sensor {} for {other}'s)", other.name())
 }
 
 /// `N touches of K classes (A to B touches a class)`, from the touches per class.
@@ -248,11 +264,20 @@ fn describe_camera(set: &CameraSet, opts: &CameraOptions) {
     let [h, w, c] = set.frame_shape;
     let colour = if c == 1 { "grey" } else { "RGB" };
     if set.spans.iter().all(|s| s.0 == 1) && set.frames == 1 {
-        println!("{}: each one still image of {h} × {w} {colour}, read as one frame, stored as 8-bit", touches(&set.per_class()));
+        println!(
+            "{}: each one still image of {h} × {w} {colour}, read as one frame, stored as 8-bit, {}",
+            touches(&set.per_class()),
+            recorded_as(set.sensor)
+        );
         print_conditions(&set.conditions);
         return;
     }
-    println!("{}: {} frames of {h} × {w} {colour} each, stored as 8-bit", touches(&set.per_class()), set.frames);
+    println!(
+        "{}: {} frames of {h} × {w} {colour} each, stored as 8-bit, {}",
+        touches(&set.per_class()),
+        set.frames,
+        recorded_as(set.sensor)
+    );
     let recorded = set.spans.iter().map(|s| s.0);
     let taken = set.spans.iter().map(|s| s.2 + 1 - s.1);
     println!(

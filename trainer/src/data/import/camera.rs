@@ -47,6 +47,9 @@ pub struct CameraOptions {
     pub allow_short: bool,
     /// The topic a bag's frames are read from (`sensor_msgs/msg/Image` or `CompressedImage`).
     pub topic: Option<String>,
+    /// The kind of sensor the set records; `None`: a camera's (`--sensor array` for a taxel
+    /// array's readings stored as images).
+    pub sensor: Option<pvt3_spec::Sensor>,
 }
 
 impl Default for CameraOptions {
@@ -62,6 +65,7 @@ impl Default for CameraOptions {
             subtract_first: false,
             allow_short: false,
             topic: None,
+            sensor: None,
         }
     }
 }
@@ -94,6 +98,8 @@ pub struct CameraSet {
     pub camera: Option<Camera>,
     /// The touches whose frames' times were not evenly spaced and rising (bags), by source.
     pub timings: Vec<(String, Timing)>,
+    /// The kind of sensor the set records ([`CameraOptions::sensor`]).
+    pub sensor: pvt3_spec::Sensor,
 }
 
 impl CameraSet {
@@ -115,7 +121,7 @@ pub fn read_camera_folder(dir: &Path, opts: &CameraOptions, mut progress: impl F
         return Err(Error::Usage(format!("--frames {frames}: a touch takes 1 to {MAX_FRAMES} frames")));
     }
     let values: Vec<Vec<String>> = files.iter().map(|f| f.values.clone()).collect();
-    let mut set = CameraSet::empty(frames, classes, conditions(&opts.naming, &values), opts.subtract_first);
+    let mut set = CameraSet::empty(frames, classes, conditions(&opts.naming, &values), opts);
     // The first touch and its first frame: every touch's frames must have its shape.
     let mut first: Option<(&Path, Picture)> = None;
     let mut recorded = Vec::new();
@@ -223,11 +229,11 @@ impl CameraOptions {
 
 impl CameraSet {
     /// A set with no touch yet, of `frames` frames a touch, with a background for each touch when
-    /// `subtract_first` asks for it.
-    fn empty(frames: usize, classes: Vec<String>, conditions: Vec<Condition>, subtract_first: bool) -> Self {
+    /// `opts.subtract_first` asks for it.
+    fn empty(frames: usize, classes: Vec<String>, conditions: Vec<Condition>, opts: &CameraOptions) -> Self {
         CameraSet {
             x: Vec::new(),
-            background: subtract_first.then(Vec::new),
+            background: opts.subtract_first.then(Vec::new),
             frame_shape: [0; 3],
             frames,
             labels: Vec::new(),
@@ -237,6 +243,7 @@ impl CameraSet {
             spans: Vec::new(),
             camera: None,
             timings: Vec::new(),
+            sensor: opts.sensor.unwrap_or(pvt3_spec::Sensor::Camera),
         }
     }
 
@@ -268,7 +275,7 @@ impl CameraSet {
         let [h, w, c] = self.frame_shape;
         let n = self.labels.len();
         let frame: Vec<usize> = if c == 1 { vec![n, h, w] } else { vec![n, h, w, c] };
-        let records = Records { labels: &self.labels, classes: &self.classes, sources: &self.sources, conditions: &self.conditions };
+        let records = Records::new(&self.labels, &self.classes, &self.sources, &self.conditions, self.sensor);
         npz::write(path, records, |npz| {
             npz.add_array(key::X, &ArrayViewD::from_shape(IxDyn(&[&frame[..], &[self.frames]].concat()), &self.x)?)?;
             if let Some(b) = &self.background {

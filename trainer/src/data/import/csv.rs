@@ -39,6 +39,9 @@ pub struct ImportOptions {
     pub per_force: Option<(String, f64)>,
     /// The topic a bag's frames are read from (a `std_msgs/msg/*MultiArray`).
     pub topic: Option<String>,
+    /// The kind of sensor the set records; `None`: a tactile array's, what a CSV file or a
+    /// multi-array holds (`--sensor camera` for a camera's frames exported as columns).
+    pub sensor: Option<pvt3_spec::Sensor>,
 }
 
 /// One touch as its file holds it: its class, its file, its frames `[frames][columns]` (every column of the
@@ -85,6 +88,17 @@ pub struct Imported {
     pub timings: Vec<(String, Timing)>,
     /// A bag's messages' layout (`layout.dim`'s sizes, outermost first).
     pub layout: Option<Vec<usize>>,
+    /// The kind of sensor the set records ([`ImportOptions::sensor`]).
+    pub sensor: pvt3_spec::Sensor,
+}
+
+/// Names listed, a long list elided in its middle: `p0, p1, …, p10, …, p1023 (1024 names)`.
+pub fn elided(names: &[String]) -> String {
+    const SHOWN: usize = 12;
+    match names.len() > SHOWN {
+        true => format!("{}, …, {} ({} names)", names[..SHOWN - 1].join(", "), names[names.len() - 1], names.len()),
+        false => names.join(", "),
+    }
 }
 
 /// Columns left out of an import, each with why.
@@ -150,6 +164,7 @@ pub fn read_folder(dir: &Path, opts: &ImportOptions) -> Result<Imported> {
         reading,
         timings: Vec::new(),
         layout: header.layout,
+        sensor: opts.sensor.unwrap_or(pvt3_spec::Sensor::Array),
     };
     for (n, t) in touches.into_iter().enumerate() {
         let touch = Touch { speed: speeds[n], force: forces[n] };
@@ -177,7 +192,7 @@ fn grid(given: Option<(usize, usize)>, layout: Option<&[usize]>, all_chosen: boo
     let grid = given.or(layout);
     if let Some((h, w)) = grid.filter(|(h, w)| h * w != channels.len()) {
         let (held, chosen) = (h * w, channels.len());
-        return Err(Error::Usage(format!("--grid {h}x{w} holds {held} channels, and {chosen} columns were chosen: {channels:?}")));
+        return Err(Error::Usage(format!("--grid {h}x{w} holds {held} channels, and {chosen} columns were chosen: {}", elided(channels))));
     }
     Ok(grid)
 }
@@ -413,7 +428,7 @@ impl Imported {
             Some((h, w)) => vec![n, h, w, longest],
             None => vec![n, channels, longest],
         };
-        let records = Records { labels: &self.labels, classes: &self.classes, sources: &self.sources, conditions: &self.conditions };
+        let records = Records::new(&self.labels, &self.classes, &self.sources, &self.conditions, self.sensor);
         npz::write(path, records, |npz| {
             npz.add_array(key::X, &ArrayD::from_shape_vec(IxDyn(&shape), x)?)?;
             npz.add_array(key::LENGTHS, &Array1::from(self.touches.iter().map(|t| t[0].len() as i64).collect::<Vec<_>>()))?;

@@ -1,5 +1,6 @@
 //! What every imported set writes beside its frames ([`crate::data::key`]): the labels, the
-//! class names, each touch's file and conditions, names as UTF-8 lines and records as JSON.
+//! class names, each touch's file and conditions, the kind of sensor, names as UTF-8 lines and
+//! records as JSON.
 
 use std::path::Path;
 
@@ -27,6 +28,21 @@ pub(super) struct Records<'a> {
     pub(super) classes: &'a [String],
     pub(super) sources: &'a [String],
     pub(super) conditions: &'a [Condition],
+    /// The kind of sensor the frames came from.
+    pub(super) sensor: pvt3_spec::Sensor,
+}
+
+impl<'a> Records<'a> {
+    /// The records of a set's touches.
+    pub(super) fn new(
+        labels: &'a [u32],
+        classes: &'a [String],
+        sources: &'a [String],
+        conditions: &'a [Condition],
+        sensor: pvt3_spec::Sensor,
+    ) -> Self {
+        Self { labels, classes, sources, conditions, sensor }
+    }
 }
 
 /// Writes a data set to `path`: `fill` adds its frames and what else it holds, then come the
@@ -58,8 +74,9 @@ pub(super) fn add_json(npz: &mut Npz, name: &str, value: &impl serde::Serialize)
 /// Adds `records` ([`Records`]) to `npz`.
 fn add_records(
     npz: &mut Npz,
-    Records { labels, classes, sources, conditions }: Records,
+    Records { labels, classes, sources, conditions, sensor }: Records,
 ) -> std::result::Result<(), ndarray_npy::WriteNpzError> {
+    npz.add_array(key::SENSOR, &lines(&[sensor.name().to_string()]))?;
     npz.add_array(key::Y, &Array1::from(labels.iter().map(|l| *l as i64).collect::<Vec<_>>()))?;
     npz.add_array(key::CLASS_NAMES, &lines(classes))?;
     npz.add_array(key::SOURCES, &lines(sources))?;

@@ -49,6 +49,42 @@ fn a_csv_tree_imports_with_its_lengths_names_and_channels() {
     std::fs::remove_dir_all(dir).unwrap();
 }
 
+/// A 32 × 32 taxel grid from CSV is recorded as a tactile array's, whatever its size, and trains
+/// with an array's layout; `--sensor camera` records it as a camera's instead.
+#[test]
+fn a_large_taxel_grid_is_recorded_as_an_array_and_trains_as_one() {
+    let dir = std::env::temp_dir().join(format!("pvt3-import-grid-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let header = (0..1024).map(|i| format!("p{i}")).collect::<Vec<_>>().join(",");
+    // Five touches a class, as the folds need.
+    for (class, touch) in ["felt", "cork"].into_iter().flat_map(|c| (0..5).map(move |t| (c, t))) {
+        std::fs::create_dir_all(dir.join(class)).unwrap();
+        let rows: Vec<String> =
+            (0..8).map(|t| (0..1024).map(|i| ((i * 7 + t * 13 + touch) % 97).to_string()).collect::<Vec<_>>().join(",")).collect();
+        std::fs::write(dir.join(class).join(format!("t{touch}.csv")), format!("{header}\n{}\n", rows.join("\n"))).unwrap();
+    }
+    let out = dir.join("set.npz");
+    for (asked, kind) in [(None, pvt3_spec::Sensor::Array), (Some(pvt3_spec::Sensor::Camera), pvt3_spec::Sensor::Camera)] {
+        let columns = vec!["p*".to_string()];
+        let set = read_folder(&dir, &ImportOptions { columns, grid: Some((32, 32)), sensor: asked, ..Default::default() }).unwrap();
+        set.write_npz(&out).unwrap();
+        let data = Dataset::load(&out, 0).unwrap();
+        assert_eq!((data.sample_shape.clone(), data.sensor, data.sensor_recorded), (vec![32, 32, 8], kind, true));
+        let configured = crate::configure::configure(&data, &Default::default(), &Default::default()).unwrap();
+        let layout = configured.notes.iter().find(|n| n.starts_with("no preset takes samples of 32 × 32 × 8")).unwrap();
+        let expected = match kind {
+            pvt3_spec::Sensor::Array => "derived the BioTac layout",
+            pvt3_spec::Sensor::Camera => "derived a camera's layout",
+        };
+        assert!(layout.contains(expected) && !layout.contains("does not record"), "{layout}");
+    }
+    // A long list of columns is elided where it is said.
+    let wrong = ImportOptions { columns: vec!["p*".into()], grid: Some((31, 32)), ..Default::default() };
+    let err = read_folder(&dir, &wrong).unwrap_err().to_string();
+    assert!(err.contains("p9, p10, …, p1023 (1024 names)") && !err.contains("p500"), "{err}");
+    std::fs::remove_dir_all(dir).unwrap();
+}
+
 #[test]
 fn bad_files_are_named_with_their_line() {
     let dir = tree("bad");
