@@ -143,17 +143,15 @@ pub fn robust(
         does.push("reads windows at other speeds");
     }
     let fits = cfg.architecture() == Architecture::Pvt3 && cfg.frames / 2 >= ROBUST_SPECTRAL_BANDS;
-    let array = match data.sensor {
-        Sensor::Array => true,
-        Sensor::Camera => false,
-    };
-    let cfg = if fits && cfg.spectral_bands() == 0 && !overridden(overrides, "spectral_bands") && array {
-        let spectral = format!("spectral_bands={ROBUST_SPECTRAL_BANDS}");
-        chose.push(format!("--set {spectral}"));
-        does.push("reads each channel's spectrum beside");
-        apply_overrides(cfg, &[spectral])?
-    } else {
-        cfg
+    // A spectral head over each channel's frames: an array's channels (a camera's pixels are not).
+    let cfg = match data.sensor {
+        Sensor::Array if fits && cfg.spectral_bands() == 0 && !overridden(overrides, "spectral_bands") => {
+            let spectral = format!("spectral_bands={ROBUST_SPECTRAL_BANDS}");
+            chose.push(format!("--set {spectral}"));
+            does.push("reads each channel's spectrum beside");
+            apply_overrides(cfg, &[spectral])?
+        }
+        Sensor::Array | Sensor::Camera => cfg,
     };
     let last = does.pop().expect("the channel scale is always chosen");
     let does = if does.is_empty() { last.to_string() } else { format!("{} and {last}", does.join(", ")) };
