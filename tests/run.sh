@@ -229,6 +229,10 @@ other_platforms() {
   same_as_host target/platforms/x86_64-unknown-linux-musl/debug/pvt3-run
   is_static target/platforms/x86_64-unknown-linux-musl/debug/pvt3-ros
   target/platforms/x86_64-unknown-linux-musl/debug/pvt3-ros --help | grep -q "touch_status"
+  # Every crate packs as `cargo publish` would pack it: its metadata, its files, its internal
+  # dependencies by version (the packages made earlier in the run stand in for crates.io). Not
+  # built again from the packages (--no-verify): that would build the workspace a third time.
+  cargo package --target-dir target/platforms --workspace --no-verify
 }
 
 step "host: cargo test --profile ci --workspace (built, then run)"
