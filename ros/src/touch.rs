@@ -32,11 +32,17 @@ pub enum Boundary {
 
 /// A recording for [`Boundary::Moving`]: what the moving span needs of each frame, each frame
 /// read as the file says (a model's frame, far smaller than the camera's) and its stamp.
-#[derive(Default)]
 struct Recording {
-    motion: Option<Motion>,
+    motion: Motion,
     read: Vec<Picture>,
     stamps: Vec<Stamp>,
+}
+
+impl Default for Recording {
+    /// Nothing recorded yet.
+    fn default() -> Self {
+        Self { motion: Motion::new(FrameSpan::Moving), read: Vec::new(), stamps: Vec::new() }
+    }
 }
 
 /// A touch's answer: the prediction, the stamp of its last frame, and how it was reached.
@@ -189,7 +195,7 @@ impl Touches {
         let picture = self.recorded_picture(decoded.frame)?;
         let camera = self.classifier.camera().expect("a moving span's file records a camera");
         let read = picture.clone().read_as(&camera).map_err(Refused)?;
-        self.recording.motion.get_or_insert_with(|| Motion::new(FrameSpan::Moving)).push(&picture);
+        self.recording.motion.push(&picture);
         self.recording.read.push(read);
         self.last = decoded.stamp.unwrap_or(received);
         self.recording.stamps.push(self.last);
@@ -206,7 +212,6 @@ impl Touches {
     fn finish_recording(&mut self, ended_by: &'static str) -> Result<Answer, Refused> {
         let started = Instant::now();
         let recording = std::mem::take(&mut self.recording);
-        let motion = recording.motion.expect("a recording holds a frame");
         let window = self.session.frames();
         if recording.read.len() < window {
             let recorded = recording.read.len();
@@ -215,7 +220,7 @@ impl Touches {
                 "a recording of {recorded} frames ended by {ended_by}, fewer than the window's {window}: dropped"
             )));
         }
-        let taken = motion.take(window);
+        let taken = recording.motion.take(window);
         let subtract_first = self.classifier.camera().is_some_and(|c| c.subtract_first);
         let first = subtract_first.then_some(0);
         let pushed =

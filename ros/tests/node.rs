@@ -51,7 +51,8 @@ fn converse(model: &Path, touches: &Path, kind: &str, hostile: bool, params: &[&
     let model = format!("model:={}", model.display());
     args.extend(["-p", &model]);
     params.iter().for_each(|p| args.extend(["-p", p]));
-    let mut node = target::target_command(env!("CARGO_BIN_EXE_pvt3-ros")).args(&args).stderr(Stdio::piped()).spawn().expect("the node runs");
+    let mut node =
+        target::target_command(env!("CARGO_BIN_EXE_pvt3-ros")).args(&args).stderr(Stdio::piped()).spawn().expect("the node runs");
     let heard: Vec<serde_json::Value> = lines.map(|l| serde_json::from_str(&l.unwrap()).unwrap()).collect();
     assert!(peer.wait().unwrap().success(), "the peer failed");
     node.kill().unwrap();

@@ -124,10 +124,10 @@ pub struct CameraArgs {
 }
 
 impl CameraArgs {
-    fn options(&self, naming: Naming, topic: Option<String>) -> CameraOptions {
+    fn options(&self, naming: Naming, topic: Option<String>, sensor: Option<pvt3_spec::Sensor>) -> CameraOptions {
         let (crop, size, grey, frames, span) = (self.crop, self.size, self.grey, self.frames, self.frames_from);
         let (subtract_first, allow_short) = (self.subtract_first, self.allow_short);
-        CameraOptions { naming, crop, size, grey, frames, span, subtract_first, allow_short, topic, sensor: None }
+        CameraOptions { naming, crop, size, grey, frames, span, subtract_first, allow_short, topic, sensor }
     }
 
     /// The camera options given on the command line (those left at their defaults not named).
@@ -226,7 +226,7 @@ fn run_camera(a: ImportArgs, naming: Naming) -> Result<()> {
     if let Some(option) = given.first() {
         bail!("{option} is for CSV touches, and {} holds a camera's (videos or frame folders)", a.dir.display());
     }
-    let opts = CameraOptions { sensor: a.sensor, ..a.camera.options(naming, a.topic) };
+    let opts = a.camera.options(naming, a.topic, a.sensor);
     let bar = progress::bar("decoding");
     let set = read_camera_folder(&a.dir, &opts, |done, all| {
         bar.set_length(all as u64);
