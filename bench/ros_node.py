@@ -1,9 +1,12 @@
 """What pvt3-ros costs on a ROS 2 graph: a sensor driver publishing a touch's frames at a camera's
 rate through a zenoh router on 127.0.0.1 (eclipse-zenoh, messages by rosbags: tests/ros_peer.py's
 code), the node pinned to one core. For each touch, the time from the publish of its last frame
-to the answer's arrival, beside the runtime's own time on that frame (the node's `last_ms`:
-from the frame's arrival to the answer); the answers come in the touches' order, one a touch; every second, the node's CPU share and resident memory
-(/proc). Prints a row of bench/ros_node.sh's table (docs/benchmarks.md).
+to its answer's arrival at the router (the router's own stamp, zenoh's HLC, taken in Rust as the
+answer comes in), beside the runtime's own time on that frame (the node's `last_ms`: from the
+frame's arrival to the answer); and to the answer's arrival in this process's Python callback,
+which waits for the GIL. The answers come in the touches' order, one a touch. Every second, the
+node's CPU share and resident memory (/proc). Prints a row of bench/ros_node.sh's table
+(docs/benchmarks.md).
 
     target/onnx-venv/bin/python bench/ros_node.py PVT3_ROS MODEL KIND FPS SECONDS
 
@@ -64,11 +67,12 @@ def main(binary, model, kind, fps, seconds):
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
     session = ros_peer.router(port)
-    arrived, last_ms = [], []
+    routed, arrived, last_ms = [], [], []
     store = ros_peer.STORE
 
     def on_answer(sample):
-        arrived.append(time.perf_counter())
+        arrived.append(time.time_ns())
+        routed.append(sample.timestamp.get_time_as_ntp64().as_nanos())
 
     def on_status(sample):
         m = store.deserialize_cdr(bytes(sample.payload.to_bytes()), "diagnostic_msgs/msg/DiagnosticStatus")
@@ -101,7 +105,7 @@ def main(binary, model, kind, fps, seconds):
         ns += int(1e9 / fps)
         driver.put(ros_peer.image(frame, ns) if kind == "image" else ros_peer.array(frame))
         if (n + 1) % window == 0:
-            published.append(time.perf_counter())
+            published.append(time.time_ns())
         n += 1
         time.sleep(max(0.0, start + n / fps - time.perf_counter()))
     time.sleep(1.0)
@@ -113,7 +117,8 @@ def main(binary, model, kind, fps, seconds):
     session.close()
     # Answers come in the touches' order, one a touch: the k-th answers the k-th touch.
     assert len(arrived) == len(published), f"{len(arrived)} answers for {len(published)} touches"
-    latencies = [1e3 * (a - p) for a, p in zip(arrived, published)]
+    latencies = [(r - p) / 1e6 for r, p in zip(routed, published)]
+    at_listener = [(a - p) / 1e6 for a, p in zip(arrived, published)]
     overhead = [lat - last for lat, last in zip(latencies, last_ms)]
     cpu = [(b[1] - a[1]) / (b[0] - a[0]) for a, b in zip(usage, usage[1:])]
     rss = [u[2] for u in usage]
@@ -123,6 +128,7 @@ def main(binary, model, kind, fps, seconds):
     print(
         f"| `{model}` | {fps:g} | {seconds:g} s, {len(latencies)} touches | {percentile(latencies, 50):.2f} / {percentile(latencies, 99):.2f} ms "
         f"| {percentile(last_ms, 50):.2f} / {percentile(last_ms, 99):.2f} ms | {percentile(overhead, 99):.2f} ms "
+        f"| {percentile(at_listener, 50):.2f} / {percentile(at_listener, 99):.2f} ms "
         f"| {100 * np.mean(cpu):.1f} % ({100 * max(cpu, default=0):.1f} %) | {rss[0]:.1f} / {rss[-1]:.1f} / {max(rss):.1f} MiB | {growth:+.3f} MiB |"
     )
 

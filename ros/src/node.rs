@@ -284,10 +284,17 @@ impl NodeBuilder<'_> {
         let topic = self.topic(name, type_name)?;
         let entity = self.token(graph::Kind::Publisher, Some(&topic))?;
         // Blocking rather than dropping when the link is busy: an answer is one message a touch,
-        // and none may be lost.
+        // and none may be lost. Express: sent at once, never held in a batch for what may follow
+        // (zenoh's transmission task otherwise backs off for up to its batching time, 1 ms, on a
+        // timer of 1 ms resolution).
         let key = topic.key_expr(self.args.node.domain);
-        let publisher =
-            self.session.declare_publisher(key).congestion_control(zenoh::qos::CongestionControl::Block).wait().map_err(zenoh_error)?;
+        let publisher = self
+            .session
+            .declare_publisher(key)
+            .congestion_control(zenoh::qos::CongestionControl::Block)
+            .express(true)
+            .wait()
+            .map_err(zenoh_error)?;
         Ok(Out { publisher, gid: entity.gid, sequence: 0 })
     }
 }

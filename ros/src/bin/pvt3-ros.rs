@@ -1,5 +1,7 @@
 //! `pvt3-ros`: the node, started as ROS users start one (`--ros-args -r … -p …`).
 
+#![deny(clippy::undocumented_unsafe_blocks)]
+
 use pvt3_ros::args::{Args, PARAMETERS, TOPICS};
 use pvt3_ros::node::Node;
 
@@ -37,9 +39,30 @@ fn wrapped(text: &str, indent: usize, width: usize) -> String {
     lines.join(&format!("\n{:indent$}", ""))
 }
 
+/// The node's memory stays flat while it serves: freed memory is kept for the next touch (the
+/// runtime's tensors), and every thread allocates from one heap. glibc otherwise gives a thread
+/// that meets a busy heap one of its own, and the node's resident memory grew by steps for
+/// minutes (docs/benchmarks.md, "The ROS 2 node").
+fn set_up_memory() {
+    // SAFETY: first thing in main, before zenoh or anything else starts a thread.
+    unsafe { pvt3_runtime::keep_freed_memory() };
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: mallopt only sets glibc's allocator's policy, and no other thread exists yet.
+    unsafe {
+        libc::mallopt(libc::M_ARENA_MAX, 1);
+    }
+}
+
 fn main() -> std::process::ExitCode {
+    set_up_memory();
     let words: Vec<String> = std::env::args().skip(1).collect();
     if words.iter().any(|w| w == "--help" || w == "-h") {
+        // The rest of the line is read first, so that `… --help` also checks a command line.
+        let rest: Vec<String> = words.iter().filter(|w| !["--help", "-h"].contains(&w.as_str())).cloned().collect();
+        if let Err(e) = Args::parse(&rest, None) {
+            eprintln!("pvt3-ros: {e}");
+            return std::process::ExitCode::FAILURE;
+        }
         print!("{}", help());
         return std::process::ExitCode::SUCCESS;
     }
