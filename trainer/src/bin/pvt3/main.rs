@@ -14,6 +14,7 @@ mod plot;
 mod progress;
 mod prune;
 mod prune_args;
+mod shell;
 mod train;
 
 use anyhow::Result;
@@ -57,6 +58,8 @@ enum Command {
     #[command(subcommand)]
     Bench(bench::Bench),
     Info(info::InfoArgs),
+    Completions(shell::CompletionsArgs),
+    Man(shell::ManArgs),
 }
 
 /// Process settings, before any other thread starts.
@@ -106,6 +109,11 @@ fn main() -> Result<()> {
         Command::Plot(a) => plot::run(a),
         Command::Bench(b) => bench::run(b),
         Command::Info(a) => info::run(a),
+        Command::Completions(a) => {
+            shell::completions::<Cli>(a.shell, &mut std::io::stdout());
+            Ok(())
+        }
+        Command::Man(a) => shell::man::<Cli>(&a.dir).map(|()| println!("manual pages written to {}", a.dir.display())),
     }
 }
 
@@ -127,6 +135,23 @@ mod tests {
             let e = Cli::try_parse_from(["pvt3", sub.as_str(), "--version"]).err().unwrap_or_else(|| panic!("{sub} --version ran"));
             assert_eq!(e.kind(), clap::error::ErrorKind::DisplayVersion, "{sub}");
         }
+    }
+
+    /// The completions and the manual pages cover every subcommand, from the same definitions.
+    #[test]
+    fn completions_and_manual_pages_cover_every_subcommand() {
+        let mut bash = Vec::new();
+        super::shell::completions::<Cli>(clap_complete::Shell::Bash, &mut bash);
+        let bash = String::from_utf8(bash).unwrap();
+        let dir = std::env::temp_dir().join(format!("pvt3-man-{}", std::process::id()));
+        super::shell::man::<Cli>(&dir).unwrap();
+        for sub in Cli::command().get_subcommands().map(|c| c.get_name().to_string()) {
+            assert!(bash.contains(&format!("pvt3__subcmd__{sub}")), "no bash completion for {sub}");
+            let page = std::fs::read_to_string(dir.join(format!("pvt3-{sub}.1"))).unwrap_or_else(|e| panic!("pvt3-{sub}.1: {e}"));
+            assert!(page.contains(".TH pvt3-"), "pvt3-{sub}.1 is no manual page");
+        }
+        assert!(std::fs::read_to_string(dir.join("pvt3.1")).unwrap().contains(r"\-\-threads"), "the global option, in roff");
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 
     /// Options parse into their types: value enums, seeds, pruning, --only; bad values are
