@@ -1,7 +1,8 @@
-//! The docs a user reads hold to the lab notebook: the README and the guide (docs/guide/) quote
-//! no figure that its home in the notebook (docs/*.md) does not state, a figure's interval
-//! beside it; every relative link leads to a file; the README stays a five-minute read and
-//! each guide page short.
+//! The docs a user reads hold to the lab notebook: each figure the README and the guide
+//! (docs/guide/) quote (accuracies with their intervals, multiply-adds, percentages, sizes and
+//! times) links on its line to the named section of the notebook (docs/*.md) it comes from, and
+//! that section states it; every relative link
+//! leads to a file; the README stays a five-minute read and each guide page short.
 
 use std::path::{Path, PathBuf};
 
@@ -67,30 +68,223 @@ fn interval_after(line: &str, figure: &str) -> Option<String> {
     intervals(after.split('±').next().unwrap_or("")).into_iter().next()
 }
 
-#[test]
-fn every_figure_a_user_reads_is_its_notebook_home_s() {
-    let notebook: Vec<String> = markdown_in(&workspace().join("docs"))
+/// What a quoted figure measures, by its unit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Kind {
+    Accuracy,
+    MultiplyAdds,
+    Percentage,
+    Size,
+    Time,
+}
+
+/// The units that make a number a figure of each kind (the interval's level, "95 % interval",
+/// is a definition, not a figure).
+const UNITS: [(&str, Kind); 11] = [
+    (" M", Kind::MultiplyAdds),
+    (" %", Kind::Percentage),
+    (" KiB", Kind::Size),
+    (" MiB", Kind::Size),
+    (" GiB", Kind::Size),
+    (" MB", Kind::Size),
+    (" µs", Kind::Time),
+    (" ms", Kind::Time),
+    (" s", Kind::Time),
+    (" minutes", Kind::Time),
+    (" hours", Kind::Time),
+];
+
+/// `line` as a reader sees its figures: no code spans, no emphasis.
+fn plain(line: &str) -> String {
+    line.split('`').step_by(2).collect::<Vec<_>>().join("").replace("**", "")
+}
+
+/// Every figure `line` quotes, its kind and its text as written.
+fn quoted(line: &str) -> Vec<(Kind, String)> {
+    let line = plain(line);
+    let mut found: Vec<(Kind, String)> = figures(&line).into_iter().map(|f| (Kind::Accuracy, f)).collect();
+    let chars: Vec<(usize, char)> = line.char_indices().collect();
+    let mut i = 0;
+    while i < chars.len() {
+        let (at, c) = chars[i];
+        let follows_word = i > 0 && (chars[i - 1].1.is_alphanumeric() || chars[i - 1].1 == '.' || chars[i - 1].1 == '±');
+        if !c.is_ascii_digit() || follows_word {
+            i += 1;
+            continue;
+        }
+        let mut j = i;
+        while j < chars.len()
+            && (chars[j].1.is_ascii_digit() || (matches!(chars[j].1, '.' | ',') && chars.get(j + 1).is_some_and(|n| n.1.is_ascii_digit())))
+        {
+            j += 1;
+        }
+        let end = chars.get(j).map_or(line.len(), |c| c.0);
+        let rest = &line[end..];
+        let unit = UNITS.iter().find(|(u, _)| {
+            rest.starts_with(u) && !rest[u.len()..].starts_with(|c: char| c.is_alphanumeric()) && !rest[u.len()..].starts_with(" interval")
+        });
+        if let Some((u, kind)) = unit {
+            found.push((*kind, format!("{}{u}", &line[at..end])));
+        }
+        i = j.max(i + 1);
+    }
+    found
+}
+
+/// A heading's anchor, as GitHub makes it: lower case, spaces to hyphens, punctuation dropped.
+fn slug(heading: &str) -> String {
+    heading
+        .trim_start_matches('#')
+        .trim()
+        .to_lowercase()
+        .chars()
+        .filter(|c| c.is_alphanumeric() || matches!(c, ' ' | '-' | '_'))
+        .map(|c| if c == ' ' { '-' } else { c })
+        .collect()
+}
+
+/// The section of `text` under the heading whose anchor is `anchor`, to the next heading of its
+/// level or above.
+fn section(text: &str, anchor: &str) -> Option<String> {
+    let lines: Vec<&str> = text.lines().collect();
+    // A heading's level; 0 for any other line, a code block's `#` lines included.
+    let mut code = false;
+    let levels: Vec<usize> = lines
         .iter()
-        .flat_map(|p| std::fs::read_to_string(p).unwrap().lines().map(str::to_string).collect::<Vec<_>>())
+        .map(|l| {
+            code ^= l.starts_with("```");
+            if code || !l.starts_with('#') {
+                0
+            } else {
+                l.chars().take_while(|c| *c == '#').count()
+            }
+        })
         .collect();
-    let mut wrong = Vec::new();
-    let mut checked = 0;
-    for page in user_pages() {
-        let text = std::fs::read_to_string(&page).unwrap();
-        for (n, line) in text.lines().enumerate() {
-            for figure in figures(line) {
-                checked += 1;
-                // Where the page gives the figure's interval, its home gives the same one.
-                let interval = interval_after(line, &figure);
-                let home = notebook.iter().any(|l| l.contains(&figure) && (interval.is_none() || interval_after(l, &figure) == interval));
-                if !home {
-                    wrong.push(format!("{}:{}: {figure} {}", page.display(), n + 1, interval.unwrap_or_default()));
-                }
+    let start = (0..lines.len()).find(|&i| levels[i] > 0 && slug(lines[i]) == anchor)?;
+    let end = (start + 1..lines.len()).find(|&i| (1..=levels[start]).contains(&levels[i])).unwrap_or(lines.len());
+    Some(lines[start..end].iter().map(|l| plain(l)).collect::<Vec<_>>().join("\n"))
+}
+
+/// The homes `line` links to: notebook sections (`page.md#anchor`), read by `read`.
+fn homes(line: &str, page: &Path, read: &dyn Fn(&Path) -> Option<String>) -> Vec<(String, Option<String>)> {
+    line.split("](")
+        .skip(1)
+        .filter_map(|s| s.split_once(')').map(|(t, _)| t))
+        .filter_map(|target| target.split_once('#'))
+        .filter(|(path, _)| path.ends_with(".md"))
+        .map(|(path, anchor)| {
+            let text = read(&page.parent().unwrap().join(path));
+            (format!("{path}#{anchor}"), text.and_then(|t| section(&t, anchor)))
+        })
+        .collect()
+}
+
+/// The figures of `text` (a page at `page`) that their home does not state: each line that
+/// quotes a figure links to the named section it comes from, and that section states it, an
+/// accuracy with the same interval on the same line.
+fn unhomed(page: &Path, text: &str, read: &dyn Fn(&Path) -> Option<String>, held: &dyn Fn(&str) -> bool) -> (usize, Vec<String>) {
+    let (mut checked, mut wrong) = (0, Vec::new());
+    let mut code = false;
+    for (n, line) in text.lines().enumerate() {
+        code ^= line.starts_with("```");
+        let figures = quoted(line);
+        if code || figures.is_empty() || line.trim_start().starts_with("<!--") || held(line) {
+            continue;
+        }
+        let homes = homes(line, page, read);
+        for (kind, figure) in figures {
+            checked += 1;
+            let interval = (kind == Kind::Accuracy).then(|| interval_after(&plain(line), &figure)).flatten();
+            let stated = |section: &String| {
+                section.lines().any(|l| l.contains(&figure) && (interval.is_none() || interval_after(l, &figure) == interval))
+            };
+            if !homes.iter().any(|(_, s)| s.as_ref().is_some_and(stated)) {
+                let to = homes.iter().map(|h| h.0.as_str()).collect::<Vec<_>>().join(", ");
+                let why = if homes.is_empty() { "no home linked on its line".to_string() } else { format!("not in {to}") };
+                wrong.push(format!("{}:{}: {kind:?} {figure} {}: {why}", page.display(), n + 1, interval.unwrap_or_default()));
             }
         }
     }
-    assert!(checked >= 9, "the README's results table is read ({checked} figures)");
-    assert!(wrong.is_empty(), "figures no notebook line of docs/*.md states (with their interval):\n{}", wrong.join("\n"));
+    (checked, wrong)
+}
+
+#[test]
+fn every_figure_a_user_reads_is_its_home_s() {
+    let read = |p: &Path| std::fs::read_to_string(p).ok();
+    let (mut checked, mut wrong) = (0, Vec::new());
+    for page in user_pages() {
+        let held = |line: &str| presets_table().iter().any(|row| row.join("|") == line_cells(line).join("|"));
+        let (c, w) = unhomed(&page, &std::fs::read_to_string(&page).unwrap(), &read, &held);
+        checked += c;
+        wrong.extend(w);
+    }
+    assert!(checked >= 20, "the pages' figures are read ({checked})");
+    assert!(wrong.is_empty(), "figures their home does not state:\n{}", wrong.join("\n"));
+}
+
+/// A table row's cells, trimmed.
+fn line_cells(line: &str) -> Vec<String> {
+    line.split('|').map(|c| c.trim().to_string()).collect()
+}
+
+/// The rows of the command-line guide's presets table, as cells: their home is `pvt3 info`.
+fn presets_table() -> Vec<Vec<String>> {
+    let page = std::fs::read_to_string(workspace().join("docs/guide/command-line.md")).unwrap();
+    page.lines()
+        .skip_while(|l| !l.starts_with("## Presets"))
+        .take_while(|l| !l.starts_with("(`pvt3 info"))
+        .filter(|l| l.starts_with("| `"))
+        .map(line_cells)
+        .collect()
+}
+
+/// The presets table is what `pvt3 info PRESET` prints: each row's parameters, and its
+/// multiply-adds in millions to the table's one decimal.
+#[test]
+fn the_presets_table_is_what_pvt3_info_prints() {
+    let rows = presets_table();
+    assert!(rows.len() >= 7, "the presets table is read: {rows:?}");
+    for row in rows {
+        let preset = row[1].trim_matches('`');
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_pvt3")).args(["info", preset]).output().unwrap();
+        let info = String::from_utf8(out.stdout).unwrap();
+        let field = |name: &str| info.lines().find(|l| l.starts_with(name)).and_then(|l| l.split_whitespace().nth(1)).map(str::to_string);
+        let parameters = row[4].split_whitespace().next().unwrap_or_default().replace(',', "");
+        assert_eq!(Some(parameters), field("parameters"), "{preset}: {info}");
+        let multiply_adds: f64 = field("mult-adds").and_then(|m| m.parse().ok()).unwrap_or(f64::NAN);
+        assert_eq!(row[5], format!("{:.1} M", multiply_adds / 1e6), "{preset}: {info}");
+    }
+}
+
+/// A wrong figure of each kind, planted in a page, is found; the right ones pass.
+#[test]
+fn a_planted_wrong_figure_of_each_kind_fails() {
+    let home = "# Notebook\n## The table\n| row | 0.9500 ± 0.0098 | [0.9418, 0.9582] | 6.59 M | 26 % | 8.1 MiB | 124 µs |\n## Other\n0.9600 ± 0.0100\n";
+    let read = |p: &Path| p.ends_with("notebook.md").then(|| home.to_string());
+    let page = Path::new("docs/guide/page.md");
+    let right = "| [row](../notebook.md#the-table) | 0.9500 ± 0.0098 | [0.9418, 0.9582] | 6.59 M | 26 % | 8.1 MiB | 124 µs |";
+    assert_eq!(
+        unhomed(page, right, &read, &|_| false),
+        (5, vec![]),
+        "an accuracy with its interval, multiply-adds, a share, a size, a time"
+    );
+    for (right_figure, wrong_figure) in [
+        ("0.9500 ± 0.0098", "0.9500 ± 0.0099"),
+        ("[0.9418, 0.9582]", "[0.9418, 0.9583]"),
+        ("6.59 M", "6.58 M"),
+        ("26 %", "27 %"),
+        ("8.1 MiB", "8.2 MiB"),
+        ("124 µs", "125 µs"),
+    ] {
+        let (_, wrong) = unhomed(page, &right.replace(right_figure, wrong_figure), &read, &|_| false);
+        assert_eq!(wrong.len(), 1, "{wrong_figure}: {wrong:?}");
+    }
+    let (_, homeless) = unhomed(page, "It takes 5 minutes.", &read, &|_| false);
+    assert!(homeless[0].contains("no home linked"), "{homeless:?}");
+    let (_, elsewhere) = unhomed(page, "[x](../notebook.md#other): 0.9500 ± 0.0098", &read, &|_| false);
+    assert!(elsewhere[0].contains("not in ../notebook.md#other"), "a figure stated in another section is not at home: {elsewhere:?}");
+    assert_eq!(quoted("the 95 % interval, `--set x=5 ms`, x86-64 and 1.18× at 3 × 4"), vec![]);
+    assert_eq!(slug("### iCub-20, 3 seeds × 4 folds"), "icub-20-3-seeds--4-folds");
 }
 
 #[test]
