@@ -19,12 +19,15 @@ mod csv_tree;
 #[path = "support/onnx_check.rs"]
 #[allow(dead_code)] // the other end-to-end tests use the rest of it
 mod onnx_check;
+#[path = "support/pages.rs"]
+mod pages;
 #[path = "support/workspace.rs"]
 mod workspace;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use pages::user_pages;
 use workspace::workspace;
 
 /// The programs whose commands a page's blocks give, as the tests built them.
@@ -46,16 +49,6 @@ struct Block {
     console: bool,
     text: String,
     how: How,
-}
-
-/// The pages a user reads: the README and the guide's.
-fn pages() -> Vec<PathBuf> {
-    let guide = workspace().join("docs/guide");
-    let mut pages: Vec<PathBuf> =
-        std::fs::read_dir(&guide).unwrap().map(|e| e.unwrap().path()).filter(|p| p.extension() == Some("md".as_ref())).collect();
-    pages.sort();
-    pages.insert(0, workspace().join("README.md"));
-    pages
 }
 
 /// The marker on the line before a block, if any.
@@ -98,16 +91,17 @@ fn blocks(page: &Path) -> Vec<Block> {
     found
 }
 
-/// What the pages assume, made once: the checkout's folders, the programs, a CSV folder, bags,
-/// a model and its windows.
+/// What the pages assume, made once in `assumed/` (the bags' writer's output beside it in
+/// `made/`): the checkout's folders, the programs, a CSV folder, bags, a model and its windows.
 fn fixtures() -> PathBuf {
     let dir = std::env::temp_dir().join(format!("pvt3-guide-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
-    let (bin, made) = (dir.join("bin"), dir.join("made"));
+    let (assumed, made) = (dir.join("assumed"), dir.join("made"));
+    let bin = assumed.join("bin");
     std::fs::create_dir_all(&bin).unwrap();
     let root = workspace().canonicalize().unwrap();
     for shared in ["shipped", "data", "trainer", "runtime", "ros"] {
-        std::os::unix::fs::symlink(root.join(shared), dir.join(shared)).unwrap();
+        std::os::unix::fs::symlink(root.join(shared), assumed.join(shared)).unwrap();
     }
     let built = Path::new(env!("CARGO_BIN_EXE_pvt3")).parent().unwrap();
     for program in PROGRAMS {
@@ -118,23 +112,23 @@ fn fixtures() -> PathBuf {
     let cargo = format!("#!/bin/sh\nexec python3 {} \"$@\"\n", root.join("tests/guide_cargo.py").display());
     std::fs::write(bin.join("cargo"), cargo).unwrap();
     std::fs::set_permissions(bin.join("cargo"), std::os::unix::fs::PermissionsExt::from_mode(0o755)).unwrap();
-    csv_tree::write(&dir.join("csvs"), 2, 8, 40, 64);
+    csv_tree::write(&assumed.join("csvs"), 2, 8, 40, 64);
     onnx_check::run_script("tests/bag_writer.py", &[&made]);
-    std::os::unix::fs::symlink(made.join("bags/rosbags-mcap/rgb8"), dir.join("bags")).unwrap();
-    std::os::unix::fs::symlink(made.join("bags/rosbags-mcap/int16"), dir.join("skin-bags")).unwrap();
-    std::fs::copy(root.join("shipped/icub20.onnx"), dir.join("model.onnx")).unwrap();
-    std::fs::copy(root.join("shipped/icub20-touch.npy"), dir.join("windows.npy")).unwrap();
+    std::os::unix::fs::symlink(made.join("bags/rosbags-mcap/rgb8"), assumed.join("bags")).unwrap();
+    std::os::unix::fs::symlink(made.join("bags/rosbags-mcap/int16"), assumed.join("skin-bags")).unwrap();
+    std::fs::copy(root.join("shipped/icub20.onnx"), assumed.join("model.onnx")).unwrap();
+    std::fs::copy(root.join("shipped/icub20-touch.npy"), assumed.join("windows.npy")).unwrap();
     dir
 }
 
-/// The folder of one page's blocks, which build on each other, made on its first block: the
-/// fixtures beside it, and a home of its own.
+/// The folder of one page's blocks, which build on each other, made on its first block: every
+/// fixture beside it, and a home of its own.
 fn page_folder(fixtures: &Path, page: usize) -> PathBuf {
     let dir = fixtures.join(format!("page{page}"));
     if !dir.exists() {
         std::fs::create_dir_all(dir.join("home")).unwrap();
-        for entry in ["bin", "shipped", "data", "trainer", "runtime", "ros", "csvs", "bags", "skin-bags", "model.onnx", "windows.npy"] {
-            std::os::unix::fs::symlink(fixtures.join(entry), dir.join(entry)).unwrap();
+        for entry in std::fs::read_dir(fixtures.join("assumed")).unwrap().map(|e| e.unwrap()) {
+            std::os::unix::fs::symlink(entry.path(), dir.join(entry.file_name())).unwrap();
         }
     }
     dir
@@ -197,7 +191,7 @@ fn every_shell_block_of_the_readme_and_the_guide_runs_as_written() {
     let fixtures = fixtures();
     let mut failed = Vec::new();
     let mut counts = [0; 3];
-    for (n, block) in pages().iter().enumerate().flat_map(|(n, p)| blocks(p).into_iter().map(move |b| (n, b))) {
+    for (n, block) in user_pages().iter().enumerate().flat_map(|(n, p)| blocks(p).into_iter().map(move |b| (n, b))) {
         let dir = page_folder(&fixtures, n);
         let result = match &block.how {
             How::Run if block.console => console(&dir, &block.text),

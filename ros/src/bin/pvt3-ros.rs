@@ -55,11 +55,10 @@ fn set_up_memory() {
 
 fn main() -> std::process::ExitCode {
     set_up_memory();
-    let words: Vec<String> = std::env::args().skip(1).collect();
-    if words.iter().any(|w| w == "--help" || w == "-h") {
+    let (asked_help, words): (Vec<String>, Vec<String>) = std::env::args().skip(1).partition(|w| w == "--help" || w == "-h");
+    if !asked_help.is_empty() {
         // The rest of the line is read first, so that `… --help` also checks a command line.
-        let rest: Vec<String> = words.iter().filter(|w| !["--help", "-h"].contains(&w.as_str())).cloned().collect();
-        if let Err(e) = Args::parse(&rest, None) {
+        if let Err(e) = Args::parse(&words, None) {
             eprintln!("pvt3-ros: {e}");
             return std::process::ExitCode::FAILURE;
         }

@@ -275,7 +275,8 @@ impl CameraSet {
         let [h, w, c] = self.frame_shape;
         let n = self.labels.len();
         let frame: Vec<usize> = if c == 1 { vec![n, h, w] } else { vec![n, h, w, c] };
-        let records = Records::new(&self.labels, &self.classes, &self.sources, &self.conditions, self.sensor);
+        let (labels, classes, sources, conditions) = (&self.labels, &self.classes, &self.sources, &self.conditions);
+        let records = Records { labels, classes, sources, conditions, sensor: self.sensor };
         npz::write(path, records, |npz| {
             npz.add_array(key::X, &ArrayViewD::from_shape(IxDyn(&[&frame[..], &[self.frames]].concat()), &self.x)?)?;
             if let Some(b) = &self.background {

@@ -428,7 +428,8 @@ impl Imported {
             Some((h, w)) => vec![n, h, w, longest],
             None => vec![n, channels, longest],
         };
-        let records = Records::new(&self.labels, &self.classes, &self.sources, &self.conditions, self.sensor);
+        let (labels, classes, sources, conditions) = (&self.labels, &self.classes, &self.sources, &self.conditions);
+        let records = Records { labels, classes, sources, conditions, sensor: self.sensor };
         npz::write(path, records, |npz| {
             npz.add_array(key::X, &ArrayD::from_shape_vec(IxDyn(&shape), x)?)?;
             npz.add_array(key::LENGTHS, &Array1::from(self.touches.iter().map(|t| t[0].len() as i64).collect::<Vec<_>>()))?;

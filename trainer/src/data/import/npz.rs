@@ -32,19 +32,6 @@ pub(super) struct Records<'a> {
     pub(super) sensor: pvt3_spec::Sensor,
 }
 
-impl<'a> Records<'a> {
-    /// The records of a set's touches.
-    pub(super) fn new(
-        labels: &'a [u32],
-        classes: &'a [String],
-        sources: &'a [String],
-        conditions: &'a [Condition],
-        sensor: pvt3_spec::Sensor,
-    ) -> Self {
-        Self { labels, classes, sources, conditions, sensor }
-    }
-}
-
 /// Writes a data set to `path`: `fill` adds its frames and what else it holds, then come the
 /// `records` every set holds ([`super::csv::Imported::write_npz`],
 /// [`super::camera::CameraSet::write_npz`]). An error names the file.
