@@ -1,8 +1,9 @@
 //! The docs a user reads hold to the lab notebook: each figure the README and the guide
 //! (docs/guide/) quote (accuracies with their intervals, multiply-adds, percentages, sizes and
 //! times) links on its line to the named section of the notebook (docs/*.md) it comes from, and
-//! that section states it; every relative link leads to a file; the README stays a five-minute
-//! read and each guide page short.
+//! that section states it; every relative link leads to a file; the pages a user follows say
+//! what holds now, not the history of their making; the README stays a five-minute read and each
+//! guide page short.
 
 use std::path::Path;
 
@@ -309,6 +310,55 @@ fn every_relative_link_a_user_follows_leads_to_a_file() {
     }
     assert!(followed >= 10, "the pages' relative links are read ({followed})");
     assert!(broken.is_empty(), "links to no file:\n{}", broken.join("\n"));
+}
+
+/// What in `line` tells the history of its page's making (an issue, a numbered period of work)
+/// where a reader wants what holds now: the words, or `None`.
+fn making(line: &str) -> Option<String> {
+    let lower = line.to_lowercase();
+    let numbered = |word: &str| {
+        lower.match_indices(word).map(|(i, _)| &lower[i..]).find(|rest| rest[word.len()..].trim_start_matches('#').starts_with(|c: char| c.is_ascii_digit()))
+    };
+    let said = ["the issue", "issue's", "an issue"].into_iter().find_map(|w| lower.find(w).map(|i| &lower[i..]));
+    said.or_else(|| numbered("issue ")).or_else(|| numbered("session ")).map(|rest| rest.chars().take(30).collect())
+}
+
+/// The pages a user reads and the pages they link to (docs/*.md, the changelog).
+fn pages_and_their_links() -> Vec<std::path::PathBuf> {
+    let mut pages = user_pages();
+    for page in user_pages() {
+        let text = std::fs::read_to_string(&page).unwrap();
+        for target in links(&text).map(|t| t.split('#').next().unwrap()).filter(|t| t.ends_with(".md") && !t.contains("://")) {
+            let linked = page.parent().unwrap().join(target).canonicalize().unwrap();
+            if !pages.iter().any(|p| p.canonicalize().unwrap() == linked) {
+                pages.push(linked);
+            }
+        }
+    }
+    pages
+}
+
+/// The README, the guide and every page they link to say what holds now: no issue numbers, no
+/// "the issue", no numbered periods of work (their history is the notebook's, by date and commit).
+#[test]
+fn the_pages_a_user_follows_say_what_holds_now() {
+    let pages = pages_and_their_links();
+    assert!(pages.iter().any(|p| p.ends_with("docs/camera.md")) && pages.iter().any(|p| p.ends_with("CHANGELOG.md")), "{pages:?}");
+    let told: Vec<String> = pages
+        .iter()
+        .flat_map(|page| {
+            let text = std::fs::read_to_string(page).unwrap();
+            let told: Vec<String> = text.lines().enumerate().filter_map(|(i, l)| making(l).map(|m| format!("{}:{}: {m}", page.display(), i + 1))).collect();
+            told
+        })
+        .collect();
+    assert!(told.is_empty(), "history of the page's making where a reader wants what holds now:\n{}", told.join("\n"));
+    for history in ["Issue #53. Done:", "within the issue's 30", "(session 34)", "issue 12 asks"] {
+        assert!(making(history).is_some(), "{history}");
+    }
+    for now in ["A session of a file runs a third plan", "pvt3_session_push_camera_frame", "an answer's issue"] {
+        assert_eq!(making(now), None, "{now}");
+    }
 }
 
 #[test]
