@@ -317,7 +317,10 @@ fn every_relative_link_a_user_follows_leads_to_a_file() {
 fn making(line: &str) -> Option<String> {
     let lower = line.to_lowercase();
     let numbered = |word: &str| {
-        lower.match_indices(word).map(|(i, _)| &lower[i..]).find(|rest| rest[word.len()..].trim_start_matches('#').starts_with(|c: char| c.is_ascii_digit()))
+        lower
+            .match_indices(word)
+            .map(|(i, _)| &lower[i..])
+            .find(|rest| rest[word.len()..].trim_start_matches('#').starts_with(|c: char| c.is_ascii_digit()))
     };
     let said = ["the issue", "issue's", "an issue"].into_iter().find_map(|w| lower.find(w).map(|i| &lower[i..]));
     said.or_else(|| numbered("issue ")).or_else(|| numbered("session ")).map(|rest| rest.chars().take(30).collect())
@@ -348,7 +351,8 @@ fn the_pages_a_user_follows_say_what_holds_now() {
         .iter()
         .flat_map(|page| {
             let text = std::fs::read_to_string(page).unwrap();
-            let told: Vec<String> = text.lines().enumerate().filter_map(|(i, l)| making(l).map(|m| format!("{}:{}: {m}", page.display(), i + 1))).collect();
+            let told: Vec<String> =
+                text.lines().enumerate().filter_map(|(i, l)| making(l).map(|m| format!("{}:{}: {m}", page.display(), i + 1))).collect();
             told
         })
         .collect();

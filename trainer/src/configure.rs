@@ -143,7 +143,8 @@ pub fn robust(
         does.push("reads windows at other speeds");
     }
     let fits = cfg.architecture() == Architecture::Pvt3 && cfg.frames / 2 >= ROBUST_SPECTRAL_BANDS;
-    // A spectral head over each channel's frames: an array's channels (a camera's pixels are not).
+    // A spectral head over each channel's frames: an array's channels read as channels (frames read
+    // as images have the image's head, spectral_bands > 0).
     let cfg = match data.sensor {
         Sensor::Array if fits && cfg.spectral_bands() == 0 && !overridden(overrides, "spectral_bands") => {
             let spectral = format!("spectral_bands={ROBUST_SPECTRAL_BANDS}");
@@ -221,25 +222,26 @@ fn base_config(data: &Dataset, choice: &ModelChoice) -> Result<(Config, bool)> {
 /// (`Config::for_sensor`), as `cfg` has it after the user's overrides; where the set does not
 /// record its sensor's kind, how it was taken.
 fn derived_layout(cfg: &Config, data: &Dataset, window: &[usize]) -> String {
-    let layout = match data.sensor {
-        Sensor::Camera => {
-            let (ph, pw) = (cfg.patch_height, cfg.patch_width);
-            let grid = format!("{} × {}", cfg.height / ph, cfg.width / pw);
-            let head = match cfg.spectral_space() {
-                true => format!(
-                    ", a spectral head over the image's space ({} rings, a histogram of {} bins{}{})",
-                    cfg.spectral_bands(),
-                    cfg.spectral_histogram(),
-                    if cfg.spectral_gradients() { " of the values and of their gradients across and down" } else { "" },
-                    if cfg.spectral_pixels() { " and the pixels, the form chosen on validation" } else { "" }
-                ),
-                false => String::new(),
-            };
-            format!("a camera's layout, patches of {ph} × {pw} pixels ({grid} a frame){head}, one token per {} frames", cfg.tubelet)
-        }
-        Sensor::Array => {
-            format!("the BioTac layout, one token per {} frames of all {} values of a frame", cfg.tubelet, cfg.sensor_channels())
-        }
+    let layout = if data.sensor.reads_images(cfg.height, cfg.width) {
+        let (ph, pw) = (cfg.patch_height, cfg.patch_width);
+        let grid = format!("{} × {}", cfg.height / ph, cfg.width / pw);
+        let head = match cfg.spectral_space() {
+            true => format!(
+                ", a spectral head over the image's space ({} rings, a histogram of {} bins{}{})",
+                cfg.spectral_bands(),
+                cfg.spectral_histogram(),
+                if cfg.spectral_gradients() { " of the values and of their gradients across and down" } else { "" },
+                if cfg.spectral_pixels() { " and the pixels, the form chosen on validation" } else { "" }
+            ),
+            false => String::new(),
+        };
+        let whose = match data.sensor {
+            Sensor::Camera => "a camera's layout",
+            Sensor::Array => "an image's layout for a taxel grid this large (docs/results.md, \"A large taxel grid\")",
+        };
+        format!("{whose}, patches of {ph} × {pw} pixels ({grid} a frame){head}, one token per {} frames", cfg.tubelet)
+    } else {
+        format!("the BioTac layout, one token per {} frames of all {} values of a frame", cfg.tubelet, cfg.sensor_channels())
     };
     let kind = match data.sensor_recorded {
         true => String::new(),

@@ -67,13 +67,12 @@ impl Config {
     /// A sensor no preset fits, of kind `sensor` (as its data set records it), samples `[height,
     /// width, (channels,) frames]`. The tubelet is the
     /// divisor of `frames` nearest (in ratio) to `frames / 40`, so that about 40 temporal tokens
-    /// remain, as in the BioTac preset. A camera's images ([`Sensor::Camera`]) are cut into about 12
-    /// square patches (sides the divisors of height and width nearest `√(height · width / 12)`:
-    /// 10 × 10 pixels of 30 × 40), with a spectral head over the image's space (rings, a
-    /// histogram and the pixels), the rest the
-    /// GelSight preset's. Any other sensor gets the BioTac
-    /// layout, which assumes no grid: all channels of a tubelet form one token (one patch covering
-    /// the frame), the rest the BioTac preset's. `None` for a shape that is not 3 or 4 axes of
+    /// remain, as in the BioTac preset. Frames read as images ([`Sensor::reads_images`]: a camera's,
+    /// a large taxel grid's) are cut into about 12 square patches (sides the divisors of height
+    /// and width nearest `√(height · width / 12)`: 10 × 10 pixels of 30 × 40), with a spectral
+    /// head over the image's space (rings, a histogram and the pixels), the rest the GelSight
+    /// preset's. Other frames get the BioTac layout, which assumes no grid: all channels of a
+    /// tubelet form one token (one patch covering the frame), the rest the BioTac preset's. `None` for a shape that is not 3 or 4 axes of
     /// positive lengths.
     pub fn for_sensor(sensor: Sensor, sample_shape: &[usize]) -> Option<Self> {
         let (height, width, channels, frames) = match *sample_shape {
@@ -85,26 +84,22 @@ impl Config {
             return None;
         }
         let tubelet = nearest_divisor(frames, frames as f64 / 40.0);
-        match sensor {
-            Sensor::Camera => {
-                let side = ((height * width) as f64 / IMAGE_PATCHES).sqrt();
-                let (patch_height, patch_width) = (nearest_divisor(height, side), nearest_divisor(width, side));
-                let bands = (1..=IMAGE_BANDS).rev().find(|b| crate::spectrum::space::band_of(height, width, *b).is_ok()).unwrap_or(0);
-                let histogram = if bands > 0 { IMAGE_HISTOGRAM } else { 0 };
-                let network = Pvt3Config {
-                    spectral_bands: bands,
-                    spectral_space: bands > 0,
-                    spectral_histogram: histogram,
-                    spectral_pixels: bands > 0,
-                    ..Pvt3Config::default()
-                }
-                .into();
-                Some(Self { height, width, channels, frames, patch_height, patch_width, tubelet, network, ..Self::gelsight() })
-            }
-            Sensor::Array => {
-                Some(Self { height, width, channels, frames, patch_height: height, patch_width: width, tubelet, ..Self::biotac20() })
-            }
+        if !sensor.reads_images(height, width) {
+            return Some(Self { height, width, channels, frames, patch_height: height, patch_width: width, tubelet, ..Self::biotac20() });
         }
+        let side = ((height * width) as f64 / IMAGE_PATCHES).sqrt();
+        let (patch_height, patch_width) = (nearest_divisor(height, side), nearest_divisor(width, side));
+        let bands = (1..=IMAGE_BANDS).rev().find(|b| crate::spectrum::space::band_of(height, width, *b).is_ok()).unwrap_or(0);
+        let histogram = if bands > 0 { IMAGE_HISTOGRAM } else { 0 };
+        let network = Pvt3Config {
+            spectral_bands: bands,
+            spectral_space: bands > 0,
+            spectral_histogram: histogram,
+            spectral_pixels: bands > 0,
+            ..Pvt3Config::default()
+        }
+        .into();
+        Some(Self { height, width, channels, frames, patch_height, patch_width, tubelet, network, ..Self::gelsight() })
     }
 
     /// GelSight-style optical tactile video: 25 RGB frames of 240 × 320, patches 40 × 40.
@@ -230,6 +225,12 @@ mod tests {
             Config::for_sensor(Sensor::of(&[15, 40, 3, 25]), &[15, 40, 3, 25]).unwrap().num_patches(),
             1,
             "a grid narrower than an image"
+        );
+        let grid = [32, 32, 40];
+        assert_eq!(
+            Config::for_sensor(Sensor::Array, &grid),
+            Config::for_sensor(Sensor::Camera, &grid),
+            "a large taxel grid reads as an image"
         );
     }
 }

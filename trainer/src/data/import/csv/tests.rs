@@ -50,7 +50,8 @@ fn a_csv_tree_imports_with_its_lengths_names_and_channels() {
 }
 
 /// A 32 × 32 taxel grid from CSV is recorded as a tactile array's, whatever its size, and trains
-/// with an array's layout; `--sensor camera` records it as a camera's instead.
+/// as one: with the image's layout a taxel grid this large takes, said as an array's; `--sensor
+/// camera` records it as a camera's instead.
 #[test]
 fn a_large_taxel_grid_is_recorded_as_an_array_and_trains_as_one() {
     let dir = std::env::temp_dir().join(format!("pvt3-import-grid-{}", std::process::id()));
@@ -73,8 +74,8 @@ fn a_large_taxel_grid_is_recorded_as_an_array_and_trains_as_one() {
         let configured = crate::configure::configure(&data, &Default::default(), &Default::default()).unwrap();
         let layout = configured.notes.iter().find(|n| n.starts_with("no preset takes samples of 32 × 32 × 8")).unwrap();
         let expected = match kind {
-            pvt3_spec::Sensor::Array => "derived the BioTac layout",
-            pvt3_spec::Sensor::Camera => "derived a camera's layout",
+            pvt3_spec::Sensor::Array => "derived an image's layout for a taxel grid this large",
+            pvt3_spec::Sensor::Camera => "derived a camera's layout,",
         };
         assert!(layout.contains(expected) && !layout.contains("does not record"), "{layout}");
     }
