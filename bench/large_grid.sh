@@ -17,19 +17,21 @@ cargo build --release --quiet --manifest-path "$here/Cargo.toml" -p pvt3-trainer
 pvt3=$here/target/release/pvt3
 mkdir -p "$out"
 cd "$out"
-# The BioTac preset laid over the whole 32 x 32 grid, a token a frame: what an array's layout
-# derives for frames smaller than an image's.
-"$pvt3" info biotac20 --json | "$python" -c '
-import json, sys
-c = json.load(sys.stdin)
-c.update(height=32, width=32, frames=40, patch_height=32, patch_width=32, tubelet=1, classes=6)
-json.dump(c, open("channels.json", "w"), indent=1)'
 for set in slide press; do
   [ -d "$set" ] || "$python" "$here/bench/synthetic_grid.py" "$set" "$set"
   "$pvt3" import "$set" --grid 32x32 --out "$set.npz"
+  # The BioTac preset laid over the set's whole grid, a token a frame: what an array's layout
+  # derives for frames smaller than an image's (the tubelet that keeps about 40 tokens is 1 here).
+  "$pvt3" info biotac20 --json | "$python" -c '
+import json, sys
+import numpy as np
+data, c = np.load(sys.argv[1]), json.load(sys.stdin)
+_, height, width, frames = data["x"].shape
+c.update(height=height, width=width, frames=frames, patch_height=height, patch_width=width, tubelet=1, classes=int(data["y"].max()) + 1)
+json.dump(c, open(sys.argv[2], "w"), indent=1)' "$set.npz" "$set-channels.json"
   for layout in image channels; do
     config=()
-    [ "$layout" = image ] || config=(--config channels.json)
+    [ "$layout" = image ] || config=(--config "$set-channels.json")
     echo "== $set, the $layout layout"
     "$pvt3" cv --data "$set.npz" "${config[@]}" --seeds 0,1,2 --jobs 2 --out "runs/$set-$layout" 2>&1 | grep -v '^note\|^seed [0-9]: note'
   done

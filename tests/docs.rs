@@ -292,18 +292,23 @@ fn the_figure_reader_reads_figures_and_intervals() {
     assert_eq!(interval_after(another, "0.9946 ± 0.0045"), None, "the interval after another figure is not its");
 }
 
+/// The relative links of `text` (a page at `page`): each target as written and the path it leads
+/// to (the part before any `#`, from the page's folder).
+fn relative_links<'a>(page: &'a Path, text: &'a str) -> impl Iterator<Item = (&'a str, std::path::PathBuf)> + 'a {
+    links(text).filter_map(move |target| {
+        let path = target.split('#').next().unwrap();
+        (!path.is_empty() && !path.contains("://")).then(|| (target, page.parent().unwrap().join(path)))
+    })
+}
+
 #[test]
 fn every_relative_link_a_user_follows_leads_to_a_file() {
     let (mut broken, mut followed) = (Vec::new(), 0);
     for page in user_pages() {
         let text = std::fs::read_to_string(&page).unwrap();
-        for target in links(&text) {
-            let path = target.split('#').next().unwrap();
-            if path.is_empty() || path.contains("://") {
-                continue;
-            }
+        for (target, path) in relative_links(&page, &text) {
             followed += 1;
-            if !page.parent().unwrap().join(path).exists() {
+            if !path.exists() {
                 broken.push(format!("{}: {target}", page.display()));
             }
         }
@@ -328,12 +333,13 @@ fn making(line: &str) -> Option<String> {
 
 /// The pages a user reads and the pages they link to (docs/*.md, the changelog).
 fn pages_and_their_links() -> Vec<std::path::PathBuf> {
-    let mut pages = user_pages();
-    for page in user_pages() {
-        let text = std::fs::read_to_string(&page).unwrap();
-        for target in links(&text).map(|t| t.split('#').next().unwrap()).filter(|t| t.ends_with(".md") && !t.contains("://")) {
-            let linked = page.parent().unwrap().join(target).canonicalize().unwrap();
-            if !pages.iter().any(|p| p.canonicalize().unwrap() == linked) {
+    let user: Vec<_> = user_pages().into_iter().map(|p| p.canonicalize().unwrap()).collect();
+    let mut pages = user.clone();
+    for page in &user {
+        let text = std::fs::read_to_string(page).unwrap();
+        for (_, path) in relative_links(page, &text).filter(|(_, p)| p.extension().is_some_and(|e| e == "md")) {
+            let linked = path.canonicalize().unwrap_or_else(|e| panic!("{}: a link to {}: {e}", page.display(), path.display()));
+            if !pages.contains(&linked) {
                 pages.push(linked);
             }
         }
@@ -351,9 +357,10 @@ fn the_pages_a_user_follows_say_what_holds_now() {
         .iter()
         .flat_map(|page| {
             let text = std::fs::read_to_string(page).unwrap();
-            let told: Vec<String> =
-                text.lines().enumerate().filter_map(|(i, l)| making(l).map(|m| format!("{}:{}: {m}", page.display(), i + 1))).collect();
-            told
+            text.lines()
+                .enumerate()
+                .filter_map(|(i, l)| making(l).map(|m| format!("{}:{}: {m}", page.display(), i + 1)))
+                .collect::<Vec<_>>()
         })
         .collect();
     assert!(told.is_empty(), "history of the page's making where a reader wants what holds now:\n{}", told.join("\n"));
