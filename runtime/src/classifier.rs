@@ -21,6 +21,12 @@ use crate::stages::{Head, Stages};
 use crate::{Error, Result};
 use pvt3_format::onnx::GraphProto;
 
+/// The values one run of a plan may hold in its largest tensor (1 MiB of f32): a batch runs in
+/// runs of as many windows as fit ([`Classifier::windows_per_run`]). Between 2¹⁷ and 2²⁰ the
+/// shipped files ran alike, within this machine's noise, and each faster than whole batches of 32
+/// (docs/results.md, "Batches in cache-sized runs").
+const RUN_VALUES: usize = 1 << 18;
+
 /// The answer for one window.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Prediction {
@@ -377,9 +383,36 @@ impl Classifier {
         Ok(())
     }
 
-    /// Logits and probabilities `[batch × classes]` each, for `batch` windows back to back.
+    /// Logits and probabilities `[batch × classes]` each, for `batch` windows back to back: run
+    /// [`Self::windows_per_run`] windows at a time.
     pub fn run(&self, frames: &[f32], batch: usize) -> Result<(Vec<f32>, Vec<f32>)> {
         self.validate(frames, batch)?;
+        let per_run = self.windows_per_run()?;
+        if batch <= per_run {
+            return self.run_plan(frames, batch);
+        }
+        let (mut logits, mut probabilities) = (vec![], vec![]);
+        for part in frames.chunks(per_run * self.sample_len()) {
+            let (l, p) = self.run_plan(part, part.len() / self.sample_len())?;
+            logits.extend(l);
+            probabilities.extend(p);
+        }
+        Ok((logits, probabilities))
+    }
+
+    /// How many windows one run of a plan takes: as many as keep the plan's largest tensor within
+    /// 2¹⁸ values (1 MiB, `RUN_VALUES`), at least one. tract runs each op over the whole batch,
+    /// so a batch whose tensors outgrow the caches runs slower per window than its windows
+    /// apart: the camera model's spatial attention holds 270,400 values a window, and 32 windows
+    /// in one run went at 40–50 a second against 110–140 one by one (docs/results.md, "Batches
+    /// in cache-sized runs").
+    pub fn windows_per_run(&self) -> Result<usize> {
+        let per_window = self.plan(1)?.largest_tensor().max(1);
+        Ok((RUN_VALUES / per_window).max(1))
+    }
+
+    /// Logits and probabilities for `batch` windows in one run of the plan for `batch`.
+    fn run_plan(&self, frames: &[f32], batch: usize) -> Result<(Vec<f32>, Vec<f32>)> {
         let input = Tensor::from_shape(&self.batch_shape(batch), frames).map_err(tract_error)?;
         let plan = self.plan(batch)?;
         let outputs = plan.run(tvec!(input.into()))?;

@@ -28,8 +28,9 @@ use crate::small_products::{self, Combine, Epilogue, Isa, SmallProduct, Source};
 pub enum Kernels {
     /// By a fixed rule (the default): on one thread, on x86-64 with AVX-512 or with AVX2 and FMA,
     /// the runtime's own product for short sums wherever it applies, in the widest instruction
-    /// set (both sum in the same order, so they give the same bits); tract's own choice for every
-    /// other product. Timing kept the runtime's product on every shape tried, k from 20 to 4800
+    /// set (both sum in the same order, so they give the same bits), except, with AVX2, on large
+    /// products with long sums (`short_enough`); tract's own choice for every other product.
+    /// With AVX-512, timing kept the runtime's product on every shape tried, k from 20 to 4800
     /// (docs/benchmarks.md, step 18). Nothing is timed: the same file on the same machine gets
     /// the same plan, hence bit-identical outputs, and a plan costs only tract's optimisation.
     #[default]
@@ -168,13 +169,36 @@ pub fn tune(model: &mut TypedModel, threads: usize, kernels: Kernels) -> TractRe
 }
 
 /// The fixed rule's choice: the runtime's product where it applies (`small`, built by [`small`]
-/// with the widest instruction set); otherwise tract's own pick (`None`).
+/// with the widest instruction set) and [`short_enough`] says so; otherwise tract's own pick
+/// (`None`).
 fn fixed(small: Option<&Small>) -> Option<Choice> {
     #[cfg(target_arch = "x86_64")]
-    return small.map(|(op, _)| Choice::Small(op.isa));
+    return small.filter(|(op, _)| short_enough(op)).map(|(op, _)| Choice::Small(op.isa));
     #[cfg(not(target_arch = "x86_64"))]
     small.map(|s| match *s {})
 }
+
+/// With AVX2 (8 lanes, register blocks of 4 rows by 3 vectors), the runtime's product loses to
+/// tract's packed 16 × 6 kernel on large products with long sums: on the camera model's
+/// `325 × 64 × 128` and `300 × 300 × 64` products it took 1.3–1.6× tract's time, and 1.4× on a
+/// matrix times a vector of 1,200 (docs/benchmarks.md, "The kernel rule on AVX2"). It keeps
+/// every product with sums of at most [`AVX2_SHORT_SUM`], and longer ones with fewer outputs than
+/// [`AVX2_MANY_OUTPUTS`] and sums shorter than [`AVX2_LONG_SUM`]: every product of the iCub and
+/// BioTac files. With AVX-512 it keeps every product (step 18 of the same page).
+#[cfg(target_arch = "x86_64")]
+fn short_enough(op: &SmallProduct) -> bool {
+    match op.isa {
+        Isa::Avx512 => true,
+        Isa::Avx2 => op.k <= AVX2_SHORT_SUM || (op.m * op.n < AVX2_MANY_OUTPUTS && op.k < AVX2_LONG_SUM),
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+const AVX2_SHORT_SUM: usize = 32;
+#[cfg(target_arch = "x86_64")]
+const AVX2_MANY_OUTPUTS: usize = 16_384;
+#[cfg(target_arch = "x86_64")]
+const AVX2_LONG_SUM: usize = 1_024;
 
 /// What beats `current` on `p` by more than the margin, if anything: one of tract's kernels
 /// (and packing), or `small`, the product as the runtime's own.

@@ -22,6 +22,7 @@ mod classifier;
 mod continuous;
 mod error;
 pub mod ffi;
+mod fusions;
 mod heap;
 mod kernels;
 mod npy;

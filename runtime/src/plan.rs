@@ -15,8 +15,16 @@ use crate::{Error, Result};
 /// once, in tract's order. tract's own (`TypedModel::declutter`) repeats the round until a whole
 /// round changes nothing: on the exporter's graphs the second round changes a few `Add`, `Mul` and
 /// reshapes, the plans run alike (docs/benchmarks.md, step 20), and the rounds after the first cost a
-/// third of the time, 4–5 ms of the first call's ~21 ms.
+/// third of the time, 4–5 ms of the first call's ~21 ms. Then the runtime's own fusions replace
+/// what tract runs slowly ([`crate::fusions`]).
 pub fn declutter(model: &mut TypedModel) -> TractResult<()> {
+    tract_declutter(model)?;
+    crate::fusions::fuse(model)?;
+    Ok(())
+}
+
+/// tract's own decluttering, one round ([`declutter`] without the runtime's fusions).
+pub(crate) fn tract_declutter(model: &mut TypedModel) -> TractResult<()> {
     let optimizer = Optimizer::declutter();
     let mut session = optimizer.session();
     model.compact()?;
@@ -99,6 +107,18 @@ impl Plan {
             return Err(Error::Tract(format!("output `{name}` has {} values, not the {len} the header implies", values.len())));
         }
         Ok(values)
+    }
+
+    /// The values of the plan's largest tensor, its input and outputs included.
+    pub(crate) fn largest_tensor(&self) -> usize {
+        let model = self.plan.model();
+        model
+            .nodes()
+            .iter()
+            .flat_map(|n| &n.outputs)
+            .filter_map(|o| o.fact.shape.as_concrete().map(|s| s.iter().product()))
+            .max()
+            .unwrap_or(0)
     }
 
     /// Runs the plan. A state that panicked is dropped, not reused.

@@ -106,6 +106,7 @@ pub fn bench(path: &str, threads: usize, seconds: f64) -> Result<serde_json::Val
         "prepare_ms": prepare_ms,
         "batch1_first_call_after_prepare_ms": prepared_first_ms,
         "batch32_windows_per_second": b32_windows_per_second,
+        "windows_per_run": c.windows_per_run()?,
         "continuous_answer_median_us": continuous_answer_median,
         "continuous_per_token_us": continuous_per_token_us,
     });
