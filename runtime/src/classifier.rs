@@ -264,13 +264,18 @@ impl Classifier {
     /// Builds now what the first call at each batch size of `batches`, and with `streaming` the
     /// first session, would otherwise build: tract's optimisation of each plan, tens of
     /// milliseconds (docs/deploy.md). A robot calls this at start-up, so that its first touch
-    /// costs what every other touch costs.
+    /// costs what every other touch costs. A batch larger than one run ([`Self::windows_per_run`])
+    /// gets the plans of its runs.
     pub fn prepare(&self, batches: &[usize], streaming: bool) -> Result<()> {
         for &batch in batches {
             if batch == 0 {
                 return Err(Error::EmptyBatch);
             }
-            self.plan(batch)?;
+            let per_run = self.windows_per_run()?;
+            self.plan(batch.min(per_run))?;
+            if batch > per_run && batch % per_run != 0 {
+                self.plan(batch % per_run)?;
+            }
         }
         if streaming {
             self.stages()?;
@@ -429,5 +434,41 @@ impl Classifier {
     /// Classifies one window.
     pub fn classify(&self, frames: &[f32]) -> Result<Prediction> {
         Ok(self.classify_batch(frames, 1)?.remove(0))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A batch of 32 runs in runs of `windows_per_run` (6 windows for the shipped iCub file, one
+    /// for the camera's), as `prepare` built them: no plan is built at the call, and each
+    /// window's logits are its own, run alone, within 1e-5 of the largest.
+    #[test]
+    fn a_batch_runs_in_the_runs_prepare_built_and_answers_as_its_windows_alone() {
+        let shipped = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shipped");
+        for (file, per_run) in [("icub20.onnx", 6), ("physiclear.onnx", 1)] {
+            let c = Classifier::load(shipped.join(file)).unwrap();
+            assert_eq!(c.windows_per_run().unwrap(), per_run, "{file}");
+            c.prepare(&[32], false).unwrap();
+            let built = |c: &Classifier| {
+                let mut sizes: Vec<usize> = c.plans.lock().unwrap().keys().copied().collect();
+                sizes.sort();
+                sizes
+            };
+            let prepared = built(&c);
+            let len = c.sample_len();
+            let frames: Vec<f32> = (0..32 * len).map(|i| ((i * 7919) % 1000) as f32 / 100.0).collect();
+            let (batch, _) = c.run(&frames, 32).unwrap();
+            assert_eq!(built(&c), prepared, "{file}: the call built no plan");
+            let classes = c.classes().len();
+            for (w, window) in frames.chunks(len).enumerate() {
+                let (alone, _) = c.run(window, 1).unwrap();
+                let largest = alone.iter().fold(0f32, |m, v| m.max(v.abs()));
+                for (a, b) in alone.iter().zip(&batch[w * classes..(w + 1) * classes]) {
+                    assert!((a - b).abs() <= 1e-5 * largest, "{file}, window {w}: {a} alone, {b} in the batch");
+                }
+            }
+        }
     }
 }
