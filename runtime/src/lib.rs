@@ -31,8 +31,6 @@ mod plan;
 mod real_dft;
 #[cfg(not(feature = "spectral"))]
 mod small_fft;
-#[cfg(target_arch = "x86_64")]
-mod small_products;
 mod stages;
 mod stream;
 mod wire;

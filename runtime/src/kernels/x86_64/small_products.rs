@@ -4,7 +4,7 @@
 //! saving and setting the float control register), so at k = 20 most of a product's time is that
 //! cost, after packing the input. This product reads its inputs where they lie and computes
 //! register blocks of outputs within one call (docs/benchmarks.md, step 17), with AVX-512 or with
-//! AVX2 and FMA. The module exists on x86-64 only (`lib.rs`); elsewhere tract's kernels run.
+//! AVX2 and FMA. The module exists on x86-64 only (`kernels/mod.rs`); elsewhere tract's kernels run.
 
 use tract_core::internal::*;
 use tract_core::tract_linalg::BinOp;

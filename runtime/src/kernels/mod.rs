@@ -21,7 +21,10 @@ use tract_core::tract_linalg::mmm::{
 use tract_core::tract_linalg::pack::PackedFormat;
 
 #[cfg(target_arch = "x86_64")]
-use crate::small_products::{self, Combine, Epilogue, Isa, SmallProduct, Source};
+use x86_64::small_products::{self, Combine, Epilogue, Isa, SmallProduct, Source};
+
+#[cfg(target_arch = "x86_64")]
+mod x86_64;
 
 /// How a plan chooses the kernel of each matrix product.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]

@@ -135,7 +135,7 @@ impl Block<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::small_products::covered;
+    use crate::kernels::x86_64::small_products::covered;
 
     fn values(len: usize, seed: usize) -> Vec<f32> {
         (0..len).map(|i| (((i + seed) * 7919 % 211) as f32 - 105.0) / 53.0).collect()
