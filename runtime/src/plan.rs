@@ -16,7 +16,7 @@ use crate::{Error, Result};
 /// round changes nothing: on the exporter's graphs the second round changes a few `Add`, `Mul` and
 /// reshapes, the plans run alike (docs/benchmarks.md, step 20), and the rounds after the first cost a
 /// third of the time, 4–5 ms of the first call's ~21 ms. Then the runtime's own fusions replace
-/// what tract runs slowly ([`crate::fusions`]).
+/// what tract runs slowly (the `fusions` module).
 pub fn declutter(model: &mut TypedModel) -> TractResult<()> {
     tract_declutter(model)?;
     crate::fusions::fuse(model)?;
