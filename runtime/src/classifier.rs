@@ -408,9 +408,8 @@ impl Classifier {
     /// How many windows one run of a plan takes: as many as keep the plan's largest tensor within
     /// 2¹⁸ values (1 MiB, `RUN_VALUES`), at least one. tract runs each op over the whole batch,
     /// so a batch whose tensors outgrow the caches runs slower per window than its windows
-    /// apart: the camera model's spatial attention holds 270,400 values a window, and 32 windows
-    /// in one run went at 40–50 a second against 110–140 one by one (docs/results.md, "Batches
-    /// in cache-sized runs").
+    /// apart, as the camera model's spatial attention did (docs/results.md, "Batches in
+    /// cache-sized runs").
     pub fn windows_per_run(&self) -> Result<usize> {
         let per_window = self.plan(1)?.largest_tensor().max(1);
         Ok((RUN_VALUES / per_window).max(1))

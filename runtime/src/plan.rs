@@ -82,12 +82,23 @@ pub(crate) struct Plan {
     outputs: Vec<String>,
     /// States not in use; a caller running concurrently with another spawns its own.
     idle: Mutex<Vec<TypedSimpleState>>,
+    /// The values of the plan's largest tensor, its input and outputs included: read at every
+    /// batch's run (`Classifier::windows_per_run`), so counted once, here.
+    largest_tensor: usize,
 }
 
 impl Plan {
     /// `plan`, whose outputs are the tensors named `outputs`.
     pub(crate) fn new(plan: Arc<TypedRunnableModel>, outputs: Vec<String>) -> Self {
-        Self { plan, outputs, idle: Mutex::new(Vec::new()) }
+        let largest_tensor = plan
+            .model()
+            .nodes()
+            .iter()
+            .flat_map(|n| &n.outputs)
+            .filter_map(|o| o.fact.shape.as_concrete().map(|s| s.iter().product()))
+            .max()
+            .unwrap_or(0);
+        Self { plan, outputs, idle: Mutex::new(Vec::new()), largest_tensor }
     }
 
     /// The names of `model`'s outputs, as the wiring labelled them.
@@ -111,14 +122,7 @@ impl Plan {
 
     /// The values of the plan's largest tensor, its input and outputs included.
     pub(crate) fn largest_tensor(&self) -> usize {
-        let model = self.plan.model();
-        model
-            .nodes()
-            .iter()
-            .flat_map(|n| &n.outputs)
-            .filter_map(|o| o.fact.shape.as_concrete().map(|s| s.iter().product()))
-            .max()
-            .unwrap_or(0)
+        self.largest_tensor
     }
 
     /// Runs the plan. A state that panicked is dropped, not reused.

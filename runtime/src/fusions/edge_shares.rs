@@ -1,12 +1,13 @@
 //! [`EdgeShares`]: the camera head's histogram counts in one pass. The exporter writes each
-//! pixel's share above each of a histogram's edges as ONNX's element-wise ops, `clamp(−(v·s + o), 0, 1)`
-//! spelt `max(0 − max(v·s + o, −1), 0)`, over a `[rows, edges, pixels]` tensor, then sums it
-//! over the pixels (export/src/spectrum/space.rs, `histogram`). tract runs that as five passes
-//! over a tensor 23 times the frame's size: 10 of a 240 × 320 × 3 … camera window's 19 ms here
-//! (docs/benchmarks.md, "The camera's whole window"). [`matched`] finds the pattern after
-//! decluttering, and [`super::fuse`] puts this op in its place: it reads each row of pixels once, scales it, and
-//! sums every edge's shares in registers. Each share is computed as tract computes it (a product,
-//! then a sum, then the clamps), so only the order of the sum over the pixels changes.
+//! pixel's share above each of a histogram's edges as ONNX's element-wise ops,
+//! `clamp(−(v·s + o), 0, 1)` spelt `max(0 − max(v·s + o, −1), 0)`, over a `[rows, edges,
+//! pixels]` tensor, then sums it over the pixels (export/src/spectrum/space.rs, `histogram`).
+//! tract runs that as five passes over a tensor as many times the frames' size as there are
+//! edges, about half of the shipped camera file's time (docs/benchmarks.md, "The camera's whole
+//! window"). [`matched`] finds the pattern after decluttering, and [`super::fuse`] puts this op
+//! in its place: it reads each row of pixels once, scales it, and sums every edge's shares in
+//! registers. Each share is computed as tract computes it (a product, then a sum, then the
+//! clamps), so only the order of the sum over the pixels changes.
 
 use tract_core::internal::*;
 use tract_core::ops::nn::{Reduce, Reducer};
@@ -69,7 +70,7 @@ fn sum_of_shares(scaled: &[f32], offset: f32) -> f32 {
     lanes.iter().sum::<f32>() + tail
 }
 
-// The fields are never NaN (a file's scale and offsets are finite), so equality is total.
+// Equality compares the constants' values; a NaN among them only makes two ops unequal.
 impl Eq for EdgeShares {}
 
 impl Op for EdgeShares {

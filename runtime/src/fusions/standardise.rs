@@ -1,8 +1,8 @@
 //! [`Standardise`]: `(x − mean) ⊙ scale` with constants as large as a trailing part of `x` (a
 //! frame's, or a row's, mean and 1 / std per value: tract's decluttering turns the exporter's
 //! `Div` by a constant into a `Mul` by its reciprocal). tract broadcasts such constants
-//! through its generic path, one pass each at about 11 ns a value: 1.9 ms of the camera head's
-//! 25 frames of 30 × 40 × 3 (docs/benchmarks.md, "The camera's whole window"). This op walks
+//! through its generic path, one slow pass each (the camera head's standardisation:
+//! docs/benchmarks.md, "The camera's whole window"). This op walks
 //! `x` once, the constants repeating along it; each value gets the same two operations tract
 //! would give it, so the same bits.
 

@@ -182,9 +182,9 @@ fn fixed(small: Option<&Small>) -> Option<Choice> {
 }
 
 /// With AVX2 (8 lanes, register blocks of 4 rows by 3 vectors), the runtime's product loses to
-/// tract's packed 16 × 6 kernel on large products with long sums: on the camera model's
-/// `325 × 64 × 128` and `300 × 300 × 64` products it took 1.3–1.6× tract's time, and 1.4× on a
-/// matrix times a vector of 1,200 (docs/benchmarks.md, "The kernel rule on AVX2"). It keeps
+/// tract's packed 16 × 6 kernel on large products with long sums, as the camera model's
+/// `325 × 64 × 128`, `300 × 300 × 64` and a matrix times a vector of 1,200 (their times:
+/// docs/benchmarks.md, "The kernel rule on AVX2"). It keeps
 /// every product with sums of at most [`AVX2_SHORT_SUM`], and longer ones with fewer outputs than
 /// [`AVX2_MANY_OUTPUTS`] and sums shorter than [`AVX2_LONG_SUM`]: every product of the iCub and
 /// BioTac files. With AVX-512 it keeps every product (step 18 of the same page).
